@@ -1,0 +1,158 @@
+"""The single-threaded fixed-timestep loop, after Glenn Fiedler's "Fix Your Timestep!".
+
+Time is an integer accumulator in units of ns x hz, so one step is exactly 1e9 units and a
+60 Hz step never drifts by rounding. Each rendered frame: read the clock, add the frame time
+(clamped at 0.25 s), run at most `max_steps` due steps (the rest are counted as dropped,
+never carried: no spiral of death), render with the interpolation alpha, then wait for the
+absolute deadline of the next frame (deadlines reset after a stall).
+
+Stages receive the step index and dt; none reads a clock. Every stage and the render are
+timed with perf_counter_ns into a FrameBudget.
+"""
+
+from __future__ import annotations
+
+import gc
+import time
+from collections.abc import Callable
+from contextlib import contextmanager
+
+from engine.budget import FrameBudget
+from engine.clock import NS_PER_S, RealClock, VirtualClock
+
+StageFn = Callable[[int, float], None]
+RenderFn = Callable[[float], None]
+
+MAX_FRAME_NS = 250_000_000
+MAX_STEPS_PER_FRAME = 5
+
+
+class FixedStepLoop:
+    def __init__(
+        self,
+        clock: RealClock | VirtualClock | None = None,
+        hz: int = 60,
+        render_hz: int | None = None,
+        max_steps: int = MAX_STEPS_PER_FRAME,
+        budget: FrameBudget | None = None,
+    ):
+        self.clock = clock or RealClock()
+        self.hz = hz
+        self.dt = 1.0 / hz
+        self.render_hz = render_hz or hz
+        self.max_steps = max_steps
+        self.budget = budget or FrameBudget(frame_budget_ms=1000.0 / hz)
+        self._stages: list[tuple[int, StageFn]] = []
+        self._render: tuple[int, RenderFn] | None = None
+        self.step_index = 0  # steps run so far; the next step's index
+        self.frame_index = 0
+        self.dropped_steps = 0
+        self.alpha = 0.0
+        self.running = False
+        self._acc = 0  # ns * hz
+        self._last_ns: int | None = None
+        self._anchor_ns = 0
+        self._deadline_k = 0
+        self._depth = 0
+
+    # -- set-up ---------------------------------------------------------------------------
+    def add_stage(self, name: str, fn: StageFn, budget_ms: float) -> None:
+        """Run fn(step, dt) every step, in registration order, within budget_ms."""
+        self._stages.append((self.budget.register(name, budget_ms), fn))
+
+    def set_render(self, fn: RenderFn, budget_ms: float, name: str = "render") -> None:
+        """Run fn(alpha) once per rendered frame. The name must start with 'render'."""
+        if not name.startswith("render"):
+            raise ValueError("the render stage's name starts with 'render' (FORMATS.md)")
+        self._render = (self.budget.register(name, budget_ms), fn)
+
+    @staticmethod
+    def freeze_gc() -> None:
+        """Call once everything is loaded: the collector stops walking the assets."""
+        gc.collect()
+        gc.freeze()
+
+    @contextmanager
+    def span(self, name: str):
+        """Time a part of a stage; it nests inside the stage in the trace."""
+        start = time.perf_counter_ns()
+        self._depth += 1
+        try:
+            yield
+        finally:
+            self._depth -= 1
+            self.budget.add_span(self.budget.stage_id(name), self.step_index, start, time.perf_counter_ns() - start, self._depth + 1)
+
+    # -- running --------------------------------------------------------------------------
+    def _frame_period_ns(self, k: int) -> int:
+        # rounded up, so that k frames always hold at least k * hz / render_hz whole steps
+        return -((-k * NS_PER_S) // self.render_hz)
+
+    def run_frame(self) -> int:
+        """One rendered frame: due steps, render, wait. Returns the number of steps run."""
+        now = self.clock.now_ns()
+        frame_start = time.perf_counter_ns()
+        self.budget.begin_frame(frame_start)
+        if self._last_ns is None:
+            self._last_ns = now
+            self._anchor_ns = now
+            self._deadline_k = 0
+            # the first frame runs one step so that there is a state to render
+            self._acc = NS_PER_S
+        raw = now - self._last_ns
+        self._last_ns = now
+        clamped = min(raw, MAX_FRAME_NS)
+        self._acc += clamped * self.hz
+        due = self._acc // NS_PER_S
+        run = min(due, self.max_steps)
+        self._acc -= due * NS_PER_S
+        dropped = (due - run) + ((raw - clamped) * self.hz) // NS_PER_S
+        self.dropped_steps += dropped
+        budget = self.budget
+        perf = time.perf_counter_ns
+        for _ in range(run):
+            step, dt = self.step_index, self.dt
+            for sid, fn in self._stages:
+                t0 = perf()
+                fn(step, dt)
+                budget.add_span(sid, step, t0, perf() - t0)
+            self.step_index += 1
+        self.alpha = self._acc / NS_PER_S
+        if self._render is not None:
+            sid, fn = self._render
+            t0 = perf()
+            fn(self.alpha)
+            budget.add_span(sid, self.step_index, t0, perf() - t0)
+        wait_start = perf()
+        self._wait_next_deadline()
+        end = perf()
+        budget.end_frame(end, run, dropped, end - wait_start)
+        self.frame_index += 1
+        return run
+
+    def _wait_next_deadline(self) -> None:
+        self._deadline_k += 1
+        deadline = self._anchor_ns + self._frame_period_ns(self._deadline_k)
+        now = self.clock.now_ns()
+        if now > deadline + self._frame_period_ns(1):
+            # stalled: more than a whole frame late; start a fresh schedule from now
+            self._anchor_ns, self._deadline_k = now, 0
+            return
+        self.clock.wait_until(deadline)
+
+    def run(self, steps: int | None = None, frames: int | None = None, until: Callable[[], bool] | None = None) -> None:
+        """Run until `steps` steps or `frames` frames have run, `until()` is true, or stop()."""
+        self.running = True
+        start_steps, start_frames = self.step_index, self.frame_index
+        while self.running:
+            if steps is not None and self.step_index - start_steps >= steps:
+                break
+            if frames is not None and self.frame_index - start_frames >= frames:
+                break
+            if until is not None and until():
+                break
+            self.run_frame()
+        self.running = False
+
+    def stop(self) -> None:
+        self.running = False

@@ -1,0 +1,1 @@
+"""Jakobsen Verlet particle physics (paper section V)."""

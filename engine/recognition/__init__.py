@@ -1,0 +1,1 @@
+"""Recognition: templates, the dual buffer and the incremental DTW (paper sections III-IV)."""

@@ -1,0 +1,194 @@
+"""The recording CSV of FORMATS.md: a reader, a whole-file writer and a streaming writer.
+
+Readers accept any `# key: value` metadata, one- or two-hand columns, an optional label and
+extra columns (ignored). A bad file raises RecordingError naming the file and line; the CLI
+turns that into one line on stderr and exit code 2.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import os
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from engine.errors import InputError
+from engine.sensors.source import Sample
+
+HAND_COLUMNS = (("rx", "ry", "rz"), ("lx", "ly", "lz"))
+FLUSH_EVERY_S = 0.25  # a killed process loses at most the last second
+
+
+class RecordingError(InputError):
+    """A recording file that cannot be read; the message names the file and line."""
+
+    def __init__(self, path: str | os.PathLike, line: int | None, message: str):
+        self.path, self.line = str(path), line
+        where = f"{self.path}:{line}" if line else self.path
+        super().__init__(f"{where}: {message}")
+
+
+@dataclass
+class Recording:
+    """Samples of one recording. `accel` has shape (n, sensors, 3) in g; `labels` is '' when idle."""
+
+    t: np.ndarray
+    accel: np.ndarray
+    labels: list[str] = field(default_factory=list)
+    meta: dict[str, str] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        self.t = np.asarray(self.t, dtype=np.float64)
+        self.accel = np.asarray(self.accel, dtype=np.float64).reshape(len(self.t), -1, 3)
+        if not self.labels:
+            self.labels = [""] * len(self.t)
+
+    @property
+    def sensors(self) -> int:
+        return self.accel.shape[1]
+
+    def __len__(self) -> int:
+        return len(self.t)
+
+    def samples(self) -> list[Sample]:
+        return [Sample(float(t), a) for t, a in zip(self.t, self.accel)]
+
+
+def _header_columns(sensors: int) -> list[str]:
+    return ["t"] + [c for hand in HAND_COLUMNS[:sensors] for c in hand]
+
+
+def read_recording(path: str | os.PathLike) -> Recording:
+    """Read a recording CSV. Raises RecordingError (file and line) on anything malformed."""
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise RecordingError(path, None, f"cannot read: {exc}") from None
+    meta: dict[str, str] = {}
+    lines = text.splitlines()
+    lineno = 0
+    while lineno < len(lines) and (lines[lineno].startswith("#") or not lines[lineno].strip()):
+        body = lines[lineno][1:].strip()
+        if ":" in body:
+            key, value = body.split(":", 1)
+            meta[key.strip()] = value.strip()
+        lineno += 1
+    if lineno >= len(lines):
+        raise RecordingError(path, None, "no header line (expected t,rx,ry,rz,...)")
+    header = [h.strip() for h in next(csv.reader([lines[lineno]]))]
+    header_line = lineno + 1
+    missing = [c for c in ("t", "rx", "ry", "rz") if c not in header]
+    if missing:
+        raise RecordingError(path, header_line, f"missing column(s) {', '.join(missing)}")
+    two_hands = all(c in header for c in HAND_COLUMNS[1])
+    if not two_hands and any(c in header for c in HAND_COLUMNS[1]):
+        raise RecordingError(path, header_line, "left-hand columns need all of lx,ly,lz")
+    sensors = 2 if two_hands else 1
+    numeric = [header.index(c) for c in _header_columns(sensors)]
+    label_col = header.index("label") if "label" in header else None
+
+    rows = lines[lineno + 1 :]
+    values = np.empty((len(rows), len(numeric)), dtype=np.float64)
+    labels: list[str] = []
+    n = 0
+    for i, row in enumerate(csv.reader(rows)):
+        if not row or (len(row) == 1 and not row[0].strip()):
+            continue
+        line = header_line + 1 + i
+        if len(row) <= max(numeric):
+            raise RecordingError(path, line, f"{len(row)} fields, header has {len(header)}")
+        try:
+            values[n] = [float(row[j]) for j in numeric]
+        except (ValueError, IndexError):
+            bad = next((row[j] for j in numeric if j < len(row) and not _is_float(row[j])), "?")
+            raise RecordingError(path, line, f"not a number: {bad!r}") from None
+        if not np.all(np.isfinite(values[n])):
+            raise RecordingError(path, line, "not a finite number")
+        if n and values[n, 0] < values[n - 1, 0]:
+            raise RecordingError(
+                path, line, f"time goes backwards ({values[n, 0]} after {values[n - 1, 0]})"
+            )
+        labels.append(row[label_col].strip() if label_col is not None and label_col < len(row) else "")
+        n += 1
+    if n == 0:
+        raise RecordingError(path, None, "no samples")
+    return Recording(values[:n, 0], values[:n, 1:].reshape(n, sensors, 3), labels, meta)
+
+
+def _is_float(s: str) -> bool:
+    try:
+        float(s)
+    except ValueError:
+        return False
+    return True
+
+
+def _format_row(t: float, accel: np.ndarray, label: str) -> str:
+    vals = ",".join(f"{v:.4f}" for v in np.asarray(accel, dtype=np.float64).ravel())
+    return f"{t:.4f},{vals},{label}\n"
+
+
+def _metadata_lines(meta: dict[str, str]) -> str:
+    return "".join(f"# {k}: {v}\n" for k, v in meta.items())
+
+
+def write_recording(path: str | os.PathLike, rec: Recording) -> None:
+    """Write a whole recording (FORMATS.md layout, label column always present)."""
+    buf = io.StringIO()
+    buf.write(_metadata_lines({"rate_hz": "60", "units": "g", **rec.meta}))
+    buf.write(",".join(_header_columns(rec.sensors) + ["label"]) + "\n")
+    for t, a, lab in zip(rec.t, rec.accel, rec.labels):
+        buf.write(_format_row(float(t), a, lab))
+    Path(path).write_text(buf.getvalue(), encoding="utf-8")
+
+
+class RecordingWriter:
+    """Streams samples to a recording CSV, flushing at least every FLUSH_EVERY_S of wall time,
+    so a process killed mid-recording loses at most the last second."""
+
+    def __init__(
+        self,
+        path: str | os.PathLike,
+        sensors: int,
+        meta: dict[str, str] | None = None,
+        t0: float | None = None,
+    ):
+        self.path = Path(path)
+        self.sensors = sensors
+        self.t0 = t0  # recording time = host time - t0; the first sample sets it when None
+        self._file = open(self.path, "w", encoding="utf-8", newline="")
+        self._file.write(_metadata_lines({"rate_hz": "60", "units": "g", **(meta or {})}))
+        self._file.write(",".join(_header_columns(sensors) + ["label"]) + "\n")
+        self._last_flush = time.monotonic()
+        self.rows = 0
+        self._flush()
+
+    def write(self, sample: Sample, label: str = "") -> None:
+        if self.t0 is None:
+            self.t0 = sample.t
+        accel = np.asarray(sample.accel, dtype=np.float64).reshape(-1, 3)[: self.sensors]
+        self._file.write(_format_row(sample.t - self.t0, accel, label))
+        self.rows += 1
+        if time.monotonic() - self._last_flush >= FLUSH_EVERY_S:
+            self._flush()
+
+    def _flush(self) -> None:
+        self._file.flush()
+        os.fsync(self._file.fileno())
+        self._last_flush = time.monotonic()
+
+    def close(self) -> None:
+        if not self._file.closed:
+            self._flush()
+            self._file.close()
+
+    def __enter__(self) -> RecordingWriter:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()

@@ -1,0 +1,65 @@
+"""`replay://file.csv?speed=1&loop=0`: plays a recording back in (scaled) real time, as samples
+stamped on the host clock, so everything downstream sees what a live device would send."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from engine.recording import Recording, read_recording
+from engine.sensors.source import Clock, Sample, Source, SourceError, SourceState, parse_source_url, register_scheme
+
+
+class ReplaySource(Source):
+    def __init__(self, rec: Recording, *, url: str = "", clock: Clock, speed: float = 1.0, loop: bool = False):
+        if speed <= 0:
+            raise SourceError(f"{url}: speed must be positive, not {speed}")
+        super().__init__(url=url, sensors=rec.sensors, clock=clock, description=rec.meta.get("source", "replay"))
+        self.rec = rec
+        self.speed = speed
+        self.loop = loop
+        self._rel = rec.t - rec.t[0]
+        period = float(np.median(np.diff(self._rel))) if len(rec) > 1 else 1 / 60
+        self._length = float(self._rel[-1]) + period  # one loop's duration
+        self.rate_hz = 1.0 / period if period > 0 else None
+        self._start = clock()
+        self._next = 0  # index of the next sample, counted across loops
+        self.state = SourceState.CONNECTED
+
+    def poll(self) -> list[Sample]:
+        if self.state is not SourceState.CONNECTED:
+            return []
+        elapsed = (self.clock() - self._start) * self.speed
+        n = len(self._rel)
+        out: list[Sample] = []
+        while True:
+            lap, i = divmod(self._next, n)
+            if lap and not self.loop:
+                self.state = SourceState.ENDED
+                break
+            rel = self._rel[i] + lap * self._length
+            if rel > elapsed:
+                break
+            out.append(Sample(self._start + rel / self.speed, self.rec.accel[i]))
+            self._next += 1
+        return out
+
+    def label_at(self, t: float) -> str:
+        """Ground-truth label at host time t (for evaluation and the HUD)."""
+        rel = ((t - self._start) * self.speed) % self._length if self.loop else (t - self._start) * self.speed
+        i = int(np.clip(np.searchsorted(self._rel, rel, side="right") - 1, 0, len(self._rel) - 1))
+        return self.rec.labels[i]
+
+
+def open_replay(url: str, clock: Clock) -> ReplaySource:
+    _, path, params = parse_source_url(url)
+    if not path:
+        raise SourceError(f"{url}: no file (expected replay://path/to/recording.csv)")
+    try:
+        speed = float(params.get("speed", "1"))
+        loop = params.get("loop", "0").lower() in ("1", "true", "yes")
+    except ValueError:
+        raise SourceError(f"{url}: speed must be a number") from None
+    return ReplaySource(read_recording(path), url=url, clock=clock, speed=speed, loop=loop)
+
+
+register_scheme("replay", open_replay)

@@ -1,0 +1,1 @@
+"""The serial IMU bridge: wire protocol (CPython and MicroPython), firmware, device emulator."""

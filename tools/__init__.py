@@ -1,0 +1,1 @@
+"""Offline work: recording, templates, the Interaction Graph build, evaluation, profiling, benchmarks."""

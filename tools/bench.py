@@ -1,0 +1,22 @@
+"""`quickjab bench TARGET`: benchmarks that print figures and ratios against a peer measured
+in the same run. Each target is a module with `add_arguments(parser)` and `run(args) -> int`."""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+
+# target name -> module; modules load only when their target runs
+TARGETS = {
+    "loop": "tools.bench_loop",
+}
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("bench", help="run a benchmark and print figures", description=__doc__)
+    targets = p.add_subparsers(dest="target", metavar="TARGET", required=True)
+    for name, module in TARGETS.items():
+        mod = importlib.import_module(module)
+        tp = targets.add_parser(name, help=(mod.__doc__ or "").strip().splitlines()[0], description=mod.__doc__)
+        mod.add_arguments(tp)
+        tp.set_defaults(func=mod.run)
