@@ -72,8 +72,11 @@ class World:
         self.max_speed = float(max_speed)  # clamp on any particle's speed, m/s
         self.ground_friction = float(ground_friction)  # 0..1 of sliding removed on the ground
         self.collision_margin = float(collision_margin)
-        self.contact_passes = 3  # re-linearized contact passes after the iterations
+        self.contact_passes = 3  # re-linearized contact passes after the iterations, at most
+        self.contact_tolerance = 0.001  # m of overlap those passes leave alone
         self.bodies: list[Body] = []
+        self._pd_key: list = []  # per body: the scalar (stiffness, damping) last set, or None
+        self._target_vel_on: list[bool] = []
         self.steps = 0
         self._dt_prev: float | None = None
         self._alloc(0)
@@ -146,6 +149,8 @@ class World:
         self._cap_body = np.concatenate([self._cap_body, np.full(len(caps), bid)])
         self._cap_local = np.concatenate([self._cap_local, np.arange(len(caps))])
         self._cap_tags += tags
+        self._pd_key.append(None)
+        self._target_vel_on.append(False)
         self.bodies.append(Body(bid, sl, slice(c0, c0 + len(caps)), caps, rad, tags, st, rest, m, lim, lim_rng))
         self._rebuild()
         return bid
@@ -181,15 +186,20 @@ class World:
         if t.shape != (b.n_particles, 3):
             raise ValueError(f"targets must be ({b.n_particles}, 3), got {t.shape}")
         self.targets[sl] = t
-        omega = 2.0 * np.pi * np.asarray(stiffness, dtype=float)
-        self._w2[sl] = omega * omega
-        self._c[sl] = 2.0 * np.asarray(damping_ratio, dtype=float) * omega
-        self._pd_dt = None
-        if velocities is None:
-            self.target_vel[sl] = 0.0
-        else:
+        key = (stiffness, damping_ratio) if np.isscalar(stiffness) and np.isscalar(damping_ratio) else None
+        if key is None or self._pd_key[bid] != key:  # the game sets the same gains every step
+            omega = 2.0 * np.pi * np.asarray(stiffness, dtype=float)
+            self._w2[sl] = omega * omega
+            self._c[sl] = 2.0 * np.asarray(damping_ratio, dtype=float) * omega
+            self._pd_dt = None
+            self._pd_key[bid] = key
+        if velocities is not None:
             self.target_vel[sl] = velocities
-        self._has_target_vel = bool(self.target_vel.any())
+            self._target_vel_on[bid] = True
+        elif self._target_vel_on[bid]:
+            self.target_vel[sl] = 0.0
+            self._target_vel_on[bid] = False
+        self._has_target_vel = any(self._target_vel_on)
 
     def clear_targets(self, bid: int) -> None:
         """No pull on body `bid` (it goes limp: a knockdown)."""
@@ -197,6 +207,7 @@ class World:
         self._w2[sl] = 0.0
         self._c[sl] = 0.0
         self._pd_dt = None
+        self._pd_key[bid] = None
 
     def set_positions(self, bid: int, positions) -> None:
         """Teleport body `bid` to `positions` (P, 3) at rest (no velocity)."""
@@ -260,13 +271,14 @@ class World:
         if len(self.pairs):
             cand = self.pairs.candidates(x, self.collision_margin)
             if len(cand):
-                s, t, ca, n, depth = self.pairs.narrow(x, cand)
-                contacts = self._contacts(cand, s, t, ca, n, depth, v)
+                s, t, n, depth = self.pairs.narrow(x, cand)
+                contacts = self._contacts(cand, s, t, n, depth, v)
                 # pairs already touching or within the margin become this step's contact
                 # constraints, so relaxing the sticks cannot push them into each other
                 near = depth > -self.collision_margin
                 if near.any():
-                    cset = self.pairs.contact_set(cand[near], s[near], t[near], n[near])
+                    near_idx = cand[near]
+                    cset = self.pairs.contact_set(near_idx, s[near], t[near], n[near])
 
         ground = x[:, 1]
         relax = self.constraints.relax
@@ -279,11 +291,11 @@ class World:
             # one more contact pass linearized at the relaxed positions: the closest points
             # moved during the iterations, and what the user sees must not interpenetrate
             for _ in range(self.contact_passes):
-                s, t, _ca, n, depth = self.pairs.narrow(x, cand)
-                pen = depth > 0.0
+                s, t, n, depth = self.pairs.narrow(x, near_idx)
+                pen = depth > self.contact_tolerance
                 if not pen.any():
                     break
-                self.pairs.contact_set(cand[pen], s[pen], t[pen], n[pen]).project(x)
+                self.pairs.contact_set(near_idx[pen], s[pen], t[pen], n[pen]).project(x)
 
         if self.ground_friction > 0.0:
             on = x[:, 1] <= self.ground_y + 1e-9
@@ -295,7 +307,7 @@ class World:
         self.steps += 1
         return contacts
 
-    def _contacts(self, cand, s, t, ca, n, depth, v) -> list[Contact]:
+    def _contacts(self, cand, s, t, n, depth, v) -> list[Contact]:
         """Contacts among the candidate pairs at the integrated positions (before any
         resolution), with the closing speed of the two closest points along the normal."""
         hit = np.flatnonzero(depth > 0.0)
@@ -303,20 +315,19 @@ class World:
             return []
         p = self.pairs
         k = cand[hit]
-        s, t, ca, n, depth = s[hit, None], t[hit, None], ca[hit], n[hit], depth[hit]
-        va = (1.0 - s) * v[p.ia[k]] + s * v[p.ja[k]]
-        vb = (1.0 - t) * v[p.ib[k]] + t * v[p.jb[k]]
-        closing = np.einsum("ij,ij->i", va - vb, n)
+        s, t, n, depth = s[hit], t[hit], n[hit], depth[hit]
+        ca = p.closest_on_a(self.x, k, s)
+        closing = np.einsum("ij,ij->i", p.relative(v, k, s, t), n)
         ra = self._radii[p.cap_a[k]]
         # midway between the two surfaces along the normal
         point = ca + n * (ra - 0.5 * depth)[:, None]
-        out = []
-        for m in range(len(k)):
-            a, b = int(p.cap_a[k[m]]), int(p.cap_b[k[m]])
-            out.append(Contact(int(self._cap_body[a]), int(self._cap_local[a]), self._cap_tags[a],
-                               int(self._cap_body[b]), int(self._cap_local[b]), self._cap_tags[b],
-                               point[m].copy(), n[m].copy(), float(closing[m]), float(depth[m])))
-        return out
+        ca_, cb_ = p.cap_a[k], p.cap_b[k]
+        rows = zip(self._cap_body[ca_].tolist(), self._cap_local[ca_].tolist(), ca_.tolist(),
+                   self._cap_body[cb_].tolist(), self._cap_local[cb_].tolist(), cb_.tolist(),
+                   point, n, closing.tolist(), depth.tolist(), strict=True)
+        tags = self._cap_tags
+        return [Contact(ba, la, tags[ga], bb, lb, tags[gb], pt, nn, sp, de)
+                for ba, la, ga, bb, lb, gb, pt, nn, sp, de in rows]
 
     def state_hash(self) -> str:
         """Hash of the simulation state (positions, previous positions, step count)."""
