@@ -37,7 +37,12 @@ from engine.sensors.wiimote.protocol import (
     parse_calibration,
     parse_nunchuk_calibration,
 )
-from engine.sensors.wiimote.transport import BackendMissing, HidTransport, hid_backend, list_wiimotes
+from engine.sensors.wiimote.transport import (
+    BackendMissing,
+    HidTransport,
+    hid_backend,
+    list_wiimotes,
+)
 
 PAIRING_HELP = (
     "pair one first: press the red SYNC button under the battery cover (or hold 1+2), then on "

@@ -26,7 +26,12 @@ import numpy as np
 
 from engine.sensors.source import Clock, Sample, Source, SourceState
 from engine.sensors.wiimote import protocol as p
-from engine.sensors.wiimote.transport import HidTransport, TransportError, WiimoteInfo, list_wiimotes
+from engine.sensors.wiimote.transport import (
+    HidTransport,
+    TransportError,
+    WiimoteInfo,
+    list_wiimotes,
+)
 
 log = logging.getLogger(__name__)
 

@@ -228,7 +228,7 @@ def _encode_point(p: Iterable[int]) -> bytes:
 
 
 def _usable(zero: tuple[int, int, int], one_g: tuple[int, int, int]) -> bool:
-    return all(o != z for o, z in zip(one_g, zero))
+    return all(o != z for o, z in zip(one_g, zero, strict=True))
 
 
 def parse_calibration(block: bytes) -> Calibration | None:
