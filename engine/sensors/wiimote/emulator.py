@@ -482,6 +482,7 @@ class EmulatedHidDevice:
 
     def open_path(self, path: bytes) -> None:
         for r in self.bus.remotes:
+            r.pump()
             if r.connected and r.path == path:
                 self._remote, self._connection = r, r.connection
                 return
@@ -546,6 +547,7 @@ class EmulatedBus:
     def enumerate(self, vendor_id: int = 0, product_id: int = 0) -> list[dict[str, Any]]:
         out = []
         for r in self.remotes:
+            r.pump()  # scheduled events (a re-plug) happen whoever looks
             visible = r.connected or r.loss == "silent"
             if not visible or (vendor_id and vendor_id != p.VENDOR_ID) or (product_id and product_id != r.product_id):
                 continue
