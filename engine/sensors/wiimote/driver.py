@@ -115,6 +115,7 @@ class WiimoteSource(Source):
         self._streaming = False
         self._status_solicited_until = -1.0
         self._last_rx = 0.0
+        self._last_data = 0.0
         self._probe_sent = False
         self._next_scan = -1e18
         self._next_status = 0.0
@@ -295,6 +296,7 @@ class WiimoteSource(Source):
 
     def _set_mode(self, now: float) -> None:
         self._last_mode_fix = now
+        self._last_data = now  # data should follow from now on
         self._send(p.build_report_mode(p.MODE_CORE_ACCEL_EXT16, continuous=True))
 
     # ---- scripts ------------------------------------------------------------------------
@@ -475,6 +477,7 @@ class WiimoteSource(Source):
 
     def _on_data(self, rep: p.Report, now: float, t: float) -> Sample | None:
         self.count("data_reports")
+        self._last_data = now
         if rep.report_id != p.MODE_CORE_ACCEL_EXT16 and self._streaming and self._script is None:
             self.count("foreign_mode")
             self._say(
@@ -528,5 +531,15 @@ class WiimoteSource(Source):
             elif self._streaming and self._script is None and now >= self._next_status:
                 self._next_status = now + STATUS_EVERY_S
                 self._request_status(now)
+            if (
+                self._streaming
+                and self._script is None
+                and now - self._last_data >= PROBE_S
+                and now - self._last_mode_fix >= MODE_FIX_EVERY_S
+            ):
+                # It answers but sends no data: our mode report was lost, or something
+                # stopped reporting. Ask again (no harm if it was only slow).
+                self.count("mode_resent")
+                self._set_mode(now)
         except DeviceGone:
             pass

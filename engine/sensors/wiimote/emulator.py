@@ -154,6 +154,7 @@ class EmulatedWiimote:
         self.sent: list[SentData] = []
         self.outputs: list[bytes] = []  # every output report received, in order
         self.stats: dict[str, int] = {}
+        self.lose_outputs = 0  # the next N output reports vanish on the air
         self._reset_link()
 
     # ---- link state ---------------------------------------------------------------------
@@ -335,6 +336,10 @@ class EmulatedWiimote:
             return False
         data = bytes(data)
         self.outputs.append(data)
+        if self.lose_outputs:  # lost on the air (tests set this)
+            self.lose_outputs -= 1
+            self._count("lost_output")
+            return True
         if len(data) < 2:
             self._count("short_output")
             return True
