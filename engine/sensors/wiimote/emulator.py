@@ -28,6 +28,7 @@ calibration (X 10 bits, Y and Z 9), and the log of what was sent lets tests comp
   nunchuk=1      a Nunchuk is plugged at power-on
   seed=0         random seed (jitter, drops, garbage)
   loop=1         loop the recording
+  start=0        begin this many seconds into the recording
   unplug_at=S, replug_at=S, nunchuk_out_at=S, nunchuk_in_at=S, foreign_mode_at=S
                  events, S seconds after the emulator starts (comma-separated lists allowed)
   loss=error     how an unplug looks: 'error' (reads fail, device gone) or 'silent'
@@ -103,6 +104,7 @@ class EmulatedWiimote:
         loss: str = "error",
         kernel_driver: bool = False,
         battery: int = 0xB4,
+        start: float = 0.0,
         events: list[tuple[float, str]] | None = None,
     ):
         self.rec = rec
@@ -118,6 +120,7 @@ class EmulatedWiimote:
         self.kernel_driver = "wiimote" if kernel_driver else None
         self.battery = battery
         self.rng = np.random.default_rng(seed)
+        self.start = start
         self.t0 = clock()
         self._rel = rec.t - rec.t[0]
         period = float(np.median(np.diff(self._rel))) if len(rec) > 1 else PERIOD_S
@@ -283,7 +286,7 @@ class EmulatedWiimote:
     # ---- what it sends ------------------------------------------------------------------
 
     def _values_at(self, k: int) -> tuple[float, np.ndarray]:
-        rel = k * PERIOD_S
+        rel = self.start + k * PERIOD_S
         rel = rel % self._length if self.loop else min(rel, float(self._rel[-1]))
         g = np.array([np.interp(rel, self._rel, self.rec.accel[:, s, a]) for s in range(self.rec.sensors) for a in range(3)])
         return rel, g.reshape(self.rec.sensors, 3)
@@ -610,7 +613,8 @@ def emulator_from_url(url: str, clock: Callable[[], float]) -> tuple[EmulatedBus
             jitter_ms=float(params.get("jitter_ms", "2")), latency_ms=float(params.get("latency_ms", "4")),
             pad=int(params.get("pad", "0")), drop=float(params.get("drop", "0")), clone=clone,
             nunchuk=flag("nunchuk", "1"), seed=int(params.get("seed", "0")), loop=flag("loop", "1"),
-            loss=loss, kernel_driver=flag("kernel_driver"), events=events,
+            loss=loss, kernel_driver=flag("kernel_driver"), start=float(params.get("start", "0")),
+            events=events,
         )  # fmt: skip
     except ValueError as exc:
         raise SourceError(f"{url}: bad option ({exc})") from None

@@ -288,3 +288,25 @@ def test_waiting_source_connects_when_a_remote_appears(rec_path, monkeypatch):
         vc.advance(STEP_NS)
         got += src.poll()
     assert src.state is SourceState.CONNECTED and len(got) > 50
+
+
+def test_real_punches_through_the_emulator(shared_data):
+    """A real two-glove recording (25 Hz, punches beyond a Wiimote's range) through the
+    emulator and the driver: in range within one count, out of range saturated like the sensor."""
+    path = shared_data / "punchbuddy" / "right-hook-100-egor-combo-lh-0.csv"
+    rec = read_recording(path)
+    src, samples, _ = session(f"wiimote-emu://{path}?jitter_ms=4&pad=22&start=12", 3.0)
+    read = [s for s in src.emulator.sent if s.read_at is not None]
+    assert len(samples) == len(read) > 200
+    saturated = 0
+    for sample, sent in zip(samples, read, strict=True):
+        exp = expected(rec, sent.rec_time)
+        for row, cal in ((0, src.wiimote_calibration), (1, src.nunchuk_calibration)):
+            raw = cal.from_g(exp[row])
+            one = 1.0 / (np.asarray(cal.one_g) - np.asarray(cal.zero))
+            inside = (raw >= 0) & (raw <= 1022)
+            assert np.all(np.abs(sample.accel[row] - exp[row])[inside] <= one[inside] + 1e-9)
+            edge = cal.to_g(np.where(raw < 0, 0, np.where(raw > 1022, [1023, 1022, 1022] if row == 0 else 1023, raw)))
+            assert np.allclose(sample.accel[row][~inside], edge[~inside])
+            saturated += int((~inside).sum())
+    assert saturated > 0  # the recording does go past the range
