@@ -467,9 +467,11 @@ class WiimoteSource(Source):
                 self._start(self._configure_extension(), now)
             else:
                 self._ext_dirty = True
-        elif not solicited and self._streaming and self._script is None:
-            # WiiBrew: after an unrequested 0x20 the mode must be set again.
-            self.count("unsolicited_status")
+        elif self._streaming and self._script is None:
+            # WiiBrew: after an unrequested 0x20 the mode must be set again; Linux's
+            # hid-wiimote (handler_status_K) re-sends it after every 0x20, and so do we.
+            if not solicited:
+                self.count("unsolicited_status")
             try:
                 self._set_mode(now)
             except DeviceGone:
