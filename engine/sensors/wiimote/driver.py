@@ -316,7 +316,10 @@ class WiimoteSource(Source):
                 self._script = None
                 self._wait = None
             return
-        except DeviceGone:
+        except DeviceGone:  # the connection is already marked lost (or closed)
+            if self._script is script:
+                self._script = None
+                self._wait = None
             return
         except SetupFailed as exc:
             self.count("setup_failures")

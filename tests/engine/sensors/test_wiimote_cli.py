@@ -61,3 +61,11 @@ def test_devices_lists_both_kinds():
     assert set(j) >= {"wiimotes", "serial_ports"}
     for w in j["wiimotes"]:
         assert w["model"].startswith("RVL-CNT-01") and w["path"]
+
+
+def test_bench_wiimote_prints_figures():
+    r = quickjab("bench", "wiimote", "--seconds", "2", "--json")
+    assert r.returncode == 0, r.stderr
+    fig = json.loads(r.stdout)
+    assert 80 <= fig["samples_per_s"] <= 110  # (2 s minus the set-up) at ~100 Hz
+    assert fig["poll_median_us"] > 0 and fig["decode_report_us"] > 0
