@@ -33,6 +33,9 @@ calibration (X 10 bits, Y and Z 9), and the log of what was sent lets tests comp
                  events, S seconds after the emulator starts (comma-separated lists allowed)
   loss=error     how an unplug looks: 'error' (reads fail, device gone) or 'silent'
   kernel_driver=0  1: pretend Linux's hid-wiimote is bound to the device
+  status_stops=0 1: every status report stops data reporting (what Linux's hid-wiimote
+                 assumes, "on status reports the drm is reset"; Dolphin stops it only on
+                 extension events)
   player=1       LED the driver sets
 """
 
@@ -105,6 +108,7 @@ class EmulatedWiimote:
         kernel_driver: bool = False,
         battery: int = 0xB4,
         start: float = 0.0,
+        status_stops: bool = False,
         events: list[tuple[float, str]] | None = None,
     ):
         self.rec = rec
@@ -121,6 +125,7 @@ class EmulatedWiimote:
         self.battery = battery
         self.rng = np.random.default_rng(seed)
         self.start = start
+        self.status_stops = status_stops
         self.t0 = clock()
         self._rel = rec.t - rec.t[0]
         period = float(np.median(np.diff(self._rel))) if len(rec) > 1 else PERIOD_S
@@ -365,6 +370,8 @@ class EmulatedWiimote:
                 self._ack(rid, p.ERR_OK, now)
         elif rid == p.OUT_STATUS_REQUEST:
             self._emit(self._status_report(), now + self.latency)
+            if self.status_stops:
+                self.mode = None
         elif rid == p.OUT_WRITE_MEMORY:
             self._write(data, now)
         elif rid == p.OUT_READ_MEMORY:
@@ -614,7 +621,7 @@ def emulator_from_url(url: str, clock: Callable[[], float]) -> tuple[EmulatedBus
             pad=int(params.get("pad", "0")), drop=float(params.get("drop", "0")), clone=clone,
             nunchuk=flag("nunchuk", "1"), seed=int(params.get("seed", "0")), loop=flag("loop", "1"),
             loss=loss, kernel_driver=flag("kernel_driver"), start=float(params.get("start", "0")),
-            events=events,
+            status_stops=flag("status_stops"), events=events,
         )  # fmt: skip
     except ValueError as exc:
         raise SourceError(f"{url}: bad option ({exc})") from None

@@ -69,3 +69,12 @@ def test_bench_wiimote_prints_figures():
     fig = json.loads(r.stdout)
     assert 80 <= fig["samples_per_s"] <= 110  # (2 s minus the set-up) at ~100 Hz
     assert fig["poll_median_us"] > 0 and fig["decode_report_us"] > 0
+
+
+def test_emulator_bad_input_names_itself(tmp_path):
+    missing = tmp_path / "nope.csv"
+    r = quickjab("record", "--source", f"wiimote-emu://{missing}", "-o", str(tmp_path / "o.csv"), "--seconds", "1")
+    assert r.returncode == 2 and str(missing) in r.stderr and "Traceback" not in r.stderr
+    write_recording(tmp_path / "ok.csv", Recording(np.arange(0, 1, 1 / 60), np.zeros((60, 1, 3))))
+    r = quickjab("record", "--source", f"wiimote-emu://{tmp_path / 'ok.csv'}?drop=lots", "-o", str(tmp_path / "o.csv"))
+    assert r.returncode == 2 and "bad option" in r.stderr

@@ -310,3 +310,21 @@ def test_real_punches_through_the_emulator(shared_data):
             assert np.allclose(sample.accel[row][~inside], edge[~inside])
             saturated += int((~inside).sum())
     assert saturated > 0  # the recording does go past the range
+
+
+@pytest.mark.parametrize("status_stops", ["0", "1"])
+def test_status_requests_mid_stream_keep_data_flowing(rec_path, status_stops):
+    """Whether a status report stops reporting (Linux's assumption) or not (Dolphin's), the
+    driver's battery polls must not leave a gap: it sets the mode again after each 0x20."""
+    vc = VirtualClock()
+    src, samples, _ = session(f"wiimote-emu://{rec_path}?status_stops={status_stops}", 0.5, vc)
+    for _ in range(3):
+        src._request_status(vc.seconds())  # what the 10 s battery refresh does
+        got = []
+        for _ in range(12):  # 0.2 s
+            vc.advance(STEP_NS)
+            got += src.poll()
+        assert len(got) >= 17  # no gap beyond a report or two
+        samples += got
+    assert src.state is SourceState.CONNECTED and "mode_resent" not in src.stats
+    check_against_recording(src, samples, read_recording(rec_path))
