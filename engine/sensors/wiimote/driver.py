@@ -412,7 +412,8 @@ class WiimoteSource(Source):
         if not err:
             err = yield from self._write_register(p.EXT_INIT2, b"\x00")
         ident = None if err else (yield from self._read_memory(p.EXT_ID, 6))
-        if ident is None:
+        if ident is None or ident == b"\xff" * 6:  # all 0xFF: half inserted (Linux: none)
+            self.count("extension_init_errors")
             self._drop_extension()  # unplugged again meanwhile, or it would not answer
             return
         if not p.is_nunchuk_id(ident):
