@@ -10,6 +10,7 @@ import importlib
 TARGETS = {
     "loop": "tools.bench_loop",
     "physics": "tools.bench_physics",
+    "wiimote": "tools.bench_wiimote",
 }
 
 
