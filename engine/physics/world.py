@@ -185,6 +185,8 @@ class World:
         t = np.asarray(targets, dtype=float)
         if t.shape != (b.n_particles, 3):
             raise ValueError(f"targets must be ({b.n_particles}, 3), got {t.shape}")
+        if not np.isfinite(t).all():  # one NaN would spread through the sticks to every particle
+            raise ValueError("targets must be finite")
         self.targets[sl] = t
         key = (stiffness, damping_ratio) if np.isscalar(stiffness) and np.isscalar(damping_ratio) else None
         if key is None or self._pd_key[bid] != key:  # the game sets the same gains every step
