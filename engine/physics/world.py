@@ -274,13 +274,13 @@ class World:
             cand = self.pairs.candidates(x, self.collision_margin)
             if len(cand):
                 s, t, n, depth = self.pairs.narrow(x, cand)
-                contacts = self._contacts(cand, s, t, n, depth, v)
                 # pairs already touching or within the margin become this step's contact
                 # constraints, so relaxing the sticks cannot push them into each other
-                near = depth > -self.collision_margin
-                if near.any():
+                near = np.flatnonzero(depth > -self.collision_margin)
+                if len(near):
                     near_idx = cand[near]
                     cset = self.pairs.contact_set(near_idx, s[near], t[near], n[near])
+                    contacts = self._contacts(near_idx, s[near], n[near], depth[near], cset.closing_speeds(v))
 
         ground = x[:, 1]
         relax = self.constraints.relax
@@ -309,27 +309,25 @@ class World:
         self.steps += 1
         return contacts
 
-    def _contacts(self, cand, s, t, n, depth, v) -> list[Contact]:
-        """Contacts among the candidate pairs at the integrated positions (before any
-        resolution), with the closing speed of the two closest points along the normal."""
+    def _contacts(self, idx, s, n, depth, closing) -> list[Contact]:
+        """Contacts among pairs `idx` that overlap at the integrated positions (before any
+        resolution), with the closing speed of their closest points along the normal."""
         hit = np.flatnonzero(depth > 0.0)
         if len(hit) == 0:
             return []
         p = self.pairs
-        k = cand[hit]
-        s, t, n, depth = s[hit], t[hit], n[hit], depth[hit]
-        ca = p.closest_on_a(self.x, k, s)
-        closing = np.einsum("ij,ij->i", p.relative(v, k, s, t), n)
-        ra = self._radii[p.cap_a[k]]
+        k = idx[hit]
+        n, depth = n[hit], depth[hit]
+        ca = p.closest_on_a(self.x, k, s[hit])
         # midway between the two surfaces along the normal
-        point = ca + n * (ra - 0.5 * depth)[:, None]
-        ca_, cb_ = p.cap_a[k], p.cap_b[k]
-        rows = zip(self._cap_body[ca_].tolist(), self._cap_local[ca_].tolist(), ca_.tolist(),
-                   self._cap_body[cb_].tolist(), self._cap_local[cb_].tolist(), cb_.tolist(),
-                   point, n, closing.tolist(), depth.tolist(), strict=True)
+        point = ca + n * (self._radii[p.cap_a[k]] - 0.5 * depth)[:, None]
+        ga, gb = p.cap_a[k], p.cap_b[k]
+        rows = zip(self._cap_body[ga].tolist(), self._cap_local[ga].tolist(), ga.tolist(),
+                   self._cap_body[gb].tolist(), self._cap_local[gb].tolist(), gb.tolist(),
+                   point, n, closing[hit].tolist(), depth.tolist(), strict=True)
         tags = self._cap_tags
-        return [Contact(ba, la, tags[ga], bb, lb, tags[gb], pt, nn, sp, de)
-                for ba, la, ga, bb, lb, gb, pt, nn, sp, de in rows]
+        return [Contact(ba, la, tags[a], bb, lb, tags[b], pt, nn, sp, de)
+                for ba, la, a, bb, lb, b, pt, nn, sp, de in rows]
 
     def state_hash(self) -> str:
         """Hash of the simulation state (positions, previous positions, step count)."""
