@@ -46,12 +46,12 @@ def _params(a, b, c, e, f) -> tuple[np.ndarray, np.ndarray]:
     hi = np.maximum(sp, sq)
     s = np.where(denom <= 1e-6 * ae, 0.5 * (np.maximum(lo, 0.0) + np.minimum(hi, 1.0)),
                  (b * f - c * e) / np.maximum(denom, _EPS))
-    np.clip(s, 0.0, 1.0, out=s)
+    s = np.minimum(np.maximum(s, 0.0), 1.0)  # (np.clip costs a Python wrapper per call)
     t = (b * s + f) / np.maximum(e, _EPS)
     # t outside the segment: clamp it, and s becomes the projection of that end of segment 2
     s = np.where(t < 0.0, sp, np.where(t > 1.0, sq, s))
-    np.clip(s, 0.0, 1.0, out=s)
-    np.clip(t, 0.0, 1.0, out=t)
+    s = np.minimum(np.maximum(s, 0.0), 1.0)
+    t = np.minimum(np.maximum(t, 0.0), 1.0)
     return s, t
 
 
@@ -96,6 +96,7 @@ class CapsulePairs:
         self.quad = np.stack([self.ia, self.ja, self.ib, self.jb])  # (4, K) for one gather
         self.rsum = radii[cap_a] + radii[cap_b]
         self.inv_mass = inv_mass
+        self.inv_mass3 = np.repeat(inv_mass, 3)  # per coordinate of x.ravel()
         self.n = n_particles
         # broad-phase matrices: pair_mid @ x = midpoint(b) - midpoint(a) for every pair,
         # half @ x = half axis of every capsule, pair_caps @ |half| = sum of the two half lengths
@@ -158,7 +159,7 @@ class CapsulePairs:
         g[k, self.jb[idx]] += t
         g[k, self.ia[idx]] = s - 1.0
         g[k, self.ja[idx]] -= s
-        return ContactSet(g, n, self.rsum[idx], self.inv_mass)
+        return ContactSet(g, n, self.rsum[idx], self.inv_mass, self.inv_mass3)
 
 
 class ContactSet:
@@ -169,7 +170,8 @@ class ContactSet:
     dx_p = w_p sum_k G_kp n_k lambda_k: the separation grows by exactly the depth, heavier
     particles moving less, and momentum is conserved."""
 
-    def __init__(self, g: np.ndarray, n: np.ndarray, rsum: np.ndarray, inv_mass: np.ndarray) -> None:
+    def __init__(self, g: np.ndarray, n: np.ndarray, rsum: np.ndarray, inv_mass: np.ndarray,
+                 inv_mass3: np.ndarray) -> None:
         self.g = g
         self.n = n
         self.rsum = rsum
@@ -178,7 +180,7 @@ class ContactSet:
         # push.T @ lambda = the displacement of every coordinate (inverse mass folded in)
         self.gn = (g[:, :, None] * n[:, None, :]).reshape(k, 3 * m)
         inv_wsum = 1.0 / np.maximum((g * g) @ inv_mass, _EPS)
-        self.push = (self.gn * np.repeat(inv_mass, 3)) * inv_wsum[:, None]
+        self.push = (self.gn * inv_mass3) * inv_wsum[:, None]
 
     def project(self, x: np.ndarray) -> None:
         flat = x.reshape(-1)  # a view: x is C-contiguous
