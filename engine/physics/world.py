@@ -170,6 +170,13 @@ class World:
         ca, cb = ca.ravel(), cb.ravel()
         keep = self._cap_body[ca] < self._cap_body[cb] if len(ca) else np.zeros(0, dtype=bool)
         self.pairs = CapsulePairs(ca[keep], cb[keep], self._caps, self._radii, self.inv_mass, len(self.x))
+        self._forget_contacts()
+
+    def _forget_contacts(self) -> None:
+        """Which pairs were in contact last step is unknown (new body, teleport): assume all, so
+        that no overlap is taken for a fast pass-through (see step)."""
+        self._was_near = np.ones(len(self.pairs), dtype=bool)
+        self._any_near = True
 
     # ---- control --------------------------------------------------------------------------
 
@@ -216,6 +223,7 @@ class World:
         sl = self.bodies[bid].slice
         self.x[sl] = positions
         self.x_prev[sl] = self.x[sl]
+        self._forget_contacts()
 
     def velocity(self, dt: float) -> np.ndarray:
         """Particle velocities (N, 3) over the last step of length dt."""
@@ -279,8 +287,23 @@ class World:
                 near = np.flatnonzero(depth > -self.collision_margin)
                 if len(near):
                     near_idx = cand[near]
-                    cset = self.pairs.contact_set(near_idx, s[near], t[near], n[near])
-                    contacts = self._contacts(near_idx, s[near], n[near], depth[near], cset.closing_speeds(v))
+                    s, t, n, depth = s[near], t[near], n[near], depth[near]
+                    cset = self.pairs.contact_set(near_idx, s, t, n)
+                    closing = cset.closing_speeds(v)
+                    # a pair that was apart last step and now overlaps while "separating" went
+                    # past the middle within one step (a fast fist): turn it back the way it came
+                    flip = (depth > 0.0) & (closing < 0.0) & ~self._was_near[near_idx]
+                    if flip.any():
+                        n = np.where(flip[:, None], -n, n)
+                        depth = np.where(flip, 2.0 * self.pairs.rsum[near_idx] - depth, depth)
+                        closing = np.where(flip, -closing, closing)
+                        cset = self.pairs.contact_set(near_idx, s, t, n)
+                    contacts = self._contacts(near_idx, s, n, depth, closing)
+        if self._any_near:
+            self._was_near[:] = False
+        self._any_near = cset is not None
+        if cset is not None:
+            self._was_near[near_idx] = True
 
         ground = x[:, 1]
         relax = self.constraints.relax

@@ -175,3 +175,20 @@ def test_one_step_separates_random_overlapping_capsules():
         after = segment_distance(x[pairs.ia], x[pairs.ja], x[pairs.ib], x[pairs.jb]) - pairs.rsum
         assert len(contacts) == int(before[0] < 0)
         assert after[0] >= -0.002
+
+
+def test_fast_fist_that_passes_the_head_centre_in_one_step_is_turned_back():
+    """At 15 m/s a fist moves 25 cm a step: from just outside the head to past its centre.
+    The contact still points from the fist into the head, closing, and the fist ends on the
+    side it came from."""
+    w = World(gravity=(0, 0, 0), ground_y=-10.0, damping=0.0, max_speed=20.0)
+    head = _ball(w, (0.0, 1.6, 0.0), "head", radius=0.11, mass=5.0)
+    fist = _ball(w, (0.0, 1.6, -1.0), "fist_r", radius=0.06, mass=1.0)
+    assert w.step(DT) == []  # a step apart: the world has seen them not touching
+    w.x[1] = (0.0, 1.6, -0.18)  # 1 cm outside the head
+    w.x_prev[1] = w.x[1] - (0.0, 0.0, 15.0 * DT)  # moving +z at 15 m/s: next at z = +0.07
+    (c,) = w.step(DT)
+    assert (c.body_a, c.tag_a, c.body_b, c.tag_b) == (head, "head", fist, "fist_r")
+    np.testing.assert_allclose(c.normal, (0.0, 0.0, -1.0), atol=1e-9)  # head -> fist: back along -z
+    assert c.rel_speed == pytest.approx(15.0, rel=1e-6)
+    assert w.x[1, 2] < w.x[0, 2] - 0.17 + 0.002  # the fist is in front of the head, not behind it
