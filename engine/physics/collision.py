@@ -16,7 +16,9 @@ class Contact:
 
     `normal` points from capsule a towards capsule b; `rel_speed` is the closing speed along
     that normal before resolution (m/s, > 0 when the capsules move towards each other);
-    `point` lies midway between the two surfaces; `depth` is the penetration in metres."""
+    `point` lies midway between the two surfaces; `depth` is the penetration in metres.
+    body_a < body_b always (pairs are ordered by body id), so a fist can be on either side;
+    capsule_a/b index the body's own capsule list and tag_a/b are its tags."""
 
     body_a: int
     capsule_a: int
