@@ -16,7 +16,9 @@ class Contact:
 
     `normal` points from capsule a towards capsule b; `rel_speed` is the closing speed along
     that normal before resolution (m/s, > 0 when the capsules move towards each other);
-    `point` lies midway between the two surfaces; `depth` is the penetration in metres."""
+    `point` lies midway between the two surfaces; `depth` is the penetration in metres.
+    body_a < body_b always (pairs are ordered by body id), so a fist can be on either side;
+    capsule_a/b index the body's own capsule list and tag_a/b are its tags."""
 
     body_a: int
     capsule_a: int
@@ -34,19 +36,20 @@ def _params(a, b, c, e, f) -> tuple[np.ndarray, np.ndarray]:
     """(s, t) from the segments' Gram entries a = d1.d1, b = d1.d2, c = d1.r, e = d2.d2,
     f = d2.r (d1 = q1 - p1, d2 = q2 - p2, r = p1 - p2). Ericson, Real-Time Collision
     Detection 5.1.9, with its branches turned into np.where over all pairs at once."""
-    inv_a = 1.0 / np.maximum(a, _EPS)
-    inv_e = 1.0 / np.maximum(e, _EPS)
+    a_safe = np.maximum(a, _EPS)
+    ae = a_safe * np.maximum(e, _EPS)
+    sp = -c / a_safe  # segment 2's ends projected on segment 1's line
+    sq = (b - c) / a_safe
     denom = a * e - b * b
-    sp = -c * inv_a  # segment 2's ends projected on segment 1's line
-    sq = (b - c) * inv_a
     # (near-)parallel segments have no single closest pair: take the middle of the part of
     # segment 1 that segment 2 overlaps, so side-by-side capsules are pushed apart at their
     # middle rather than at one end. This also covers either segment being a point.
-    parallel = denom <= 1e-6 * np.maximum(a, _EPS) * np.maximum(e, _EPS)
-    s_par = 0.5 * (np.maximum(np.minimum(sp, sq), 0.0) + np.minimum(np.maximum(sp, sq), 1.0))
-    s = np.where(parallel, s_par, (b * f - c * e) / np.where(parallel, 1.0, denom))
-    s = np.minimum(np.maximum(s, 0.0), 1.0)
-    t = (b * s + f) * inv_e
+    lo = np.minimum(sp, sq)
+    hi = np.maximum(sp, sq)
+    s = np.where(denom <= 1e-6 * ae, 0.5 * (np.maximum(lo, 0.0) + np.minimum(hi, 1.0)),
+                 (b * f - c * e) / np.maximum(denom, _EPS))
+    s = np.minimum(np.maximum(s, 0.0), 1.0)  # (np.clip costs a Python wrapper per call)
+    t = (b * s + f) / np.maximum(e, _EPS)
     # t outside the segment: clamp it, and s becomes the projection of that end of segment 2
     s = np.where(t < 0.0, sp, np.where(t > 1.0, sq, s))
     s = np.minimum(np.maximum(s, 0.0), 1.0)
@@ -95,6 +98,7 @@ class CapsulePairs:
         self.quad = np.stack([self.ia, self.ja, self.ib, self.jb])  # (4, K) for one gather
         self.rsum = radii[cap_a] + radii[cap_b]
         self.inv_mass = inv_mass
+        self.inv_mass3 = np.repeat(inv_mass, 3)  # per coordinate of x.ravel()
         self.n = n_particles
         # broad-phase matrices: pair_mid @ x = midpoint(b) - midpoint(a) for every pair,
         # half @ x = half axis of every capsule, pair_caps @ |half| = sum of the two half lengths
@@ -147,11 +151,6 @@ class CapsulePairs:
         p = x[self.ia[idx]]
         return p + s[:, None] * (x[self.ja[idx]] - p)
 
-    def relative(self, v: np.ndarray, idx: np.ndarray, s: np.ndarray, t: np.ndarray) -> np.ndarray:
-        """v at the closest point on a minus v at the closest point on b -> (K, 3)."""
-        w = np.stack([1.0 - s, s, t - 1.0, -t])  # (4, K) barycentric weights, b negated
-        return np.einsum("qk,qki->ki", w, v[self.quad[:, idx]])
-
     def contact_set(self, idx: np.ndarray, s: np.ndarray, t: np.ndarray, n: np.ndarray) -> ContactSet:
         """Contact constraints for pairs `idx`, linearized at this step's closest points."""
         k = np.arange(len(idx))
@@ -162,7 +161,7 @@ class CapsulePairs:
         g[k, self.jb[idx]] += t
         g[k, self.ia[idx]] = s - 1.0
         g[k, self.ja[idx]] -= s
-        return ContactSet(g, n, self.rsum[idx], self.inv_mass)
+        return ContactSet(g, n, self.rsum[idx], self.inv_mass, self.inv_mass3)
 
 
 class ContactSet:
@@ -173,14 +172,23 @@ class ContactSet:
     dx_p = w_p sum_k G_kp n_k lambda_k: the separation grows by exactly the depth, heavier
     particles moving less, and momentum is conserved."""
 
-    def __init__(self, g: np.ndarray, n: np.ndarray, rsum: np.ndarray, inv_mass: np.ndarray) -> None:
+    def __init__(self, g: np.ndarray, n: np.ndarray, rsum: np.ndarray, inv_mass: np.ndarray,
+                 inv_mass3: np.ndarray) -> None:
         self.g = g
         self.n = n
         self.rsum = rsum
-        self.w = inv_mass[:, None]
-        self.inv_wsum = 1.0 / np.maximum((g * g) @ inv_mass, _EPS)
+        k, m = g.shape
+        # flattened over (particle, axis): gn @ x.ravel() = (G @ x) . n per contact, and
+        # push.T @ lambda = the displacement of every coordinate (inverse mass folded in)
+        self.gn = (g[:, :, None] * n[:, None, :]).reshape(k, 3 * m)
+        inv_wsum = 1.0 / np.maximum((g * g) @ inv_mass, _EPS)
+        self.push = (self.gn * inv_mass3) * inv_wsum[:, None]
 
     def project(self, x: np.ndarray) -> None:
-        depth = self.rsum - np.einsum("ij,ij->i", self.g @ x, self.n)
-        lam = np.maximum(depth, 0.0) * self.inv_wsum
-        x += self.w * (self.g.T @ (lam[:, None] * self.n))
+        flat = x.reshape(-1)  # a view: x is C-contiguous
+        depth = self.rsum - self.gn @ flat
+        flat += np.maximum(depth, 0.0, out=depth) @ self.push
+
+    def closing_speeds(self, v: np.ndarray) -> np.ndarray:
+        """Speed at which each pair's closest points approach along its normal (> 0 closing)."""
+        return -(self.gn @ v.reshape(-1))

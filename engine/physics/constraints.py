@@ -62,54 +62,69 @@ class DistanceConstraints:
         # share of the correction each end takes: the lighter end moves more
         ki = inv_mass[i] / np.maximum(wsum, _EPS)
         kj = inv_mass[j] / np.maximum(wsum, _EPS)
-        self.n_colours = 0
-        self.batches: list[tuple[np.ndarray, ...]] = []
+        n = len(inv_mass)
         if solver == "gauss_seidel":
             colours = edge_colouring(self.pairs)
             self.n_colours = int(colours.max()) + 1 if len(colours) else 0
-            for c in range(self.n_colours):
-                m = colours == c
-                self.batches.append((i[m], j[m], self.lo[m], self.hi[m], ki[m][:, None], kj[m][:, None]))
+            groups = [np.flatnonzero(colours == c) for c in range(self.n_colours)]
+            scale = np.ones(len(self.pairs))  # within a colour no particle is shared
         else:
-            n = len(inv_mass)
+            self.n_colours = 1 if len(self.pairs) else 0
+            groups = [np.arange(len(self.pairs))] if len(self.pairs) else []
             count = np.bincount(self.pairs.ravel(), minlength=n).astype(float)
             scale = omega / np.maximum(np.maximum(count[i], count[j]), 1.0)
-            # difference matrix D (S, N): D @ x = x[j] - x[i] for every stick in one matmul;
-            # incidence matrix A (N, S): particle displacement = A @ per-stick correction
-            s = np.arange(len(self.pairs))
-            self.D = np.zeros((len(self.pairs), n))
-            self.D[s, j] += 1.0
-            self.D[s, i] -= 1.0
-            self.A = np.zeros((n, len(self.pairs)))
-            self.A[i, s] += ki * scale
-            self.A[j, s] -= kj * scale
-            self.lo_safe = np.maximum(self.lo, _EPS)
+        self.batches = [_Batch(i[g], j[g], self.lo[g], self.hi[g], ki[g] * scale[g], kj[g] * scale[g], n)
+                        for g in groups]
 
     def __len__(self) -> int:
         return len(self.pairs)
 
     def relax(self, x: np.ndarray) -> None:
-        """One relaxation iteration over every constraint, in place on x (N, 3)."""
-        if self.solver == "gauss_seidel":
-            for i, j, lo, hi, ki, kj in self.batches:
-                d = x[j] - x[i]
-                length = np.sqrt(np.einsum("ij,ij->i", d, d))
-                target = np.clip(length, lo, hi)
-                # (len - target) / len: > 0 stretched (ends move together), < 0 compressed
-                d *= ((length - target) / np.maximum(length, _EPS))[:, None]
-                x[i] += ki * d
-                x[j] -= kj * d
-        elif len(self.pairs):
-            # written for few numpy calls: at this size each call's overhead is the cost
-            d = self.D @ x
-            length = np.sqrt(np.einsum("ij,ij->i", d, d))
-            target = np.minimum(np.maximum(length, self.lo_safe), self.hi)
-            # 1 - target/len = (len - target)/len; len >= lo_safe > 0 wherever it matters
-            f = 1.0 - target / np.maximum(length, _EPS)
-            x += (self.A * f) @ d
+        """One relaxation iteration over every constraint, in place on x (N, 3): one batch
+        (Jacobi) or one batch per colour in turn (Gauss-Seidel)."""
+        for batch in self.batches:
+            batch.project(x)
 
     def errors(self, x: np.ndarray) -> np.ndarray:
         """Per-constraint violation in metres (0 inside [lo, hi]) -> (S,)."""
         d = x[self.pairs[:, 1]] - x[self.pairs[:, 0]]
         length = np.sqrt(np.einsum("ij,ij->i", d, d))
         return np.abs(length - np.clip(length, self.lo, self.hi))
+
+
+class _Batch:
+    """Constraints projected together from the same positions, as two small matmuls:
+    D (S, N) gives every stick's difference x[j] - x[i], A (N, S) spreads the per-stick
+    corrections back to the particles (mass split and relaxation scale folded in).
+    Scratch buffers are preallocated: no per-step allocation but the matmul temporaries."""
+
+    def __init__(self, i, j, lo, hi, ki, kj, n: int) -> None:
+        s = np.arange(len(i))
+        self.D = np.zeros((len(i), n))
+        self.D[s, j] += 1.0
+        self.D[s, i] -= 1.0
+        self.A = np.zeros((n, len(i)))
+        self.A[i, s] += ki
+        self.A[j, s] -= kj
+        self.lo = np.maximum(lo, _EPS)  # a zero minimum distance must not divide by zero
+        self.hi = hi
+        self._d = np.zeros((len(i), 3))
+        self._len = np.zeros(len(i))
+        self._f = np.zeros(len(i))
+        self._m = np.zeros((n, len(i)))
+        self._dx = np.zeros((n, 3))
+
+    def project(self, x: np.ndarray) -> None:
+        # written for few numpy calls: at this size each call's overhead is the cost
+        d = np.matmul(self.D, x, out=self._d)
+        length = np.einsum("ij,ij->i", d, d, out=self._len)
+        np.sqrt(length, out=length)
+        np.maximum(length, _EPS, out=length)
+        f = np.maximum(length, self.lo, out=self._f)
+        np.minimum(f, self.hi, out=f)  # the target length, clip(len, lo, hi)
+        # 1 - target / len = (len - target) / len: > 0 stretched (the ends move together),
+        # < 0 compressed (apart), 0 inside [lo, hi]
+        np.divide(f, length, out=f)
+        np.subtract(1.0, f, out=f)
+        np.multiply(self.A, f, out=self._m)
+        x += np.matmul(self._m, d, out=self._dx)

@@ -170,6 +170,13 @@ class World:
         ca, cb = ca.ravel(), cb.ravel()
         keep = self._cap_body[ca] < self._cap_body[cb] if len(ca) else np.zeros(0, dtype=bool)
         self.pairs = CapsulePairs(ca[keep], cb[keep], self._caps, self._radii, self.inv_mass, len(self.x))
+        self._forget_contacts()
+
+    def _forget_contacts(self) -> None:
+        """Which pairs were in contact last step is unknown (new body, teleport): assume all, so
+        that no overlap is taken for a fast pass-through (see step)."""
+        self._was_near = np.ones(len(self.pairs), dtype=bool)
+        self._any_near = True
 
     # ---- control --------------------------------------------------------------------------
 
@@ -185,6 +192,8 @@ class World:
         t = np.asarray(targets, dtype=float)
         if t.shape != (b.n_particles, 3):
             raise ValueError(f"targets must be ({b.n_particles}, 3), got {t.shape}")
+        if not np.isfinite(t).all():  # one NaN would spread through the sticks to every particle
+            raise ValueError("targets must be finite")
         self.targets[sl] = t
         key = (stiffness, damping_ratio) if np.isscalar(stiffness) and np.isscalar(damping_ratio) else None
         if key is None or self._pd_key[bid] != key:  # the game sets the same gains every step
@@ -214,6 +223,7 @@ class World:
         sl = self.bodies[bid].slice
         self.x[sl] = positions
         self.x_prev[sl] = self.x[sl]
+        self._forget_contacts()
 
     def velocity(self, dt: float) -> np.ndarray:
         """Particle velocities (N, 3) over the last step of length dt."""
@@ -272,13 +282,28 @@ class World:
             cand = self.pairs.candidates(x, self.collision_margin)
             if len(cand):
                 s, t, n, depth = self.pairs.narrow(x, cand)
-                contacts = self._contacts(cand, s, t, n, depth, v)
                 # pairs already touching or within the margin become this step's contact
                 # constraints, so relaxing the sticks cannot push them into each other
-                near = depth > -self.collision_margin
-                if near.any():
+                near = np.flatnonzero(depth > -self.collision_margin)
+                if len(near):
                     near_idx = cand[near]
-                    cset = self.pairs.contact_set(near_idx, s[near], t[near], n[near])
+                    s, t, n, depth = s[near], t[near], n[near], depth[near]
+                    cset = self.pairs.contact_set(near_idx, s, t, n)
+                    closing = cset.closing_speeds(v)
+                    # a pair that was apart last step and now overlaps while "separating" went
+                    # past the middle within one step (a fast fist): turn it back the way it came
+                    flip = (depth > 0.0) & (closing < 0.0) & ~self._was_near[near_idx]
+                    if flip.any():
+                        n = np.where(flip[:, None], -n, n)
+                        depth = np.where(flip, 2.0 * self.pairs.rsum[near_idx] - depth, depth)
+                        closing = np.where(flip, -closing, closing)
+                        cset = self.pairs.contact_set(near_idx, s, t, n)
+                    contacts = self._contacts(near_idx, s, n, depth, closing)
+        if self._any_near:
+            self._was_near[:] = False
+        self._any_near = cset is not None
+        if cset is not None:
+            self._was_near[near_idx] = True
 
         ground = x[:, 1]
         relax = self.constraints.relax
@@ -307,27 +332,25 @@ class World:
         self.steps += 1
         return contacts
 
-    def _contacts(self, cand, s, t, n, depth, v) -> list[Contact]:
-        """Contacts among the candidate pairs at the integrated positions (before any
-        resolution), with the closing speed of the two closest points along the normal."""
+    def _contacts(self, idx, s, n, depth, closing) -> list[Contact]:
+        """Contacts among pairs `idx` that overlap at the integrated positions (before any
+        resolution), with the closing speed of their closest points along the normal."""
         hit = np.flatnonzero(depth > 0.0)
         if len(hit) == 0:
             return []
         p = self.pairs
-        k = cand[hit]
-        s, t, n, depth = s[hit], t[hit], n[hit], depth[hit]
-        ca = p.closest_on_a(self.x, k, s)
-        closing = np.einsum("ij,ij->i", p.relative(v, k, s, t), n)
-        ra = self._radii[p.cap_a[k]]
+        k = idx[hit]
+        n, depth = n[hit], depth[hit]
+        ca = p.closest_on_a(self.x, k, s[hit])
         # midway between the two surfaces along the normal
-        point = ca + n * (ra - 0.5 * depth)[:, None]
-        ca_, cb_ = p.cap_a[k], p.cap_b[k]
-        rows = zip(self._cap_body[ca_].tolist(), self._cap_local[ca_].tolist(), ca_.tolist(),
-                   self._cap_body[cb_].tolist(), self._cap_local[cb_].tolist(), cb_.tolist(),
-                   point, n, closing.tolist(), depth.tolist(), strict=True)
+        point = ca + n * (self._radii[p.cap_a[k]] - 0.5 * depth)[:, None]
+        ga, gb = p.cap_a[k], p.cap_b[k]
+        rows = zip(self._cap_body[ga].tolist(), self._cap_local[ga].tolist(), ga.tolist(),
+                   self._cap_body[gb].tolist(), self._cap_local[gb].tolist(), gb.tolist(),
+                   point, n, closing[hit].tolist(), depth.tolist(), strict=True)
         tags = self._cap_tags
-        return [Contact(ba, la, tags[ga], bb, lb, tags[gb], pt, nn, sp, de)
-                for ba, la, ga, bb, lb, gb, pt, nn, sp, de in rows]
+        return [Contact(ba, la, tags[a], bb, lb, tags[b], pt, nn, sp, de)
+                for ba, la, a, bb, lb, b, pt, nn, sp, de in rows]
 
     def state_hash(self) -> str:
         """Hash of the simulation state (positions, previous positions, step count)."""
