@@ -233,17 +233,22 @@ class Bouts:
         # windows already over are taken as spent: the state does not say whether they landed
         self.spent[:, who] = t.spent_before[action, np.clip(frame, 0, t.spent_before.shape[1] - 1)]
 
-    def pose(self, who) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(distance, bearing_self, bearing_other) seen by boxer `who` ((B,) int or int)."""
-        rows = np.arange(self.n)
-        who = np.broadcast_to(np.asarray(who), (self.n,))
+    def pose(self, who, rows: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(distance, bearing_self, bearing_other) seen by boxer `who` ((B,) int or int),
+        for all bouts or only these rows (then `who` is per row or one int)."""
+        if rows is None:
+            rows = np.arange(self.n)
+        who = np.broadcast_to(np.asarray(who), rows.shape)
         me, other = self.pos[rows, who], self.pos[rows, 1 - who]
-        yaw = self.yaw
+        act, base = self.act[rows], self.base_yaw[rows]
+        f = np.clip(self.frame[rows], 0, None)
+        yaw = base + self.table.offset[act, f, 2]
+        k = np.arange(len(rows))
         dv = other - me
         dist = np.hypot(dv[:, 0], dv[:, 1])
         head = np.arctan2(dv[:, 0], dv[:, 1])
-        bs = wrap_angle(head - yaw[rows, who])
-        bo = wrap_angle(head + math.pi - yaw[rows, 1 - who])
+        bs = wrap_angle(head - yaw[k, who])
+        bo = wrap_angle(head + math.pi - yaw[k, 1 - who])
         return dist, bs, bo
 
     def select(self, rows: np.ndarray) -> Bouts:
@@ -374,8 +379,7 @@ def greedy_choice(b: Bouts, who: int, rows: np.ndarray, rules: BoutRules) -> np.
     """The greedy opponent: the most damaging attack whose reach covers the other now,
     otherwise a step forward."""
     t = b.table
-    dist, bs, _ = b.pose(who)
-    dist, bs = dist[rows], bs[rows]
+    dist, bs, _ = b.pose(who, rows)
     ahead = dist * np.cos(bs)
     side = np.abs(dist * np.sin(bs))
     step_fwd = t.index("step_forward") if "step_forward" in t.names else t.wait

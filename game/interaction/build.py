@@ -36,10 +36,10 @@ CHOOSABLE = ["straight_l", "straight_r", "uppercut_l", "uppercut_r", "hook_l", "
 class BuildParams:
     seed: int = 0
     states: int = 60000
-    bouts: int = 2048              # sampling bouts run at once
-    bout_steps: int = 1200         # steps per sampling bout before it restarts
+    bouts: int = 8192              # sampling bouts run at once
+    bout_steps: int = 300          # steps per sampling bout before it restarts
     max_rounds: int = 12           # sampling rounds at most (each: `bouts` x `bout_steps`)
-    sample_factor: float = 1.6     # sample until this many x `states` distinct cells exist
+    sample_factor: float = 1.3     # sample until this many x `states` distinct cells exist
     greedy_share: float = 0.35     # share of sampled decisions taken by the greedy policy
     opponent_max: float = 1.0      # 1: min-max; 0: the opponent's expectation (random)
 
@@ -87,11 +87,11 @@ def sample_states(t: ActionTable, grid: StateGrid, p: BuildParams, rules: BoutRu
                     if not len(rows):
                         continue
                     w = who[rows]
-                    d, bs, bo = b.pose(who)
+                    d, bs, bo = b.pose(w, rows)
                     act, frame = canonical_other(b, who)
-                    sel = (rows,)
-                    key = grid.key(d[sel], bs[sel], bo[sel], act[sel], frame[sel])
-                    for c, v in zip(cols, (key, d[sel], bs[sel], bo[sel], act[sel], frame[sel]), strict=True):
+                    act, frame = act[rows], frame[rows]
+                    key = grid.key(d, bs, bo, act, frame)
+                    for c, v in zip(cols, (key, d, bs, bo, act, frame), strict=True):
                         c.append(v)
                     choice = rng.choice(t.choices, len(rows))
                     greedy = rng.random(len(rows)) < p.greedy_share

@@ -46,10 +46,11 @@ def _choose(policy: str, b: Bouts, who: int, rows: np.ndarray, graph: Interactio
         return rng.choice(table.choices[table.choices != table.wait], len(rows))
     if policy == "greedy":
         return greedy_choice(b, who, rows, graph.table.rules)
-    d, bs, bo = b.pose(who)
+    d, bs, bo = b.pose(who, rows)
     act, frame = canonical_other(b, np.full(b.n, who))
-    return np.array([graph.best_action_id(float(d[r]), float(bs[r]), float(bo[r]), int(act[r]),
-                                          float(frame[r])) for r in rows], dtype=np.int64)
+    act, frame = act[rows], frame[rows]
+    return np.array([graph.best_action_id(float(d[k]), float(bs[k]), float(bo[k]), int(act[k]),
+                                          float(frame[k])) for k in range(len(rows))], dtype=np.int64)
 
 
 def duel(graph: InteractionGraph, lib: dict, opponent: str = "random", bouts: int = 200,

@@ -63,7 +63,7 @@ class StateGrid:
 
     distance_step: float = 0.05      # metres
     angle_step_deg: float = 10.0     # degrees, both bearings
-    phase_step: int = 2              # clip frames
+    phase_step: int = 1              # clip frames
     distance_max: float = 4.0        # beyond this, all distances share the last bin
     max_frames: int = 256            # upper bound of any action's length (sizes the key)
 
