@@ -206,7 +206,7 @@ def build_graph(lib: dict, params: BuildParams | None = None, rules: BoutRules |
     samples, rounds = sample_states(t, grid, params, rules, rewards, rng, log)
     t1 = time.perf_counter()
     keys, feat, oact, oframe, visits = select_states(samples, grid, params.states)
-    index = StateIndex(grid, keys)
+    index = StateIndex(grid, keys, ready_action=t.wait)
     if log:
         log(f"kept {len(keys)} states of {len(np.unique(samples[0]))} cells")
     indptr, dst, action, reward, steps, flip = expand_edges(t, index, feat, oact, oframe, rules, rewards)
@@ -230,4 +230,5 @@ def build_graph(lib: dict, params: BuildParams | None = None, rules: BoutRules |
         visits=visits, best_action=action[sol.best_edge], value=sol.value.astype(np.float32),
         edge_ptr=indptr, edge_dst=dst, edge_action=action, edge_steps=steps,
         edge_flip=flip, edge_reward=reward.astype(np.float32),
+        fill_keys=index.fill_keys, fill_state=index.fill_state,
         grid=grid, rules=rules, rewards=rewards, build=info)

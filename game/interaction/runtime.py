@@ -19,10 +19,11 @@ class InteractionGraph:
     def __init__(self, table: GraphTable, path: str | Path | None = None):
         self.table = table
         self.path = Path(path) if path is not None else None
-        self.index = StateIndex(table.grid, table.keys)
         self.names = list(table.action_names)
         self._ids = {n: i for i, n in enumerate(self.names)}
         self.wait_id = self._ids[IDLE]
+        self.index = StateIndex(table.grid, table.keys, (table.fill_keys, table.fill_state),
+                                ready_action=self.wait_id)
         self.ready_frame = table.rules.wait_frames - 1
         self._best = table.best_action.tolist()
         self._best_names = [self.names[i] for i in self._best]

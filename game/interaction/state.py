@@ -86,9 +86,12 @@ class StateGrid:
     def bins(self, distance, bearing_self, bearing_other, other_frame):
         """Integer bins (d, bs, bo, phase), vectorized."""
         nd, na = self.n_distance, self.n_angle
-        db = np.clip(np.floor(np.asarray(distance) / self.distance_step), 0, nd - 1).astype(np.int64)
-        sb = np.floor((wrap_angle(bearing_self) + math.pi) / self.angle_step).astype(np.int64) % na
-        ob = np.floor((wrap_angle(bearing_other) + math.pi) / self.angle_step).astype(np.int64) % na
+        # multiply by the reciprocal, as the scalar look-up does, so both agree on borders
+        ds, as_ = 1.0 / self.distance_step, 1.0 / self.angle_step
+        two_pi = 2.0 * math.pi
+        db = np.clip(np.floor(np.asarray(distance) * ds), 0, nd - 1).astype(np.int64)
+        sb = np.floor(((np.asarray(bearing_self) + math.pi) % two_pi) * as_).astype(np.int64) % na
+        ob = np.floor(((np.asarray(bearing_other) + math.pi) % two_pi) * as_).astype(np.int64) % na
         pb = np.clip(np.asarray(other_frame) // self.phase_step, 0, self.n_phase - 1).astype(np.int64)
         return db, sb, ob, pb
 

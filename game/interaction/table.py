@@ -18,6 +18,7 @@ Arrays (S states, E edges grouped by source state, edge_ptr[s]:edge_ptr[s+1] are
 | edge_steps | (E,) uint8 | 60 Hz steps until the next decision |
 | edge_flip | (E,) bool | the next decision is the other boxer's |
 | edge_reward | (E,) float32 | the chooser's reward along the edge |
+| fill_keys, fill_state | (F,) int64, int32 | nearest state of every cell next to a sampled one (lookup.py) |
 """
 
 from __future__ import annotations
@@ -60,6 +61,8 @@ class GraphTable:
     edge_steps: np.ndarray
     edge_flip: np.ndarray
     edge_reward: np.ndarray
+    fill_keys: np.ndarray
+    fill_state: np.ndarray
     grid: StateGrid = field(default_factory=StateGrid)
     rules: BoutRules = field(default_factory=BoutRules)
     rewards: Rewards = field(default_factory=Rewards)
@@ -99,6 +102,8 @@ class GraphTable:
                 edge_steps=np.minimum(self.edge_steps, 255).astype(np.uint8),
                 edge_flip=self.edge_flip.astype(bool),
                 edge_reward=self.edge_reward.astype(np.float32),
+                fill_keys=self.fill_keys.astype(np.int64),
+                fill_state=self.fill_state.astype(np.int32),
             )
 
     @classmethod
@@ -120,7 +125,7 @@ class GraphTable:
 
         need = ["meta", "action_names", "keys", "features", "other_action", "other_frame",
                 "visits", "best_action", "value", "edge_ptr", "edge_dst", "edge_action",
-                "edge_steps", "edge_flip", "edge_reward"]
+                "edge_steps", "edge_flip", "edge_reward", "fill_keys", "fill_state"]
         missing = [k for k in need if k not in a]
         if missing:
             raise bad(f"missing {', '.join(missing)}")
@@ -147,11 +152,14 @@ class GraphTable:
             and a["edge_ptr"].shape == (S + 1,)
             and all(a[k].shape == (E,) for k in ("edge_action", "edge_steps", "edge_flip",
                                                   "edge_reward"))
+            and a["fill_keys"].ndim == 1 and a["fill_state"].shape == a["fill_keys"].shape
         )
         if not shapes_ok:
             raise bad("array shapes disagree")
         if S == 0:
             raise bad("no states")
+        if "guard" not in [str(x) for x in a["action_names"]]:
+            raise bad("action_names lacks 'guard'")
         ptr = a["edge_ptr"].astype(np.int64)
         if ptr[0] != 0 or ptr[-1] != E or (np.diff(ptr) < 0).any():
             raise bad("edge offsets out of order")
@@ -160,8 +168,10 @@ class GraphTable:
         if a["best_action"].min() < 0 or a["best_action"].max() >= A or \
                 (E and a["edge_action"].max() >= A):
             raise bad("an action id outside action_names")
-        if (np.diff(a["keys"]) <= 0).any():
-            raise bad("state keys not strictly ascending")
+        if (np.diff(a["keys"]) <= 0).any() or (np.diff(a["fill_keys"]) <= 0).any():
+            raise bad("keys not strictly ascending")
+        if len(a["fill_state"]) and (a["fill_state"].min() < 0 or a["fill_state"].max() >= S):
+            raise bad("the look-up fill points outside the states")
         if not (np.isfinite(a["value"]).all() and np.isfinite(a["features"]).all()):
             raise bad("non-finite numbers")
         return cls(
@@ -172,4 +182,5 @@ class GraphTable:
             best_action=a["best_action"].astype(np.int64), value=a["value"],
             edge_ptr=ptr, edge_dst=a["edge_dst"], edge_action=a["edge_action"],
             edge_steps=a["edge_steps"], edge_flip=a["edge_flip"], edge_reward=a["edge_reward"],
+            fill_keys=a["fill_keys"].astype(np.int64), fill_state=a["fill_state"],
             grid=grid, rules=rules, rewards=rewards, build=meta.get("build", {}))

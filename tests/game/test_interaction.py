@@ -247,7 +247,7 @@ def test_lookup_maps_a_live_situation_to_its_nearest_state(small_graph):
         aid, frame = g.other_code(s.other_action, s.other_phase)
         peer = g.index.brute_force(d, bs, bo, aid, frame)
         # the same state, or one exactly as near (a situation on a cell border)
-        q = g.table.grid.normalized(d, bs, bo)
+        q = g.table.grid.cell_centres(np.array([g.table.grid.key(d, bs, bo, aid, frame)]))[0]
         near = [grid_distance2(g.index.centres[k], q, g.table.grid.n_angle) for k in (got, peer)]
         assert got == peer or near[0] == pytest.approx(near[1])
         assert g.table.other_action[got] == g.table.other_action[peer]
@@ -267,6 +267,19 @@ def test_scalar_and_vectorized_lookup_agree(small_graph):
     many = g.index.nearest_many(d, bs, bo, act, frame)
     one = [g.index.nearest(d[i], bs[i], bo[i], int(act[i]), int(frame[i])) for i in range(n)]
     np.testing.assert_array_equal(many, one)
+
+
+def test_fill_and_scan_agree_with_brute_force(small_graph):
+    g = small_graph
+    rng = np.random.default_rng(2)
+    n = 400
+    d = rng.uniform(0, 4.5, n)
+    bs, bo = rng.uniform(-math.pi, math.pi, (2, n))
+    act = rng.integers(0, len(g.names), n)
+    frame = rng.integers(0, 30, n)
+    many = g.index.nearest_many(d, bs, bo, act, frame)
+    peer = [g.index.brute_force(d[i], bs[i], bo[i], int(act[i]), int(frame[i])) for i in range(n)]
+    np.testing.assert_array_equal(many, peer)
 
 
 def test_idle_other_is_ready(small_graph):
