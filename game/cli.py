@@ -16,6 +16,7 @@ COMMAND_MODULES = [
     "tools.record",
     "tools.devices",
     "tools.bench",
+    "tools.graph",
 ]
 
 

@@ -11,6 +11,7 @@ TARGETS = {
     "loop": "tools.bench_loop",
     "physics": "tools.bench_physics",
     "wiimote": "tools.bench_wiimote",
+    "graph": "tools.bench_graph",
 }
 
 
