@@ -50,8 +50,7 @@ def pad_templates(templates: Sequence[np.ndarray]) -> tuple[np.ndarray, np.ndarr
 class IncrementalDTW:
     """Open-end DTW of a growing query against T templates of shape (L_k, D).
 
-    push(frame) -> (T,) normalized scores of the query so far (lower is closer); `best_pos`
-    holds, per template, the template position the query's end is aligned to."""
+    push(frame) -> (T,) normalized scores of the query so far (lower is closer)."""
 
     def __init__(self, templates: Sequence[np.ndarray], method: str = "auto", min_progress: float = 0.0):
         self.tmpl, self.lengths = pad_templates([np.asarray(t, dtype=np.float64) for t in templates])
@@ -68,10 +67,11 @@ class IncrementalDTW:
         self._expanded = self.tmpl.size >= EXPANDED_COST_FROM
         self._flat = self.tmpl.reshape(self.L * self.T, self.D)
         self._sqnorm = np.einsum("ltd,ltd->lt", self.tmpl, self.tmpl)
-        # Positions past a template's end never count: their normalizer is +inf.
+        # Positions past a template's end never count: +inf added to their normalized score.
         pos = np.arange(self.L)[:, None]
-        self._valid = pos < self.lengths[None, :]
+        self._pad_inf = np.where(pos < self.lengths[None, :], 0.0, np.inf)
         self._steps = (pos + 1.0) * np.ones((1, self.T))  # j + 1, reused for normalization
+        self._cols = np.arange(self.T)
         shape = (self.L, self.T)
         self._row = np.empty(shape)
         self._prev = np.empty(shape)
@@ -80,7 +80,6 @@ class IncrementalDTW:
         self._tmp = np.empty(shape)
         self._diff = np.empty(self.tmpl.shape) if not self._expanded else None
         self.scores = np.empty(self.T)
-        self.best_pos = np.zeros(self.T, dtype=np.int64)
         self.reset()
 
     def reset(self) -> None:
@@ -97,8 +96,7 @@ class IncrementalDTW:
             np.maximum(c, 0.0, out=c)
         else:
             np.subtract(self.tmpl, q, out=self._diff)
-            np.square(self._diff, out=self._diff)
-            np.sum(self._diff, axis=2, out=c)
+            np.einsum("ltd,ltd->lt", self._diff, self._diff, out=c)
         np.sqrt(c, out=c)
         return c
 
@@ -130,12 +128,14 @@ class IncrementalDTW:
         self.n += 1
         norm = np.add(self._steps, float(self.n), out=self._tmp)
         np.divide(row, norm, out=norm)
-        norm[~self._valid] = np.inf
+        norm += self._pad_inf
         if self.min_progress > 0:
-            need = np.minimum(self.lengths, self.min_progress * self.n)  # (T,) positions needed
-            norm[self._steps < need[None, :]] = np.inf
-        np.argmin(norm, axis=0, out=self.best_pos)
-        self.scores[:] = norm[self.best_pos, np.arange(self.T)]
+            # best over positions j >= need - 1: a suffix minimum, then one row per template
+            first = np.minimum(self.lengths, int(np.ceil(self.min_progress * self.n))) - 1
+            suffix = np.minimum.accumulate(norm[::-1], axis=0)
+            np.take(suffix.ravel(), (self.L - 1 - first) * self.T + self._cols, out=self.scores)
+        else:
+            np.min(norm, axis=0, out=self.scores)
         return self.scores
 
 
@@ -169,7 +169,7 @@ def open_end_score(query: np.ndarray, template: np.ndarray, min_progress: float 
     n, m = len(query), len(template)
     steps = np.arange(1, m + 1)
     scores = acc[-1] / (n + steps)
-    scores[steps < min(m, min_progress * n)] = np.inf
+    scores[steps < min(m, int(np.ceil(min_progress * n)))] = np.inf
     return float(np.min(scores))
 
 
