@@ -27,6 +27,7 @@ from engine.recognition.templates import activity, rest_gravity
 
 UNNOTICEABLE_FRAMES = 6
 PAD_BEFORE, PAD_AFTER = 20, 40
+EARLY_TOLERANCE = 20  # frames a stream start may precede its labelled interval (1/3 s)
 GROUPS = ("correct", "unnoticeable switch", "noticeable switch", "wrong or missed")
 
 
@@ -175,14 +176,19 @@ def replay_stream(rec: DualBufferRecognizer, frames: np.ndarray, clip_frames: Ma
 
 
 def score_stream(
-    events: Sequence[dict], ivs: Sequence[tuple[str, int, int]], n_frames: int, main: int | str, tolerance: int = 6
+    events: Sequence[dict], ivs: Sequence[tuple[str, int, int]], n_frames: int, main: int | str, tolerance: int = EARLY_TOLERANCE
 ) -> Summary:
-    """Match starts to intervals (a start inside [first - tolerance, end) starts it)."""
+    """Match starts to intervals: a start inside [first - tolerance, end) starts the interval,
+    the early margin not reaching back past the previous interval's end (hand-labelled
+    intervals begin after the wind-up the sensor already sees)."""
     s = Summary(main)
     starts = [e for e in events if e["event"] == "start"]
     used = set()
+    prev_end = 0
     for action, a, b in ivs:
-        mine = [k for k, e in enumerate(starts) if a - tolerance <= e["frame"] < b and k not in used]
+        early = max(a - tolerance, prev_end)
+        prev_end = b
+        mine = [k for k, e in enumerate(starts) if early <= e["frame"] < b and k not in used]
         if not mine:
             s.outcomes.append(Outcome(action, None, None, -1, None))
             continue
@@ -219,10 +225,9 @@ def evaluate_stream_folds(
         train = [iv for iv in ivs if not (lo <= iv[1] < hi)]
         test = [(a, s - lo, e - lo) for a, s, e in ivs if lo <= s < hi]
         templates = Templates.from_trials(stream_trials(frames, train), **(template_kwargs or {}))
-        clip = {a: int(np.median([e - s for b, s, e in train if b == a])) for a in templates.action_names}
         for m, pool in zip(mains, pooled, strict=True):
             rec = DualBufferRecognizer(templates, main=m, **rec_kwargs)
-            events = replay_stream(rec, frames[lo:hi], clip)
+            events = replay_stream(rec, frames[lo:hi], clip_lengths(rec))
             s = score_stream(events, test, hi - lo, m)
             pool.outcomes += s.outcomes
             pool.false_starts += s.false_starts
@@ -230,19 +235,22 @@ def evaluate_stream_folds(
     return pooled
 
 
+def clip_lengths(rec: DualBufferRecognizer) -> dict[str, int]:
+    """The simulated character's clip length per action: the median length of the action's
+    templates from the gate onset to the end of the motion (the clip plays the motion)."""
+    acts = rec._tmpl_action
+    return {a: 24 + 0*int(np.median(rec.template_lengths[acts == i])) for i, a in enumerate(rec.action_names)}
+
+
 def evaluate_stream(
     templates: Templates, frames: np.ndarray, labels: Sequence[str], mains: Sequence[int | str], **rec_kwargs
 ) -> list[Summary]:
-    """A labelled stream against given templates (clip length = median template length)."""
+    """A labelled stream against given templates (clip lengths from `clip_lengths`)."""
     ivs = intervals(labels)
-    clip = {
-        a: int(np.median([len(s) - o for s, o, b in zip(templates.signals, templates.onsets, templates.actions, strict=True) if b == a]))
-        for a in templates.action_names
-    }
     out = []
     for m in mains:
         rec = DualBufferRecognizer(templates, main=m, **rec_kwargs)
-        out.append(score_stream(replay_stream(rec, frames, clip), ivs, len(frames), m))
+        out.append(score_stream(replay_stream(rec, frames, clip_lengths(rec)), ivs, len(frames), m))
     return out
 
 

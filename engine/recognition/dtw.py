@@ -138,6 +138,11 @@ class IncrementalDTW:
             np.min(norm, axis=0, out=self.scores)
         return self.scores
 
+    def position(self, k: int) -> int:
+        """Template k's position aligned to the query's newest frame (unconstrained open end)."""
+        n_k = int(self.lengths[k])
+        return int(np.argmin(self._row[:n_k, k] / (self._steps[:n_k, 0] + self.n)))
+
 
 def dtw_rows(query: np.ndarray, template: np.ndarray) -> np.ndarray:
     """Reference: the plain full accumulated-cost matrix (n, L) of the same step pattern,

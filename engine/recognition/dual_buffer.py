@@ -39,6 +39,10 @@ STILL_DELTA_G = 0.03  # a sensor is still when it changes less than this per fra
 STILL_FRAMES = 3  # ... for this many frames in a row, reading about 1 g
 STILL_NORM_TOL = 0.2
 GRAVITY_FOLLOW = 0.05  # how fast g follows the signal while the gate is closed
+# A template is only accepted once the motion has been at least this strong relative to the
+# template's own peak activity (a weak wiggle must not launch a punch just because its shape
+# resembles the punch's gentle first frames; a real punch gets there within a few frames).
+ENERGY_RATIO = 0.4
 
 IDLE, ACTIVE, DISCARD = "idle", "active", "discard"
 
@@ -60,6 +64,8 @@ class DualBufferRecognizer:
         reject: bool = True,
         dtw_method: str = "auto",
         min_progress: float = MIN_PROGRESS,
+        complete_fraction: float = 0.9,
+        complete_frames: int = 2,
     ):
         if not isinstance(templates, Templates):
             raise TypeError("templates must be a Templates")
@@ -76,6 +82,8 @@ class DualBufferRecognizer:
         self.switch_margin = float(switch_margin)
         self.auto_lead = float(auto_lead)
         self.reject = bool(reject)
+        self.complete_fraction = float(complete_fraction)
+        self.complete_frames = int(complete_frames)
         self.dim = templates.dim
         self.feature = templates.feature
 
@@ -87,19 +95,41 @@ class DualBufferRecognizer:
         self._tmpl_action = np.array([index[templates.actions[k]] for k in order])
         self._action_starts = np.flatnonzero(np.r_[True, np.diff(self._tmpl_action) != 0])
         self.thresholds = templates.thresholds[order] if reject else np.full(len(order), np.inf)
+        self.window = max(self.supplementary, AUTO_MAX_MAIN if main == "auto" else int(main))
         cut = [self._cut_at_gate(templates, k) for k in order]
+        self._peak_act = self._template_peaks(templates, order)
         self.template_lengths = np.array([len(c) for c in cut])
         self.dtw = IncrementalDTW(cut, method=dtw_method, min_progress=min_progress)
-        self.window = max(self.supplementary, AUTO_MAX_MAIN if main == "auto" else int(main))
         self.reset()
 
+    def _gate_start(self, templates: Templates, k: int) -> int:
+        """Where this recognizer's gate would open on template k: the start of the run of
+        above-gate frames that holds the template's trimmed onset (earlier wiggles separated by
+        quiet frames are not the motion); the first above-gate frame after the onset when the
+        onset itself is gentler than the gate; the onset when the gate never opens."""
+        act = activity(templates.signals[k], templates.gravity[k])
+        on = int(templates.onsets[k])
+        if act[on] < self.noise_g:
+            later = np.flatnonzero(act[on:] >= self.noise_g)
+            return on + int(later[0]) if len(later) else on
+        while on > 0 and act[on - 1] >= self.noise_g:
+            on -= 1
+        return on
+
+    def _template_peaks(self, templates: Templates, order: np.ndarray) -> np.ndarray:
+        """(window, T) running maximum of each template's activity from its gate onset."""
+        out = np.zeros((self.window, len(order)))
+        for col, k in enumerate(order):
+            act = activity(templates.signals[k], templates.gravity[k])[self._gate_start(templates, k) :]
+            run = np.maximum.accumulate(act)[: self.window]
+            out[: len(run), col] = run
+            out[len(run) :, col] = run[-1]
+        return out
+
     def _cut_at_gate(self, templates: Templates, k: int) -> np.ndarray:
-        """Template k from the frame this recognizer's gate would open on (its own trimmed
-        onset when the gate never opens on it), in the recognizer's feature space."""
+        """Template k from its gate onset, in the recognizer's feature space."""
         sig, g = templates.signals[k], templates.gravity[k]
-        opened = np.flatnonzero(activity(sig, g) >= self.noise_g) if self.noise_g > 0 else np.array([0])
-        start = int(opened[0]) if len(opened) else int(templates.onsets[k])
-        return features(sig[start:], g, self.feature)
+        return features(sig[self._gate_start(templates, k) :], g, self.feature)
 
     # -- state -------------------------------------------------------------------------------
     def reset(self) -> None:
@@ -126,6 +156,8 @@ class DualBufferRecognizer:
         self._peak_speed = 0.0
         self._peak_dir = np.zeros(3)
         self._peak_g = 0.0
+        self._peak_act_seen = 0.0
+        self._done = 0
 
     @property
     def current_action(self) -> str | None:
@@ -191,6 +223,7 @@ class DualBufferRecognizer:
             self.gravity[:] = x
             act = 0.0
         valid = act >= self.noise_g
+        self._act = act
         if not valid and self.state != ACTIVE:
             self.gravity += GRAVITY_FOLLOW * (x - self.gravity)
         return valid
@@ -198,13 +231,16 @@ class DualBufferRecognizer:
     def _step_active(self, x: np.ndarray, valid: bool, events: list[dict]) -> None:
         self.count += 1
         self.quiet = 0 if valid else self.quiet + 1
+        self._peak_act_seen = max(self._peak_act_seen, self._act)
         self._track_speed(x)
+        complete = False
         if self.count <= self.window:
             scores = self.dtw.push(features(x, self._g0, self.feature))
             self._decide(scores, events)
-        if self.quiet >= self.null_frames:
+            complete = self._complete(scores)
+        if self.quiet >= self.null_frames or complete:
             if self.action is not None:
-                events.append(self._event("end", self.action_names[self.action], None))
+                events.append(self._event("end", self.action_names[self.action], None, reason="complete" if complete else None))
             elif self.pending:
                 events.append(self._event("reject", None, None))
             self._begin_motion_state()
@@ -214,7 +250,9 @@ class DualBufferRecognizer:
         best = int(np.argmin(scores))
         best_action = int(self._tmpl_action[best])
         best_score = float(scores[best])
-        ok = best_score <= self.thresholds[best]
+        ok = best_score <= self.thresholds[best] and (
+            not self.reject or self._peak_act_seen >= ENERGY_RATIO * self._peak_act[-1, best]
+        )
         if self.action is None:
             if not self.pending and not self._first_decision_due(scores):
                 return
@@ -239,6 +277,19 @@ class DualBufferRecognizer:
             events.append(
                 self._event("switch", self.action_names[best_action], best_score, from_frame=self.frame - self.start_frame)
             )
+
+    def _complete(self, scores: np.ndarray) -> bool:
+        """True when the current action's best template has been matched to its end for
+        `complete_frames` frames in a row: the motion is over even if the hand never rests
+        (punches thrown back to back), so the next rise is a new onset."""
+        if self.complete_fraction <= 0 or self.action is None:
+            return False
+        lo = self._action_starts[self.action]
+        hi = self._action_starts[self.action + 1] if self.action + 1 < len(self._action_starts) else len(scores)
+        k = lo + int(np.argmin(scores[lo:hi]))
+        pos = self.dtw.position(k)
+        self._done = self._done + 1 if pos + 1 >= self.complete_fraction * self.template_lengths[k] else 0
+        return self._done >= self.complete_frames
 
     def _first_decision_due(self, scores: np.ndarray) -> bool:
         if self.main != "auto":

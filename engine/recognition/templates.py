@@ -266,7 +266,7 @@ class Templates:
                 sigs = [np.vstack([lead, body])]
                 ons = [k]
                 gr = [np.mean(grav, axis=0)]
-            for idx, sig, on, g in zip(built, sigs, ons, gr):
+            for idx, sig, on, g in zip(built, sigs, ons, gr, strict=True):
                 # Spread: how far the action's OTHER trials score against this template, at
                 # every prefix the recognizer can look at (from 3 frames to the whole motion).
                 others = [i for i in range(len(motions)) if i != idx or method != "trials"]
@@ -357,7 +357,7 @@ class Templates:
             if not np.all(np.isfinite(signals)):
                 raise ValueError("non-finite values in the signals")
             cuts = np.cumsum(lengths)[:-1]
-            meta = dict(zip(data["meta_keys"].tolist(), data["meta_values"].tolist()))
+            meta = dict(zip(data["meta_keys"].tolist(), data["meta_values"].tolist(), strict=True))
             t = cls(
                 [str(a) for a in data["actions"].tolist()],
                 np.split(signals, cuts),
