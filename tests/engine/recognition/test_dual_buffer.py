@@ -89,7 +89,7 @@ def test_switch_carries_n_p():
 
 
 def test_end_after_null_signal(templates):
-    rec = DualBufferRecognizer(templates, null_frames=6)
+    rec = DualBufferRecognizer(templates, null_frames=6, complete_fraction=0)  # the null rule alone
     motion = bump(0, 3.0)
     frames = np.vstack([rest(10), motion, rest(30)])
     events = run(rec, frames)
@@ -99,6 +99,17 @@ def test_end_after_null_signal(templates):
     last_valid = int(np.flatnonzero(act >= 1.0)[-1])
     assert end[0]["frame"] == last_valid + 6
     assert rec.state == "idle"
+
+
+def test_back_to_back_motions_each_start_once_the_template_is_consumed(templates):
+    # no quiet frame between the two: only the "template consumed" rule can separate them
+    frames = np.vstack([rest(10), bump(0, 3.0), bump(2, 3.0), rest(20)])
+    events = run(DualBufferRecognizer(templates), frames)
+    assert [e["action"] for e in events if e["event"] == "start"] == ["jab", "upper"]
+    ends = [e for e in events if e["event"] == "end"]
+    assert ends[0]["reason"] == "complete" and ends[0]["frame"] < 10 + 24 + 6
+    without = run(DualBufferRecognizer(templates, complete_fraction=0), frames)
+    assert [e["action"] for e in without if e["event"] == "start"] == ["jab"]
 
 
 def test_discard_after_character_finished_until_discard_frames(templates):
