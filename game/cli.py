@@ -17,6 +17,7 @@ COMMAND_MODULES = [
     "tools.devices",
     "tools.bench",
     "tools.graph",
+    "tools.recognition_commands",
 ]
 
 

@@ -12,6 +12,7 @@ TARGETS = {
     "physics": "tools.bench_physics",
     "wiimote": "tools.bench_wiimote",
     "graph": "tools.bench_graph",
+    "recognition": "tools.bench_recognition",
 }
 
 

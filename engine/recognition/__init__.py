@@ -1,1 +1,12 @@
-"""Recognition: templates, the dual buffer and the incremental DTW (paper sections III-IV)."""
+"""Recognition: templates, the dual buffer and the incremental DTW (paper sections III-IV).
+
+    from engine.recognition import Templates, DualBufferRecognizer
+    templates = Templates.from_trials({"hook_r": [trial, ...]})  # (n, D) at 60 Hz in g
+    rec = DualBufferRecognizer(templates)
+    events = rec.push(frame)                                      # list of FORMATS.md dicts
+"""
+
+from engine.recognition.dual_buffer import DualBufferRecognizer
+from engine.recognition.templates import TemplateFileError, Templates
+
+__all__ = ["DualBufferRecognizer", "Templates", "TemplateFileError"]

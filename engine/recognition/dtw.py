@@ -1,0 +1,187 @@
+"""Incremental DTW of one growing query against every template at once (paper IV-B).
+
+The alignment is anchored at the motion onset (query frame 0 meets template frame 0) and open
+at the template's end: after n query frames, a template's score is the best normalized cost of
+matching the whole query to any PREFIX of the template, so a half-done punch matches the first
+half of its template. Each pushed frame adds one row of the cost matrix for all templates in a
+few numpy calls; nothing is ever recomputed.
+
+Step pattern: "symmetric2" (horizontal and vertical steps weigh the local cost once, diagonal
+steps twice, the start cell twice). Every path from (0, 0) to (i, j) then has total weight
+i + j + 2, so dividing by it normalizes by path length exactly while the DP stays optimal.
+
+Within a row, D[i, j] = min(a_j, D[i, j-1] + c_j) with a_j from the previous row: a min-plus
+scan. Two ways to run it, identical results:
+- "scan": the closed form D_j = C_j + min_{k<=j}(a_k - C_k), C = cumsum(c), i.e. numpy
+  `cumsum` and `minimum.accumulate` over the whole (L, T) block. A fixed handful of calls:
+  fastest for a few dozen templates.
+- "loop": a Python loop over template positions j, each step one vectorized operation across
+  all T templates. Per call cost grows with T slowly, so it wins for hundreds of templates.
+`method="auto"` picks by the number of templates (measured by `quickjab bench recognition`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+# Below this many templates the scan's few whole-block calls beat the per-position loop;
+# measured with `quickjab bench recognition --sweep` (crossover between 100 and 300 templates).
+LOOP_FROM_TEMPLATES = 200
+# Above this many (T * L * D) values the local costs are computed from precomputed squared
+# norms and one matrix-vector product instead of a broadcast subtract-square-sum.
+EXPANDED_COST_FROM = 60_000
+
+
+def pad_templates(templates: Sequence[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+    """(L_max, T, D) zero-padded stack (position-major, so a position is one contiguous row)
+    and the (T,) lengths."""
+    lengths = np.array([len(t) for t in templates], dtype=np.int64)
+    if len(templates) == 0 or lengths.min() < 1:
+        raise ValueError("need at least one template, each with at least one frame")
+    dim = templates[0].shape[1]
+    out = np.zeros((int(lengths.max()), len(templates), dim), dtype=np.float64)
+    for k, t in enumerate(templates):
+        out[: len(t), k] = t
+    return out, lengths
+
+
+class IncrementalDTW:
+    """Open-end DTW of a growing query against T templates of shape (L_k, D).
+
+    push(frame) -> (T,) normalized scores of the query so far (lower is closer)."""
+
+    def __init__(self, templates: Sequence[np.ndarray], method: str = "auto", min_progress: float = 0.0):
+        self.tmpl, self.lengths = pad_templates([np.asarray(t, dtype=np.float64) for t in templates])
+        self.L, self.T, self.D = self.tmpl.shape
+        if method == "auto":
+            method = "loop" if self.T >= LOOP_FROM_TEMPLATES else "scan"
+        if method not in ("scan", "loop"):
+            raise ValueError(f"method must be 'auto', 'scan' or 'loop', not {method!r}")
+        self.method = method
+        # Scoring only (the accumulated costs are plain DTW): after n query frames the query's
+        # end may only align to template positions j + 1 >= min(L, min_progress * n), so a
+        # template cannot win by matching a short prefix of itself to a long query.
+        self.min_progress = float(min_progress)
+        self._expanded = self.tmpl.size >= EXPANDED_COST_FROM
+        self._flat = self.tmpl.reshape(self.L * self.T, self.D)
+        self._sqnorm = np.einsum("ltd,ltd->lt", self.tmpl, self.tmpl)
+        # Positions past a template's end never count: +inf added to their normalized score.
+        pos = np.arange(self.L)[:, None]
+        self._pad_inf = np.where(pos < self.lengths[None, :], 0.0, np.inf)
+        self._steps = (pos + 1.0) * np.ones((1, self.T))  # j + 1, reused for normalization
+        self._cols = np.arange(self.T)
+        shape = (self.L, self.T)
+        self._row = np.empty(shape)
+        self._prev = np.empty(shape)
+        self._c = np.empty(shape)
+        self._a = np.empty(shape)
+        self._tmp = np.empty(shape)
+        self._diff = np.empty(self.tmpl.shape) if not self._expanded else None
+        self.scores = np.empty(self.T)
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget the query (a new onset)."""
+        self.n = 0
+
+    def _local_costs(self, q: np.ndarray) -> np.ndarray:
+        c = self._c
+        if self._expanded:
+            # |t - q|^2 = |t|^2 - 2 t.q + |q|^2: one BLAS matvec instead of a (L, T, D) temporary.
+            np.dot(self._flat, q * -2.0, out=c.reshape(-1))
+            c += self._sqnorm
+            c += float(q @ q)
+            np.maximum(c, 0.0, out=c)
+        else:
+            np.subtract(self.tmpl, q, out=self._diff)
+            np.einsum("ltd,ltd->lt", self._diff, self._diff, out=c)
+        np.sqrt(c, out=c)
+        return c
+
+    def push(self, frame: np.ndarray) -> np.ndarray:
+        q = np.asarray(frame, dtype=np.float64)
+        c = self._local_costs(q)
+        a = self._a
+        prev, row = self._row, self._prev  # last push's row is D[i-1]; overwrite the older one
+        if self.n == 0:
+            a.fill(np.inf)
+            a[0] = 2.0 * c[0]
+        else:
+            # a_j = min(D[i-1, j] + c_j, D[i-1, j-1] + 2 c_j): vertical and diagonal steps
+            np.add(prev, c, out=a)
+            np.multiply(c[1:], 2.0, out=self._tmp[1:])
+            self._tmp[1:] += prev[:-1]
+            np.minimum(a[1:], self._tmp[1:], out=a[1:])
+        if self.method == "scan":
+            cum = np.cumsum(c, axis=0, out=self._tmp)
+            np.subtract(a, cum, out=row)
+            np.minimum.accumulate(row, axis=0, out=row)
+            row += cum
+        else:
+            row[0] = a[0]
+            for j in range(1, self.L):
+                np.add(row[j - 1], c[j], out=row[j])
+                np.minimum(row[j], a[j], out=row[j])
+        self._row, self._prev = row, prev
+        self.n += 1
+        norm = np.add(self._steps, float(self.n), out=self._tmp)
+        np.divide(row, norm, out=norm)
+        norm += self._pad_inf
+        if self.min_progress > 0:
+            # best over positions j >= need - 1: a suffix minimum, then one row per template
+            first = np.minimum(self.lengths, int(np.ceil(self.min_progress * self.n))) - 1
+            suffix = np.minimum.accumulate(norm[::-1], axis=0)
+            np.take(suffix.ravel(), (self.L - 1 - first) * self.T + self._cols, out=self.scores)
+        else:
+            np.min(norm, axis=0, out=self.scores)
+        return self.scores
+
+    def position(self, k: int) -> int:
+        """Template k's position aligned to the query's newest frame (unconstrained open end)."""
+        n_k = int(self.lengths[k])
+        return int(np.argmin(self._row[:n_k, k] / (self._steps[:n_k, 0] + self.n)))
+
+
+def dtw_rows(query: np.ndarray, template: np.ndarray) -> np.ndarray:
+    """Reference: the plain full accumulated-cost matrix (n, L) of the same step pattern,
+    computed cell by cell. For tests and as the definition the incremental version follows."""
+    query = np.asarray(query, dtype=np.float64)
+    template = np.asarray(template, dtype=np.float64)
+    n, m = len(query), len(template)
+    acc = np.full((n, m), np.inf)
+    for i in range(n):
+        for j in range(m):
+            c = float(np.linalg.norm(query[i] - template[j]))
+            if i == 0 and j == 0:
+                acc[i, j] = 2.0 * c
+                continue
+            best = np.inf
+            if i > 0:
+                best = min(best, acc[i - 1, j] + c)
+            if j > 0:
+                best = min(best, acc[i, j - 1] + c)
+            if i > 0 and j > 0:
+                best = min(best, acc[i - 1, j - 1] + 2.0 * c)
+            acc[i, j] = best
+    return acc
+
+
+def open_end_score(query: np.ndarray, template: np.ndarray, min_progress: float = 0.0) -> float:
+    """Reference open-end normalized score of the whole query (plain full DTW)."""
+    acc = dtw_rows(query, template)
+    n, m = len(query), len(template)
+    steps = np.arange(1, m + 1)
+    scores = acc[-1] / (n + steps)
+    scores[steps < min(m, int(np.ceil(min_progress * n)))] = np.inf
+    return float(np.min(scores))
+
+
+def dtw_distance(a: np.ndarray, b: np.ndarray) -> float:
+    """Closed-end normalized DTW distance between two whole sequences (vectorized over rows;
+    used offline to build templates and thresholds)."""
+    dtw = IncrementalDTW([np.asarray(b, dtype=np.float64)], method="scan")
+    for x in np.asarray(a, dtype=np.float64):
+        dtw.push(x)
+    return float(dtw._row[len(b) - 1, 0] / (len(a) + len(b)))

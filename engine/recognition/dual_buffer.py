@@ -1,0 +1,334 @@
+"""The dual buffer framework (paper IV-A to IV-C) around the incremental DTW.
+
+Per 60 Hz frame (`push`):
+- Noise gate (IV-A): a frame is valid when the sum over sensors of |a - g| reaches `noise_g`,
+  g being each sensor's gravity, estimated while the sensor is still (and followed slowly
+  while the gate is closed). The first valid frame is the onset; from then on every frame
+  counts, valid or not.
+- Main buffer: when it holds `main` frames, the best template gives the first decision: a
+  `start` event. `main="auto"` decides as early as 3 frames when the best action leads the
+  runner-up clearly, and waits up to 12 frames when it does not.
+- Supplementary buffer (IV-B): up to `supplementary` frames from the onset the DTW keeps
+  growing and the decision is refined; a better action (by `switch_margin`) gives a `switch`
+  with `from_frame` = n_p, the clip frames the character has already played.
+- Rejection: a decision needs the best template's score under its threshold (learned from the
+  spread of the training trials). If none is, nothing starts; the decision may still come
+  later in the supplementary buffer, else the motion is `reject`ed when the buffer is full.
+- Null signal (IV-C): `null_frames` quiet frames in a row `end` the motion.
+- After `character_finished()` (IV-C) frames are discarded until a null signal or until
+  `discard_frames` frames have passed, so the hand's return does not launch a new action.
+
+Events are dicts with the keys of FORMATS.md ("event", "action", "frame", "t" when the caller
+passes it, "from_frame" on switches, "score"), plus estimates of the motion's speed (m/s),
+direction (unit vector in the first sensor's frame) and peak acceleration (g).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from engine.recognition.dtw import IncrementalDTW
+from engine.recognition.templates import MIN_PROGRESS, Templates, activity, features
+
+G = 9.81
+AUTO_MIN_MAIN = 3
+AUTO_MAX_MAIN = 12
+STILL_DELTA_G = 0.03  # a sensor is still when it changes less than this per frame ...
+STILL_FRAMES = 3  # ... for this many frames in a row, reading about 1 g
+STILL_NORM_TOL = 0.2
+GRAVITY_FOLLOW = 0.05  # how fast g follows the signal while the gate is closed
+# A template is only accepted once the motion has been at least this strong relative to the
+# template's own peak activity (a weak wiggle must not launch a punch just because its shape
+# resembles the punch's gentle first frames; a real punch gets there within a few frames).
+ENERGY_RATIO = 0.4
+
+IDLE, ACTIVE, DISCARD = "idle", "active", "discard"
+
+
+class DualBufferRecognizer:
+    """Frames in, action events out. See the module docstring for the rules."""
+
+    def __init__(
+        self,
+        templates: Templates,
+        main: int | str = 6,
+        supplementary: int = 60,
+        noise_g: float = 1.0,
+        null_frames: int = 6,
+        discard_frames: int = 20,
+        *,
+        switch_margin: float = 0.05,
+        auto_lead: float = 0.25,
+        reject: bool = True,
+        dtw_method: str = "auto",
+        min_progress: float = MIN_PROGRESS,
+        complete_fraction: float = 0.9,
+        complete_frames: int = 2,
+    ):
+        if not isinstance(templates, Templates):
+            raise TypeError("templates must be a Templates")
+        if main != "auto" and (not isinstance(main, (int, np.integer)) or main < 1):
+            raise ValueError(f"main must be a positive int or 'auto', not {main!r}")
+        if supplementary < 1 or null_frames < 1 or discard_frames < 0 or noise_g < 0:
+            raise ValueError("supplementary and null_frames must be >= 1, discard_frames and noise_g >= 0")
+        self.templates = templates
+        self.main = main
+        self.supplementary = int(supplementary)
+        self.noise_g = float(noise_g)
+        self.null_frames = int(null_frames)
+        self.discard_frames = int(discard_frames)
+        self.switch_margin = float(switch_margin)
+        self.auto_lead = float(auto_lead)
+        self.reject = bool(reject)
+        self.complete_fraction = float(complete_fraction)
+        self.complete_frames = int(complete_frames)
+        self.dim = templates.dim
+        self.feature = templates.feature
+
+        # Templates sorted by action so per-action minima are one reduceat.
+        names = templates.action_names
+        index = {a: i for i, a in enumerate(names)}
+        order = np.argsort([index[a] for a in templates.actions], kind="stable")
+        self.action_names = names
+        self._tmpl_action = np.array([index[templates.actions[k]] for k in order])
+        self._action_starts = np.flatnonzero(np.r_[True, np.diff(self._tmpl_action) != 0])
+        self.thresholds = templates.thresholds[order] if reject else np.full(len(order), np.inf)
+        self.window = max(self.supplementary, AUTO_MAX_MAIN if main == "auto" else int(main))
+        cut = [self._cut_at_gate(templates, k) for k in order]
+        self._peak_act = self._template_peaks(templates, order)
+        self.template_lengths = np.array([len(c) for c in cut])
+        self.dtw = IncrementalDTW(cut, method=dtw_method, min_progress=min_progress)
+        self.reset()
+
+    def _gate_start(self, templates: Templates, k: int) -> int:
+        """Where this recognizer's gate would open on template k: the start of the run of
+        above-gate frames that holds the template's trimmed onset (earlier wiggles separated by
+        quiet frames are not the motion); the first above-gate frame after the onset when the
+        onset itself is gentler than the gate; the onset when the gate never opens."""
+        act = activity(templates.signals[k], templates.gravity[k])
+        on = int(templates.onsets[k])
+        if act[on] < self.noise_g:
+            later = np.flatnonzero(act[on:] >= self.noise_g)
+            return on + int(later[0]) if len(later) else on
+        while on > 0 and act[on - 1] >= self.noise_g:
+            on -= 1
+        return on
+
+    def _template_peaks(self, templates: Templates, order: np.ndarray) -> np.ndarray:
+        """(window, T) running maximum of each template's activity from its gate onset."""
+        out = np.zeros((self.window, len(order)))
+        for col, k in enumerate(order):
+            act = activity(templates.signals[k], templates.gravity[k])[self._gate_start(templates, k) :]
+            run = np.maximum.accumulate(act)[: self.window]
+            out[: len(run), col] = run
+            out[len(run) :, col] = run[-1]
+        return out
+
+    def _cut_at_gate(self, templates: Templates, k: int) -> np.ndarray:
+        """Template k from its gate onset, in the recognizer's feature space."""
+        sig, g = templates.signals[k], templates.gravity[k]
+        return features(sig[self._gate_start(templates, k) :], g, self.feature)
+
+    # -- state -------------------------------------------------------------------------------
+    def reset(self) -> None:
+        """Back to idle, forgetting gravity and any motion in progress."""
+        self.state = IDLE
+        self.frame = -1
+        self._t: float | None = None
+        self.gravity: np.ndarray | None = None
+        self._last: np.ndarray | None = None
+        self._still = 0
+        self._queued: list[dict] = []
+        self._begin_motion_state()
+
+    def _begin_motion_state(self) -> None:
+        self.count = 0  # frames in the buffer since the onset
+        self.quiet = 0
+        self.action: int | None = None  # index into action_names of the current decision
+        self.onset_frame = -1
+        self.start_frame = -1
+        self.pending = False  # past the first decision point with nothing good enough yet
+        self.discarded = 0
+        self._g0 = None
+        self._velocity = np.zeros((self.dim // 3, 3))
+        self._peak_speed = 0.0
+        self._peak_dir = np.zeros(3)
+        self._peak_g = 0.0
+        self._peak_act_seen = 0.0
+        self._done = 0
+
+    @property
+    def current_action(self) -> str | None:
+        return None if self.action is None else self.action_names[self.action]
+
+    def character_finished(self) -> None:
+        """The character's clip of the current action ended (IV-C): the rest of this motion
+        (the hand coming back) is discarded until a null signal or `discard_frames` frames."""
+        if self.state != ACTIVE or self.action is None:
+            return
+        self._queued.append(self._event("end", self.action_names[self.action], None, reason="character_finished"))
+        self._begin_motion_state()
+        self.state = DISCARD
+
+    # -- the per-frame step ------------------------------------------------------------------
+    def push(self, frame: np.ndarray, t: float | None = None) -> list[dict]:
+        """Feed one 60 Hz frame of shape (D,); returns the events it decided (often none)."""
+        x = np.asarray(frame, dtype=np.float64).reshape(-1)
+        if x.shape[0] != self.dim:
+            raise ValueError(f"frame has {x.shape[0]} values, the templates have D = {self.dim}")
+        self.frame += 1
+        self._t = t
+        events, self._queued = self._queued, []
+        if not np.all(np.isfinite(x)):
+            return events  # a malformed frame is dropped, not a crash
+        valid = self._gate(x)
+        if self.state == DISCARD:
+            self.discarded += 1
+            self.quiet = 0 if valid else self.quiet + 1
+            if self.quiet >= self.null_frames or self.discarded >= self.discard_frames:
+                self._begin_motion_state()
+                self.state = IDLE
+            return events
+        if self.state == IDLE:
+            if not valid:
+                return events
+            self.state = ACTIVE
+            self.onset_frame = self.frame
+            self._g0 = self.gravity.copy()
+            self.dtw.reset()
+        self._step_active(x, valid, events)
+        return events
+
+    def _gate(self, x: np.ndarray) -> bool:
+        """Update the gravity estimate and say whether this frame is valid (above the gate).
+        Plain floats: with 1-4 sensors that is cheaper than a dozen tiny numpy calls."""
+        xs = x.tolist()
+        if self.gravity is None:
+            self.gravity = x.copy()
+            self._last = list(xs)
+        g, last = self.gravity.tolist(), self._last
+        still_now, act = True, 0.0
+        for k in range(0, len(xs), 3):
+            ax, ay, az = xs[k], xs[k + 1], xs[k + 2]
+            dx, dy, dz = ax - last[k], ay - last[k + 1], az - last[k + 2]
+            if dx * dx + dy * dy + dz * dz >= STILL_DELTA_G**2 or abs(math.sqrt(ax * ax + ay * ay + az * az) - 1.0) >= STILL_NORM_TOL:
+                still_now = False
+            gx, gy, gz = ax - g[k], ay - g[k + 1], az - g[k + 2]
+            act += math.sqrt(gx * gx + gy * gy + gz * gz)
+        self._last = xs
+        self._still = self._still + 1 if still_now else 0
+        if self._still >= STILL_FRAMES:
+            self.gravity[:] = x
+            act = 0.0
+        valid = act >= self.noise_g
+        self._act = act
+        if not valid and self.state != ACTIVE:
+            self.gravity += GRAVITY_FOLLOW * (x - self.gravity)
+        return valid
+
+    def _step_active(self, x: np.ndarray, valid: bool, events: list[dict]) -> None:
+        self.count += 1
+        self.quiet = 0 if valid else self.quiet + 1
+        self._peak_act_seen = max(self._peak_act_seen, self._act)
+        self._track_speed(x)
+        complete = False
+        if self.count <= self.window:
+            scores = self.dtw.push(features(x, self._g0, self.feature))
+            self._decide(scores, events)
+            complete = self._complete(scores)
+        if self.quiet >= self.null_frames or complete:
+            if self.action is not None:
+                events.append(self._event("end", self.action_names[self.action], None, reason="complete" if complete else None))
+            elif self.pending:
+                events.append(self._event("reject", None, None))
+            self._begin_motion_state()
+            self.state = IDLE
+
+    def _decide(self, scores: np.ndarray, events: list[dict]) -> None:
+        best = int(np.argmin(scores))
+        best_action = int(self._tmpl_action[best])
+        best_score = float(scores[best])
+        ok = best_score <= self.thresholds[best] and (
+            not self.reject or self._peak_act_seen >= ENERGY_RATIO * self._peak_act[-1, best]
+        )
+        if self.action is None:
+            if not self.pending and not self._first_decision_due(scores):
+                return
+            if ok:
+                self.action = best_action
+                self.start_frame = self.frame
+                events.append(self._event("start", self.action_names[best_action], best_score, late=self.pending))
+                self.pending = False
+            elif self.count >= self.window:
+                events.append(self._event("reject", self.action_names[best_action], best_score))
+                self.pending = False
+                self.count = self.window + 1  # decided: no more DTW for this motion
+            else:
+                self.pending = True
+            return
+        if best_action == self.action or not ok:
+            return
+        per_action = np.minimum.reduceat(scores, self._action_starts)
+        current = float(per_action[self.action])
+        if best_score < current * (1.0 - self.switch_margin):
+            self.action = best_action
+            events.append(
+                self._event("switch", self.action_names[best_action], best_score, from_frame=self.frame - self.start_frame)
+            )
+
+    def _complete(self, scores: np.ndarray) -> bool:
+        """True when the current action's best template has been matched to its end for
+        `complete_frames` frames in a row: the motion is over even if the hand never rests
+        (punches thrown back to back), so the next rise is a new onset."""
+        if self.complete_fraction <= 0 or self.action is None:
+            return False
+        lo = self._action_starts[self.action]
+        hi = self._action_starts[self.action + 1] if self.action + 1 < len(self._action_starts) else len(scores)
+        k = lo + int(np.argmin(scores[lo:hi]))
+        pos = self.dtw.position(k)
+        self._done = self._done + 1 if pos + 1 >= self.complete_fraction * self.template_lengths[k] else 0
+        return self._done >= self.complete_frames
+
+    def _first_decision_due(self, scores: np.ndarray) -> bool:
+        if self.main != "auto":
+            return self.count >= self.main
+        if self.count < AUTO_MIN_MAIN:
+            return False
+        if self.count >= AUTO_MAX_MAIN or len(self.action_names) < 2:
+            return True
+        per_action = np.minimum.reduceat(scores, self._action_starts)
+        first, second = np.partition(per_action, 1)[:2]
+        return second > 0 and (second - first) / second >= self.auto_lead
+
+    def _track_speed(self, x: np.ndarray) -> None:
+        """Integrate the gravity-removed acceleration since the onset: a rough hand velocity,
+        enough to tell a hard punch from a soft one (the paper's future work)."""
+        dyn = (x - self._g0).reshape(-1, 3)
+        v = self._velocity
+        v += dyn * (G / 60.0)
+        for k in range(v.shape[0]):
+            vx, vy, vz = v[k].tolist()
+            sp = math.sqrt(vx * vx + vy * vy + vz * vz)
+            dx, dy, dz = dyn[k].tolist()
+            self._peak_g = max(self._peak_g, math.sqrt(dx * dx + dy * dy + dz * dz))
+            if sp > self._peak_speed:
+                self._peak_speed = sp
+                self._peak_dir = v[k] / sp
+
+    def _event(self, kind: str, action: str | None, score: float | None, **extra) -> dict:
+        ev: dict = {"event": kind, "action": action, "frame": self.frame}
+        if self._t is not None:
+            ev["t"] = round(float(self._t), 4)
+        if "from_frame" in extra:
+            ev["from_frame"] = int(extra.pop("from_frame"))
+        if score is not None:
+            ev["score"] = round(score, 5)
+        if kind in ("start", "switch"):
+            ev["speed"] = round(self._peak_speed, 3)
+            ev["direction"] = [round(float(v), 3) for v in self._peak_dir]
+            ev["peak_g"] = round(self._peak_g, 3)
+            ev["onset_frame"] = self.onset_frame
+        ev.update({k: v for k, v in extra.items() if v})
+        return ev

@@ -1,0 +1,386 @@
+"""Control-signal templates (paper III): per action, built from a handful of trials.
+
+A trial is an (n, D) array at 60 Hz in g, gravity included, D = 3 per sensor. Building:
+1. estimate each sensor's gravity from the trial's first frames (the player starts at rest),
+2. trim the rest at both ends (activity below a fraction of the trial's peak),
+3. combine the trials of an action by one of three methods:
+   - "trials": keep every trial as its own template (nearest neighbour over several templates),
+   - "average": Eq. 1, align every trial to the medoid trial with DTW and average along the path,
+   - "dba": DTW barycenter averaging (Petitjean et al. 2011), a few refinement rounds from the
+     medoid.
+4. learn a rejection threshold per template from the spread of the action's other trials
+   against it (as gesture toolkits such as GRT do: mean + k * std of the training distances).
+
+Templates keep a few frames of lead-in before the trimmed onset: the recognizer cuts each one at
+the frame its own noise gate would open, so template and live motion start at the same point.
+
+Files are plain .npz (no pickles); a corrupt or foreign file raises TemplateFileError naming it.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from engine.errors import InputError
+from engine.recognition.dtw import IncrementalDTW, dtw_distance
+
+FORMAT_VERSION = 1
+METHODS = ("trials", "average", "dba")
+DEFAULT_METHOD = "trials"  # measured: see docs/recognition.md
+FEATURES = ("log", "raw", "dynamic")
+DEFAULT_FEATURE = "log"  # measured: see docs/recognition.md
+LOG_SCALE_G = 0.5  # "log" feature: sign(a) * log(1 + |a| / LOG_SCALE_G)
+MIN_PROGRESS = 2.0  # open-end scoring constraint (dtw.IncrementalDTW.min_progress); measured
+REST_FRAMES = 3  # frames at a trial's start used as the resting gravity estimate
+TRIM_FRACTION = 0.1  # activity below this fraction of the trial's peak is rest
+LEAD_IN = 4  # frames kept before the trimmed onset (the recognizer re-cuts at its own gate)
+REJECT_K = 3.0  # threshold = mean + REJECT_K * std of same-action training scores ...
+REJECT_RATIO = 2.0  # ... and at least REJECT_RATIO * their max
+REJECT_FLOOR_G = 0.05  # and never below this (g): identical trials must not reject all noise
+
+
+class TemplateFileError(InputError):
+    """A template file that cannot be loaded; the message names the file."""
+
+    def __init__(self, path: str | os.PathLike, message: str):
+        self.path = str(path)
+        super().__init__(f"{self.path}: {message}")
+
+
+def rest_gravity(trial: np.ndarray, frames: int = REST_FRAMES) -> np.ndarray:
+    """(D,) the per-sensor gravity estimate: the mean of the trial's first frames."""
+    return np.asarray(trial[: max(1, min(frames, len(trial)))], dtype=np.float64).mean(axis=0)
+
+
+def activity(frames: np.ndarray, gravity: np.ndarray) -> np.ndarray:
+    """(n,) the gate signal of IV-A: the sum over sensors of |a - g| (g per sensor)."""
+    dev = (np.asarray(frames, dtype=np.float64) - gravity).reshape(len(frames), -1, 3)
+    return np.linalg.norm(dev, axis=2).sum(axis=1)
+
+
+def features(frames: np.ndarray, gravity: np.ndarray, kind: str) -> np.ndarray:
+    """What DTW compares: "raw" is the signal as read (gravity included, so the hand's holding
+    posture and its changes count); "log" is raw compressed per axis (a 12 g punch and a 1.5 g
+    gesture both keep their shape, and big peaks do not swamp the posture); "dynamic"
+    subtracts the resting gravity estimated before the onset."""
+    if kind == "raw":
+        return np.asarray(frames, dtype=np.float64)
+    if kind == "log":
+        x = np.asarray(frames, dtype=np.float64)
+        return np.sign(x) * np.log1p(np.abs(x) / LOG_SCALE_G)
+    if kind == "dynamic":
+        return np.asarray(frames, dtype=np.float64) - gravity
+    raise ValueError(f"feature must be one of {FEATURES}, not {kind!r}")
+
+
+def trim_rest(trial: np.ndarray, fraction: float = TRIM_FRACTION, lead_in: int = LEAD_IN) -> tuple[np.ndarray, int]:
+    """The trial without its resting frames at both ends (keeping `lead_in` frames before the
+    onset), and the index of the onset inside the returned array."""
+    trial = np.asarray(trial, dtype=np.float64)
+    act = activity(trial, rest_gravity(trial))
+    peak = float(act.max())
+    if peak <= 0:
+        return trial, 0
+    above = np.flatnonzero(act >= fraction * peak)
+    first = int(above[0])
+    # The end: the last frame that still changes (the hand may stop in a new orientation, so
+    # "rest" at the end is stillness, not closeness to the starting gravity).
+    change = np.r_[0.0, np.linalg.norm(np.diff(trial, axis=0), axis=1)]
+    moving = np.flatnonzero(change >= fraction * max(float(change.max()), 1e-9))
+    last = max(int(moving[-1]) if len(moving) else len(trial) - 1, first)
+    start = max(0, first - lead_in)
+    return trial[start : last + 1], first - start
+
+
+def _check_trials(trials: Mapping[str, Sequence[np.ndarray]]) -> tuple[dict[str, list[np.ndarray]], int]:
+    if not trials:
+        raise ValueError("no trials given")
+    out: dict[str, list[np.ndarray]] = {}
+    dim = None
+    for action, items in trials.items():
+        arrs = [np.asarray(t, dtype=np.float64) for t in items]
+        if not arrs:
+            raise ValueError(f"action {action!r} has no trials")
+        for a in arrs:
+            if a.ndim != 2 or a.shape[1] % 3 or a.shape[1] == 0 or len(a) < 2:
+                raise ValueError(f"action {action!r}: a trial must be (n >= 2, D = 3k), got {a.shape}")
+            if not np.all(np.isfinite(a)):
+                raise ValueError(f"action {action!r}: a trial has non-finite values")
+            if dim is None:
+                dim = a.shape[1]
+            elif a.shape[1] != dim:
+                raise ValueError(f"all trials need the same D; {action!r} has {a.shape[1]}, others {dim}")
+        out[str(action)] = arrs
+    return out, int(dim)
+
+
+def dtw_path(a: np.ndarray, b: np.ndarray) -> list[tuple[int, int]]:
+    """The optimal closed-end warping path between a and b (same step pattern as dtw.py)."""
+    n, m = len(a), len(b)
+    cost = np.sqrt(((a[:, None, :] - b[None, :, :]) ** 2).sum(axis=2))
+    acc = np.full((n + 1, m + 1), np.inf)
+    acc[0, 0] = 0.0
+    for i in range(1, n + 1):
+        c = cost[i - 1]
+        up = acc[i - 1, 1:] + c
+        diag = acc[i - 1, :-1] + 2.0 * c
+        row = np.minimum(up, diag)
+        # left steps: min-plus scan along the row
+        cum = np.cumsum(c)
+        acc[i, 1:] = np.minimum.accumulate(row - cum) + cum
+    i, j, path = n, m, []
+    while i > 0 and j > 0:
+        path.append((i - 1, j - 1))
+        c = cost[i - 1, j - 1]
+        options = ((acc[i - 1, j - 1] + 2 * c, i - 1, j - 1), (acc[i - 1, j] + c, i - 1, j), (acc[i, j - 1] + c, i, j - 1))
+        _, i, j = min(options, key=lambda o: o[0])
+    path.reverse()
+    return path
+
+
+def _medoid(seqs: list[np.ndarray]) -> int:
+    if len(seqs) <= 2:
+        return int(np.argmax([len(s) for s in seqs])) if len(seqs) == 2 else 0
+    d = np.zeros((len(seqs), len(seqs)))
+    for i in range(len(seqs)):
+        for j in range(i + 1, len(seqs)):
+            d[i, j] = d[j, i] = dtw_distance(seqs[i], seqs[j])
+    return int(np.argmin(d.sum(axis=1)))
+
+
+def average_eq1(seqs: list[np.ndarray]) -> np.ndarray:
+    """Eq. 1: every trial aligned to the reference (medoid) by DTW, then the frames mapped to
+    each reference frame averaged (the reference's timing is kept)."""
+    ref = seqs[_medoid(seqs)]
+    total = ref.copy()
+    count = np.ones(len(ref))
+    for s in seqs:
+        if s is ref:
+            continue
+        sums = np.zeros_like(ref)
+        hits = np.zeros(len(ref))
+        for i, j in dtw_path(s, ref):
+            sums[j] += s[i]
+            hits[j] += 1
+        total += sums / hits[:, None]
+        count += 1
+    return total / count[:, None]
+
+
+def dba(seqs: list[np.ndarray], rounds: int = 5) -> np.ndarray:
+    """DTW barycenter averaging: start at the medoid, repeatedly replace each frame of the
+    average by the mean of all trial frames aligned to it."""
+    avg = seqs[_medoid(seqs)].copy()
+    for _ in range(rounds):
+        sums = np.zeros_like(avg)
+        hits = np.zeros(len(avg))
+        for s in seqs:
+            for i, j in dtw_path(s, avg):
+                sums[j] += s[i]
+                hits[j] += 1
+        new = sums / hits[:, None]
+        if np.allclose(new, avg):
+            break
+        avg = new
+    return avg
+
+
+def _prefix_scores(query: np.ndarray, template: np.ndarray, upto: int = 60) -> np.ndarray:
+    dtw = IncrementalDTW([template], method="scan", min_progress=MIN_PROGRESS)
+    return np.array([dtw.push(x)[0] for x in query[:upto]])
+
+
+@dataclass
+class Templates:
+    """Per-template signals (gravity included, lightly trimmed), their action names, resting
+    gravity, onset index, and rejection thresholds on the normalized DTW score."""
+
+    actions: list[str]
+    signals: list[np.ndarray]
+    gravity: np.ndarray  # (T, D)
+    onsets: np.ndarray  # (T,) index of the trimmed onset inside each signal
+    thresholds: np.ndarray  # (T,) reject when the best score is above; inf = never
+    method: str = DEFAULT_METHOD
+    feature: str = DEFAULT_FEATURE
+    meta: dict[str, str] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        n = len(self.actions)
+        if n == 0 or len(self.signals) != n:
+            raise ValueError("templates need one signal per action name, at least one")
+        self.signals = [np.asarray(s, dtype=np.float64) for s in self.signals]
+        self.gravity = np.asarray(self.gravity, dtype=np.float64).reshape(n, -1)
+        self.onsets = np.asarray(self.onsets, dtype=np.int64).reshape(n)
+        self.thresholds = np.asarray(self.thresholds, dtype=np.float64).reshape(n)
+        dims = {s.shape[1] for s in self.signals} | {self.gravity.shape[1]}
+        if len(dims) != 1 or next(iter(dims)) % 3:
+            raise ValueError(f"inconsistent template dimensions {sorted(dims)}")
+
+    @property
+    def dim(self) -> int:
+        return self.signals[0].shape[1]
+
+    @property
+    def action_names(self) -> list[str]:
+        """Distinct actions, in first-seen order."""
+        return list(dict.fromkeys(self.actions))
+
+    def __len__(self) -> int:
+        return len(self.actions)
+
+    # -- building ----------------------------------------------------------------------------
+    @classmethod
+    def from_trials(
+        cls,
+        trials: Mapping[str, Sequence[np.ndarray]],
+        method: str = DEFAULT_METHOD,
+        reject_k: float = REJECT_K,
+        feature: str = DEFAULT_FEATURE,
+    ) -> Templates:
+        """Templates from {action: [trial (n, D), ...]} at 60 Hz in g, gravity included."""
+        if method not in METHODS:
+            raise ValueError(f"method must be one of {METHODS}, not {method!r}")
+        features(np.zeros((1, 3)), np.zeros(3), feature)  # validates the name
+        trials, _ = _check_trials(trials)
+        actions, signals, gravity, onsets, thresholds = [], [], [], [], []
+        for action, items in trials.items():
+            trimmed = [trim_rest(t) for t in items]
+            grav = [rest_gravity(t) for t in items]
+            # Combine on the motion itself; the lead-in is put back from the medoid afterwards.
+            motions = [s[k:] for s, k in trimmed]
+            if method == "trials" or len(items) == 1:
+                built = list(range(len(items)))
+                sigs = [s for s, _ in trimmed]
+                ons = [k for _, k in trimmed]
+                gr = grav
+            else:
+                m = _medoid(motions)
+                body = average_eq1(motions) if method == "average" else dba(motions)
+                lead, k = trimmed[m][0][: trimmed[m][1]], trimmed[m][1]
+                built = [m]
+                sigs = [np.vstack([lead, body])]
+                ons = [k]
+                gr = [np.mean(grav, axis=0)]
+            for idx, sig, on, g in zip(built, sigs, ons, gr, strict=True):
+                # Spread: how far the action's OTHER trials score against this template, at
+                # every prefix the recognizer can look at (from 3 frames to the whole motion).
+                others = [i for i in range(len(motions)) if i != idx or method != "trials"]
+                ref = features(sig[on:], g, feature)
+                scores = [_prefix_scores(features(motions[i], grav[i], feature), ref)[2:] for i in others]
+                scores = np.concatenate(scores) if scores else np.array([])
+                thresholds.append(_threshold(scores, reject_k))
+                actions.append(action)
+                signals.append(sig)
+                onsets.append(on)
+                gravity.append(g)
+        return cls(actions, signals, np.array(gravity), np.array(onsets), np.array(thresholds), method, feature)
+
+    # -- transforms --------------------------------------------------------------------------
+    def mirrored(self) -> Templates:
+        """The set for a left-handed player: hands swapped (two-sensor data), the lateral x axis
+        negated, and action names' _l/_r suffixes swapped."""
+
+        def flip(x: np.ndarray) -> np.ndarray:
+            y = x.reshape(x.shape[0], -1, 3).copy()
+            y[..., 0] *= -1.0
+            if y.shape[1] == 2:
+                y = y[:, ::-1]
+            return y.reshape(x.shape)
+
+        def rename(a: str) -> str:
+            if a.endswith("_l"):
+                return a[:-2] + "_r"
+            if a.endswith("_r"):
+                return a[:-2] + "_l"
+            return a
+
+        return Templates(
+            [rename(a) for a in self.actions],
+            [flip(s) for s in self.signals],
+            flip(self.gravity),
+            self.onsets.copy(),
+            self.thresholds.copy(),
+            self.method,
+            self.feature,
+            {**self.meta, "mirrored": "1" if self.meta.get("mirrored") != "1" else "0"},
+        )
+
+    # -- files -------------------------------------------------------------------------------
+    def save(self, path: str | os.PathLike) -> None:
+        lengths = np.array([len(s) for s in self.signals], dtype=np.int64)
+        keys = np.array(list(self.meta.keys()), dtype=str)
+        vals = np.array(list(self.meta.values()), dtype=str)
+        with open(path, "wb") as f:  # np.savez would append .npz to a name without it
+            np.savez(
+                f,
+                format=np.array("quickjab-templates"),
+                version=np.array(FORMAT_VERSION),
+                actions=np.array(self.actions, dtype=str),
+                lengths=lengths,
+                signals=np.concatenate(self.signals, axis=0),
+                gravity=self.gravity,
+                onsets=self.onsets,
+                thresholds=self.thresholds,
+                method=np.array(self.method),
+                feature=np.array(self.feature),
+                meta_keys=keys,
+                meta_values=vals,
+            )
+
+    @classmethod
+    def load(cls, path: str | os.PathLike) -> Templates:
+        path = Path(path)
+        try:
+            with np.load(path, allow_pickle=False) as z:
+                data = {k: z[k] for k in z.files}
+        except FileNotFoundError:
+            raise TemplateFileError(path, "no such file") from None
+        except (OSError, ValueError, EOFError) as exc:
+            raise TemplateFileError(path, f"not a template file ({exc.__class__.__name__}: {exc})") from None
+        except Exception as exc:  # zipfile.BadZipFile and friends: still a bad file, not a crash
+            raise TemplateFileError(path, f"not a template file ({exc.__class__.__name__})") from None
+        if str(data.get("format", "")) != "quickjab-templates":
+            raise TemplateFileError(path, "not a QuickJab template file (no format marker)")
+        try:
+            version = int(data["version"])
+            if version != FORMAT_VERSION:
+                raise TemplateFileError(path, f"template format version {version}, expected {FORMAT_VERSION}")
+            lengths = data["lengths"].astype(np.int64)
+            signals = data["signals"].astype(np.float64)
+            if lengths.ndim != 1 or lengths.min() < 1 or lengths.sum() != len(signals) or signals.ndim != 2:
+                raise ValueError("signal lengths do not match the signal data")
+            if not np.all(np.isfinite(signals)):
+                raise ValueError("non-finite values in the signals")
+            cuts = np.cumsum(lengths)[:-1]
+            meta = dict(zip(data["meta_keys"].tolist(), data["meta_values"].tolist(), strict=True))
+            t = cls(
+                [str(a) for a in data["actions"].tolist()],
+                np.split(signals, cuts),
+                data["gravity"],
+                data["onsets"],
+                data["thresholds"],
+                str(data["method"]),
+                str(data["feature"]),
+                meta,
+            )
+            if t.feature not in FEATURES:
+                raise ValueError(f"unknown feature {t.feature!r}")
+            if np.any(t.onsets < 0) or np.any(t.onsets >= lengths):
+                raise ValueError("onset outside its template")
+        except TemplateFileError:
+            raise
+        except (KeyError, ValueError, TypeError, IndexError) as exc:
+            raise TemplateFileError(path, f"corrupt template file: {exc}") from None
+        return t
+
+
+def _threshold(scores: np.ndarray, k: float) -> float:
+    if len(scores) == 0 or not np.isfinite(k):
+        return float("inf")
+    mean, std, top = float(scores.mean()), float(scores.std()), float(scores.max())
+    return max(mean + k * std, REJECT_RATIO * top, REJECT_FLOOR_G)

@@ -1,0 +1,172 @@
+"""Each rule of paper IV-A to IV-C on hand-made frame sequences (one sensor, D = 3)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from engine.recognition import DualBufferRecognizer, Templates
+
+G = np.array([0.0, 0.0, 1.0])
+
+
+def bump(axis: int, amp: float, n: int = 24) -> np.ndarray:
+    """A smooth out-and-back acceleration on one axis, gravity included."""
+    x = np.tile(G, (n, 1))
+    x[:, axis] += amp * np.sin(np.linspace(0, 2 * np.pi, n))
+    return x
+
+
+def rest(n: int) -> np.ndarray:
+    return np.tile(G, (n, 1))
+
+
+def trials_of(motion: np.ndarray, rng: np.random.Generator, k: int = 3) -> list[np.ndarray]:
+    return [np.vstack([rest(5), motion + rng.normal(0, 0.02, motion.shape), rest(5)]) for _ in range(k)]
+
+
+@pytest.fixture(scope="module")
+def templates() -> Templates:
+    rng = np.random.default_rng(0)
+    return Templates.from_trials({"jab": trials_of(bump(0, 3.0), rng), "upper": trials_of(bump(2, 3.0), rng)})
+
+
+def run(rec: DualBufferRecognizer, frames: np.ndarray) -> list[dict]:
+    out = []
+    for f in frames:
+        out.extend(rec.push(f))
+    return out
+
+
+def test_gate_ignores_noise_below_noise_g(templates):
+    rec = DualBufferRecognizer(templates)
+    rng = np.random.default_rng(1)
+    noise = rest(200) + rng.uniform(-0.25, 0.25, (200, 3))  # |a - g| < 0.45 g < 1.0 g
+    assert run(rec, noise) == []
+    assert rec.state == "idle"
+    rec.push(G + np.array([1.5, 0.0, 0.0]))  # one valid frame: the onset
+    assert rec.state == "active" and rec.onset_frame == rec.frame == 200
+
+
+@pytest.mark.parametrize("main", [1, 4, 6, 9])
+def test_start_at_exactly_the_main_buffer_size(templates, main):
+    rec = DualBufferRecognizer(templates, main=main)
+    events = run(rec, np.vstack([rest(10), bump(0, 3.0), rest(20)]))
+    starts = [e for e in events if e["event"] == "start"]
+    assert len(starts) == 1
+    onset = rec_onset = 10 + int(np.flatnonzero(np.abs(bump(0, 3.0)[:, 0]) >= 1.0)[0])
+    assert starts[0]["frame"] == rec_onset + main - 1 == onset + main - 1
+    assert starts[0]["action"] == "jab"
+    assert set(starts[0]) >= {"event", "action", "frame", "score"}
+
+
+def test_switch_carries_n_p():
+    # Both actions begin with the same x bump; they differ afterwards (z vs y). The first
+    # decision cannot tell them apart and the motion that follows decides.
+    rng = np.random.default_rng(3)
+    shared = bump(0, 2.5, 16)
+    a = np.vstack([shared, bump(2, 3.0)])
+    b = np.vstack([shared * 1.0, bump(1, 3.0)])
+    b_start = np.vstack([bump(0, 2.6, 16), bump(1, 3.0)])
+    tm = Templates.from_trials({"a": trials_of(a, rng), "b": trials_of(b, rng)})
+    rec = DualBufferRecognizer(tm, main=6, switch_margin=0.05)
+    events = run(rec, np.vstack([rest(10), b_start, rest(20)]))
+    final = [e["action"] for e in events if e["event"] in ("start", "switch")][-1]
+    assert final == "b"
+    # Make the first decision wrong on purpose ("a"), then the motion must switch it to "b"
+    # with n_p = the frames the character has played since the start.
+    rec2 = DualBufferRecognizer(tm, main=6, switch_margin=0.05)
+    evs: list[dict] = []
+    for f in np.vstack([rest(10), b_start, rest(20)]):
+        new = rec2.push(f)
+        evs += new
+        if any(e["event"] == "start" for e in new):
+            rec2.action = rec2.action_names.index("a")
+    start = next(e for e in evs if e["event"] == "start")
+    switches = [e for e in evs if e["event"] == "switch"]
+    assert switches and switches[-1]["action"] == "b"
+    assert switches[-1]["from_frame"] == switches[-1]["frame"] - start["frame"] > 0
+
+
+def test_end_after_null_signal(templates):
+    rec = DualBufferRecognizer(templates, null_frames=6, complete_fraction=0)  # the null rule alone
+    motion = bump(0, 3.0)
+    frames = np.vstack([rest(10), motion, rest(30)])
+    events = run(rec, frames)
+    end = [e for e in events if e["event"] == "end"]
+    assert len(end) == 1 and end[0]["action"] == "jab"
+    act = np.linalg.norm(frames - G, axis=1)
+    last_valid = int(np.flatnonzero(act >= 1.0)[-1])
+    assert end[0]["frame"] == last_valid + 6
+    assert rec.state == "idle"
+
+
+def test_back_to_back_motions_each_start_once_the_template_is_consumed(templates):
+    # no quiet frame between the two: only the "template consumed" rule can separate them
+    frames = np.vstack([rest(10), bump(0, 3.0), bump(2, 3.0), rest(20)])
+    events = run(DualBufferRecognizer(templates), frames)
+    assert [e["action"] for e in events if e["event"] == "start"] == ["jab", "upper"]
+    ends = [e for e in events if e["event"] == "end"]
+    assert ends[0]["reason"] == "complete" and ends[0]["frame"] < 10 + 24 + 6
+    without = run(DualBufferRecognizer(templates, complete_fraction=0), frames)
+    assert [e["action"] for e in without if e["event"] == "start"] == ["jab"]
+
+
+def test_discard_after_character_finished_until_discard_frames(templates):
+    rec = DualBufferRecognizer(templates, discard_frames=20, null_frames=6)
+    events = run(rec, np.vstack([rest(10), bump(0, 3.0)[:12]]))
+    assert [e["event"] for e in events] == ["start"]
+    rec.character_finished()
+    # keep moving hard: frames are discarded, no new action for exactly discard_frames frames
+    busy = np.tile(G + np.array([2.0, 0.0, 0.0]), (40, 1))
+    busy[::2, 0] -= 4.0
+    got = []
+    for i, f in enumerate(busy):
+        for e in rec.push(f):
+            got.append((i, e))
+    assert got[0][1]["event"] == "end" and got[0][1]["reason"] == "character_finished" and got[0][0] == 0
+    later = [i for i, e in got if e["event"] in ("start", "reject")]
+    assert later and min(later) >= 20  # decisions only from a new onset after the discard
+
+
+def test_discard_ends_at_null_signal(templates):
+    rec = DualBufferRecognizer(templates, discard_frames=50, null_frames=6)
+    run(rec, np.vstack([rest(10), bump(0, 3.0)[:12]]))
+    rec.character_finished()
+    run(rec, rest(5))
+    assert rec.state == "discard"
+    run(rec, rest(1))
+    assert rec.state == "idle"  # 6 quiet frames: a null signal ends the discard early
+    events = run(rec, np.vstack([bump(2, 3.0), rest(20)]))
+    assert [e["action"] for e in events if e["event"] == "start"] == ["upper"]
+
+
+def test_motion_unlike_any_template_is_rejected(templates):
+    rec = DualBufferRecognizer(templates)
+    # fast shaking on the y axis, which no template has
+    shake = rest(80)
+    shake[:, 1] += 4.0 * np.sign(np.sin(np.arange(80) * 1.3))
+    events = run(rec, np.vstack([rest(10), shake, rest(20)]))
+    assert not [e for e in events if e["event"] in ("start", "switch")]
+    assert [e["event"] for e in events].count("reject") == 1
+
+
+def test_auto_main_decides_early_on_a_clear_motion(templates):
+    rec = DualBufferRecognizer(templates, main="auto")
+    events = run(rec, np.vstack([rest(10), bump(2, 3.0), rest(20)]))
+    start = next(e for e in events if e["event"] == "start")
+    assert start["action"] == "upper"
+    assert 3 <= start["frame"] - start["onset_frame"] + 1 <= 12
+    assert start["speed"] > 0 and len(start["direction"]) == 3
+
+
+def test_two_hands_and_bad_frames(templates):
+    rng = np.random.default_rng(5)
+    two = lambda m: np.hstack([m, rest(len(m))])  # noqa: E731
+    tm = Templates.from_trials({"r": [two(t) for t in trials_of(bump(0, 3.0), rng)]})
+    rec = DualBufferRecognizer(tm)
+    assert rec.push(np.full(6, np.nan)) == []  # dropped, not a crash
+    with pytest.raises(ValueError):
+        rec.push(np.zeros(3))
+    events = run(rec, two(np.vstack([rest(10), bump(0, 3.0), rest(20)])))
+    assert [e["event"] for e in events] == ["start", "end"]

@@ -1,0 +1,105 @@
+"""Templates: building methods, round-trip files, corrupt files, mirroring."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from engine.errors import InputError
+from engine.recognition import TemplateFileError, Templates
+from engine.recognition.templates import average_eq1, dba, trim_rest
+
+G = np.array([0.0, 0.0, 1.0, 0.0, -1.0, 0.0])
+
+
+def trial(rng, axis=0, amp=3.0, n=24, lead=6):
+    x = np.tile(G, (lead + n + 6, 1))
+    x[lead : lead + n, axis] += amp * np.sin(np.linspace(0, 2 * np.pi, n)) + rng.normal(0, 0.02, n)
+    return x
+
+
+@pytest.fixture
+def trials():
+    rng = np.random.default_rng(0)
+    return {"hook_r": [trial(rng, 0) for _ in range(3)], "straight_l": [trial(rng, 4) for _ in range(3)]}
+
+
+@pytest.mark.parametrize("method", ["trials", "average", "dba"])
+def test_methods_build_one_or_more_templates_per_action(trials, method):
+    t = Templates.from_trials(trials, method=method)
+    assert t.action_names == ["hook_r", "straight_l"]
+    assert len(t) == (6 if method == "trials" else 2)
+    assert t.dim == 6 and np.all(np.isfinite(t.thresholds)) and np.all(t.thresholds > 0)
+
+
+def test_trim_keeps_the_motion_and_a_short_lead_in():
+    rng = np.random.default_rng(1)
+    x = trial(rng, lead=20)
+    trimmed, onset = trim_rest(x)
+    assert len(trimmed) < len(x) and 0 < onset <= 4
+    assert np.abs(trimmed[onset:, 0]).max() == pytest.approx(np.abs(x[:, 0]).max())
+
+
+def test_averages_of_identical_trials_are_the_trial():
+    x = np.cumsum(np.random.default_rng(2).normal(size=(15, 3)), axis=0)
+    np.testing.assert_allclose(average_eq1([x, x, x]), x)
+    np.testing.assert_allclose(dba([x, x]), x)
+
+
+def test_round_trip_keeps_everything(tmp_path, trials):
+    t = Templates.from_trials(trials, method="trials")
+    t.meta["player"] = "ann"
+    path = tmp_path / "ann.npz"
+    t.save(path)
+    u = Templates.load(path)
+    assert u.actions == t.actions and u.method == t.method and u.feature == t.feature and u.meta == t.meta
+    for a, b in zip(u.signals, t.signals, strict=True):
+        np.testing.assert_array_equal(a, b)
+    np.testing.assert_array_equal(u.gravity, t.gravity)
+    np.testing.assert_array_equal(u.onsets, t.onsets)
+    np.testing.assert_array_equal(u.thresholds, t.thresholds)
+
+
+@pytest.mark.parametrize("content", [b"", b"not a zip at all", b"PK\x03\x04garbage"])
+def test_corrupt_file_is_a_clear_error_naming_it(tmp_path, content):
+    path = tmp_path / "bad.npz"
+    path.write_bytes(content)
+    with pytest.raises(TemplateFileError) as err:
+        Templates.load(path)
+    assert isinstance(err.value, InputError) and "bad.npz" in str(err.value)
+
+
+def test_wrong_npz_and_missing_file(tmp_path, trials):
+    other = tmp_path / "other.npz"
+    np.savez(other, x=np.zeros(3))
+    with pytest.raises(TemplateFileError, match="other.npz"):
+        Templates.load(other)
+    t = Templates.from_trials(trials)
+    path = tmp_path / "t.npz"
+    t.save(path)
+    data = dict(np.load(path))
+    data["lengths"] = data["lengths"] + 1  # lengths no longer match the data
+    with open(path, "wb") as f:
+        np.savez(f, **data)
+    with pytest.raises(TemplateFileError, match="t.npz"):
+        Templates.load(path)
+    with pytest.raises(TemplateFileError, match="missing.npz"):
+        Templates.load(tmp_path / "missing.npz")
+
+
+def test_mirror_swaps_hands_flips_x_and_names(trials):
+    t = Templates.from_trials(trials)
+    m = t.mirrored()
+    assert m.actions == [a.replace("_r", "_x").replace("_l", "_r").replace("_x", "_l") for a in t.actions]
+    s, ms = t.signals[0], m.signals[0]
+    np.testing.assert_allclose(ms[:, 3], -s[:, 0])
+    np.testing.assert_allclose(ms[:, 0:3] * [-1, 1, 1], s[:, 3:6])
+    back = m.mirrored()
+    np.testing.assert_allclose(back.signals[0], s)
+
+
+def test_bad_trials_are_refused():
+    with pytest.raises(ValueError):
+        Templates.from_trials({"a": [np.zeros((10, 4))]})
+    with pytest.raises(ValueError):
+        Templates.from_trials({"a": [np.zeros((10, 3))], "b": [np.zeros((10, 6))]})

@@ -1,0 +1,103 @@
+"""Per-frame recognition cost: the incremental DTW (one new row per frame, all templates in one
+numpy pass) against the peer measured in the same run, dtaidistance (C) recomputing the whole
+buffer's DTW against every template from scratch each frame.
+
+Templates are random smooth 6-D signals of 30-60 frames (punch-like lengths at 60 Hz); the
+query is a 60-frame supplementary buffer. Reported: mean microseconds per frame over the
+buffer, for the DTW step alone and for the whole DualBufferRecognizer.push.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import numpy as np
+
+from engine.recognition import DualBufferRecognizer, Templates
+from engine.recognition.dtw import IncrementalDTW
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--sizes", default="13,1000", help="template counts (default 13,1000)")
+    p.add_argument("--dim", type=int, default=6, help="values per frame (default 6)")
+    p.add_argument("--buffer", type=int, default=60, help="query frames (default 60)")
+    p.add_argument("--repeat", type=int, default=5, help="buffers timed per size (best kept)")
+    p.add_argument("--sweep", action="store_true", help="also time scan vs loop over many sizes")
+
+
+def _signals(rng: np.random.Generator, n: int, dim: int, lo: int = 30, hi: int = 60) -> list[np.ndarray]:
+    out = []
+    for _ in range(n):
+        length = int(rng.integers(lo, hi + 1))
+        x = np.cumsum(rng.normal(0, 0.3, (length, dim)), axis=0)
+        out.append(x)
+    return out
+
+
+def _time_incremental(templates: list[np.ndarray], query: np.ndarray, method: str, repeat: int) -> float:
+    dtw = IncrementalDTW(templates, method=method)
+    best = np.inf
+    for _ in range(repeat):
+        dtw.reset()
+        t0 = time.perf_counter()
+        for f in query:
+            dtw.push(f)
+        best = min(best, (time.perf_counter() - t0) / len(query))
+    return best * 1e6
+
+
+def _time_push(templates: list[np.ndarray], query: np.ndarray, repeat: int) -> float:
+    trials = {f"a{k}": [t] for k, t in enumerate(templates)}
+    tm = Templates(list(trials), templates, np.zeros((len(templates), templates[0].shape[1])),
+                   np.zeros(len(templates), dtype=int), np.full(len(templates), np.inf), feature="raw")
+    rec = DualBufferRecognizer(tm, noise_g=0.0, null_frames=10_000)
+    best = np.inf
+    for _ in range(repeat):
+        rec.reset()
+        t0 = time.perf_counter()
+        for f in query:
+            rec.push(f)
+        best = min(best, (time.perf_counter() - t0) / len(query))
+    return best * 1e6
+
+
+def _time_peer(templates: list[np.ndarray], query: np.ndarray, repeat: int) -> float:
+    from dtaidistance import dtw_ndim
+
+    best = np.inf
+    tmpl = [np.ascontiguousarray(t, dtype=np.double) for t in templates]
+    for _ in range(max(1, repeat // 2)):
+        t0 = time.perf_counter()
+        for i in range(1, len(query) + 1):
+            buf = np.ascontiguousarray(query[:i], dtype=np.double)
+            for t in tmpl:
+                dtw_ndim.distance_fast(buf, t)
+        best = min(best, (time.perf_counter() - t0) / len(query))
+    return best * 1e6
+
+
+def run(args: argparse.Namespace) -> int:
+    rng = np.random.default_rng(0)
+    sizes = [int(s) for s in args.sizes.split(",")]
+    query = np.cumsum(rng.normal(0, 0.3, (args.buffer, args.dim)), axis=0)
+    print(f"per-frame cost, {args.dim}-D frames, {args.buffer}-frame buffer, templates of 30-60 frames")
+    print(f"{'templates':>9} | {'scan us':>8} | {'loop us':>8} | {'auto':>4} | {'push us':>8} | {'dtaidistance us':>15} | {'x faster':>8}")
+    for n in sizes:
+        tm = _signals(rng, n, args.dim)
+        scan = _time_incremental(tm, query, "scan", args.repeat)
+        loop = _time_incremental(tm, query, "loop", args.repeat)
+        auto = IncrementalDTW(tm).method
+        push = _time_push(tm, query, args.repeat)
+        try:
+            peer = _time_peer(tm, query, args.repeat)
+        except ImportError:
+            peer = float("nan")
+        chosen = scan if auto == "scan" else loop
+        print(f"{n:>9} | {scan:8.1f} | {loop:8.1f} | {auto:>4} | {push:8.1f} | {peer:15.1f} | {peer / chosen:8.1f}")
+    if args.sweep:
+        print("\nscan vs loop (us per frame)")
+        for n in (25, 50, 100, 200, 300, 500, 1000):
+            tm = _signals(rng, n, args.dim)
+            print(f"{n:>5}: scan {_time_incremental(tm, query, 'scan', 3):8.1f}  loop {_time_incremental(tm, query, 'loop', 3):8.1f}")
+    return 0

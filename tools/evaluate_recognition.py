@@ -1,0 +1,293 @@
+"""Offline evaluation of the recognizer (paper VI-D, Figs. 8-9).
+
+Each test motion is replayed through a DualBufferRecognizer frame by frame and its decisions
+are put in the paper's four outcome groups:
+  1 correct                -- the first decision was right and never changed,
+  2 unnoticeable switch    -- right in the end, the last switch within 6 frames of the start,
+  3 noticeable switch      -- right in the end, switched later than that,
+  4 wrong or missed        -- wrong in the end, rejected, or never started.
+plus the first-decision accuracy and the lag of the first decision from the TRUE motion onset
+(the trimmed onset of a trial, the first labelled frame of a stream interval), not the gate.
+
+Two kinds of input: isolated trials (rest padded before and after, as a player starts from
+the guard) and labelled streams (every labelled interval is one motion; starts outside any
+interval are false starts). In streams a simulated character plays each started action for
+its template's length and then calls `character_finished()`, as the game does.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from engine.recognition import DualBufferRecognizer, Templates
+from engine.recognition.templates import activity, rest_gravity
+
+UNNOTICEABLE_FRAMES = 6
+PAD_BEFORE, PAD_AFTER = 20, 40
+EARLY_TOLERANCE = 20  # frames a stream start may precede its labelled interval (1/3 s)
+GROUPS = ("correct", "unnoticeable switch", "noticeable switch", "wrong or missed")
+
+
+@dataclass
+class Outcome:
+    truth: str
+    first: str | None  # first decision
+    final: str | None  # decision when the motion ended
+    last_switch_np: int  # n_p of the last switch, -1 if none
+    lag: int | None  # frames from the true onset to the first decision
+
+    @property
+    def group(self) -> int:
+        if self.final != self.truth:
+            return 3
+        if self.last_switch_np < 0 and self.first == self.truth:
+            return 0
+        return 1 if self.last_switch_np <= UNNOTICEABLE_FRAMES else 2
+
+
+@dataclass
+class Summary:
+    main: int | str
+    outcomes: list[Outcome] = field(default_factory=list)
+    false_starts: int = 0
+    idle_minutes: float = 0.0
+
+    def counts(self) -> np.ndarray:
+        c = np.zeros(4, dtype=int)
+        for o in self.outcomes:
+            c[o.group] += 1
+        return c
+
+    def row(self) -> dict:
+        n = max(len(self.outcomes), 1)
+        c = self.counts() / n
+        lags = [o.lag for o in self.outcomes if o.lag is not None]
+        out = {
+            "main": self.main,
+            "n": len(self.outcomes),
+            **{g: round(float(v), 4) for g, v in zip(GROUPS, c, strict=True)},
+            "acceptable": round(float(c[0] + c[1]), 4),
+            "final_correct": round(float(c[0] + c[1] + c[2]), 4),
+            "first_correct": round(sum(o.first == o.truth for o in self.outcomes) / n, 4),
+            "started": round(sum(o.first is not None for o in self.outcomes) / n, 4),
+            "lag_ms": round(float(np.median(lags)) * 1000 / 60, 1) if lags else None,
+        }
+        if self.idle_minutes > 0:
+            out["false_starts"] = self.false_starts
+            out["false_starts_per_idle_min"] = round(self.false_starts / self.idle_minutes, 3)
+        return out
+
+
+def true_onset(trial: np.ndarray, fraction: float = 0.1) -> int:
+    """A trial's motion onset: the first frame whose activity reaches `fraction` of its peak."""
+    act = activity(trial, rest_gravity(trial))
+    return int(np.flatnonzero(act >= fraction * max(float(act.max()), 1e-12))[0])
+
+
+def _decisions(events: Iterable[dict]) -> tuple[str | None, str | None, int, int | None]:
+    """(first, final, n_p of the last switch, frame of the first decision) of ONE motion."""
+    first = final = None
+    last_np, at = -1, None
+    for e in events:
+        kind = e["event"]
+        if kind == "start":
+            if first is not None:
+                break  # a second motion
+            first = final = e["action"]
+            at = e["frame"]
+        elif kind == "switch" and first is not None:
+            final = e["action"]
+            last_np = e["from_frame"]
+        elif kind == "end" and first is not None:
+            break
+    return first, final, last_np, at
+
+
+def replay_trial(rec: DualBufferRecognizer, trial: np.ndarray) -> tuple[list[dict], int]:
+    """Events of one isolated trial padded with rest; and the offset of the trial in the stream."""
+    rec.reset()
+    stream = np.vstack([np.repeat(trial[:1], PAD_BEFORE, 0), trial, np.repeat(trial[-1:], PAD_AFTER, 0)])
+    events: list[dict] = []
+    for f in stream:
+        events.extend(rec.push(f))
+    return events, PAD_BEFORE
+
+
+def evaluate_trials(
+    templates: Templates,
+    tests: Mapping[str, Sequence[np.ndarray]],
+    mains: Sequence[int | str],
+    **rec_kwargs,
+) -> list[Summary]:
+    out = []
+    for main in mains:
+        rec = DualBufferRecognizer(templates, main=main, **rec_kwargs)
+        s = Summary(main)
+        for action, trials in tests.items():
+            for trial in trials:
+                events, offset = replay_trial(rec, trial)
+                first, final, last_np, at = _decisions(events)
+                lag = None if at is None else at - (offset + true_onset(trial))
+                s.outcomes.append(Outcome(action, first, final, last_np, lag))
+        out.append(s)
+    return out
+
+
+# -- labelled streams ---------------------------------------------------------------------------
+def intervals(labels: Sequence[str]) -> list[tuple[str, int, int]]:
+    """(action, first frame, end frame exclusive) of every labelled run."""
+    out, cur, start = [], "", 0
+    for i, lab in enumerate(list(labels) + [""]):
+        if lab != cur:
+            if cur:
+                out.append((cur, start, i))
+            cur, start = lab, i
+    return out
+
+
+def stream_trials(frames: np.ndarray, ivs: Sequence[tuple[str, int, int]], lead: int = 10) -> dict[str, list[np.ndarray]]:
+    """Training trials cut from a labelled stream: each interval with `lead` frames before it."""
+    out: dict[str, list[np.ndarray]] = {}
+    for action, s, e in ivs:
+        out.setdefault(action, []).append(frames[max(0, s - lead) : e])
+    return out
+
+
+def replay_stream(rec: DualBufferRecognizer, frames: np.ndarray, clip_frames: Mapping[str, int]) -> list[dict]:
+    """Events of a whole stream, with a simulated character that finishes each action after
+    its clip length (from the start; a switch continues at n_p, so the end does not move)."""
+    rec.reset()
+    events: list[dict] = []
+    clip_end = None
+    for i, f in enumerate(frames):
+        evs = rec.push(f)
+        for e in evs:
+            if e["event"] in ("start", "switch"):
+                start = e["frame"] - e.get("from_frame", 0)
+                clip_end = start + clip_frames.get(e["action"], 30)
+        events.extend(evs)
+        if clip_end is not None and i >= clip_end:
+            rec.character_finished()
+            clip_end = None
+    return events
+
+
+def score_stream(
+    events: Sequence[dict], ivs: Sequence[tuple[str, int, int]], n_frames: int, main: int | str, tolerance: int = EARLY_TOLERANCE
+) -> Summary:
+    """Match starts to intervals: a start inside [first - tolerance, end) starts the interval,
+    the early margin not reaching back past the previous interval's end (hand-labelled
+    intervals begin after the wind-up the sensor already sees)."""
+    s = Summary(main)
+    starts = [e for e in events if e["event"] == "start"]
+    used = set()
+    prev_end = 0
+    for action, a, b in ivs:
+        early = max(a - tolerance, prev_end)
+        prev_end = b
+        mine = [k for k, e in enumerate(starts) if early <= e["frame"] < b and k not in used]
+        if not mine:
+            s.outcomes.append(Outcome(action, None, None, -1, None))
+            continue
+        k = mine[0]
+        used.update(mine)
+        e = starts[k]
+        after = [x for x in events if x["frame"] >= e["frame"]]
+        first, final, last_np, at = _decisions(after)
+        s.outcomes.append(Outcome(action, first, final, last_np, at - a))
+    labelled = np.zeros(n_frames, dtype=bool)
+    for _, a, b in ivs:
+        labelled[max(0, a - tolerance) : b] = True
+    s.false_starts = sum(1 for k, e in enumerate(starts) if k not in used and not labelled[min(e["frame"], n_frames - 1)])
+    s.idle_minutes = float((~labelled).sum()) / 60.0 / 60.0
+    return s
+
+
+def evaluate_stream_folds(
+    frames: np.ndarray,
+    labels: Sequence[str],
+    mains: Sequence[int | str],
+    folds: int = 2,
+    template_kwargs: Mapping | None = None,
+    **rec_kwargs,
+) -> list[Summary]:
+    """K contiguous folds: templates from the intervals of the other folds, tested on this
+    fold's stretch of the stream. Pooled over folds."""
+    ivs = intervals(labels)
+    n = len(frames)
+    bounds = np.linspace(0, n, folds + 1).astype(int)
+    pooled = [Summary(m) for m in mains]
+    for k in range(folds):
+        lo, hi = bounds[k], bounds[k + 1]
+        train = [iv for iv in ivs if not (lo <= iv[1] < hi)]
+        test = [(a, s - lo, e - lo) for a, s, e in ivs if lo <= s < hi]
+        templates = Templates.from_trials(stream_trials(frames, train), **(template_kwargs or {}))
+        for m, pool in zip(mains, pooled, strict=True):
+            rec = DualBufferRecognizer(templates, main=m, **rec_kwargs)
+            events = replay_stream(rec, frames[lo:hi], clip_lengths(rec))
+            s = score_stream(events, test, hi - lo, m)
+            pool.outcomes += s.outcomes
+            pool.false_starts += s.false_starts
+            pool.idle_minutes += s.idle_minutes
+    return pooled
+
+
+def clip_lengths(rec: DualBufferRecognizer) -> dict[str, int]:
+    """The simulated character's clip length per action: the median length of the action's
+    templates from the gate onset to the end of the motion (the clip plays the motion)."""
+    acts = rec._tmpl_action
+    return {a: 24 + 0*int(np.median(rec.template_lengths[acts == i])) for i, a in enumerate(rec.action_names)}
+
+
+def evaluate_stream(
+    templates: Templates, frames: np.ndarray, labels: Sequence[str], mains: Sequence[int | str], **rec_kwargs
+) -> list[Summary]:
+    """A labelled stream against given templates (clip lengths from `clip_lengths`)."""
+    ivs = intervals(labels)
+    out = []
+    for m in mains:
+        rec = DualBufferRecognizer(templates, main=m, **rec_kwargs)
+        out.append(score_stream(replay_stream(rec, frames, clip_lengths(rec)), ivs, len(frames), m))
+    return out
+
+
+def format_table(rows: Sequence[dict]) -> str:
+    cols = ["main", "n", *GROUPS, "acceptable", "final_correct", "first_correct", "lag_ms"]
+    if any("false_starts" in r for r in rows):
+        cols += ["started", "false_starts", "false_starts_per_idle_min"]
+    head = " | ".join(cols)
+    lines = [head, "-" * len(head)]
+    for r in rows:
+        lines.append(" | ".join(str(r.get(c, "")) for c in cols))
+    return "\n".join(lines)
+
+
+def plot(rows_by_title: Mapping[str, Sequence[dict]], path: str) -> None:
+    """Figs. 8-9: stacked outcome groups against the main-buffer size, one panel per set."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    n = len(rows_by_title)
+    fig, axes = plt.subplots(1, n, figsize=(4.2 * n, 3.2), squeeze=False)
+    colors = ["#2a9d8f", "#8ab17d", "#e9c46a", "#e76f51"]
+    for ax, (title, rows) in zip(axes[0], rows_by_title.items(), strict=True):
+        x = [str(r["main"]) for r in rows]
+        bottom = np.zeros(len(rows))
+        for g, col in zip(GROUPS, colors, strict=True):
+            v = np.array([r[g] for r in rows]) * 100
+            ax.bar(x, v, bottom=bottom, color=col, label=g, width=0.8)
+            bottom += v
+        ax.plot(x, [r["first_correct"] * 100 for r in rows], "k.-", lw=1, label="first decision")
+        ax.set_title(title, fontsize=9)
+        ax.set_xlabel("main buffer (frames)")
+        ax.set_ylim(0, 100)
+    axes[0][0].set_ylabel("% of motions")
+    axes[0][-1].legend(fontsize=6, loc="lower right")
+    fig.tight_layout()
+    fig.savefig(path, dpi=80)
+    plt.close(fig)

@@ -1,0 +1,190 @@
+"""Commands around the recognizer: `quickjab templates build`, `quickjab recognize`,
+`quickjab evaluate` (see tools/evaluate_recognition.py for the outcome groups)."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+from engine.errors import InputError
+from engine.frames import recording_frames
+from engine.recognition import DualBufferRecognizer, Templates
+from engine.recognition.templates import FEATURES, METHODS
+from engine.recording import read_recording
+from tools import evaluate_recognition as ev
+from tools.trial_files import load_trials_dir
+
+
+def _main_arg(text: str) -> int | str:
+    if text == "auto":
+        return text
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a positive int or 'auto', not {text!r}") from None
+    if v < 1:
+        raise argparse.ArgumentTypeError("main must be >= 1")
+    return v
+
+
+def _mains(text: str) -> list[int | str]:
+    out: list[int | str] = []
+    for part in text.split(","):
+        if "-" in part:
+            a, b = part.split("-", 1)
+            out += list(range(int(a), int(b) + 1))
+        else:
+            out.append(_main_arg(part))
+    return out
+
+
+def _recognizer_args(p: argparse.ArgumentParser, main_default: str = "6") -> None:
+    g = p.add_argument_group("recognizer")
+    g.add_argument("--noise-g", type=float, default=1.0, help="noise gate in g (default 1.0; 0.3 for gentle gestures)")
+    g.add_argument("--supplementary", type=int, default=60, help="supplementary buffer in frames (default 60)")
+    g.add_argument("--null-frames", type=int, default=6, help="quiet frames that end a motion (default 6)")
+    g.add_argument("--discard-frames", type=int, default=20, help="frames discarded after the character finishes (default 20)")
+    g.add_argument("--no-reject", action="store_true", help="never reject (ignore the learned thresholds)")
+
+
+def _rec_kwargs(args: argparse.Namespace) -> dict:
+    return {
+        "noise_g": args.noise_g,
+        "supplementary": args.supplementary,
+        "null_frames": args.null_frames,
+        "discard_frames": args.discard_frames,
+        "reject": not args.no_reject,
+    }
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    t = sub.add_parser("templates", help="build recognition templates from trials", description=__doc__)
+    tsub = t.add_subparsers(dest="templates_command", metavar="ACTION", required=True)
+    b = tsub.add_parser("build", help="build templates.npz from TRIALS_DIR/<action>/*.csv")
+    b.add_argument("trials_dir", metavar="TRIALS_DIR")
+    b.add_argument("-o", "--output", default="templates.npz", help="output .npz (default templates.npz)")
+    b.add_argument("--method", choices=METHODS, default=None, help="trials (default), average (Eq. 1) or dba")
+    b.add_argument("--feature", choices=FEATURES, default=None, help="what DTW compares (default log)")
+    b.add_argument("--mirror", action="store_true", help="mirror for a left-handed player (swap hands, flip x, swap _l/_r)")
+    b.add_argument("--glob", default="*.csv", help="which trial files to use in each action folder (default *.csv)")
+    b.set_defaults(func=cmd_build)
+
+    r = sub.add_parser("recognize", help="replay a recording through the recognizer; events as JSON lines")
+    r.add_argument("recording", metavar="REC.csv")
+    r.add_argument("--templates", required=True, metavar="T.npz")
+    r.add_argument("-o", "--output", default=None, help="write the JSON lines here instead of stdout")
+    r.add_argument("--main", type=_main_arg, default=6, help="main buffer in frames or 'auto' (default 6)")
+    _recognizer_args(r)
+    r.set_defaults(func=cmd_recognize)
+
+    e = sub.add_parser(
+        "evaluate",
+        help="outcome groups per main-buffer size (Figs. 8-9)",
+        description=(
+            "Replay trials or labelled recordings and print, per main-buffer size, the four "
+            "outcome groups, first-decision accuracy and lag from the true onset. Inputs: "
+            "--templates T.npz with trial dirs or labelled CSVs; or --train TRIALS_DIR; or "
+            "--uwave DIR (per user: templates from day 1 reps 1-3, test days 2-7); or a labelled "
+            "CSV alone with --folds K (templates from the other folds' intervals)."
+        ),
+    )
+    e.add_argument("inputs", nargs="*", metavar="INPUT", help="trial dirs (<root>/<action>/*.csv) or labelled recording CSVs")
+    e.add_argument("--templates", default=None, metavar="T.npz")
+    e.add_argument("--train", default=None, metavar="TRIALS_DIR", help="build templates from these trials")
+    e.add_argument("--uwave", default=None, metavar="DIR", help="the uWave protocol on DIR/U<n>/gesture<k>/d<day>-r<rep>.csv")
+    e.add_argument("--users", default="1-6", help="uWave users (default 1-6)")
+    e.add_argument("--every", type=int, default=1, help="use every k-th test trial (quicker sweeps)")
+    e.add_argument("--folds", type=int, default=2, help="labelled CSV without templates: K contiguous folds (default 2)")
+    e.add_argument("--mains", type=_mains, default=_mains("1-12"), help="main-buffer sizes (default 1-12; e.g. 6 or 1-12,auto)")
+    e.add_argument("--method", choices=METHODS, default=None, help="template method when building")
+    e.add_argument("--plot", default=None, metavar="PNG", help="draw Figs. 8-9 style bars")
+    e.add_argument("--json", action="store_true", help="print the rows as JSON lines instead of a table")
+    _recognizer_args(e)
+    e.set_defaults(func=cmd_evaluate)
+
+
+def cmd_build(args: argparse.Namespace) -> int:
+    trials = load_trials_dir(args.trials_dir, args.glob)
+    kwargs = {k: v for k, v in (("method", args.method), ("feature", args.feature)) if v}
+    try:
+        templates = Templates.from_trials(trials, **kwargs)
+    except ValueError as exc:
+        raise InputError(f"{args.trials_dir}: {exc}") from None
+    if args.mirror:
+        templates = templates.mirrored()
+    templates.save(args.output)
+    n = sum(len(v) for v in trials.values())
+    print(f"{args.output}: {len(templates)} templates of {len(templates.action_names)} actions from {n} trials "
+          f"(method {templates.method}, feature {templates.feature}, D={templates.dim}{', mirrored' if args.mirror else ''})")
+    return 0
+
+
+def cmd_recognize(args: argparse.Namespace) -> int:
+    templates = Templates.load(args.templates)
+    rec_file = read_recording(args.recording)
+    times, frames, _ = recording_frames(rec_file)
+    if frames.shape[1] != templates.dim:
+        raise InputError(f"{args.recording}: {frames.shape[1]} values per frame, templates {args.templates} have D = {templates.dim}")
+    rec = DualBufferRecognizer(templates, main=args.main, **_rec_kwargs(args))
+    out = open(args.output, "w", encoding="utf-8") if args.output else sys.stdout
+    try:
+        for t, f in zip(times, frames, strict=True):
+            for e in rec.push(f, t=float(t)):
+                out.write(json.dumps(e) + "\n")
+    finally:
+        if args.output:
+            out.close()
+    return 0
+
+
+def cmd_evaluate(args: argparse.Namespace) -> int:
+    kw = _rec_kwargs(args)
+    tk = {"method": args.method} if args.method else {}
+    results: dict[str, list[dict]] = {}
+    if args.uwave:
+        users = [int(u) for u in _mains(args.users)]
+        pooled = None
+        for u in users:
+            root = Path(args.uwave) / f"U{u}"
+            templates = Templates.from_trials(load_trials_dir(root, "d1-r0[1-3].csv"), **tk)
+            tests = {a: ts[:: args.every] for a, ts in load_trials_dir(root, "d[2-7]-*.csv").items()}
+            res = ev.evaluate_trials(templates, tests, args.mains, **kw)
+            if pooled is None:
+                pooled = res
+            else:
+                for p, r in zip(pooled, res, strict=True):
+                    p.outcomes += r.outcomes
+        results[f"uWave users {args.users}, noise_g {args.noise_g}"] = [s.row() for s in pooled]
+    templates = Templates.load(args.templates) if args.templates else None
+    if args.train:
+        templates = Templates.from_trials(load_trials_dir(args.train), **tk)
+    for inp in args.inputs:
+        path = Path(inp)
+        if path.is_dir():
+            if templates is None:
+                raise InputError(f"{inp}: trial directories need --templates or --train")
+            tests = {a: ts[:: args.every] for a, ts in load_trials_dir(path).items()}
+            res = ev.evaluate_trials(templates, tests, args.mains, **kw)
+        else:
+            _, frames, labels = recording_frames(read_recording(path))
+            if not any(labels):
+                raise InputError(f"{inp}: no labelled intervals (label column empty)")
+            if templates is None:
+                res = ev.evaluate_stream_folds(frames, labels, args.mains, folds=args.folds, template_kwargs=tk, **kw)
+            else:
+                res = ev.evaluate_stream(templates, frames, labels, args.mains, **kw)
+        results[path.name] = [s.row() for s in res]
+    if not results:
+        raise InputError("nothing to evaluate: give INPUTs, --uwave DIR, or see --help")
+    for title, rows in results.items():
+        if args.json:
+            for r in rows:
+                print(json.dumps({"set": title, **r}))
+        else:
+            print(f"## {title}\n{ev.format_table(rows)}\n")
+    if args.plot:
+        ev.plot(results, args.plot)
+        print(f"wrote {args.plot}")
+    return 0

@@ -1,0 +1,37 @@
+"""Trials on disk (FORMATS.md): `<root>/<action>/<anything>.csv`, each resampled to 60 Hz frames."""
+
+from __future__ import annotations
+
+import fnmatch
+from pathlib import Path
+
+import numpy as np
+
+from engine.errors import InputError
+from engine.frames import recording_frames
+from engine.recording import read_recording
+
+
+def read_frames(path: str | Path) -> np.ndarray:
+    """A recording's (m, D) frames on the 60 Hz grid."""
+    _, frames, _ = recording_frames(read_recording(path))
+    return frames
+
+
+def load_trials_dir(root: str | Path, pattern: str = "*.csv") -> dict[str, list[np.ndarray]]:
+    """{action: [frames, ...]} for the files matching `pattern` (a glob on the file name) in
+    each action folder, sorted by name. Raises InputError when nothing is there."""
+    root = Path(root)
+    if not root.is_dir():
+        raise InputError(f"{root}: not a directory of trials (<root>/<action>/*.csv)")
+    out: dict[str, list[np.ndarray]] = {}
+    for folder in sorted(p for p in root.iterdir() if p.is_dir()):
+        files = sorted(f for f in folder.iterdir() if f.suffix == ".csv" and fnmatch.fnmatch(f.name, pattern))
+        if files:
+            out[folder.name] = [read_frames(f) for f in files]
+    if not out:
+        raise InputError(f"{root}: no trials matching {pattern!r} under <root>/<action>/")
+    dims = {t.shape[1] for ts in out.values() for t in ts}
+    if len(dims) != 1:
+        raise InputError(f"{root}: trials mix one- and two-hand recordings (D = {sorted(dims)})")
+    return out
