@@ -6,7 +6,15 @@ from __future__ import annotations
 import numpy as np
 
 from engine.recording import Recording, read_recording
-from engine.sensors.source import Clock, Sample, Source, SourceError, SourceState, parse_source_url, register_scheme
+from engine.sensors.source import (
+    Clock,
+    Sample,
+    Source,
+    SourceError,
+    SourceState,
+    parse_source_url,
+    register_scheme,
+)
 
 
 class ReplaySource(Source):
