@@ -1,0 +1,299 @@
+"""A game session: every part of a match wired into the FixedStepLoop's stages.
+
+Stages, in order each 60 Hz step, with their declared budgets (ms; issue 9 holds the loop to
+them and the F3 overlay shows them):
+
+    input      0.30  pygame events (keys, pause, F3, F11), source.poll()
+    frames     0.10  samples -> this step's 60 Hz frame (engine.frames.FrameResampler)
+    recognize  1.00  the frame through the dual-buffer recognizer -> player controller events
+    player     0.50  player controller + body targets; tells the recognizer when a clip ended
+    opponent   0.50  Interaction Graph look-up when at the guard; opponent body targets
+    physics    3.00  Verlet step of both bodies, contacts
+    hits       0.20  contacts -> blows (referee) -> damage, reactions, flashes, sound, rumble
+    match      0.10  round clock, count, winner; HUD state
+    render     8.00  (once per rendered frame) ring, bodies interpolated with alpha, HUD
+
+Nothing here reads a clock except through the loop's: with a VirtualClock and a seed a session
+is reproducible to the bit (`state_hash`).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pygame
+
+from engine.clock import RealClock, VirtualClock
+from engine.frames import FrameResampler
+from engine.loop import FixedStepLoop
+from engine.sensors.source import Source, SourceState
+from engine.state_hash import state_hash
+from game.hud import Hud, HudState
+from game.match import Match
+from game.referee import Referee, reaction_name
+from game.render import Renderer
+
+HZ = 60
+STAGE_BUDGETS_MS = {
+    "input": 0.30, "frames": 0.10, "recognize": 1.00, "player": 0.50, "opponent": 0.50,
+    "physics": 3.00, "hits": 0.20, "match": 0.10,
+}  # fmt: skip
+RENDER_BUDGET_MS = 8.0
+LOW_POWER_RENDER_BUDGET_MS = 4.0
+LOW_POWER_SCALE = 0.5  # the low-power mode renders at half size and scales up
+START_GAP = 1.8  # metres between the two roots at the bell
+HOME_BUTTON = 0x0080  # Wiimote core buttons: Home
+RUMBLE_MS = 120
+KNOCKDOWN_HOLD = 0.55  # the fraction of the knockdown clip held while the referee counts
+
+
+@dataclass
+class SessionConfig:
+    seed: int = 0
+    size: tuple[int, int] = (1280, 720)
+    low_power: bool = False
+    demo: bool = False
+    keyboard_banner: bool = False
+    templates: str | Path | None = None  # None: the player's trained ones, else the shipped set
+    graph: str | Path | None = None
+    sound: bool = True
+    physics_iterations: int = 4
+
+
+def load_templates(path: str | Path | None = None):
+    """The player's own templates (Train your moves), else the shipped set."""
+    from engine.recognition import Templates
+    from game.userdata import SHIPPED_TEMPLATES, user_templates_path
+
+    if path is not None:
+        return Templates.load(path)
+    user = user_templates_path()
+    return Templates.load(user if user.exists() else SHIPPED_TEMPLATES)
+
+
+class Session:
+    """Build with a source and a surface to draw on; `loop.run(...)` plays."""
+
+    def __init__(self, source: Source, config: SessionConfig | None = None,
+                 clock: RealClock | VirtualClock | None = None,
+                 surface_provider: Callable[[], pygame.Surface] | None = None):
+        from engine.physics import World
+        from engine.recognition import DualBufferRecognizer
+        from game.actions import load_library
+        from game.boxer import Boxer
+        from game.interaction import InteractionGraph, OpponentController
+        from game.sound import Sounds
+
+        self.config = cfg = config or SessionConfig()
+        self.clock = clock or RealClock()
+        self.source = source
+        self.lib = load_library()
+        self.world = World(gravity=(0.0, -9.81, 0.0), ground_y=0.0, damping=0.01,
+                           iterations=max(1, cfg.physics_iterations // (2 if cfg.low_power else 1)))
+        self.boxers = (Boxer(self.world, self.lib, x=0.0, z=-START_GAP / 2, yaw=0.0),
+                       Boxer(self.world, self.lib, x=0.0, z=START_GAP / 2, yaw=math.pi))
+        self.player, self.opponent = self.boxers
+        graph = InteractionGraph.load(cfg.graph) if cfg.graph else InteractionGraph.load()
+        self.opponent_ai = OpponentController(graph, self.lib, controller=self.opponent.controller)
+        self.templates = load_templates(cfg.templates)
+        self.recognizer = DualBufferRecognizer(self.templates)
+        self.resampler = FrameResampler(sensors=self.templates.dim // 3)
+        self.referee = Referee(self.lib)
+        self.match = Match()
+        self.hud_state = HudState(keys=[], source_url=source.url, keyboard_banner=cfg.keyboard_banner,
+                                  demo=cfg.demo, mode="LOW POWER" if cfg.low_power else "",
+                                  main_size=int(self.recognizer.main) if self.recognizer.main != "auto" else 6,
+                                  supp_size=self.recognizer.supplementary)
+        if hasattr(source, "press_key"):
+            from game.keyboard_source import key_help
+
+            self.hud_state.keys = key_help()
+        self.hud = Hud()
+        self.sounds = Sounds(enabled=cfg.sound, seed=cfg.seed)
+        self.renderer = Renderer(cfg.size, antialias=not cfg.low_power)
+        self._surface_provider = surface_provider
+        self._offscreen: pygame.Surface | None = None
+        self.events_log: list[dict] = []  # recognizer events, in order (tests, the trace)
+        self.blows_log: list[tuple[int, int, str, bool, float]] = []  # (step, attacker, target, blocked, damage)
+        self.on_toggle_fullscreen: Callable[[], None] | None = None
+        self._t0 = self.clock.seconds()
+        self._buttons = 0
+        self._auto_paused = False
+        self._step = 0
+        self.prev_joints = [b.joint_positions().copy() for b in self.boxers]
+        self.curr_joints = [j.copy() for j in self.prev_joints]
+        self.frame_vec: np.ndarray | None = None
+
+        self.loop = FixedStepLoop(self.clock, hz=HZ, render_hz=HZ // 2 if cfg.low_power else HZ)
+        for name, fn in (("input", self._input), ("frames", self._frames), ("recognize", self._recognize),
+                         ("player", self._player), ("opponent", self._opponent), ("physics", self._physics),
+                         ("hits", self._hits), ("match", self._match)):
+            self.loop.add_stage(name, fn, STAGE_BUDGETS_MS[name])
+        self.loop.set_render(self.render, LOW_POWER_RENDER_BUDGET_MS if cfg.low_power else RENDER_BUDGET_MS)
+        self.sounds.play("bell")
+
+    # -- surfaces ------------------------------------------------------------------------
+    def target_surface(self) -> pygame.Surface:
+        if self._surface_provider is not None:
+            return self._surface_provider()
+        if self._offscreen is None:
+            self._offscreen = pygame.Surface(self.config.size)
+        return self._offscreen
+
+    # -- stages --------------------------------------------------------------------------
+    def _input(self, step: int, dt: float) -> None:
+        if pygame.display.get_init():
+            for event in pygame.event.get():
+                self.handle_event(event)
+        samples = self.source.poll()
+        buttons = int(getattr(self.source, "buttons", 0) or 0)
+        if buttons & HOME_BUTTON and not self._buttons & HOME_BUTTON:
+            self.match.toggle_pause()
+        self._buttons = buttons
+        self.resampler.push(samples)
+        disconnected = self.source.state in (SourceState.DISCONNECTED, SourceState.RECONNECTING, SourceState.CONNECTING)
+        if disconnected and not self.hud_state.disconnected:
+            if not self.match.paused:
+                self.match.toggle_pause()
+                self._auto_paused = True
+        elif not disconnected and self.hud_state.disconnected and self._auto_paused:
+            if self.match.paused:
+                self.match.toggle_pause()
+            self._auto_paused = False
+        self.hud_state.disconnected = disconnected
+
+    def handle_event(self, event: pygame.event.Event) -> None:
+        if event.type == pygame.QUIT:
+            self.loop.stop()
+        elif event.type == pygame.KEYDOWN:
+            if event.key == pygame.K_ESCAPE:
+                self.match.toggle_pause()
+            elif event.key == pygame.K_F3:
+                self.hud_state.show_budget = not self.hud_state.show_budget
+            elif event.key == pygame.K_F11:
+                if self.on_toggle_fullscreen is not None:
+                    self.on_toggle_fullscreen()
+            elif hasattr(self.source, "press_key") and not self.match.paused:
+                self.source.press_key(pygame.key.name(event.key))
+
+    def _frames(self, step: int, dt: float) -> None:
+        self.frame_vec = self.resampler.frame_at(self._t0 + step * dt)
+
+    def _recognize(self, step: int, dt: float) -> None:
+        if self.frame_vec is None:
+            return
+        events = self.recognizer.push(self.frame_vec, t=step * dt)
+        for ev in events:
+            self.events_log.append(ev)
+            self.hud_state.mark(ev)
+            if self.match.fighting:
+                self.player.controller.on_event(ev)
+                if ev.get("event") == "start" and self.lib[ev["action"]].kind == "attack":
+                    self.sounds.play("punch", 0.5)
+        rec = self.recognizer
+        active = rec.state == "active"
+        self.hud_state.main_fill = min(rec.count, self.hud_state.main_size) if active else 0
+        self.hud_state.supp_fill = min(rec.count, rec.supplementary) if active else 0
+
+    def _player(self, step: int, dt: float) -> None:
+        self._hold_knockdown(0)
+        self.player.step(dt)
+        if self.player.controller.finished_action():
+            self.recognizer.character_finished()
+
+    def _opponent(self, step: int, dt: float) -> None:
+        from game.interaction import Situation
+
+        self._hold_knockdown(1)
+        if self.match.fighting:
+            me, them = self.opponent.controller, self.player.controller
+            situation = Situation.from_roots(self.opponent.root, me.action, me.frame,
+                                             self.player.root, them.action, them.frame)
+            self.opponent_ai.decide(situation)
+        self.opponent.step(dt)
+
+    def _hold_knockdown(self, i: int) -> None:
+        """While the referee counts, the downed boxer stays down (the clip's low frame)."""
+        ctrl = self.boxers[i].controller
+        clip = self.lib.get("knockdown")
+        if self.match.down == i and clip is not None:
+            hold = int(clip.frames * KNOCKDOWN_HOLD)
+            if ctrl.action != "knockdown" or ctrl.frame > hold:
+                ctrl.play("knockdown", from_frame=min(ctrl.frame, hold) if ctrl.action == "knockdown" else 0)
+
+    def _physics(self, step: int, dt: float) -> None:
+        self.contacts = self.world.step(dt)
+        self.prev_joints, self.curr_joints = self.curr_joints, [b.joint_positions().copy() for b in self.boxers]
+        self.renderer.step_effects()
+
+    def _hits(self, step: int, dt: float) -> None:
+        blows = self.referee.judge(self.contacts, (self.player.body_id, self.opponent.body_id),
+                                   (self.player.controller, self.opponent.controller))
+        for blow in blows:
+            target = 1 - blow.attacker
+            if not self.match.hit(target, blow.damage):
+                continue
+            self.blows_log.append((step, blow.attacker, blow.target, blow.blocked, round(blow.damage, 4)))
+            self.renderer.add_flash(blow.point, strong=blow.damage >= 8, blocked=blow.blocked)
+            if blow.blocked:
+                self.sounds.play("block")
+            else:
+                self.sounds.play("hit" if blow.damage >= 8 else "hit_light")
+                if self.match.down != target:
+                    self.boxers[target].controller.play(reaction_name(blow, self.lib))
+            if target == 0:
+                self.source.rumble(RUMBLE_MS)
+
+    def _match(self, step: int, dt: float) -> None:
+        m = self.match
+        m.step()
+        for kind, who in m.drain_events():
+            if kind == "bell":
+                self.sounds.play("bell")
+                if m.phase == "fight":
+                    self.hud_state.message, self.hud_state.message_age = f"ROUND {m.round}", 0
+            elif kind == "knockdown":
+                self.boxers[who].controller.play("knockdown")
+            elif kind == "rise":
+                self.boxers[who].controller.play("guard")
+        h = self.hud_state
+        h.health = list(m.health)
+        h.round, h.rounds = m.round, m.rounds
+        h.seconds_left = m.seconds_left()
+        h.phase, h.count, h.down = m.phase, m.count, m.down
+        h.knockdowns = list(m.knockdowns)
+        h.winner, h.result, h.paused = m.winner, m.result, m.paused
+        h.source_url, h.source_state = self.source.url, self.source.state.value
+        h.battery = self.source.battery
+        h.tick()
+        self._step = step
+
+    # -- rendering -----------------------------------------------------------------------
+    def render(self, alpha: float) -> None:
+        target = self.target_surface()
+        if self.config.low_power:
+            w, h = target.get_size()
+            size = (max(1, int(w * LOW_POWER_SCALE)), max(1, int(h * LOW_POWER_SCALE)))
+            if self._offscreen is None or self._offscreen.get_size() != size or self._offscreen is target:
+                self._offscreen = pygame.Surface(size)
+            surf = self._offscreen
+        else:
+            surf = target
+        bodies = [self.prev_joints[i] + (self.curr_joints[i] - self.prev_joints[i]) * alpha for i in (0, 1)]
+        self.renderer.draw(surf, bodies)
+        self.hud.draw(surf, self.hud_state, self.loop.budget)
+        if surf is not target:
+            pygame.transform.scale(surf, target.get_size(), target)
+        if self._surface_provider is not None and pygame.display.get_init() and pygame.display.get_surface() is target:
+            pygame.display.flip()
+
+    # -- reproducibility ------------------------------------------------------------------
+    def state_hash(self) -> str:
+        """The simulation's state: bodies, controllers, match, recognizer decisions."""
+        ctrls = [(b.controller.action, round(float(b.controller.frame), 6), tuple(np.round(b.root, 9))) for b in self.boxers]
+        events = [(e.get("frame"), e.get("event"), e.get("action"), e.get("from_frame")) for e in self.events_log]
+        return state_hash(self.world.x, self.match.state(), ctrls, events, self.blows_log)
