@@ -30,6 +30,7 @@ POST_HALF = 3.15
 ROPE_HEIGHTS = (0.55, 0.9, 1.25)
 POST_HEIGHT = 1.4
 
+KEY = (255, 0, 255)
 LIGHT_2D = np.array([-0.55, -0.83])  # the key light comes from the upper left of the screen
 
 
@@ -97,7 +98,7 @@ class Renderer:
             self._static = self._front = None
 
     def _poly(self, surf: pygame.Surface, color, pts: np.ndarray, width: int = 0) -> None:
-        pygame.draw.polygon(surf, color, [(float(x), float(y)) for x, y in pts], width)
+        pygame.draw.polygon(surf, color, np.asarray(pts).tolist(), width)
 
     def _build_static(self) -> None:
         w, h = self.camera.size
@@ -153,7 +154,11 @@ class Renderer:
         post_cols = [(200, 40, 40), (235, 235, 235), (40, 80, 210), (235, 235, 235)]
         depth_of = cam.project(posts)[1]
         mid_depth = cam.project(np.zeros(3))[1]
-        front = pygame.Surface((w, h), pygame.SRCALPHA)
+        # the front layer is opaque ropes over a colour key: an RLE-accelerated blit costs
+        # only its few opaque pixels, where a per-pixel-alpha layer would cost the whole screen
+        front = pygame.Surface((w, h))
+        front.fill(KEY)
+        front.set_colorkey(KEY, pygame.RLEACCEL)
         # sides: (post i, post j); near sides go in the front layer
         for i in range(4):
             j = (i + 1) % 4
