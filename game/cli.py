@@ -21,6 +21,7 @@ COMMAND_MODULES = [
     "tools.bench",
     "tools.graph",
     "tools.recognition_commands",
+    "tools.synth",
 ]
 
 

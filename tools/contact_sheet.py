@@ -12,8 +12,8 @@ import numpy as np
 from game.actions import ACTION_NAMES, Action
 from game.skeleton import BONES, JOINTS, compose_root, local_to_world
 
-VIEW_YAW = np.radians(55.0)  # camera turned around the boxer: shows straights and hooks
-CELL_W, CELL_H, SCALE = 118, 150, 68.0
+VIEW_YAW = np.radians(35.0)  # camera turned around the boxer: shows straights and hooks
+CELL_W, CELL_H, SCALE = 130, 190, 95.0
 LEFT_COLOUR, RIGHT_COLOUR, MID_COLOUR = (60, 120, 230), (220, 60, 50), (40, 40, 40)
 
 
