@@ -14,6 +14,7 @@ from engine.errors import InputError
 # Modules that add subcommands, in the order `--help` lists them.
 COMMAND_MODULES = [
     "game.play",
+    "game.training",
     "tools.record",
     "tools.devices",
     "tools.scope",

@@ -49,6 +49,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--low-power", action="store_true", help="render at 30 Hz on a half-size surface, fewer solver iterations")
     p.add_argument("--templates", metavar="NPZ", help="recognition templates (default: yours from `quickjab train`, else the shipped set)")
     p.add_argument("--graph", metavar="NPZ", help="Interaction Graph table (default: the shipped one)")
+    p.add_argument("--left-handed", action="store_true", help="Wiimote in the left hand: mirror the templates (your own trained set is used as it is)")
     p.add_argument("--budget", action="store_true", help="show the frame-budget overlay from the start (F3 toggles)")
     p.add_argument("--no-sound", action="store_true", help="no sound")
     p.set_defaults(func=run)
@@ -74,7 +75,7 @@ def open_player_source(url: str | None, demo: bool, seed: int, clock) -> tuple[o
     try:
         source = open_source(DEFAULT_SOURCE, clock=clock)
     except SourceError as exc:
-        print(f"quickjab play: {str(exc).split(';')[0]}; using the keyboard", file=sys.stderr)
+        print(f"quickjab: {str(exc).split(';')[0]}; using the keyboard", file=sys.stderr)
     else:
         if source.state is not SourceState.DISCONNECTED:
             return source, False
@@ -104,7 +105,8 @@ def run(args: argparse.Namespace) -> int:
     pygame.display.set_caption("QuickJab")
     config = SessionConfig(seed=args.seed, size=size, low_power=args.low_power, demo=args.demo,
                            keyboard_banner=fallback, templates=args.templates, graph=args.graph,
-                           sound=not args.no_sound and not args.headless)
+                           sound=not args.no_sound and not args.headless,
+                           left_handed=args.left_handed)
     session = Session(source, config, clock=clock, surface_provider=pygame.display.get_surface)
     session.hud_state.show_budget = args.budget
 

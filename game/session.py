@@ -62,17 +62,43 @@ class SessionConfig:
     graph: str | Path | None = None
     sound: bool = True
     physics_iterations: int = 4
+    left_handed: bool = False
 
 
-def load_templates(path: str | Path | None = None):
-    """The player's own templates (Train your moves), else the shipped set."""
+def synthesized_templates(seed: int = 0, trials: int = 3):
+    """Templates from the virtual player's trials (3 per action, fixed seed): what a fresh
+    install plays with when no template file is shipped or trained (~0.2 s to build)."""
+    from engine.recognition import Templates
+    from game.actions import ACTION_NAMES, load_library
+    from game.virtual_player import synthesize_action
+
+    lib = load_library()
+    rng = np.random.default_rng(seed)
+    return Templates.from_trials({
+        a: [synthesize_action(lib[a], "experienced", rng, rest_before=20, rest_after=20).reshape(-1, 6)
+            for _ in range(trials)]
+        for a in ACTION_NAMES
+    })
+
+
+def load_templates(path: str | Path | None = None, left_handed: bool = False):
+    """The player's own templates (Train your moves), else the shipped set, else templates
+    built from the virtual player. Left-handed players (Wiimote in the left hand) get the
+    mirror image of a right-handed set; their own trained set is used as it is."""
     from engine.recognition import Templates
     from game.userdata import SHIPPED_TEMPLATES, user_templates_path
 
     if path is not None:
-        return Templates.load(path)
-    user = user_templates_path()
-    return Templates.load(user if user.exists() else SHIPPED_TEMPLATES)
+        templates = Templates.load(path)
+    elif user_templates_path().exists():
+        templates = Templates.load(user_templates_path())
+    elif SHIPPED_TEMPLATES.exists():
+        templates = Templates.load(SHIPPED_TEMPLATES)
+    else:
+        templates = synthesized_templates()
+    if left_handed and templates.meta.get("left_handed") != "1":
+        templates = templates.mirrored()
+    return templates
 
 
 class Session:
@@ -99,7 +125,7 @@ class Session:
         self.player, self.opponent = self.boxers
         graph = InteractionGraph.load(cfg.graph) if cfg.graph else InteractionGraph.load()
         self.opponent_ai = OpponentController(graph, self.lib, controller=self.opponent.controller)
-        self.templates = load_templates(cfg.templates)
+        self.templates = load_templates(cfg.templates, cfg.left_handed)
         self.recognizer = DualBufferRecognizer(self.templates)
         self.resampler = FrameResampler(sensors=self.templates.dim // 3)
         self.referee = Referee(self.lib)
