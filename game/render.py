@@ -183,6 +183,13 @@ class Renderer:
             pygame.draw.line(layer, post_cols[i], pxy[0], pxy[1], int(thick * 1.25))
         self._static, self._front = back, front
 
+    def screen_box(self, joints: np.ndarray, margin: float = 0.15) -> pygame.Rect:
+        """The screen rectangle a body's joints (with `margin` metres around them) project to."""
+        xy, z = self.camera.project(joints)
+        pad = float(np.max(self.camera.scale_at(z))) * margin
+        lo, hi = xy.min(axis=0) - pad, xy.max(axis=0) + pad
+        return pygame.Rect(int(lo[0]), int(lo[1]), int(hi[0] - lo[0]), int(hi[1] - lo[1]))
+
     # -- per frame -----------------------------------------------------------------------
     def add_flash(self, point: np.ndarray, strong: bool = True, blocked: bool = False) -> None:
         self.flashes.append(Flash(np.asarray(point, dtype=float).copy(), strong=strong, blocked=blocked))
