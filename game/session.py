@@ -45,7 +45,8 @@ STAGE_BUDGETS_MS = {
 RENDER_BUDGET_MS = 8.0
 LOW_POWER_RENDER_BUDGET_MS = 4.0
 LOW_POWER_SCALE = 0.5  # the low-power mode renders at half size and scales up
-START_GAP = 1.8  # metres between the two roots at the bell
+START_GAP = 1.6  # metres between the two roots at the bell
+MIN_GAP = 0.75  # roots never closer than this: the bodies clinch, they do not merge
 HOME_BUTTON = 0x0080  # Wiimote core buttons: Home
 RUMBLE_MS = 120
 KNOCKDOWN_HOLD = 0.55  # the fraction of the knockdown clip held while the referee counts
@@ -63,6 +64,7 @@ class SessionConfig:
     sound: bool = True
     physics_iterations: int = 4
     left_handed: bool = False
+    render: bool = True  # False: no render stage (headless benchmarks and reproducibility tests)
 
 
 def synthesized_templates(seed: int = 0, trials: int = 3):
@@ -110,7 +112,7 @@ class Session:
         from engine.physics import World
         from engine.recognition import DualBufferRecognizer
         from game.actions import load_library
-        from game.boxer import Boxer
+        from game.fighter import Boxer
         from game.interaction import InteractionGraph, OpponentController
         from game.sound import Sounds
 
@@ -159,7 +161,8 @@ class Session:
                          ("player", self._player), ("opponent", self._opponent), ("physics", self._physics),
                          ("hits", self._hits), ("match", self._match)):
             self.loop.add_stage(name, fn, STAGE_BUDGETS_MS[name])
-        self.loop.set_render(self.render, LOW_POWER_RENDER_BUDGET_MS if cfg.low_power else RENDER_BUDGET_MS)
+        if cfg.render:
+            self.loop.set_render(self.render, LOW_POWER_RENDER_BUDGET_MS if cfg.low_power else RENDER_BUDGET_MS)
         self.sounds.play("bell")
 
     # -- surfaces ------------------------------------------------------------------------
@@ -227,6 +230,8 @@ class Session:
 
     def _player(self, step: int, dt: float) -> None:
         self._hold_knockdown(0)
+        ox, oz, _ = self.opponent.root
+        self.player.face(ox, oz)
         self.player.step(dt)
         if self.player.controller.finished_action():
             self.recognizer.character_finished()
@@ -240,7 +245,19 @@ class Session:
             situation = Situation.from_roots(self.opponent.root, me.action, me.frame,
                                              self.player.root, them.action, them.frame)
             self.opponent_ai.decide(situation)
+        px, pz, _ = self.player.root
+        self.opponent.face(px, pz)
         self.opponent.step(dt)
+        self._keep_apart()
+
+    def _keep_apart(self) -> None:
+        (px, pz, _), (ox, oz, _) = self.player.root, self.opponent.root
+        d = math.hypot(ox - px, oz - pz)
+        if d < MIN_GAP:
+            ux, uz = ((ox - px) / d, (oz - pz) / d) if d > 1e-6 else (0.0, 1.0)
+            push = (MIN_GAP - d) / 2
+            self.player.push_root(-ux * push, -uz * push)
+            self.opponent.push_root(ux * push, uz * push)
 
     def _hold_knockdown(self, i: int) -> None:
         """While the referee counts, the downed boxer stays down (the clip's low frame)."""
