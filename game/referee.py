@@ -2,7 +2,8 @@
 
 Input is the physics step's contacts. A blow is a fist capsule of boxer A touching the head or
 torso of boxer B while A's current clip has an AttackWindow for that hand open; B blocks it
-when B's clip has a GuardWindow covering that target open. Each punch lands at most once
+when B's clip has a GuardWindow covering that target open, or when the fist met B's gloves or
+forearms (the guard stopped it: a blocked blow at the head). Each punch lands at most once
 (a fist stays in contact for several steps). Damage is the window's damage scaled by the
 closing speed, a fifth of it through a block.
 """
@@ -37,11 +38,14 @@ class Blow:
 
 
 def target_of(tag: str) -> str | None:
-    """Which target a capsule tag is: head, body, or nothing a blow scores on."""
+    """Which target a capsule tag is: head, body, "guard" (gloves and forearms: a punch into
+    them is blocked), or nothing a blow scores on."""
     if tag.startswith("head"):
         return "head"
     if tag.startswith(("torso", "chest", "body", "abdomen", "spine", "pelvis")):
         return "body"
+    if tag.startswith(("fist", "forearm")):
+        return "guard"
     return None
 
 
@@ -74,15 +78,18 @@ class Referee:
                     continue
                 window = action.attack_at(ctrl.frame, hand) if hasattr(action, "attack_at") else next(
                     (w for w in action.attacks if w.hand == hand and w.start <= ctrl.frame <= w.end), None)
-                if window is None or target not in window.targets:
+                if window is None or (target != "guard" and target not in window.targets):
                     continue
                 key = (ctrl.action, window.start, hand)
                 if self._landed[a] == key:
                     continue
                 self._landed[a] = key
                 defender = self.lib.get(controllers[b].action)
-                blocked = bool(defender is not None and any(
+                # into the gloves: blocked (a punch that the guard stops, at the head)
+                blocked = target == "guard" or bool(defender is not None and any(
                     g.start <= controllers[b].frame <= g.end and target in g.covers for g in defender.guards))
+                if target == "guard":
+                    target = "head"
                 speed = float(abs(c.rel_speed))
                 scale = float(np.clip(speed / REFERENCE_SPEED, 0.5, 1.5))
                 damage = window.damage * scale * (BLOCKED_SHARE if blocked else 1.0)

@@ -45,8 +45,8 @@ STAGE_BUDGETS_MS = {
 RENDER_BUDGET_MS = 8.0
 LOW_POWER_RENDER_BUDGET_MS = 4.0
 LOW_POWER_SCALE = 0.5  # the low-power mode renders at half size and scales up
-START_GAP = 1.6  # metres between the two roots at the bell
-MIN_GAP = 0.75  # roots never closer than this: the bodies clinch, they do not merge
+START_GAP = 1.1  # metres between the two roots at the bell: just out of a straight's reach
+MIN_GAP = 0.6  # roots never closer than this: the bodies clinch, they do not merge
 HOME_BUTTON = 0x0080  # Wiimote core buttons: Home
 RUMBLE_MS = 120
 KNOCKDOWN_HOLD = 0.55  # the fraction of the knockdown clip held while the referee counts
@@ -103,6 +103,29 @@ def load_templates(path: str | Path | None = None, left_handed: bool = False):
     return templates
 
 
+def load_graph(path: str | Path | None = None):
+    """The Interaction Graph: `path`, else the shipped table, else one cached in the user's
+    data directory, else a small one built now (~3 s) and cached there."""
+    import sys
+
+    from game.interaction import DEFAULT_GRAPH, InteractionGraph
+    from game.userdata import data_dir
+
+    if path is not None:
+        return InteractionGraph.load(path)
+    if DEFAULT_GRAPH.exists():
+        return InteractionGraph.load(DEFAULT_GRAPH)
+    cached = data_dir() / "graph-small.npz"
+    if not cached.exists():
+        from game.actions import load_library
+        from game.interaction.build import BuildParams, build_graph
+
+        print(f"quickjab: no shipped Interaction Graph; building a small one in {cached} (once)", file=sys.stderr)
+        cached.parent.mkdir(parents=True, exist_ok=True)
+        build_graph(load_library(), BuildParams(states=3000, bouts=256)).save(cached)
+    return InteractionGraph.load(cached)
+
+
 class Session:
     """Build with a source and a surface to draw on; `loop.run(...)` plays."""
 
@@ -113,7 +136,7 @@ class Session:
         from engine.recognition import DualBufferRecognizer
         from game.actions import load_library
         from game.fighter import Boxer
-        from game.interaction import InteractionGraph, OpponentController
+        from game.interaction import OpponentController
         from game.sound import Sounds
 
         self.config = cfg = config or SessionConfig()
@@ -125,8 +148,10 @@ class Session:
         self.boxers = (Boxer(self.world, self.lib, x=0.0, z=-START_GAP / 2, yaw=0.0),
                        Boxer(self.world, self.lib, x=0.0, z=START_GAP / 2, yaw=math.pi))
         self.player, self.opponent = self.boxers
-        graph = InteractionGraph.load(cfg.graph) if cfg.graph else InteractionGraph.load()
+        graph = load_graph(cfg.graph)
+        self.graph = graph
         self.opponent_ai = OpponentController(graph, self.lib, controller=self.opponent.controller)
+        self._pilot_wait = 0
         self.templates = load_templates(cfg.templates, cfg.left_handed)
         self.recognizer = DualBufferRecognizer(self.templates)
         self.resampler = FrameResampler(sensors=self.templates.dim // 3)
@@ -178,6 +203,8 @@ class Session:
         if pygame.display.get_init():
             for event in pygame.event.get():
                 self.handle_event(event)
+        if self.config.demo:
+            self._pilot()
         samples = self.source.poll()
         buttons = int(getattr(self.source, "buttons", 0) or 0)
         if buttons & HOME_BUTTON and not self._buttons & HOME_BUTTON:
@@ -194,6 +221,29 @@ class Session:
                 self.match.toggle_pause()
             self._auto_paused = False
         self.hud_state.disconnected = disconnected
+
+    def _pilot(self) -> None:
+        """The attract mode's player: the Interaction Graph picks the player's move from the
+        player's side, the virtual player performs it on the keyboard source, and the REAL
+        recognizer has to recognize it before the boxer moves."""
+        from game.interaction import Situation
+
+        if not hasattr(self.source, "press") or self.source.busy or not self.match.fighting:
+            return
+        if self.player.controller.action != "guard":
+            return
+        if self._pilot_wait > 0:
+            self._pilot_wait -= 1
+            return
+        me, them = self.player.controller, self.opponent.controller
+        situation = Situation.from_roots(self.player.root, me.action, me.frame,
+                                         self.opponent.root, them.action, them.frame)
+        action = self.graph.best_action(situation)
+        if action in self.lib and action != "guard":
+            self.source.press(action)
+            self._pilot_wait = 12  # the hands come back to rest before the next motion
+        else:
+            self._pilot_wait = 8
 
     def handle_event(self, event: pygame.event.Event) -> None:
         if event.type == pygame.QUIT:
