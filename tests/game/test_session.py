@@ -4,6 +4,9 @@ recognizer, and a source that disconnects shows an overlay that clears on reconn
 
 from __future__ import annotations
 
+import sys
+from pathlib import Path
+
 import numpy as np
 import pygame
 import pytest
@@ -11,6 +14,9 @@ import pytest
 from engine.clock import VirtualClock
 from engine.sensors import SourceState, open_source
 from game.session import Session, SessionConfig
+
+sys.path.insert(0, str(Path(__file__).parent))
+from game_graph import graph_path  # noqa: E402,F401 - the fixture
 
 SIZE = (640, 360)
 
@@ -21,22 +27,8 @@ def own_data_dir(tmp_path, monkeypatch):
     monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "xdg"))
 
 
-@pytest.fixture(scope="session")
-def graph_path(tmp_path_factory) -> str:
-    """The shipped Interaction Graph, else a small one built for the tests (~3 s)."""
-    from game.interaction import DEFAULT_GRAPH
-
-    if DEFAULT_GRAPH.exists():
-        return str(DEFAULT_GRAPH)
-    from game.cli import main
-
-    out = tmp_path_factory.mktemp("graph") / "graph.npz"
-    assert main(["graph", "build", "-o", str(out), "--states", "3000", "--bouts", "256", "--quiet"]) == 0
-    return str(out)
-
-
 @pytest.fixture(autouse=True)
-def _graph(graph_path):
+def _graph(graph_path):  # noqa: F811 - the imported fixture
     global GRAPH
     GRAPH = graph_path
 
