@@ -93,30 +93,30 @@ class DistanceConstraints:
 
 
 class _Batch:
-    """Constraints projected together from the same positions, as two small matmuls:
-    D (S, N) gives every stick's difference x[j] - x[i], A (N, S) spreads the per-stick
-    corrections back to the particles (mass split and relaxation scale folded in).
-    Scratch buffers are preallocated: no per-step allocation but the matmul temporaries."""
+    """Constraints projected together from the same positions: one gather of both ends of
+    every stick, a few elementwise operations, and one scatter (np.bincount) of the
+    corrections back to the particles, mass split and relaxation scale folded in. No BLAS:
+    bincount and numpy's elementwise operations give the same bits on every CPU, where BLAS
+    kernels (chosen per CPU) do not, and runs must hash the same everywhere."""
 
     def __init__(self, i, j, lo, hi, ki, kj, n: int) -> None:
-        s = np.arange(len(i))
-        self.D = np.zeros((len(i), n))
-        self.D[s, j] += 1.0
-        self.D[s, i] -= 1.0
-        self.A = np.zeros((n, len(i)))
-        self.A[i, s] += ki
-        self.A[j, s] -= kj
+        s = len(i)
+        self.s = s
+        self.ends = np.concatenate([i, j])  # gather: rows 0..s-1 the i ends, then the j ends
+        # correction of end i is +ki * c, of end j is -kj * c, c the stick's correction vector
+        self.k = np.concatenate([ki, -kj])[:, None]
+        self.flat = (self.ends[:, None] * 3 + np.arange(3)).reshape(-1)  # x.ravel() indices
+        self.size = 3 * n
         self.lo = np.maximum(lo, _EPS)  # a zero minimum distance must not divide by zero
         self.hi = hi
-        self._d = np.zeros((len(i), 3))
-        self._len = np.zeros(len(i))
-        self._f = np.zeros(len(i))
-        self._m = np.zeros((n, len(i)))
-        self._dx = np.zeros((n, 3))
+        self._len = np.zeros(s)
+        self._f = np.zeros(s)
+        self._vals = np.zeros((2 * s, 3))
 
     def project(self, x: np.ndarray) -> None:
         # written for few numpy calls: at this size each call's overhead is the cost
-        d = np.matmul(self.D, x, out=self._d)
+        xe = x[self.ends]
+        d = xe[self.s:] - xe[:self.s]  # x_j - x_i
         length = np.einsum("ij,ij->i", d, d, out=self._len)
         np.sqrt(length, out=length)
         np.maximum(length, _EPS, out=length)
@@ -126,5 +126,8 @@ class _Batch:
         # < 0 compressed (apart), 0 inside [lo, hi]
         np.divide(f, length, out=f)
         np.subtract(1.0, f, out=f)
-        np.multiply(self.A, f, out=self._m)
-        x += np.matmul(self._m, d, out=self._dx)
+        d *= f[:, None]
+        vals = self._vals
+        np.multiply(self.k[:self.s], d, out=vals[:self.s])
+        np.multiply(self.k[self.s:], d, out=vals[self.s:])
+        x += np.bincount(self.flat, weights=vals.reshape(-1), minlength=self.size).reshape(x.shape)
