@@ -80,7 +80,7 @@ def segment_distance(p1: np.ndarray, q1: np.ndarray, p2: np.ndarray, q2: np.ndar
     s, t = closest_params(p1, q1, p2, q2)
     ca = p1 + s[:, None] * (q1 - p1)
     cb = p2 + t[:, None] * (q2 - p2)
-    return np.sqrt(np.einsum("ij,ij->i", cb - ca, cb - ca))
+    return np.sqrt(((cb - ca) ** 2).sum(1))
 
 
 class CapsulePairs:
@@ -117,9 +117,9 @@ class CapsulePairs:
         pair = both[self.pair_ab]  # rows: side a then side b
         d = pair[k:, :3] - pair[:k, :3]  # 2 (mid_b - mid_a)
         axes = pair[:, 3:]
-        length = np.sqrt(np.einsum("ij,ij->i", axes, axes))  # full capsule lengths
+        length = np.sqrt((axes * axes).sum(1))  # full capsule lengths
         reach = length[:k] + length[k:] + 2.0 * (self.rsum + margin)  # 2 x reach
-        return np.flatnonzero(np.einsum("ij,ij->i", d, d) < reach * reach)
+        return np.flatnonzero((d * d).sum(1) < reach * reach)
 
     def narrow(self, x: np.ndarray, idx: np.ndarray):
         """For the pairs `idx`: (s, t, unit normal a->b, depth); depth > 0 means the capsules
@@ -127,7 +127,7 @@ class CapsulePairs:
         v, g = _gram(x[self.quad[:, idx]])
         s, t = _params(g[0, 0], g[0, 1], g[0, 2], g[1, 1], g[1, 2])
         d = t[:, None] * v[1] - s[:, None] * v[0] - v[2]  # closest point on b - on a
-        dist = np.sqrt(np.einsum("ij,ij->i", d, d))
+        dist = np.sqrt((d * d).sum(1))
         depth = self.rsum[idx] - dist
         bad = dist < 1e-9
         if bad.any():

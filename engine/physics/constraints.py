@@ -88,7 +88,7 @@ class DistanceConstraints:
     def errors(self, x: np.ndarray) -> np.ndarray:
         """Per-constraint violation in metres (0 inside [lo, hi]) -> (S,)."""
         d = x[self.pairs[:, 1]] - x[self.pairs[:, 0]]
-        length = np.sqrt(np.einsum("ij,ij->i", d, d))
+        length = np.sqrt((d * d).sum(1))
         return np.abs(length - np.clip(length, self.lo, self.hi))
 
 
@@ -104,20 +104,23 @@ class _Batch:
         self.s = s
         self.ends = np.concatenate([i, j])  # gather: rows 0..s-1 the i ends, then the j ends
         # correction of end i is +ki * c, of end j is -kj * c, c the stick's correction vector
-        self.k = np.concatenate([ki, -kj])[:, None]
+        self.k = np.stack([ki, -kj])[:, :, None]  # (2, S, 1)
         self.flat = (self.ends[:, None] * 3 + np.arange(3)).reshape(-1)  # x.ravel() indices
         self.size = 3 * n
         self.lo = np.maximum(lo, _EPS)  # a zero minimum distance must not divide by zero
         self.hi = hi
         self._len = np.zeros(s)
+        self._sq = np.zeros((s, 3))
+        self._d = np.zeros((s, 3))
+        self._xe = np.zeros((2 * s, 3))
         self._f = np.zeros(s)
-        self._vals = np.zeros((2 * s, 3))
+        self._vals = np.zeros((2, s, 3))
 
     def project(self, x: np.ndarray) -> None:
         # written for few numpy calls: at this size each call's overhead is the cost
-        xe = x[self.ends]
-        d = xe[self.s:] - xe[:self.s]  # x_j - x_i
-        length = np.einsum("ij,ij->i", d, d, out=self._len)
+        xe = np.take(x, self.ends, axis=0, out=self._xe)
+        d = np.subtract(xe[self.s:], xe[:self.s], out=self._d)  # x_j - x_i
+        length = np.add.reduce(np.multiply(d, d, out=self._sq), 1, None, self._len)
         np.sqrt(length, out=length)
         np.maximum(length, _EPS, out=length)
         f = np.maximum(length, self.lo, out=self._f)
@@ -127,7 +130,5 @@ class _Batch:
         np.divide(f, length, out=f)
         np.subtract(1.0, f, out=f)
         d *= f[:, None]
-        vals = self._vals
-        np.multiply(self.k[:self.s], d, out=vals[:self.s])
-        np.multiply(self.k[self.s:], d, out=vals[self.s:])
+        vals = np.multiply(self.k, d, out=self._vals)  # (2, S, 3): i ends, then j ends
         x += np.bincount(self.flat, weights=vals.reshape(-1), minlength=self.size).reshape(x.shape)

@@ -257,11 +257,11 @@ class World:
         dv -= self._pd_kd * v
         # max acceleration clamp: a discontinuous target moves the body smoothly
         amax = self.max_accel * dt
-        n2 = np.einsum("ij,ij->i", dv, dv)
+        n2 = (dv * dv).sum(1)
         if n2.max(initial=0.0) > amax * amax:
             dv *= np.minimum(1.0, amax / np.sqrt(np.maximum(n2, 1e-30)))[:, None]
         v += dv
-        n2 = np.einsum("ij,ij->i", v, v)
+        n2 = (v * v).sum(1)
         if n2.max(initial=0.0) > self.max_speed * self.max_speed:
             v *= np.minimum(1.0, self.max_speed / np.sqrt(np.maximum(n2, 1e-30)))[:, None]
         self.x_prev[:] = x
