@@ -64,7 +64,9 @@ class World:
             raise ValueError("iterations must be >= 1")
         self.gravity = np.asarray(gravity, dtype=float).reshape(3)
         self.ground_y = float(ground_y)
-        self.damping = float(damping)  # fraction of velocity lost per step
+        if not 0.0 <= damping < 1.0:
+            raise ValueError("damping must be in [0, 1)")
+        self.damping = float(damping)  # fraction of velocity lost per 1/60 s (Jakobsen's per step)
         self.iterations = int(iterations)
         self.solver = solver  # "jacobi" (default) or "gauss_seidel", see constraints.py
         self.relaxation = float(relaxation)  # Jacobi over-relaxation factor omega
@@ -237,7 +239,9 @@ class World:
         x, v, dv = self.x, self._v, self._dv
         dt_prev = self._dt_prev or dt
         np.subtract(x, self.x_prev, out=v)
-        v *= (1.0 - self.damping) / dt_prev
+        # the same damping per second whatever dt: (1 - d) per 60 Hz step
+        keep = (1.0 - self.damping) ** (dt * 60.0) if dt != 1.0 / 60.0 else 1.0 - self.damping
+        v *= keep / dt_prev
         v += self.gravity * dt
         # Backward Euler on x'' = w2 (T - x') - c (v' - v_T), x' = x + dt v' gives
         #   v' - v = (dt w2 (T - x) + dt c v_T - (dt c + dt^2 w2) v) / (1 + dt c + dt^2 w2)

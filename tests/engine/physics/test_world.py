@@ -271,3 +271,15 @@ def test_state_hash_does_not_depend_on_the_cpu_kernels():
         assert out.returncode == 0, out.stderr
         hashes.add(out.stdout.strip())
     assert len(hashes) == 1
+
+
+def test_damping_is_per_second_not_per_step():
+    def speed_after_1s(dt: float) -> float:
+        w = World(gravity=(0, 0, 0), ground_y=-100.0, damping=0.05)
+        w.add_body([[0.0, 0.0, 0.0]], [1.0], np.zeros((0, 2)), np.zeros((0, 2)), [], [])
+        w.x_prev[0] = (-2.0 * dt, 0.0, 0.0)  # 2 m/s
+        for _ in range(round(1.0 / dt)):
+            w.step(dt)
+        return float(w.velocity(dt)[0, 0])
+    assert speed_after_1s(1 / 60) == pytest.approx(2.0 * 0.95**60, rel=1e-9)
+    assert speed_after_1s(1 / 120) == pytest.approx(speed_after_1s(1 / 60), rel=1e-9)
