@@ -57,7 +57,7 @@ class World:
     collision between bodies and the ground plane. See engine/physics/__init__.py."""
 
     def __init__(self, gravity=(0.0, -9.81, 0.0), ground_y: float = 0.0, damping: float = 0.01,
-                 iterations: int = 4, solver: str = "jacobi", relaxation: float = 1.5, max_accel: float = 200.0,
+                 iterations: int = 4, solver: str = "jacobi", relaxation: float = 2.0, max_accel: float = 200.0,
                  max_speed: float = 15.0, ground_friction: float = 0.0,
                  collision_margin: float = 0.05) -> None:
         if iterations < 1:
