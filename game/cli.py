@@ -16,6 +16,7 @@ COMMAND_MODULES = [
     "tools.record",
     "tools.bench",
     "tools.synth",
+    "tools.bvh_cmd",
 ]
 
 
