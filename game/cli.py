@@ -17,6 +17,7 @@ COMMAND_MODULES = [
     "tools.bench",
     "tools.synth",
     "tools.bvh_cmd",
+    "tools.actions_cmd",
 ]
 
 
