@@ -140,6 +140,13 @@ def _parse_actions(text: str | None) -> list[str] | None:
 
 
 def run(args: argparse.Namespace) -> int:
+    try:
+        return _run(args)
+    except OSError as exc:  # an output we cannot write: one line naming it
+        raise InputError(f"{exc.filename or args.output}: cannot write ({exc.strerror or exc})") from None
+
+
+def _run(args: argparse.Namespace) -> int:
     if args.templates:
         seed = DEFAULT_TEMPLATE_SEED if args.seed is None else args.seed
         path = build_default_templates(args.output, seed, profile=args.player)
