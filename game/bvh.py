@@ -345,7 +345,7 @@ def cut_action(
     motion of the root relative to the cut's first frame; with `guard`, the first and last
     `blend_frames` are blended into the guard so the action leaves and returns to the fat node."""
     if not 0 <= start < end < len(motion.postures):
-        raise InputError(f"frames {start}..{end} are outside the motion (0..{len(motion.postures) - 1})")
+        raise InputError(f"frame range {start}..{end} is empty or outside the motion (0..{len(motion.postures) - 1})")
     post = motion.postures[start : end + 1].copy()
     frames = len(post)
     if guard is not None:
