@@ -34,7 +34,6 @@ from engine.sensors.source import Source, SourceState
 from engine.state_hash import state_hash
 from game.hud import Hud, HudState
 from game.match import Match
-from game.referee import Referee, reaction_name
 from game.render import Renderer
 
 HZ = 60
@@ -46,7 +45,9 @@ RENDER_BUDGET_MS = 8.0
 LOW_POWER_RENDER_BUDGET_MS = 4.0
 LOW_POWER_SCALE = 0.5  # the low-power mode renders at half size and scales up
 START_GAP = 1.1  # metres between the two roots at the bell: just out of a straight's reach
-MIN_GAP = 0.6  # roots never closer than this: the bodies clinch, they do not merge
+RING_LIMIT = 2.6  # metres from the centre a root may go (the ropes are at 3)
+REFERENCE_SPEED = 4.0  # m/s: a blow closing at this speed does its window's damage
+BLOCKED_SHARE = 0.2  # the share of the damage that goes through a block
 HOME_BUTTON = 0x0080  # Wiimote core buttons: Home
 RUMBLE_MS = 120
 KNOCKDOWN_HOLD = 0.55  # the fraction of the knockdown clip held while the referee counts
@@ -135,7 +136,7 @@ class Session:
         from engine.physics import World
         from engine.recognition import DualBufferRecognizer
         from game.actions import load_library
-        from game.fighter import Boxer
+        from game.boxer import Boxer
         from game.interaction import OpponentController
         from game.sound import Sounds
 
@@ -155,7 +156,6 @@ class Session:
         self.templates = load_templates(cfg.templates, cfg.left_handed)
         self.recognizer = DualBufferRecognizer(self.templates)
         self.resampler = FrameResampler(sensors=self.templates.dim // 3)
-        self.referee = Referee(self.lib)
         self.match = Match()
         self.hud_state = HudState(keys=[], source_url=source.url, keyboard_banner=cfg.keyboard_banner,
                                   demo=cfg.demo, mode="LOW POWER" if cfg.low_power else "",
@@ -281,7 +281,8 @@ class Session:
     def _player(self, step: int, dt: float) -> None:
         self._hold_knockdown(0)
         ox, oz, _ = self.opponent.root
-        self.player.face(ox, oz)
+        self.player.turn_towards(ox, oz)
+        self.player.keep_inside(RING_LIMIT)
         self.player.step(dt)
         if self.player.controller.finished_action():
             self.recognizer.character_finished()
@@ -296,18 +297,9 @@ class Session:
                                              self.player.root, them.action, them.frame)
             self.opponent_ai.decide(situation)
         px, pz, _ = self.player.root
-        self.opponent.face(px, pz)
+        self.opponent.turn_towards(px, pz)
+        self.opponent.keep_inside(RING_LIMIT)
         self.opponent.step(dt)
-        self._keep_apart()
-
-    def _keep_apart(self) -> None:
-        (px, pz, _), (ox, oz, _) = self.player.root, self.opponent.root
-        d = math.hypot(ox - px, oz - pz)
-        if d < MIN_GAP:
-            ux, uz = ((ox - px) / d, (oz - pz) / d) if d > 1e-6 else (0.0, 1.0)
-            push = (MIN_GAP - d) / 2
-            self.player.push_root(-ux * push, -uz * push)
-            self.opponent.push_root(ux * push, uz * push)
 
     def _hold_knockdown(self, i: int) -> None:
         """While the referee counts, the downed boxer stays down (the clip's low frame)."""
@@ -324,22 +316,32 @@ class Session:
         self.renderer.step_effects()
 
     def _hits(self, step: int, dt: float) -> None:
-        blows = self.referee.judge(self.contacts, (self.player.body_id, self.opponent.body_id),
-                                   (self.player.controller, self.opponent.controller))
-        for blow in blows:
-            target = 1 - blow.attacker
-            if not self.match.hit(target, blow.damage):
-                continue
-            self.blows_log.append((step, blow.attacker, blow.target, blow.blocked, round(blow.damage, 4)))
-            self.renderer.add_flash(blow.point, strong=blow.damage >= 8, blocked=blow.blocked)
-            if blow.blocked:
-                self.sounds.play("block")
-            else:
-                self.sounds.play("hit" if blow.damage >= 8 else "hit_light")
-                if self.match.down != target:
-                    self.boxers[target].controller.play(reaction_name(blow, self.lib))
-            if target == 0:
-                self.source.rumble(RUMBLE_MS)
+        from game.hits import hits_from_contacts
+
+        for hit in hits_from_contacts(self.contacts, list(self.boxers)):
+            self.apply_hit(step, hit)
+
+    def apply_hit(self, step: int, hit: dict) -> None:
+        """A hit event (CONTRACTS.md keys, plus the window's damage and the point): damage
+        scaled by the closing speed, a fifth through a block; reaction, flash, sound, rumble."""
+        target = 1 - hit["attacker"]
+        scale = float(np.clip(hit["speed"] / REFERENCE_SPEED, 0.5, 1.5))
+        damage = float(hit.get("damage", 8.0)) * scale * (BLOCKED_SHARE if hit["blocked"] else 1.0)
+        if not self.match.hit(target, damage):
+            return
+        self.blows_log.append((step, hit["attacker"], hit["target"], hit["blocked"], round(damage, 4)))
+        point = hit.get("point")
+        if point is None:
+            point = self.boxers[target].joint_positions()[4]
+        self.renderer.add_flash(point, strong=damage >= 8, blocked=hit["blocked"])
+        if hit["blocked"]:
+            self.sounds.play("block")
+        else:
+            self.sounds.play("hit" if damage >= 8 else "hit_light")
+            if self.match.down != target:
+                self.boxers[target].react(hit)
+        if target == 0:
+            self.source.rumble(RUMBLE_MS)
 
     def _match(self, step: int, dt: float) -> None:
         m = self.match

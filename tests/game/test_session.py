@@ -126,10 +126,10 @@ def test_rumble_on_the_player_when_hit() -> None:
     s = make_session("keyboard://?seed=6", render=False)
     calls = []
     s.source.rumble = calls.append
-    from game.referee import Blow
-
-    blow = Blow(1, "head", "r", 5.0, np.array([0, 0, -1.0]), False, 9.0, np.zeros(3), "straight_r")
-    s.referee.judge = lambda *a, **k: [blow]
-    s.contacts = []
-    s._hits(0, 1 / 60)
+    hit = {"attacker": 1, "target": "head", "hand": "r", "speed": 5.0, "direction": np.array([0, 0, -1.0]),
+           "blocked": False, "damage": 9.0}
+    s.apply_hit(0, hit)
     assert calls and s.match.health[0] < 100
+    assert s.player.controller.action.startswith("hit_head")  # the reaction plays
+    s.apply_hit(1, {**hit, "attacker": 0})
+    assert len(calls) == 1  # the CPU being hit does not rumble the player's controller
