@@ -48,8 +48,14 @@ START_GAP = 1.1  # metres between the two roots at the bell: just out of a strai
 RING_LIMIT = 2.6  # metres from the centre a root may go (the ropes are at 3)
 REFERENCE_SPEED = 4.0  # m/s: a blow closing at this speed does its window's damage
 BLOCKED_SHARE = 0.2  # the share of the damage that goes through a block
+# The CPU reads the situation from a solved table and never hesitates: its blows count for less
+# so that a human (whose moves wait for the recognizer) has a fair fight.
+DIFFICULTY = {"easy": 0.45, "normal": 0.7, "hard": 1.0}
 HOME_BUTTON = 0x0080  # Wiimote core buttons: Home
 RUMBLE_MS = 120
+PILOT_VARIETY = 0.4
+PILOT_REACH = 1.0
+PILOT_ATTACKS = ("straight_l", "straight_r", "hook_l", "hook_r", "uppercut_l", "uppercut_r", "block", "step_left", "step_right")
 KNOCKDOWN_HOLD = 0.55  # the fraction of the knockdown clip held while the referee counts
 
 
@@ -65,6 +71,7 @@ class SessionConfig:
     sound: bool = True
     physics_iterations: int = 4
     left_handed: bool = False
+    difficulty: str = "normal"
     render: bool = True  # False: no render stage (headless benchmarks and reproducibility tests)
 
 
@@ -153,6 +160,7 @@ class Session:
         self.graph = graph
         self.opponent_ai = OpponentController(graph, self.lib, controller=self.opponent.controller)
         self._pilot_wait = 0
+        self._pilot_rng = np.random.default_rng(cfg.seed + 1)
         self.templates = load_templates(cfg.templates, cfg.left_handed)
         self.recognizer = DualBufferRecognizer(self.templates)
         self.resampler = FrameResampler(sensors=self.templates.dim // 3)
@@ -239,6 +247,12 @@ class Session:
         situation = Situation.from_roots(self.player.root, me.action, me.frame,
                                          self.opponent.root, them.action, them.frame)
         action = self.graph.best_action(situation)
+        if self._pilot_rng.random() < PILOT_VARIETY:
+            # an attract mode that only ever throws the one best punch is dull to watch: now
+            # and then a different move (closing in when out of reach)
+            near = situation.distance < PILOT_REACH
+            choices = PILOT_ATTACKS if near else ("step_forward",)
+            action = choices[int(self._pilot_rng.integers(len(choices)))]
         if action in self.lib and action != "guard":
             self.source.press(action)
             self._pilot_wait = 12  # the hands come back to rest before the next motion
@@ -327,6 +341,8 @@ class Session:
         target = 1 - hit["attacker"]
         scale = float(np.clip(hit["speed"] / REFERENCE_SPEED, 0.5, 1.5))
         damage = float(hit.get("damage", 8.0)) * scale * (BLOCKED_SHARE if hit["blocked"] else 1.0)
+        if hit["attacker"] == 1:
+            damage *= DIFFICULTY[self.config.difficulty]
         if not self.match.hit(target, damage):
             return
         self.blows_log.append((step, hit["attacker"], hit["target"], hit["blocked"], round(damage, 4)))
