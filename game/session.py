@@ -396,9 +396,10 @@ class Session:
             surf = target
         bodies = [self.prev_joints[i] + (self.curr_joints[i] - self.prev_joints[i]) * alpha for i in (0, 1)]
         self.renderer.draw(surf, bodies)
-        self.hud.draw(surf, self.hud_state, self.loop.budget)
         if surf is not target:
+            # the scene at half size, scaled up; the HUD's text drawn sharp at full size
             pygame.transform.scale(surf, target.get_size(), target)
+        self.hud.draw(target, self.hud_state, self.loop.budget)
         if self._surface_provider is not None and pygame.display.get_init() and pygame.display.get_surface() is target:
             pygame.display.flip()
 
