@@ -36,6 +36,8 @@ def record(url: str, output: str, seconds: float | None, label: str = "", poll_s
                 if writer is None:
                     writer = RecordingWriter(output, source.sensors, meta)
                 writer.write(sample, label)
+            if writer is not None:
+                writer.flush_if_due()  # a silent source still gets its rows synced
             if source.state is SourceState.ENDED:
                 break
             time.sleep(poll_s)

@@ -14,7 +14,13 @@ import numpy as np
 import pytest
 
 import engine.recording as recording
-from engine.recording import Recording, RecordingError, RecordingWriter, read_recording, write_recording
+from engine.recording import (
+    Recording,
+    RecordingError,
+    RecordingWriter,
+    read_recording,
+    write_recording,
+)
 from engine.sensors.source import Sample
 
 REPO = Path(__file__).resolve().parents[2]

@@ -10,7 +10,15 @@ import engine.sensors.source as source_mod
 from engine.clock import VirtualClock
 from engine.errors import InputError
 from engine.recording import Recording, RecordingError, write_recording
-from engine.sensors import Sample, Source, SourceError, SourceState, open_source, parse_source_url, register_scheme
+from engine.sensors import (
+    Sample,
+    Source,
+    SourceError,
+    SourceState,
+    open_source,
+    parse_source_url,
+    register_scheme,
+)
 from engine.sensors.rate import RateMeter
 
 
