@@ -23,6 +23,7 @@ from engine.errors import InputError
 from engine.loop import FixedStepLoop
 from engine.sensors import Sample, Source, SourceState, open_source
 from engine.sensors.rate import RateMeter
+from engine.state_hash import state_hash
 from engine.trace import write_chrome_trace
 
 AXIS_COLORS = ((235, 85, 85), (90, 205, 90), (95, 145, 255))  # x, y, z
@@ -182,6 +183,14 @@ class Scope:
         if self.banner:
             screen.blit(self.small.render(self.banner, True, (230, 190, 70)), (8, 44))
 
+    def state_hash(self) -> str:
+        """Hash of what the scope holds: two headless runs of the same source must agree."""
+        n = min(self.ring.count, self.ring.capacity)
+        idx = np.arange(self.ring.count - n, self.ring.count) % self.ring.capacity
+        loop = self.loop
+        return state_hash(self.ring.t[idx], self.ring.x[idx], self.samples,
+                          loop.step_index if loop else 0, loop.dropped_steps if loop else 0)
+
     def close(self) -> None:
         self.final_state = self.source.state  # before close() turns it to disconnected
         self.source.close()
@@ -260,4 +269,6 @@ def run(args: argparse.Namespace) -> int:
     scope = run_scope(source, clock=clock, frames=args.frames, screenshot=args.screenshot, trace=args.trace, view=view)
     print(f"scope: {scope.samples} samples from {args.source} in {scope.loop.frame_index} frames, "
           f"source {scope.final_state.value}", file=sys.stderr)
+    if args.headless:  # reproducible: the same source and frame count give the same hash
+        print(f"state {scope.state_hash()}")
     return 0
