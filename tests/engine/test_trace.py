@@ -155,3 +155,28 @@ def test_read_back_what_was_written(tmp_path):
     write_chrome_trace(loop.budget, tmp_path / "t.json")
     doc = read_chrome_trace(tmp_path / "t.json")
     assert doc["otherData"]["stages"]["sense"]["budget_ms"] == 1.0
+
+
+def test_span_ring_wrapping_first_drops_whole_frames_only():
+    # ~5 spans per frame but room for 2 per frame: the span ring wraps long before the frame ring
+    loop = FixedStepLoop(clock=VirtualClock(), auto_freeze_gc=False,
+                         budget=FrameBudget(capacity_frames=50, spans_per_frame=2))
+    for name in ("a", "b"):
+        loop.add_stage(name, lambda s, dt: None, budget_ms=1.0)
+    loop.set_render(lambda a: None, budget_ms=1.0)
+    loop.run(frames=80)
+    doc = chrome_trace(loop.budget)
+    check_chrome_trace(doc)
+    frames = [e for e in doc["traceEvents"] if e["ph"] == "X" and e["name"] == "frame"]
+    assert 10 <= len(frames) < 50
+    stages = [e for e in doc["traceEvents"] if e["ph"] == "X" and e["name"] == "a"]
+    assert len(stages) == sum(f["args"]["steps"] for f in frames)  # no frame reported short
+    assert loop.budget.summary()["stages"]["a"]["n"] == len(stages)
+
+
+def test_overruns_are_flagged_in_the_trace():
+    loop = FixedStepLoop(clock=VirtualClock(), auto_freeze_gc=False)
+    loop.add_stage("slow", lambda step, dt: time.sleep(0.002) if step == 4 else None, budget_ms=1.0)
+    loop.run(frames=8)
+    xs = [e for e in chrome_trace(loop.budget)["traceEvents"] if e["ph"] == "X" and e["name"] == "slow"]
+    assert [e["args"]["step"] for e in xs if e["args"].get("overrun")] == [4]
