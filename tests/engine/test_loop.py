@@ -224,3 +224,14 @@ def test_state_hash_covers_dtype_shape_and_values():
     y = x.copy()
     y[3] = np.nextafter(y[3], 10)
     assert state_hash(x) != state_hash(y)
+
+
+def test_resync_after_a_pause_drops_nothing():
+    clock, loop = make_loop()
+    loop.run(frames=10)
+    clock.advance(5 * NS_PER_S)  # the game was paused outside the loop
+    loop.resync()
+    assert loop.run_frame() == 0  # no catch-up burst; the accumulator keeps its fraction
+    assert loop.dropped_steps == 0
+    loop.run(frames=5)
+    assert loop.step_index == 15 and loop.dropped_steps == 0
