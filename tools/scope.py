@@ -106,9 +106,13 @@ class Scope:
         self.ring = SampleRing(cap, 6)
         self.samples = 0
         self.quit = False
-        pygame.display.init()
+        try:
+            pygame.display.init()
+            self.screen = pygame.display.set_mode((self.view.width, self.view.height))
+        except pygame.error as exc:
+            source.close()
+            raise InputError(f"cannot open a window ({exc}); without a display use --headless") from None
         pygame.font.init()
-        self.screen = pygame.display.set_mode((self.view.width, self.view.height))
         pygame.display.set_caption(f"QuickJab scope: {source.url}")
         self.font = pygame.font.Font(None, 20)
         self.small = pygame.font.Font(None, 16)
