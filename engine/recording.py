@@ -66,7 +66,7 @@ def read_recording(path: str | os.PathLike) -> Recording:
     """Read a recording CSV. Raises RecordingError (file and line) on anything malformed."""
     path = Path(path)
     try:
-        text = path.read_text(encoding="utf-8")
+        text = path.read_text(encoding="utf-8-sig")  # a spreadsheet's BOM is not part of "t"
     except (OSError, UnicodeDecodeError) as exc:
         raise RecordingError(path, None, f"cannot read: {exc}") from None
     meta: dict[str, str] = {}
@@ -136,11 +136,16 @@ def _is_float(s: str) -> bool:
 def _format_row(t: float, accel: np.ndarray, label: str) -> str:
     # t to the microsecond (430 Hz phones are 2.3 ms apart), g to 0.1 mg (sensor noise is ~10 mg)
     vals = ",".join(f"{v:.4f}" for v in np.asarray(accel, dtype=np.float64).ravel())
+    if any(c in label for c in ',"\r\n'):
+        label = '"' + label.replace('"', '""').replace("\r", " ").replace("\n", " ") + '"'
     return f"{t:.6f},{vals},{label}\n"
 
 
 def _metadata_lines(meta: dict[str, str]) -> str:
-    return "".join(f"# {k}: {v}\n" for k, v in meta.items())
+    def one_line(x: object) -> str:
+        return " ".join(str(x).splitlines())
+
+    return "".join(f"# {one_line(k)}: {one_line(v)}\n" for k, v in meta.items())
 
 
 def write_recording(path: str | os.PathLike, rec: Recording) -> None:

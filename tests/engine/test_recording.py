@@ -191,3 +191,15 @@ def test_rows_written_before_a_sigkill_are_in_the_file(tmp_path):
     rec = read_recording(path)
     assert len(rec) == 37 and rec.sensors == 2
     assert rec.accel[-1, 1, 2] == pytest.approx(3.6)
+
+
+def test_awkward_labels_metadata_and_a_bom_round_trip(tmp_path):
+    rec = Recording(np.array([0.0, 0.5]), np.zeros((2, 1, 3)), ['jab, then "cross"', "hook"],
+                    {"note": "two\nlines"})
+    path = tmp_path / "odd.csv"
+    write_recording(path, rec)
+    back = read_recording(path)
+    assert back.labels == rec.labels and back.meta["note"] == "two lines"
+    bom = tmp_path / "bom.csv"
+    bom.write_bytes(b"\xef\xbb\xbft,rx,ry,rz\r\n0,1,2,3\r\n")
+    assert read_recording(bom).accel.tolist() == [[[1.0, 2.0, 3.0]]]
