@@ -10,30 +10,9 @@ import argparse
 import sys
 
 from engine.clock import RealClock, VirtualClock
-from engine.sensors import Source, SourceError, SourceState, open_source
-from engine.sensors.source import Clock
 
 DEFAULT_SOURCE = "wiimote://"
 FALLBACK_SOURCE = "demo://"
-
-
-def open_with_fallback(url: str, clock: Clock) -> tuple[Source, str]:
-    """Open `url`; if it is the default Wiimote and none can be opened, open the demo source.
-    Returns (source, banner); the banner is empty unless the fallback was taken."""
-    try:
-        source = open_source(url, clock=clock)
-    except SourceError as exc:
-        if url != DEFAULT_SOURCE:
-            raise
-        reason = str(exc)
-    else:
-        if source.state is not SourceState.DISCONNECTED or url != DEFAULT_SOURCE:
-            return source, ""
-        reason = "no Wiimote found"
-        source.close()
-    print(f"quickjab play: no Wiimote: {reason}", file=sys.stderr)
-    banner = "No Wiimote found: showing the synthetic demo source. Pair one, or pass --source URL."
-    return open_source(FALLBACK_SOURCE, clock=clock), banner
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -47,13 +26,13 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from tools.scope import headless_env, run_scope, view_from_args
+    from tools.scope import headless_env, open_with_fallback, run_scope, view_from_args
 
     view = view_from_args(args)
     if args.headless:
         headless_env()
     clock: RealClock | VirtualClock = VirtualClock() if args.headless else RealClock()
-    source, banner = open_with_fallback(args.source, clock.seconds)
+    source, banner = open_with_fallback(args.source, clock.seconds, DEFAULT_SOURCE, FALLBACK_SOURCE)
     if banner:
         print(banner, file=sys.stderr)
     run_scope(source, clock=clock, frames=args.frames, screenshot=args.screenshot, trace=args.trace,

@@ -14,6 +14,7 @@ from __future__ import annotations
 import argparse
 import os
 import sys
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -21,7 +22,7 @@ import numpy as np
 from engine.clock import RealClock, VirtualClock
 from engine.errors import InputError
 from engine.loop import FixedStepLoop
-from engine.sensors import Sample, Source, SourceState, open_source
+from engine.sensors import Sample, Source, SourceError, SourceState, open_source
 from engine.sensors.rate import RateMeter
 from engine.state_hash import state_hash
 from engine.trace import write_chrome_trace
@@ -229,6 +230,28 @@ def run_scope(
     finally:
         scope.close()
     return scope
+
+
+def open_with_fallback(url: str, clock: Callable[[], float], default: str = "wiimote://",
+                       fallback: str = "demo://") -> tuple[Source, str]:
+    """Open `url`; if it is the `default` device URL and no such device can be opened (an
+    error, or a source already disconnected), open `fallback` instead. Returns (source,
+    banner); the banner says what happened and is empty unless the fallback was taken."""
+    try:
+        source = open_source(url, clock=clock)
+    except SourceError as exc:
+        if url != default:
+            raise
+        reason = str(exc)
+    else:
+        if source.state is not SourceState.DISCONNECTED or url != default:
+            return source, ""
+        reason = "disconnected"
+        source.close()
+    print(f"quickjab: no device at {default}: {reason}", file=sys.stderr)
+    device = "Wiimote" if default.startswith("wiimote") else f"device at {default}"
+    banner = f"No {device} found: showing the synthetic {fallback} source. Pair one, or pass --source URL."
+    return open_source(fallback, clock=clock), banner
 
 
 def headless_env() -> None:
