@@ -44,7 +44,7 @@ class BuildParams:
     sample_factor: float = 1.3     # sample until this many x `states` distinct cells exist
     greedy_share: float = 0.35     # share of sampled decisions taken by the greedy policy
     candidate_factor: float = 1.15  # cells expanded before keeping the best connected `states`
-    opponent_max: float = 1.0      # 1: min-max; 0: the opponent's expectation (random)
+    opponent_max: float = 0.5      # 1: min-max; 0: the opponent's expectation (random)
 
 
 def compile_table(lib: dict, rules: BoutRules) -> ActionTable:
