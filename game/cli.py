@@ -14,6 +14,7 @@ from engine.errors import InputError
 # Modules that add subcommands, in the order `--help` lists them.
 COMMAND_MODULES = [
     "tools.record",
+    "tools.devices",
     "tools.bench",
     "tools.graph",
 ]
