@@ -118,6 +118,16 @@ class Action:
         """(3,) cumulative (dx, dz, dyaw) by frame f, in the local frame at the clip's start."""
         return self._lerp(self.root_table, f)
 
+    def sample(self, fs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Postures (n, 17, 3) and root offsets (n, 3) at many fractional frames at once,
+        straight from the keyframe curves (smooth to the second derivative within segments,
+        which the virtual player's accelerations need)."""
+        fs = np.clip(np.asarray(fs, dtype=np.float64), 0.0, self.frames - 1.0)
+        postures = impose_bone_lengths(_hermite(self.key_frames, self.key_poses, fs))
+        if len(self.root_keys) == 0:
+            return postures, np.zeros((len(fs), 3))
+        return postures, _hermite(self.root_keys[:, 0], self.root_keys[:, 1:], fs)
+
     def hand_trajectory(self, hand: str) -> np.ndarray:
         """(frames, 3) local fist positions ('l' or 'r')."""
         return self.table[:, joint_index(f"fist_{hand}")].copy()

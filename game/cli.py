@@ -16,6 +16,9 @@ COMMAND_MODULES = [
     "tools.record",
     "tools.devices",
     "tools.bench",
+    "tools.synth",
+    "tools.bvh_cmd",
+    "tools.actions_cmd",
     "tools.graph",
 ]
 

@@ -26,8 +26,8 @@ DT = 1.0 / 60.0
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--steps", type=int, default=1000, help="steps per timed run (default 1000)")
-    p.add_argument("--repeats", type=int, default=3, help="timed runs; the median is reported")
+    p.add_argument("--steps", type=int, default=500, help="steps per timed run (default 500)")
+    p.add_argument("--repeats", type=int, default=5, help="timed runs per configuration, taken in turn")
     p.add_argument("--iterations", type=int, default=4, help="relaxation iterations per step")
     p.add_argument("--json", action="store_true", help="print JSON instead of a table")
 
@@ -52,23 +52,27 @@ def _world(gap: float, iterations: int, solver: str = "jacobi") -> tuple[World, 
     return w, targets
 
 
-def _time_world(w: World, targets: list, steps: int, repeats: int) -> tuple[float, float]:
-    """Median µs per step (set_targets for both bodies + step), and contacts per step."""
-    def one() -> int:
-        n = 0
+def _time_worlds(configs: dict, steps: int, repeats: int) -> dict:
+    """For each named (world, targets): µs per step (set_targets for both bodies + step), the
+    minimum and the median over `repeats` runs taken in turn (so load from other processes
+    hits every configuration alike; the minimum is the least disturbed), and contacts/step."""
+    def one(w: World, targets: list) -> int:
         for bid, t in targets:
             w.set_targets(bid, t, 6.0)
-        n += len(w.step(DT))
-        return n
-    for _ in range(120):  # settle (and, in the clinch, press together)
-        one()
-    runs, contacts = [], 0
+        return len(w.step(DT))
+    for w, targets in configs.values():
+        for _ in range(120):  # settle (and, in the clinch, press together)
+            one(w, targets)
+    runs = {name: [] for name in configs}
+    contacts = dict.fromkeys(configs, 0)
     for _ in range(repeats):
-        t0 = time.process_time_ns()
-        for _ in range(steps):
-            contacts += one()
-        runs.append((time.process_time_ns() - t0) / steps / 1000)
-    return float(np.median(runs)), contacts / (steps * repeats)
+        for name, (w, targets) in configs.items():
+            t0 = time.process_time_ns()
+            for _ in range(steps):
+                contacts[name] += one(w, targets)
+            runs[name].append((time.process_time_ns() - t0) / steps / 1000)
+    return {name: {"min": float(np.min(r)), "median": float(np.median(r)),
+                   "contacts_per_step": contacts[name] / (steps * repeats)} for name, r in runs.items()}
 
 
 class PurePythonWorld:
@@ -129,7 +133,7 @@ class PurePythonWorld:
                 b[2] -= kj * f * dz
 
 
-def _time_python(w: World, steps: int, repeats: int, iterations: int) -> float:
+def _time_python(w: World, steps: int, repeats: int, iterations: int) -> dict:
     peer = PurePythonWorld(w)
     runs = []
     for _ in range(repeats):
@@ -137,7 +141,7 @@ def _time_python(w: World, steps: int, repeats: int, iterations: int) -> float:
         for _ in range(steps):
             peer.step(DT, iterations)
         runs.append((time.process_time_ns() - t0) / steps / 1000)
-    return float(np.median(runs))
+    return {"min": float(np.min(runs)), "median": float(np.median(runs))}
 
 
 def _relaxation(steps: int) -> dict:
@@ -181,32 +185,38 @@ def _relaxation(steps: int) -> dict:
 
 def run(args: argparse.Namespace) -> int:
     it = args.iterations
-    apart, _ = _time_world(*_world(1.2, it), args.steps, args.repeats)
-    clinch, clinch_contacts = _time_world(*_world(0.45, it), args.steps, args.repeats)
-    gs_apart, _ = _time_world(*_world(1.2, it, "gauss_seidel"), args.steps, args.repeats)
-    gs_clinch, _ = _time_world(*_world(0.45, it, "gauss_seidel"), args.steps, args.repeats)
-    w, _ = _world(1.2, it)
-    peer = _time_python(w, max(args.steps // 4, 50), args.repeats, it)
+    configs = {
+        "apart": _world(1.2, it), "clinch": _world(0.45, it),
+        "apart_gauss_seidel": _world(1.2, it, "gauss_seidel"), "clinch_gauss_seidel": _world(0.45, it, "gauss_seidel"),
+    }
+    steps = _time_worlds(configs, args.steps, args.repeats)
+    w = configs["apart"][0]
+    peer = _time_python(_world(1.2, it)[0], max(args.steps // 4, 50), args.repeats, it)
     relax = _relaxation(args.steps)
     fig = {
         "particles": int(len(w.x)), "constraints": len(w.constraints), "capsule_pairs": len(w.pairs),
-        "iterations": it,
-        "step_us_apart": apart, "step_us_clinch": clinch, "clinch_contacts_per_step": clinch_contacts,
-        "step_us_apart_gauss_seidel": gs_apart, "step_us_clinch_gauss_seidel": gs_clinch,
+        "iterations": it, "timer": "process CPU time, us per step (min and median over repeats)",
+        "step_us": steps,
         "peer_pure_python_step_us": peer,
-        "speedup_vs_pure_python_apart": peer / apart,
+        "speedup_vs_pure_python_apart": peer["min"] / steps["apart"]["min"],
         "relaxation": relax,
     }
     if args.json:
         print(json.dumps(fig, indent=2))
         return 0
+    st = steps
     print(f"two bodies: {fig['particles']} particles, {fig['constraints']} sticks+limits, "
-          f"{fig['capsule_pairs']} capsule pairs, {it} iterations, dt 1/60 s")
-    print(f"World.step, sparring distance (no contact):   {apart:8.1f} us   (target < 300 us)")
-    print(f"World.step, clinch ({clinch_contacts:.1f} contacts/step):      {clinch:8.1f} us")
-    print(f"  same with coloured Gauss-Seidel:             {gs_apart:8.1f} us apart, {gs_clinch:8.1f} us clinch")
-    print(f"peer: pure-Python per-stick step (no collision): {peer:6.1f} us   (numpy is {peer / apart:.1f}x faster, "
-          f"{peer / clinch:.1f}x even with contacts)")
+          f"{fig['capsule_pairs']} capsule pairs, {it} iterations, dt 1/60 s; "
+          f"CPU us per step, min (median) of {args.repeats} runs")
+    print(f"World.step, sparring distance (no contact):  {st['apart']['min']:7.1f} ({st['apart']['median']:.1f}) us"
+          "   target < 300 us")
+    print(f"World.step, clinch ({st['clinch']['contacts_per_step']:.1f} contacts/step):      "
+          f"{st['clinch']['min']:7.1f} ({st['clinch']['median']:.1f}) us")
+    print(f"  the same with coloured Gauss-Seidel:        {st['apart_gauss_seidel']['min']:7.1f} us apart, "
+          f"{st['clinch_gauss_seidel']['min']:.1f} us clinch")
+    print(f"peer: pure-Python per-stick step, no collision: {peer['min']:6.1f} ({peer['median']:.1f}) us"
+          f"   -> numpy {peer['min'] / st['apart']['min']:.1f}x faster apart, "
+          f"{peer['min'] / st['clinch']['min']:.1f}x in the clinch (which the peer does not even collide)")
     r = relax
     print("one relaxation iteration: "
           f"numpy Jacobi {r['jacobi']['us_per_iteration']:.1f} us, numpy coloured Gauss-Seidel "

@@ -62,54 +62,73 @@ class DistanceConstraints:
         # share of the correction each end takes: the lighter end moves more
         ki = inv_mass[i] / np.maximum(wsum, _EPS)
         kj = inv_mass[j] / np.maximum(wsum, _EPS)
-        self.n_colours = 0
-        self.batches: list[tuple[np.ndarray, ...]] = []
+        n = len(inv_mass)
         if solver == "gauss_seidel":
             colours = edge_colouring(self.pairs)
             self.n_colours = int(colours.max()) + 1 if len(colours) else 0
-            for c in range(self.n_colours):
-                m = colours == c
-                self.batches.append((i[m], j[m], self.lo[m], self.hi[m], ki[m][:, None], kj[m][:, None]))
+            groups = [np.flatnonzero(colours == c) for c in range(self.n_colours)]
+            scale = np.ones(len(self.pairs))  # within a colour no particle is shared
         else:
-            n = len(inv_mass)
+            self.n_colours = 1 if len(self.pairs) else 0
+            groups = [np.arange(len(self.pairs))] if len(self.pairs) else []
             count = np.bincount(self.pairs.ravel(), minlength=n).astype(float)
             scale = omega / np.maximum(np.maximum(count[i], count[j]), 1.0)
-            # difference matrix D (S, N): D @ x = x[j] - x[i] for every stick in one matmul;
-            # incidence matrix A (N, S): particle displacement = A @ per-stick correction
-            s = np.arange(len(self.pairs))
-            self.D = np.zeros((len(self.pairs), n))
-            self.D[s, j] += 1.0
-            self.D[s, i] -= 1.0
-            self.A = np.zeros((n, len(self.pairs)))
-            self.A[i, s] += ki * scale
-            self.A[j, s] -= kj * scale
-            self.lo_safe = np.maximum(self.lo, _EPS)
+        self.batches = [_Batch(i[g], j[g], self.lo[g], self.hi[g], ki[g] * scale[g], kj[g] * scale[g], n)
+                        for g in groups]
 
     def __len__(self) -> int:
         return len(self.pairs)
 
     def relax(self, x: np.ndarray) -> None:
-        """One relaxation iteration over every constraint, in place on x (N, 3)."""
-        if self.solver == "gauss_seidel":
-            for i, j, lo, hi, ki, kj in self.batches:
-                d = x[j] - x[i]
-                length = np.sqrt(np.einsum("ij,ij->i", d, d))
-                target = np.clip(length, lo, hi)
-                # (len - target) / len: > 0 stretched (ends move together), < 0 compressed
-                d *= ((length - target) / np.maximum(length, _EPS))[:, None]
-                x[i] += ki * d
-                x[j] -= kj * d
-        elif len(self.pairs):
-            # written for few numpy calls: at this size each call's overhead is the cost
-            d = self.D @ x
-            length = np.sqrt(np.einsum("ij,ij->i", d, d))
-            target = np.minimum(np.maximum(length, self.lo_safe), self.hi)
-            # 1 - target/len = (len - target)/len; len >= lo_safe > 0 wherever it matters
-            f = 1.0 - target / np.maximum(length, _EPS)
-            x += (self.A * f) @ d
+        """One relaxation iteration over every constraint, in place on x (N, 3): one batch
+        (Jacobi) or one batch per colour in turn (Gauss-Seidel)."""
+        for batch in self.batches:
+            batch.project(x)
 
     def errors(self, x: np.ndarray) -> np.ndarray:
         """Per-constraint violation in metres (0 inside [lo, hi]) -> (S,)."""
         d = x[self.pairs[:, 1]] - x[self.pairs[:, 0]]
-        length = np.sqrt(np.einsum("ij,ij->i", d, d))
+        length = np.sqrt((d * d).sum(1))
         return np.abs(length - np.clip(length, self.lo, self.hi))
+
+
+class _Batch:
+    """Constraints projected together from the same positions: one gather of both ends of
+    every stick, a few elementwise operations, and one scatter (np.bincount) of the
+    corrections back to the particles, mass split and relaxation scale folded in. No BLAS:
+    bincount and numpy's elementwise operations give the same bits on every CPU, where BLAS
+    kernels (chosen per CPU) do not, and runs must hash the same everywhere."""
+
+    def __init__(self, i, j, lo, hi, ki, kj, n: int) -> None:
+        s = len(i)
+        self.s = s
+        self.ends = np.concatenate([i, j])  # gather: rows 0..s-1 the i ends, then the j ends
+        # correction of end i is +ki * c, of end j is -kj * c, c the stick's correction vector
+        self.k = np.stack([ki, -kj])[:, :, None]  # (2, S, 1)
+        self.flat = (self.ends[:, None] * 3 + np.arange(3)).reshape(-1)  # x.ravel() indices
+        self.size = 3 * n
+        self.lo = np.maximum(lo, _EPS)  # a zero minimum distance must not divide by zero
+        self.hi = hi
+        self._len = np.zeros(s)
+        self._sq = np.zeros((s, 3))
+        self._d = np.zeros((s, 3))
+        self._xe = np.zeros((2 * s, 3))
+        self._f = np.zeros(s)
+        self._vals = np.zeros((2, s, 3))
+
+    def project(self, x: np.ndarray) -> None:
+        # written for few numpy calls: at this size each call's overhead is the cost
+        xe = np.take(x, self.ends, axis=0, out=self._xe)
+        d = np.subtract(xe[self.s:], xe[:self.s], out=self._d)  # x_j - x_i
+        length = np.add.reduce(np.multiply(d, d, out=self._sq), 1, None, self._len)
+        np.sqrt(length, out=length)
+        np.maximum(length, _EPS, out=length)
+        f = np.maximum(length, self.lo, out=self._f)
+        np.minimum(f, self.hi, out=f)  # the target length, clip(len, lo, hi)
+        # 1 - target / len = (len - target) / len: > 0 stretched (the ends move together),
+        # < 0 compressed (apart), 0 inside [lo, hi]
+        np.divide(f, length, out=f)
+        np.subtract(1.0, f, out=f)
+        d *= f[:, None]
+        vals = np.multiply(self.k, d, out=self._vals)  # (2, S, 3): i ends, then j ends
+        x += np.bincount(self.flat, weights=vals.reshape(-1), minlength=self.size).reshape(x.shape)

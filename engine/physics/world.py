@@ -64,7 +64,9 @@ class World:
             raise ValueError("iterations must be >= 1")
         self.gravity = np.asarray(gravity, dtype=float).reshape(3)
         self.ground_y = float(ground_y)
-        self.damping = float(damping)  # fraction of velocity lost per step
+        if not 0.0 <= damping < 1.0:
+            raise ValueError("damping must be in [0, 1)")
+        self.damping = float(damping)  # fraction of velocity lost per 1/60 s (Jakobsen's per step)
         self.iterations = int(iterations)
         self.solver = solver  # "jacobi" (default) or "gauss_seidel", see constraints.py
         self.relaxation = float(relaxation)  # Jacobi over-relaxation factor omega
@@ -170,6 +172,13 @@ class World:
         ca, cb = ca.ravel(), cb.ravel()
         keep = self._cap_body[ca] < self._cap_body[cb] if len(ca) else np.zeros(0, dtype=bool)
         self.pairs = CapsulePairs(ca[keep], cb[keep], self._caps, self._radii, self.inv_mass, len(self.x))
+        self._forget_contacts()
+
+    def _forget_contacts(self) -> None:
+        """Which pairs were in contact last step is unknown (new body, teleport): assume all, so
+        that no overlap is taken for a fast pass-through (see step)."""
+        self._was_near = np.ones(len(self.pairs), dtype=bool)
+        self._any_near = True
 
     # ---- control --------------------------------------------------------------------------
 
@@ -185,6 +194,8 @@ class World:
         t = np.asarray(targets, dtype=float)
         if t.shape != (b.n_particles, 3):
             raise ValueError(f"targets must be ({b.n_particles}, 3), got {t.shape}")
+        if not np.isfinite(t).all():  # one NaN would spread through the sticks to every particle
+            raise ValueError("targets must be finite")
         self.targets[sl] = t
         key = (stiffness, damping_ratio) if np.isscalar(stiffness) and np.isscalar(damping_ratio) else None
         if key is None or self._pd_key[bid] != key:  # the game sets the same gains every step
@@ -214,6 +225,7 @@ class World:
         sl = self.bodies[bid].slice
         self.x[sl] = positions
         self.x_prev[sl] = self.x[sl]
+        self._forget_contacts()
 
     def velocity(self, dt: float) -> np.ndarray:
         """Particle velocities (N, 3) over the last step of length dt."""
@@ -227,7 +239,9 @@ class World:
         x, v, dv = self.x, self._v, self._dv
         dt_prev = self._dt_prev or dt
         np.subtract(x, self.x_prev, out=v)
-        v *= (1.0 - self.damping) / dt_prev
+        # the same damping per second whatever dt: (1 - d) per 60 Hz step
+        keep = (1.0 - self.damping) ** (dt * 60.0) if dt != 1.0 / 60.0 else 1.0 - self.damping
+        v *= keep / dt_prev
         v += self.gravity * dt
         # Backward Euler on x'' = w2 (T - x') - c (v' - v_T), x' = x + dt v' gives
         #   v' - v = (dt w2 (T - x) + dt c v_T - (dt c + dt^2 w2) v) / (1 + dt c + dt^2 w2)
@@ -247,11 +261,11 @@ class World:
         dv -= self._pd_kd * v
         # max acceleration clamp: a discontinuous target moves the body smoothly
         amax = self.max_accel * dt
-        n2 = np.einsum("ij,ij->i", dv, dv)
+        n2 = (dv * dv).sum(1)
         if n2.max(initial=0.0) > amax * amax:
             dv *= np.minimum(1.0, amax / np.sqrt(np.maximum(n2, 1e-30)))[:, None]
         v += dv
-        n2 = np.einsum("ij,ij->i", v, v)
+        n2 = (v * v).sum(1)
         if n2.max(initial=0.0) > self.max_speed * self.max_speed:
             v *= np.minimum(1.0, self.max_speed / np.sqrt(np.maximum(n2, 1e-30)))[:, None]
         self.x_prev[:] = x
@@ -272,13 +286,28 @@ class World:
             cand = self.pairs.candidates(x, self.collision_margin)
             if len(cand):
                 s, t, n, depth = self.pairs.narrow(x, cand)
-                contacts = self._contacts(cand, s, t, n, depth, v)
                 # pairs already touching or within the margin become this step's contact
                 # constraints, so relaxing the sticks cannot push them into each other
-                near = depth > -self.collision_margin
-                if near.any():
+                near = np.flatnonzero(depth > -self.collision_margin)
+                if len(near):
                     near_idx = cand[near]
-                    cset = self.pairs.contact_set(near_idx, s[near], t[near], n[near])
+                    s, t, n, depth = s[near], t[near], n[near], depth[near]
+                    cset = self.pairs.contact_set(near_idx, s, t, n)
+                    closing = cset.closing_speeds(v)
+                    # a pair that was apart last step and now overlaps while "separating" went
+                    # past the middle within one step (a fast fist): turn it back the way it came
+                    flip = (depth > 0.0) & (closing < 0.0) & ~self._was_near[near_idx]
+                    if flip.any():
+                        n = np.where(flip[:, None], -n, n)
+                        depth = np.where(flip, 2.0 * self.pairs.rsum[near_idx] - depth, depth)
+                        closing = np.where(flip, -closing, closing)
+                        cset = self.pairs.contact_set(near_idx, s, t, n)
+                    contacts = self._contacts(near_idx, s, n, depth, closing)
+        if self._any_near:
+            self._was_near[:] = False
+        self._any_near = cset is not None
+        if cset is not None:
+            self._was_near[near_idx] = True
 
         ground = x[:, 1]
         relax = self.constraints.relax
@@ -307,27 +336,25 @@ class World:
         self.steps += 1
         return contacts
 
-    def _contacts(self, cand, s, t, n, depth, v) -> list[Contact]:
-        """Contacts among the candidate pairs at the integrated positions (before any
-        resolution), with the closing speed of the two closest points along the normal."""
+    def _contacts(self, idx, s, n, depth, closing) -> list[Contact]:
+        """Contacts among pairs `idx` that overlap at the integrated positions (before any
+        resolution), with the closing speed of their closest points along the normal."""
         hit = np.flatnonzero(depth > 0.0)
         if len(hit) == 0:
             return []
         p = self.pairs
-        k = cand[hit]
-        s, t, n, depth = s[hit], t[hit], n[hit], depth[hit]
-        ca = p.closest_on_a(self.x, k, s)
-        closing = np.einsum("ij,ij->i", p.relative(v, k, s, t), n)
-        ra = self._radii[p.cap_a[k]]
+        k = idx[hit]
+        n, depth = n[hit], depth[hit]
+        ca = p.closest_on_a(self.x, k, s[hit])
         # midway between the two surfaces along the normal
-        point = ca + n * (ra - 0.5 * depth)[:, None]
-        ca_, cb_ = p.cap_a[k], p.cap_b[k]
-        rows = zip(self._cap_body[ca_].tolist(), self._cap_local[ca_].tolist(), ca_.tolist(),
-                   self._cap_body[cb_].tolist(), self._cap_local[cb_].tolist(), cb_.tolist(),
-                   point, n, closing.tolist(), depth.tolist(), strict=True)
+        point = ca + n * (self._radii[p.cap_a[k]] - 0.5 * depth)[:, None]
+        ga, gb = p.cap_a[k], p.cap_b[k]
+        rows = zip(self._cap_body[ga].tolist(), self._cap_local[ga].tolist(), ga.tolist(),
+                   self._cap_body[gb].tolist(), self._cap_local[gb].tolist(), gb.tolist(),
+                   point, n, closing[hit].tolist(), depth.tolist(), strict=True)
         tags = self._cap_tags
-        return [Contact(ba, la, tags[ga], bb, lb, tags[gb], pt, nn, sp, de)
-                for ba, la, ga, bb, lb, gb, pt, nn, sp, de in rows]
+        return [Contact(ba, la, tags[a], bb, lb, tags[b], pt, nn, sp, de)
+                for ba, la, a, bb, lb, b, pt, nn, sp, de in rows]
 
     def state_hash(self) -> str:
         """Hash of the simulation state (positions, previous positions, step count)."""

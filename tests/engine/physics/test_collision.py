@@ -119,3 +119,76 @@ def test_no_interpenetration_when_two_bodies_walk_into_each_other(iterations):
     chest_a = w.x[w.bodies[a].slice][J["chest"]]
     chest_b = w.x[w.bodies[b].slice][J["chest"]]
     assert chest_b[2] - chest_a[2] > 0.25
+
+
+def test_straight_to_the_head_is_reported_with_its_speed():
+    """A's right fist driven at B's head (a straight; B's guard dropped) gives a fist_r/head
+    contact, closing at punch speed along +z (A faces +z), and the head is pushed, not
+    entered."""
+    w = World()
+    a = add_humanoid(w, 0.0, -0.3, 0.0)
+    b = add_humanoid(w, 0.0, 0.3, np.pi)
+    dropped = GUARD.copy()
+    for j in ("fist_l", "fist_r", "elbow_l", "elbow_r"):
+        dropped[J[j]] += (0.0, -0.3, -0.1)
+    pose_b = place(dropped, 0.0, 0.3, np.pi)
+    for _ in range(30):
+        w.set_targets(a, place(GUARD, 0.0, -0.3, 0.0), 8.0)
+        w.set_targets(b, pose_b, 8.0)
+        w.step(DT)
+    head_b = w.x[w.bodies[b].slice][J["head"]].copy()
+    guard_a = place(GUARD, 0.0, -0.3, 0.0)
+    shoulder = guard_a[J["shoulder_r"]]
+    aim = (head_b - shoulder) / np.linalg.norm(head_b - shoulder)
+    hits = []
+    for i in range(20):
+        # the arm's targets swing from the guard to straight at B's head in 6 frames
+        u = min(i / 6.0, 1.0)
+        pose = guard_a.copy()
+        pose[J["elbow_r"]] = (1 - u) * guard_a[J["elbow_r"]] + u * (shoulder + 0.3 * aim)
+        pose[J["fist_r"]] = (1 - u) * guard_a[J["fist_r"]] + u * (shoulder + 0.62 * aim)
+        w.set_targets(a, pose, 8.0)
+        w.set_targets(b, pose_b, 8.0)
+        hits += [c for c in w.step(DT) if c.tag_a == "fist_r" and c.tag_b == "head"]
+    assert hits, "the straight never touched the head"
+    first = hits[0]
+    assert (first.body_a, first.body_b) == (a, b)
+    assert first.rel_speed > 2.0  # m/s: a punch, not a brush
+    assert first.normal[2] > 0.6 and first.normal @ aim > 0.8  # from A's fist into B's head
+    x = w.x
+    p = w.pairs
+    assert (segment_distance(x[p.ia], x[p.ja], x[p.ib], x[p.jb]) - p.rsum).min() > -0.01
+    assert w.x[w.bodies[b].slice][J["head"], 2] > head_b[2] + 0.01  # the head was knocked back
+
+
+def test_one_step_separates_random_overlapping_capsules():
+    rng = np.random.default_rng(3)
+    for _ in range(50):
+        w = World(gravity=(0, 0, 0), ground_y=-10.0, damping=0.0)
+        for _ in range(2):
+            p = rng.normal(0.0, 0.15, (2, 3))
+            w.add_body(p, rng.uniform(0.5, 5.0, 2), [[0, 1]], [[0, 1]], [rng.uniform(0.05, 0.2)], ["c"])
+        pairs = w.pairs
+        x = w.x
+        before = segment_distance(x[pairs.ia], x[pairs.ja], x[pairs.ib], x[pairs.jb]) - pairs.rsum
+        contacts = w.step(DT)
+        after = segment_distance(x[pairs.ia], x[pairs.ja], x[pairs.ib], x[pairs.jb]) - pairs.rsum
+        assert len(contacts) == int(before[0] < 0)
+        assert after[0] >= -0.002
+
+
+def test_fast_fist_that_passes_the_head_centre_in_one_step_is_turned_back():
+    """At 15 m/s a fist moves 25 cm a step: from just outside the head to past its centre.
+    The contact still points from the fist into the head, closing, and the fist ends on the
+    side it came from."""
+    w = World(gravity=(0, 0, 0), ground_y=-10.0, damping=0.0, max_speed=20.0)
+    head = _ball(w, (0.0, 1.6, 0.0), "head", radius=0.11, mass=5.0)
+    fist = _ball(w, (0.0, 1.6, -1.0), "fist_r", radius=0.06, mass=1.0)
+    assert w.step(DT) == []  # a step apart: the world has seen them not touching
+    w.x[1] = (0.0, 1.6, -0.18)  # 1 cm outside the head
+    w.x_prev[1] = w.x[1] - (0.0, 0.0, 15.0 * DT)  # moving +z at 15 m/s: next at z = +0.07
+    (c,) = w.step(DT)
+    assert (c.body_a, c.tag_a, c.body_b, c.tag_b) == (head, "head", fist, "fist_r")
+    np.testing.assert_allclose(c.normal, (0.0, 0.0, -1.0), atol=1e-9)  # head -> fist: back along -z
+    assert c.rel_speed == pytest.approx(15.0, rel=1e-6)
+    assert w.x[1, 2] < w.x[0, 2] - 0.17 + 0.002  # the fist is in front of the head, not behind it

@@ -175,3 +175,111 @@ def test_bodies_are_slices_of_one_array():
     assert w.x.shape == (34, 3) and w.x_prev.shape == (34, 3)
     assert w.bodies[a].slice == slice(0, 17) and w.bodies[b].slice == slice(17, 34)
     np.testing.assert_allclose(w.x[w.bodies[a].slice], GUARD + (0.0, 0.0, -1.0))
+
+
+def test_joint_limit_keeps_an_elbow_from_folding_shut():
+    """The fist pulled onto its own shoulder: the limit (min 35 % of the arm) holds it off."""
+    from tests.engine.physics.humanoid import limit_ranges
+
+    w = World(gravity=(0, 0, 0), ground_y=-100.0)
+    b = add_humanoid(w)
+    folded = GUARD.copy()
+    folded[J["fist_r"]] = GUARD[J["shoulder_r"]] + (0.0, 0.0, 0.01)
+    w.set_targets(b, folded, 8.0)
+    for _ in range(60):
+        w.step(DT)
+    x = w.x[w.bodies[b].slice]
+    d = np.linalg.norm(x[J["fist_r"]] - x[J["shoulder_r"]])
+    assert d >= limit_ranges()[1, 0] - 0.03  # a 4-iteration Jacobi against an 8 Hz pull
+    # and without the limit the same pull does fold it
+    w2 = World(gravity=(0, 0, 0), ground_y=-100.0)
+    b2 = add_humanoid(w2, limits=False)
+    w2.set_targets(b2, folded, 8.0)
+    for _ in range(60):
+        w2.step(DT)
+    x2 = w2.x[w2.bodies[b2].slice]
+    assert np.linalg.norm(x2[J["fist_r"]] - x2[J["shoulder_r"]]) < d - 0.05
+
+
+def test_target_velocities_reduce_the_lag_behind_a_moving_target():
+    def lag(with_velocity: bool) -> float:
+        w = World(gravity=(0, 0, 0), ground_y=-100.0, damping=0.0)
+        b = w.add_body(np.zeros((1, 3)), [1.0], np.zeros((0, 2)), np.zeros((0, 2)), [], [])
+        for i in range(120):
+            t = np.array([[1.0 * (i + 1) * DT, 0.0, 0.0]])  # 1 m/s along x
+            w.set_targets(b, t, 4.0, velocities=np.array([[1.0, 0.0, 0.0]]) if with_velocity else None)
+            w.step(DT)
+        return float(t[0, 0] - w.x[0, 0])
+    plain, fed = lag(False), lag(True)
+    assert plain > 0.05  # 2 zeta / w = 80 ms behind at 1 m/s
+    assert abs(fed) < 0.2 * plain
+
+
+def test_set_targets_rejects_non_finite():
+    w = World()
+    b = add_humanoid(w)
+    bad = GUARD.copy()
+    bad[3, 1] = np.nan
+    with pytest.raises(ValueError):
+        w.set_targets(b, bad, 5.0)
+
+
+def test_three_bodies_collide_pairwise():
+    w = World(gravity=(0, 0, 0), ground_y=-10.0, damping=0.0)
+    for x in (-0.3, 0.0, 0.3):
+        w.add_body([[x, 1.0, 0.0]], [1.0], np.zeros((0, 2)), [[0, 0]], [0.2], [f"ball{x}"])
+    assert len(w.pairs) == 3  # (0,1), (0,2), (1,2)
+    contacts = w.step(DT)
+    assert {(c.body_a, c.body_b) for c in contacts} == {(0, 1), (1, 2)}
+    for _ in range(30):
+        w.step(DT)
+    gaps = np.diff(np.sort(w.x[:, 0]))
+    assert np.all(gaps >= 0.4 - 0.002)
+
+
+_HASH_RUN = """
+import numpy as np
+from engine.physics import World
+from tests.engine.physics.humanoid import GUARD, add_humanoid, place
+w = World()
+a = add_humanoid(w, 0.0, -1.0, 0.0)
+b = add_humanoid(w, 0.05, 1.0, np.pi)
+for i in range(150):
+    z = min(-1.0 + 0.6 * i / 60, -0.05)
+    w.set_targets(a, place(GUARD, 0.0, z, 0.0), 5.0)
+    w.set_targets(b, place(GUARD, 0.05, -z, np.pi), 5.0)
+    w.step(1 / 60)
+print(w.state_hash())
+"""
+
+
+def test_state_hash_does_not_depend_on_the_cpu_kernels():
+    """The step uses no BLAS (whose kernels OpenBLAS picks per CPU and which round
+    differently), so forcing another kernel set, or numpy without its AVX paths, must give
+    the same bits: two bodies walking into each other, contacts included."""
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[3]
+    hashes = set()
+    for extra in ({}, {"OPENBLAS_CORETYPE": "Prescott", "NPY_DISABLE_CPU_FEATURES": "X86_V3 X86_V4"}):
+        env = {**os.environ, **extra}
+        out = subprocess.run([sys.executable, "-c", _HASH_RUN], cwd=root, env=env, capture_output=True,
+                             text=True, timeout=120)
+        assert out.returncode == 0, out.stderr
+        hashes.add(out.stdout.strip())
+    assert len(hashes) == 1
+
+
+def test_damping_is_per_second_not_per_step():
+    def speed_after_1s(dt: float) -> float:
+        w = World(gravity=(0, 0, 0), ground_y=-100.0, damping=0.05)
+        w.add_body([[0.0, 0.0, 0.0]], [1.0], np.zeros((0, 2)), np.zeros((0, 2)), [], [])
+        w.x_prev[0] = (-2.0 * dt, 0.0, 0.0)  # 2 m/s
+        for _ in range(round(1.0 / dt)):
+            w.step(dt)
+        return float(w.velocity(dt)[0, 0])
+    assert speed_after_1s(1 / 60) == pytest.approx(2.0 * 0.95**60, rel=1e-9)
+    assert speed_after_1s(1 / 120) == pytest.approx(speed_after_1s(1 / 60), rel=1e-9)
