@@ -48,6 +48,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     d.add_argument("--graph", default=None, help="the .npz (default: the shipped graph)")
     d.add_argument("--bouts", type=int, default=200, help="bouts per opponent")
     d.add_argument("--opponent", choices=["random", "greedy", "both"], default="both")
+    d.add_argument("--player", choices=["graph", "random", "greedy"], default="graph",
+                   help="who plays boxer 0 (a baseline other than the graph, for comparison)")
     d.add_argument("--seconds", type=float, default=60.0, help="bout length (ends earlier by knockout)")
     d.add_argument("--seed", type=int, default=1)
     d.add_argument("--json", action="store_true", help="machine-readable output")
@@ -110,17 +112,19 @@ def cmd_duel(args: argparse.Namespace) -> int:
     for opp in opponents:
         t0 = time.perf_counter()
         try:
-            r = duel(g, lib, opp, bouts=args.bouts, seconds=args.seconds, seed=args.seed)
+            r = duel(g, lib, opp, bouts=args.bouts, seconds=args.seconds, seed=args.seed,
+                     us=args.player)
         except ValueError as exc:
             raise InputError(f"{g.path}: {exc}") from None
         d = r.as_dict()
+        d["player"] = args.player
         d["seconds"] = round(time.perf_counter() - t0, 2)
         results.append(d)
     if args.json:
         print(json.dumps(results, indent=2))
         return 0
     for d in results:
-        print(f"graph vs {d['opponent']:6s}: {d['wins']}/{d['bouts']} wins ({100 * d['win_rate']:.1f} %), "
+        print(f"{d['player']} vs {d['opponent']:6s}: {d['wins']}/{d['bouts']} wins ({100 * d['win_rate']:.1f} %), "
               f"{d['losses']} losses, {d['draws']} draws, {d['knockouts']} KOs; hits landed "
               f"{d['hits_landed']}, received {d['hits_received']}; damage {d['damage_dealt']:.0f} "
               f"dealt, {d['damage_taken']:.0f} taken ({d['seconds']} s)")

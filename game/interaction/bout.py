@@ -7,11 +7,13 @@ Timing (the game's): a boxer that chooses an action plays its clip frames 0..F-1
 root moves by the clip's root_offset increment, expressed in its facing at the clip start.
 A hit lands when one of the attacker's AttackWindows covers the current frame, the target's
 root is within `reach` (+ body radius) ahead of the attacker and within a lateral tolerance,
-and the window has not landed yet. The target part is the first of the window's targets not
-covered by a GuardWindow of the defender at that frame (a guard covers only attacks from the
-front). Clean hits cost hp and interrupt the defender into a hit reaction; blocked hits cost a
-little; parried hits cost nothing and stagger the attacker when the library has a reaction
-for it. Boxers turn towards each other at a bounded rate while at the guard or stepping
+and the window has not landed yet. The punch aims at the window's first target; it is
+guarded when a GuardWindow of the defender covers that part at that frame (a guard covers
+only attacks from the front). Clean hits cost hp and interrupt the defender into the hit
+reaction hit_<part>_<side>_<light|heavy> (side: where the blow comes from, hooks from the
+side of the punching hand's opposite, others from the front; heavy from `heavy_damage`);
+blocked hits cost a little; parried hits cost nothing and stagger the attacker when the
+library has a reaction for that. Boxers turn towards each other at a bounded rate while at the guard or stepping
 (the library has no turning clips) and cannot overlap.
 """
 
@@ -41,6 +43,7 @@ class BoutRules:
     min_separation: float = 0.45
     face_rate_deg: float = 6.0     # turning towards the other per step, at guard/stepping
     chip: float = 0.15             # fraction of damage a blocked hit still does
+    heavy_damage: float = 9.0      # hits this strong play the heavy reaction
     hp: float = 100.0
 
     def as_dict(self) -> dict:
@@ -87,8 +90,7 @@ class ActionTable:
     turns: np.ndarray             # (A,) bool: may turn towards the other (guard, steps)
     choices: np.ndarray           # action ids a boxer may choose (ACTION_NAMES + WAIT)
     wait: int
-    react_head: int
-    react_body: int
+    win_react: np.ndarray         # (W,) the reaction a clean hit of this window causes
     react_stagger: int            # -1 when the library has none
     spent_before: np.ndarray      # (A, Fmax + 1) bits of the windows over before this frame
     max_damage: float = 1.0
@@ -105,7 +107,8 @@ class ActionTable:
     @classmethod
     def from_library(cls, lib: dict, choosable: list[str], rules: BoutRules) -> ActionTable:
         """Compile `lib` (name -> Action). `choosable` are the names a boxer may pick."""
-        reactions = sorted(n for n, a in lib.items() if a.kind == "reaction")
+        # the knockdown ends a bout; it is never a state to decide in
+        reactions = sorted(n for n, a in lib.items() if a.kind == "reaction" and n != "knockdown")
         names = list(choosable) + [WAIT] + [n for n in reactions if n not in choosable]
         frames = []
         for n in names:
@@ -118,6 +121,7 @@ class ActionTable:
         cover = np.zeros((A, fmax), dtype=np.int64)
         gkind = np.zeros((A, fmax), dtype=np.int64)
         reach, damage, targets, slot, wend, win_action = [], [], [], [], [], []
+        win_hand, win_hook = [], []
         kinds = []
         for i, n in enumerate(names):
             F = int(frames[i])
@@ -139,7 +143,9 @@ class ActionTable:
                 window[i, s:e + 1] = len(reach)
                 reach.append(float(w.reach))
                 damage.append(float(w.damage))
-                targets.append(sum(PART_BITS.get(p, 0) for p in w.targets) or (HEAD | BODY))
+                targets.append(PART_BITS.get(w.targets[0], HEAD) if len(w.targets) else HEAD)
+                win_hand.append(w.hand)
+                win_hook.append("hook" in n)
                 slot.append(k)
                 wend.append(e)
                 win_action.append(i)
@@ -155,20 +161,22 @@ class ActionTable:
             spent_before[win_action[wid], wend[wid] + 1:] |= 1 << slot[wid]
 
         def pick(*words: str) -> int:
-            for w in words:
+            """The first reaction whose name has all these words (else fewer of them)."""
+            for k in range(len(words), 0, -1):
                 for n in reactions:
-                    if w in n:
+                    if all(w in n.split("_") for w in words[:k]):
                         return names.index(n)
             return -1
 
-        react_head = pick("head", "hit")
-        react_body = pick("body", "hit")
-        if react_head < 0 and reactions:
-            react_head = names.index(reactions[0])
-        if react_body < 0:
-            react_body = react_head
-        if react_head < 0:
+        if not reactions:
             raise ValueError("the action library has no hit reaction (kind 'reaction')")
+        win_react = []
+        for k in range(len(reach)):
+            part = "head" if targets[k] == HEAD else "body"
+            side = ("left" if win_hand[k] == "r" else "right") if win_hook[k] else "front"
+            strength = "heavy" if damage[k] >= rules.heavy_damage else "light"
+            r = pick(part, side, strength)
+            win_react.append(r if r >= 0 else names.index(reactions[0]))
         damage_arr = np.array(damage, dtype=float)
         return cls(
             names=names, kinds=kinds, frames=frames, offset=offset, window=window,
@@ -176,8 +184,8 @@ class ActionTable:
             win_targets=np.array(targets, dtype=np.int64), win_slot=np.array(slot, dtype=np.int64),
             win_end=np.array(wend, dtype=np.int64), guard_cover=cover, guard_kind=gkind,
             turns=turns, spent_before=spent_before, choices=np.arange(len(choosable) + 1), wait=len(choosable),
-            react_head=react_head, react_body=react_body,
-            react_stagger=pick("stagger", "parried", "recoil"),
+            win_react=np.array(win_react, dtype=np.int64),
+            react_stagger=max(pick("stagger"), pick("parried")),
             max_damage=float(damage_arr.max()) if len(damage_arr) else 1.0,
             attack_ids=np.array([i for i, k in enumerate(kinds) if k == "attack"], dtype=np.int64),
         )
@@ -351,7 +359,7 @@ def step(b: Bouts, rules: BoutRules, rewards: Rewards) -> StepResult:
             gain += np.where(parried, rewards.parry_credit * dmg, 0.0)[:, ::-1]
             b.spent |= np.where(hit, 1 << slot, 0)
             # reactions: a clean hit interrupts the defender, a parry staggers the attacker
-            react = np.where(open_ & HEAD, t.react_head, t.react_body)
+            react = t.win_react[wi]
             for i in (0, 1):
                 o = 1 - i
                 r = np.flatnonzero(clean[:, i])

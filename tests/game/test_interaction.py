@@ -282,6 +282,12 @@ def test_fill_and_scan_agree_with_brute_force(small_graph):
     np.testing.assert_array_equal(many, peer)
 
 
+def test_a_broken_situation_means_wait(small_graph):
+    for bad in (math.nan, math.inf):
+        assert small_graph.best_action(Situation(bad, 0.0, 0.0, 0.0, "guard", 0, "guard", 0)) == "guard"
+        assert small_graph.best_action(Situation(1.0, bad, 0.0, 0.0, "guard", 0, "jab", bad)) == "guard"
+
+
 def test_idle_other_is_ready(small_graph):
     g = small_graph
     assert g.other_code("guard", 3.0) == (g.wait_id, g.table.rules.wait_frames - 1)
