@@ -42,6 +42,9 @@ GRAVITY_FOLLOW = 0.05  # how fast g follows the signal while the gate is closed
 # A template is only accepted once the motion has been at least this strong relative to the
 # template's own peak activity (a weak wiggle must not launch a punch just because its shape
 # resembles the punch's gentle first frames; a real punch gets there within a few frames).
+CLOSED_END = 1e9  # a min_progress that leaves only each template's last position
+# The consumed-template end needs the motion to have lasted this fraction of the template.
+COMPLETE_MIN_LENGTH = 0.6
 ENERGY_RATIO = 0.4
 
 IDLE, ACTIVE, DISCARD = "idle", "active", "discard"
@@ -64,8 +67,9 @@ class DualBufferRecognizer:
         reject: bool = True,
         dtw_method: str = "auto",
         min_progress: float = MIN_PROGRESS,
-        complete_fraction: float = 0.9,
+        complete_fraction: float = 0.0,
         complete_frames: int = 2,
+        closed_after: int = 1,
     ):
         if not isinstance(templates, Templates):
             raise TypeError("templates must be a Templates")
@@ -84,6 +88,7 @@ class DualBufferRecognizer:
         self.reject = bool(reject)
         self.complete_fraction = float(complete_fraction)
         self.complete_frames = int(complete_frames)
+        self.closed_after = int(closed_after) if closed_after > 0 else 1 << 30
         self.dim = templates.dim
         self.feature = templates.feature
 
@@ -99,6 +104,7 @@ class DualBufferRecognizer:
         cut = [self._cut_at_gate(templates, k) for k in order]
         self._peak_act = self._template_peaks(templates, order)
         self.template_lengths = np.array([len(c) for c in cut])
+        self.min_progress = float(min_progress)
         self.dtw = IncrementalDTW(cut, method=dtw_method, min_progress=min_progress)
         self.reset()
 
@@ -235,6 +241,10 @@ class DualBufferRecognizer:
         self._track_speed(x)
         complete = False
         if self.count <= self.window:
+            # While the hand moves, the motion may be partial: open end (the query's end may sit
+            # anywhere past min_progress * n in a template). Once it is quiet the motion has
+            # probably ended, and the whole template must be matched (closed end).
+            self.dtw.min_progress = self.min_progress if (valid or self.quiet < self.closed_after) else CLOSED_END
             scores = self.dtw.push(features(x, self._g0, self.feature))
             self._decide(scores, events)
             complete = self._complete(scores)
@@ -287,6 +297,9 @@ class DualBufferRecognizer:
         lo = self._action_starts[self.action]
         hi = self._action_starts[self.action + 1] if self.action + 1 < len(self._action_starts) else len(scores)
         k = lo + int(np.argmin(scores[lo:hi]))
+        if self.count < COMPLETE_MIN_LENGTH * self.template_lengths[k]:
+            self._done = 0  # too early: an alignment can jump to a template's end at the start
+            return False
         pos = self.dtw.position(k)
         self._done = self._done + 1 if pos + 1 >= self.complete_fraction * self.template_lengths[k] else 0
         return self._done >= self.complete_frames
