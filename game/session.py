@@ -51,8 +51,11 @@ BLOCKED_SHARE = 0.2  # the share of the damage that goes through a block
 # The CPU reads the situation from a solved table and never hesitates: its blows count for less
 # so that a human (whose moves wait for the recognizer) has a fair fight.
 DIFFICULTY = {"easy": 0.45, "normal": 0.7, "hard": 1.0}
+# ... and it catches its breath between moves (steps at the guard before it may act again)
+CPU_REST_STEPS = {"easy": 40, "normal": 24, "hard": 8}
 HOME_BUTTON = 0x0080  # Wiimote core buttons: Home
 RUMBLE_MS = 120
+PILOT_SETTLE_STEPS = 90  # the pilot's hands rest first: the recognizer learns gravity at rest
 PILOT_VARIETY = 0.4
 PILOT_REACH = 1.0
 PILOT_ATTACKS = ("straight_l", "straight_r", "hook_l", "hook_r", "uppercut_l", "uppercut_r", "block", "step_left", "step_right")
@@ -159,7 +162,9 @@ class Session:
         graph = load_graph(cfg.graph)
         self.graph = graph
         self.opponent_ai = OpponentController(graph, self.lib, controller=self.opponent.controller)
-        self._pilot_wait = 0
+        self._pilot_wait = PILOT_SETTLE_STEPS
+        self._cpu_rest = 0
+        self._pilot_seen = True
         self._pilot_rng = np.random.default_rng(cfg.seed + 1)
         self.templates = load_templates(cfg.templates, cfg.left_handed)
         self.recognizer = DualBufferRecognizer(self.templates)
@@ -224,8 +229,10 @@ class Session:
             if not self.match.paused:
                 self.match.toggle_pause()
                 self._auto_paused = True
-        elif not disconnected and self.hud_state.disconnected and self._auto_paused:
-            if self.match.paused:
+        elif not disconnected and self.hud_state.disconnected:
+            # back: the controller may sit differently in the hand; learn gravity afresh
+            self.recognizer.reset()
+            if self._auto_paused and self.match.paused:
                 self.match.toggle_pause()
             self._auto_paused = False
         self.hud_state.disconnected = disconnected
@@ -247,7 +254,8 @@ class Session:
         situation = Situation.from_roots(self.player.root, me.action, me.frame,
                                          self.opponent.root, them.action, them.frame)
         action = self.graph.best_action(situation)
-        if self._pilot_rng.random() < PILOT_VARIETY:
+        unrecognized = not self._pilot_seen  # the last motion started nothing: try another
+        if unrecognized or self._pilot_rng.random() < PILOT_VARIETY:
             # an attract mode that only ever throws the one best punch is dull to watch: now
             # and then a different move (closing in when out of reach)
             near = situation.distance < PILOT_REACH
@@ -255,6 +263,7 @@ class Session:
             action = choices[int(self._pilot_rng.integers(len(choices)))]
         if action in self.lib and action != "guard":
             self.source.press(action)
+            self._pilot_seen = False
             self._pilot_wait = 12  # the hands come back to rest before the next motion
         else:
             self._pilot_wait = 8
@@ -282,6 +291,7 @@ class Session:
         events = self.recognizer.push(self.frame_vec, t=step * dt)
         for ev in events:
             self.events_log.append(ev)
+            self._pilot_seen |= ev.get("event") == "start"
             self.hud_state.mark(ev)
             if self.match.fighting:
                 self.player.controller.on_event(ev)
@@ -305,7 +315,9 @@ class Session:
         from game.interaction import Situation
 
         self._hold_knockdown(1)
-        if self.match.fighting:
+        if self._cpu_rest > 0:
+            self._cpu_rest -= 1
+        elif self.match.fighting:
             me, them = self.opponent.controller, self.player.controller
             situation = Situation.from_roots(self.opponent.root, me.action, me.frame,
                                              self.player.root, them.action, them.frame)
@@ -314,6 +326,8 @@ class Session:
         self.opponent.turn_towards(px, pz)
         self.opponent.keep_inside(RING_LIMIT)
         self.opponent.step(dt)
+        if self.opponent.controller.finished_action():
+            self._cpu_rest = CPU_REST_STEPS[self.config.difficulty]
 
     def _hold_knockdown(self, i: int) -> None:
         """While the referee counts, the downed boxer stays down (the clip's low frame)."""
