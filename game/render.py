@@ -254,7 +254,7 @@ class Renderer:
             ia, ib = J[hip], J[knee]
             mid_xy = xy[ia] + (xy[ib] - xy[ia]) * 0.5
             d = (z[ia] * 0.75 + z[ib] * 0.25) - 0.01
-            prims.append((d, 0, (xy[ia], mid_xy, 0.1 * scale[ia], 0.095 * scale[ib], look.trunks)))
+            prims.append((d, 0, (xy[ia], mid_xy, 0.09 * scale[ia], 0.085 * scale[ib], look.trunks)))
         for name, r, part in SPHERES:
             i = J[name]
             prims.append((z[i] - r, 1, (xy[i], r * scale[i], colors[part])))
@@ -307,6 +307,10 @@ class Renderer:
         chest_poly = np.array([sl2, sr2, waist_r, waist_l])
         trunks_poly = np.array([waist_l, waist_r, hr2, pel + (hr2 - pel) * 0.2 + (pel - chest) * 0.12, hl2])
         skin, trunks = look.skin, look.trunks
+        # the trunk's volume from any side: a capsule chest -> spine, the trunks round the pelvis
+        spine, pelvis = xy[J["spine"]], xy[J["pelvis"]]
+        self._capsule(surf, chest, spine, 0.15 * k, 0.14 * k, skin)
+        self._capsule(surf, spine + (pelvis - spine) * 0.3, pelvis, 0.14 * k, 0.14 * k, trunks)
         self._poly(surf, shade(skin, 0.45), chest_poly, 0)
         self._poly(surf, shade(skin, 0.45), chest_poly, 3)
         inset = (chest_poly - chest_poly.mean(axis=0)) * 0.92 + chest_poly.mean(axis=0)
@@ -316,8 +320,9 @@ class Renderer:
         self._poly(surf, shade(trunks, 0.45), trunks_poly, 0)
         t_in = (trunks_poly - trunks_poly.mean(axis=0)) * 0.9 + trunks_poly.mean(axis=0)
         self._poly(surf, trunks, t_in)
-        # waistband
-        pygame.draw.line(surf, (245, 245, 245), waist_l, waist_r, max(2, int(0.035 * k)))
+        # waistband, where the hips face the camera enough to show it
+        if float(np.hypot(*(waist_r - waist_l))) > 0.2 * k:
+            pygame.draw.line(surf, (245, 245, 245), waist_l, waist_r, max(2, int(0.035 * k)))
 
     def _draw_flashes(self, surf: pygame.Surface) -> None:
         cam = self.camera
