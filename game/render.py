@@ -83,9 +83,10 @@ class Flash:
 class Renderer:
     """Draws the ring and the boxers on a surface of any size (the window resizes)."""
 
-    def __init__(self, size: tuple[int, int], antialias: bool = True):
+    def __init__(self, size: tuple[int, int], detailed: bool = True):
         self.camera = Camera(size)
-        self.antialias = antialias
+        # low-power mode: one flat colour per limb (no highlight pass), half the draw calls
+        self.detailed = detailed
         self._static: pygame.Surface | None = None
         self._front: pygame.Surface | None = None
         self.flashes: list[Flash] = []
@@ -268,6 +269,8 @@ class Renderer:
         outline = shade(color, 0.45)
         self._capsule_fill(surf, a, b, ra + 1.5, rb + 1.5, outline)
         self._capsule_fill(surf, a, b, ra, rb, color)
+        if not self.detailed:
+            return
         # highlight: a thinner, lighter capsule shifted towards the light
         off = LIGHT_2D * 0.35
         self._capsule_fill(surf, a + off * ra, b + off * rb, ra * 0.45, rb * 0.45, shade(color, 1.28))
@@ -286,6 +289,8 @@ class Renderer:
         pos = (float(c[0]), float(c[1]))
         pygame.draw.circle(surf, shade(color, 0.45), pos, r + 1.5)
         pygame.draw.circle(surf, shade(color, 0.8), pos, r)
+        if not self.detailed:
+            return
         pygame.draw.circle(surf, color, (pos[0] + LIGHT_2D[0] * r * 0.15, pos[1] + LIGHT_2D[1] * r * 0.15), r * 0.8)
         pygame.draw.circle(surf, shade(color, 1.35), (pos[0] + LIGHT_2D[0] * r * 0.4, pos[1] + LIGHT_2D[1] * r * 0.4), r * 0.3)
 

@@ -180,7 +180,7 @@ class Session:
             self.hud_state.keys = key_help()
         self.hud = Hud()
         self.sounds = Sounds(enabled=cfg.sound, seed=cfg.seed)
-        self.renderer = Renderer(cfg.size, antialias=not cfg.low_power)
+        self.renderer = Renderer(cfg.size, detailed=not cfg.low_power)
         self._surface_provider = surface_provider
         self._offscreen: pygame.Surface | None = None
         self.events_log: list[dict] = []  # recognizer events, in order (tests, the trace)

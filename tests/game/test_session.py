@@ -133,3 +133,26 @@ def test_rumble_on_the_player_when_hit() -> None:
     assert s.player.controller.action.startswith("hit_head")  # the reaction plays
     s.apply_hit(1, {**hit, "attacker": 0})
     assert len(calls) == 1  # the CPU being hit does not rumble the player's controller
+
+
+def test_escape_pauses_and_f3_shows_the_budget_overlay() -> None:
+    s = make_session("keyboard://?seed=8", display=True)
+    surf = pygame.display.get_surface()
+    s.loop.run(frames=3)
+    before = pygame.surfarray.array3d(surf).copy()
+    pygame.event.post(pygame.event.Event(pygame.KEYDOWN, key=pygame.K_F3, mod=0, unicode="", scancode=0))
+    s.loop.run(frames=2)
+    assert s.hud_state.show_budget
+    panel = pygame.Rect(SIZE[0] - 215, 70, 200, 120)  # the overlay's corner of the screen
+    after = pygame.surfarray.array3d(surf)
+    region = (slice(panel.left, panel.right), slice(panel.top, panel.bottom))
+    assert np.abs(after[region].astype(int) - before[region].astype(int)).mean() > 10
+    pygame.event.post(pygame.event.Event(pygame.KEYDOWN, key=pygame.K_ESCAPE, mod=0, unicode="", scancode=0))
+    s.loop.run(frames=2)
+    assert s.match.paused
+    clock = s.match.clock_steps
+    s.loop.run(frames=30)
+    assert s.match.clock_steps == clock
+    pygame.event.post(pygame.event.Event(pygame.KEYDOWN, key=pygame.K_ESCAPE, mod=0, unicode="", scancode=0))
+    s.loop.run(frames=30)
+    assert not s.match.paused and s.match.clock_steps < clock
