@@ -253,7 +253,7 @@ def build_graph(lib: dict, params: BuildParams | None = None, rules: BoutRules |
     }
     return GraphTable(
         action_names=list(t.names), n_choices=len(t.choices), keys=keys,
-        features=feat.astype(np.float32), other_action=oact, other_frame=oframe,
+        features=feat, other_action=oact, other_frame=oframe,
         visits=visits, best_action=action[sol.best_edge], value=sol.value.astype(np.float32),
         edge_ptr=indptr, edge_dst=dst, edge_action=action, edge_steps=steps,
         edge_flip=flip, edge_reward=reward.astype(np.float32),

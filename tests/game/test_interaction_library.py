@@ -40,7 +40,7 @@ def test_table_compiles_the_library(lib):
     assert t.names[t.win_react[w]] == "hit_head_front_light"
 
 
-def test_a_parry_nullifies_a_straight_in_the_library(lib):
+def test_a_parry_turns_a_straight_into_chip_damage(lib):
     t = compile_table(lib, BoutRules())
     b = Bouts(t, 2)
     b.place(np.array([0.8, 0.8]), np.zeros(2), np.zeros(2))
@@ -50,7 +50,7 @@ def test_a_parry_nullifies_a_straight_in_the_library(lib):
     b.start(np.array([1]), 1, t.index("step_left"))
     for _ in range(14):
         step(b, BoutRules(), Rewards())
-    assert b.hp[0, 1] == 100.0                           # parried
+    assert b.hp[0, 1] == pytest.approx(100.0 - 0.2 * 9.0)   # parried: the referee's fifth
     assert b.hp[1, 1] == pytest.approx(100.0 - 9.0)      # stepping: hit clean
 
 
