@@ -98,3 +98,27 @@ def test_cli_build_writes_a_loadable_graph(tmp_path):
     assert r.returncode == 0, r.stderr
     g = InteractionGraph.load(out)
     assert g.n_states == 200 and g.table.build["seed"] == 0
+
+
+def test_opponent_controller_drives_the_motion_controller(lib, shipped):
+    from game.interaction import OpponentController
+    from game.motion import PlayerController
+
+    pc = PlayerController(lib)
+    oc = OpponentController(shipped, lib, controller=pc)
+    # the other stands at the guard just inside straight range, facing us
+    s = Situation(0.95, 0.0, 0.0, np.pi, "guard", 0.0, "guard", 0.0)
+    chosen, steps = [], 0
+    while len(chosen) < 3 and steps < 400:
+        c = oc.decide(s)
+        if c is not None:
+            chosen.append(c)
+            # it acts only from the guard: right after choosing an action it is busy
+            if c != "guard":
+                assert pc.action == c
+                pc.step()
+                assert oc.decide(s) is None
+        pc.step()
+        steps += 1
+    assert len(chosen) == 3 and all(c in (*ACTION_NAMES, "guard") for c in chosen)
+    assert any(lib[c].kind == "attack" for c in chosen if c != "guard"), chosen
