@@ -73,7 +73,10 @@ def cmd_build(args: argparse.Namespace) -> int:
     lib = load_actions()
     t0 = time.perf_counter()
     table = build_graph(lib, BuildParams(**kw), log=None if args.quiet else print)
-    table.save(args.output)
+    try:
+        table.save(args.output)
+    except OSError as exc:
+        raise InputError(f"{args.output}: cannot write the graph ({exc.strerror or exc})") from None
     size = Path(args.output).stat().st_size
     print(f"wrote {args.output}: {table.n_states} states, {table.n_edges} edges, "
           f"{size / 1e6:.2f} MB, built in {time.perf_counter() - t0:.1f} s")
