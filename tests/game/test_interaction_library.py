@@ -122,3 +122,14 @@ def test_opponent_controller_drives_the_motion_controller(lib, shipped):
         steps += 1
     assert len(chosen) == 3 and all(c in (*ACTION_NAMES, "guard") for c in chosen)
     assert any(lib[c].kind == "attack" for c in chosen if c != "guard"), chosen
+
+
+def test_bench_graph_on_the_shipped_graph_agrees_with_brute_force():
+    r = subprocess.run([sys.executable, "-m", "game.cli", "bench", "graph", "--graph", str(DEFAULT_GRAPH),
+                        "--lookups", "300", "--loads", "1", "--json"],
+                       cwd=REPO, capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    import json
+    fig = json.loads(r.stdout)
+    assert fig["states"] == 60000 and fig["agreement_with_brute_force"] == 1.0
+    assert fig["lookup_us"] > 0 and fig["brute_force_us"] > 0 and fig["load_s_median"] > 0
