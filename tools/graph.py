@@ -94,7 +94,7 @@ def cmd_info(args: argparse.Namespace) -> int:
     b = info["build"]
     print(f"{path}: {info['states']} states, {info['edges']} edges, "
           f"{info.get('file_bytes', 0) / 1e6:.2f} MB")
-    print(f"  build: seed {b.get('seed')}, {b.get('samples')} samples in {b.get('cells_sampled')} "
+    print(f"  build: library {b.get('library')}, seed {b.get('seed')}, {b.get('samples')} samples in {b.get('cells_sampled')} "
           f"cells, opponent_max {b.get('opponent_max')}, {b.get('seconds', {}).get('total')} s")
     print(f"  value iteration: {b.get('vi_iterations')} iterations, residual {b.get('vi_residual'):.2g}")
     print(f"  grid: {json.dumps(info['grid'])}")

@@ -96,6 +96,17 @@ class ActionTable:
     max_damage: float = 1.0
     attack_ids: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
 
+    def fingerprint(self) -> str:
+        """A hash of everything the bout model reads from the library: a graph built from
+        another library (changed timings, reaches, damage) is stale."""
+        import hashlib
+        h = hashlib.sha256("|".join(self.names).encode())
+        for arr in (self.frames, self.offset.round(6), self.window, self.win_reach.round(6),
+                    self.win_damage.round(6), self.win_targets, self.win_react, self.guard_cover,
+                    self.guard_kind):
+            h.update(np.ascontiguousarray(arr).tobytes())
+        return h.hexdigest()[:16]
+
     @property
     def ready_frame(self) -> int:
         """The `other_frame` that codes "at the guard, choosing": the wait's last frame."""

@@ -242,7 +242,7 @@ def build_graph(lib: dict, params: BuildParams | None = None, rules: BoutRules |
     t3 = time.perf_counter()
     unreached = int(len(keys) - len(np.unique(dst)))
     info = {
-        "seed": params.seed, "states_requested": params.states, "sampling_bouts": params.bouts,
+        "library": t.fingerprint(), "seed": params.seed, "states_requested": params.states, "sampling_bouts": params.bouts,
         "bout_steps": params.bout_steps, "sampling_rounds": rounds,
         "samples": int(len(samples[0])), "cells_sampled": int(len(np.unique(samples[0]))),
         "candidates": int(n_cand), "greedy_share": params.greedy_share, "opponent_max": params.opponent_max,

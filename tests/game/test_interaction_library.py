@@ -63,7 +63,9 @@ def test_small_build_with_the_library_is_deterministic(lib):
 
 
 def test_shipped_graph_matches_the_library(lib, shipped):
-    assert shipped.names == compile_table(lib, shipped.table.rules).names, \
+    table = compile_table(lib, shipped.table.rules)
+    assert shipped.names == table.names
+    assert shipped.table.build["library"] == table.fingerprint(), \
         "the action library changed: rebuild with quickjab graph build -o game/assets/graph.npz"
     assert shipped.n_states >= 55560 and shipped.n_edges >= 107167
     assert DEFAULT_GRAPH.stat().st_size < 8_000_000
@@ -133,3 +135,11 @@ def test_bench_graph_on_the_shipped_graph_agrees_with_brute_force():
     fig = json.loads(r.stdout)
     assert fig["states"] == 60000 and fig["agreement_with_brute_force"] == 1.0
     assert fig["lookup_us"] > 0 and fig["brute_force_us"] > 0 and fig["load_s_median"] > 0
+
+
+def test_duel_refuses_a_graph_built_from_another_library(lib, tmp_path):
+    sys.path.insert(0, str(Path(__file__).parent))
+    from hand_actions import hand_library
+    other = build_graph(hand_library(), BuildParams(seed=1, states=100, bouts=32, bout_steps=100, max_rounds=1))
+    with pytest.raises(ValueError, match="rebuild"):
+        duel(InteractionGraph(other), lib, "random", bouts=2, seconds=1.0)
