@@ -18,7 +18,8 @@ class Contact:
     that normal before resolution (m/s, > 0 when the capsules move towards each other);
     `point` lies midway between the two surfaces; `depth` is the penetration in metres.
     body_a < body_b always (pairs are ordered by body id), so a fist can be on either side;
-    capsule_a/b index the body's own capsule list and tag_a/b are its tags."""
+    capsule_a/b index the body's own capsule list and tag_a/b are its tags. A touch that
+    lasts is reported every step; `new` is True only on its first step (one punch, one hit)."""
 
     body_a: int
     capsule_a: int
@@ -30,6 +31,8 @@ class Contact:
     normal: np.ndarray
     rel_speed: float
     depth: float = 0.0
+    new: bool = True  # False when the same two capsules already touched the step before
+    pair: int = -1  # index of the capsule pair in world.pairs
 
 
 def _params(a, b, c, e, f) -> tuple[np.ndarray, np.ndarray]:

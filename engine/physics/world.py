@@ -179,6 +179,8 @@ class World:
         that no overlap is taken for a fast pass-through (see step)."""
         self._was_near = np.ones(len(self.pairs), dtype=bool)
         self._any_near = True
+        self._touching = np.zeros(len(self.pairs), dtype=bool)  # pairs overlapping last step
+        self._hit_idx = np.zeros(0, dtype=np.int64)
 
     # ---- control --------------------------------------------------------------------------
 
@@ -303,6 +305,10 @@ class World:
                         closing = np.where(flip, -closing, closing)
                         cset = self.pairs.contact_set(near_idx, s, t, n)
                     contacts = self._contacts(near_idx, s, n, depth, closing)
+        # remember which pairs touch (for Contact.new next step)
+        self._touching[self._hit_idx] = False
+        self._hit_idx = np.array([c.pair for c in contacts], dtype=np.int64) if contacts else self._hit_idx[:0]
+        self._touching[self._hit_idx] = True
         if self._any_near:
             self._was_near[:] = False
         self._any_near = cset is not None
@@ -353,8 +359,9 @@ class World:
                    self._cap_body[gb].tolist(), self._cap_local[gb].tolist(), gb.tolist(),
                    point, n, closing[hit].tolist(), depth.tolist(), strict=True)
         tags = self._cap_tags
-        return [Contact(ba, la, tags[a], bb, lb, tags[b], pt, nn, sp, de)
-                for ba, la, a, bb, lb, b, pt, nn, sp, de in rows]
+        fresh = (~self._touching[k]).tolist()
+        return [Contact(ba, la, tags[a], bb, lb, tags[b], pt, nn, sp, de, nw, pr)
+                for (ba, la, a, bb, lb, b, pt, nn, sp, de), nw, pr in zip(rows, fresh, k.tolist(), strict=True)]
 
     def state_hash(self) -> str:
         """Hash of the simulation state (positions, previous positions, step count)."""

@@ -198,3 +198,17 @@ def test_fast_fist_that_passes_the_head_centre_in_one_step_is_turned_back():
     np.testing.assert_allclose(c.normal, (0.0, 0.0, -1.0), atol=1e-9)  # head -> fist: back along -z
     assert c.rel_speed == pytest.approx(15.0, rel=1e-6)
     assert w.x[1, 2] < w.x[0, 2] - 0.17 + 0.002  # the fist is in front of the head, not behind it
+
+
+def test_a_lasting_touch_is_new_only_on_its_first_step():
+    w = World(gravity=(0, 0, 0), ground_y=-10.0, damping=0.0)
+    _ball(w, (0.0, 1.0, 0.0), "a", mass=1e6)  # a wall
+    _ball(w, (0.6, 1.0, 0.0), "b")
+    w.step(DT)
+    flags = []
+    for i in range(40):
+        # b pressed against a for 20 steps, then pulled away, then pressed again
+        w.set_targets(1, [[0.2 if (i < 20 or i >= 30) else 0.8, 1.0, 0.0]], 6.0)
+        flags += [c.new for c in w.step(DT)]
+    assert flags.count(True) == 2 and len(flags) > 10  # two touches, each new once
+    assert flags[0] is True and flags[1] is False
