@@ -281,39 +281,7 @@ class World:
         x = self.x
         v = self._integrate(dt)
         self._dt_prev = dt
-
-        contacts: list[Contact] = []
-        cset = None
-        if len(self.pairs):
-            cand = self.pairs.candidates(x, self.collision_margin)
-            if len(cand):
-                s, t, n, depth = self.pairs.narrow(x, cand)
-                # pairs already touching or within the margin become this step's contact
-                # constraints, so relaxing the sticks cannot push them into each other
-                near = np.flatnonzero(depth > -self.collision_margin)
-                if len(near):
-                    near_idx = cand[near]
-                    s, t, n, depth = s[near], t[near], n[near], depth[near]
-                    cset = self.pairs.contact_set(near_idx, s, t, n)
-                    closing = cset.closing_speeds(v)
-                    # a pair that was apart last step and now overlaps while "separating" went
-                    # past the middle within one step (a fast fist): turn it back the way it came
-                    flip = (depth > 0.0) & (closing < 0.0) & ~self._was_near[near_idx]
-                    if flip.any():
-                        n = np.where(flip[:, None], -n, n)
-                        depth = np.where(flip, 2.0 * self.pairs.rsum[near_idx] - depth, depth)
-                        closing = np.where(flip, -closing, closing)
-                        cset = self.pairs.contact_set(near_idx, s, t, n)
-                    contacts = self._contacts(near_idx, s, n, depth, closing)
-        # remember which pairs touch (for Contact.new next step)
-        self._touching[self._hit_idx] = False
-        self._hit_idx = np.array([c.pair for c in contacts], dtype=np.int64) if contacts else self._hit_idx[:0]
-        self._touching[self._hit_idx] = True
-        if self._any_near:
-            self._was_near[:] = False
-        self._any_near = cset is not None
-        if cset is not None:
-            self._was_near[near_idx] = True
+        contacts, cset, near_idx = self._detect(v)
 
         ground = x[:, 1]
         relax = self.constraints.relax
@@ -323,14 +291,15 @@ class World:
                 cset.project(x)
             np.maximum(ground, self.ground_y, out=ground)
         if cset is not None:
-            # one more contact pass linearized at the relaxed positions: the closest points
-            # moved during the iterations, and what the user sees must not interpenetrate
+            # contact passes linearized at the relaxed positions: the closest points moved
+            # during the iterations, and what the user sees must not interpenetrate
             for _ in range(self.contact_passes):
                 s, t, n, depth = self.pairs.narrow(x, near_idx)
                 pen = depth > self.contact_tolerance
                 if not pen.any():
                     break
                 self.pairs.contact_set(near_idx[pen], s[pen], t[pen], n[pen]).project(x)
+            np.maximum(ground, self.ground_y, out=ground)
 
         if self.ground_friction > 0.0:
             on = x[:, 1] <= self.ground_y + 1e-9
@@ -341,6 +310,41 @@ class World:
                     x[on, k] = pk + (xk - pk) * keep
         self.steps += 1
         return contacts
+
+    def _detect(self, v: np.ndarray):
+        """Contacts at the integrated positions, and this step's contact constraints: the pairs
+        touching or within `collision_margin` (so relaxing the sticks cannot push them into
+        each other). Returns (contacts, ContactSet or None, their pair indices)."""
+        contacts: list[Contact] = []
+        cset = None
+        near_idx = np.zeros(0, dtype=np.int64)
+        cand = self.pairs.candidates(self.x, self.collision_margin) if len(self.pairs) else near_idx
+        if len(cand):
+            s, t, n, depth = self.pairs.narrow(self.x, cand)
+            near = np.flatnonzero(depth > -self.collision_margin)
+            if len(near):
+                near_idx = cand[near]
+                s, t, n, depth = s[near], t[near], n[near], depth[near]
+                cset = self.pairs.contact_set(near_idx, s, t, n)
+                closing = cset.closing_speeds(v)
+                # a pair that was apart last step and now overlaps while "separating" went past
+                # the middle within one step (a fast fist): turn it back the way it came
+                flip = (depth > 0.0) & (closing < 0.0) & ~self._was_near[near_idx]
+                if flip.any():
+                    n = np.where(flip[:, None], -n, n)
+                    depth = np.where(flip, 2.0 * self.pairs.rsum[near_idx] - depth, depth)
+                    closing = np.where(flip, -closing, closing)
+                    cset = self.pairs.contact_set(near_idx, s, t, n)
+                contacts = self._contacts(near_idx, s, n, depth, closing)
+        # remember which pairs touch (Contact.new) and which were near (pass-through test)
+        self._touching[self._hit_idx] = False
+        self._hit_idx = np.array([c.pair for c in contacts], dtype=np.int64) if contacts else near_idx[:0]
+        self._touching[self._hit_idx] = True
+        if self._any_near:
+            self._was_near[:] = False
+        self._was_near[near_idx] = True
+        self._any_near = len(near_idx) > 0
+        return contacts, cset, near_idx
 
     def _contacts(self, idx, s, n, depth, closing) -> list[Contact]:
         """Contacts among pairs `idx` that overlap at the integrated positions (before any
