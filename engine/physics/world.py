@@ -77,7 +77,7 @@ class World:
         self.contact_passes = 3  # re-linearized contact passes after the iterations, at most
         self.contact_tolerance = 0.001  # m of overlap those passes leave alone
         self.bodies: list[Body] = []
-        self._pd_key: list = []  # per body: the scalar (stiffness, damping) last set, or None
+        self._pd_key: list = []  # per body: the (stiffness, damping) last set, as bytes
         self._target_vel_on: list[bool] = []
         self.steps = 0
         self._dt_prev: float | None = None
@@ -199,11 +199,13 @@ class World:
         if not np.isfinite(t).all():  # one NaN would spread through the sticks to every particle
             raise ValueError("targets must be finite")
         self.targets[sl] = t
-        key = (stiffness, damping_ratio) if np.isscalar(stiffness) and np.isscalar(damping_ratio) else None
-        if key is None or self._pd_key[bid] != key:  # the game sets the same gains every step
-            omega = 2.0 * np.pi * np.asarray(stiffness, dtype=float)
+        k = np.asarray(stiffness, dtype=float)
+        z = np.asarray(damping_ratio, dtype=float)
+        key = (k.tobytes(), k.shape, z.tobytes(), z.shape)
+        if self._pd_key[bid] != key:  # the game sets the same gains every step: skip the work
+            omega = 2.0 * np.pi * k
             self._w2[sl] = omega * omega
-            self._c[sl] = 2.0 * np.asarray(damping_ratio, dtype=float) * omega
+            self._c[sl] = 2.0 * z * omega
             self._pd_dt = None
             self._pd_key[bid] = key
         if velocities is not None:
