@@ -193,6 +193,11 @@ class ContactSet:
         dx = np.bincount(self.flat, weights=(self.push * lam[:, None]).reshape(-1), minlength=self.size)
         x += dx.reshape(x.shape)
 
+    def separations(self, x: np.ndarray) -> np.ndarray:
+        """(closest point on b - closest point on a) . n at positions x, with this step's
+        barycentric weights and normals -> (K,)."""
+        return np.einsum("qki,qki->k", self.gn, x[self.quad])
+
     def closing_speeds(self, v: np.ndarray) -> np.ndarray:
         """Speed at which each pair's closest points approach along its normal (> 0 closing)."""
         return -np.einsum("qki,qki->k", self.gn, v[self.quad])

@@ -175,10 +175,7 @@ class World:
         self._forget_contacts()
 
     def _forget_contacts(self) -> None:
-        """Which pairs were in contact last step is unknown (new body, teleport): assume all, so
-        that no overlap is taken for a fast pass-through (see step)."""
-        self._was_near = np.ones(len(self.pairs), dtype=bool)
-        self._any_near = True
+        """Forget which pairs touched last step (new body, teleport): Contact.new starts over."""
         self._touching = np.zeros(len(self.pairs), dtype=bool)  # pairs overlapping last step
         self._hit_idx = np.zeros(0, dtype=np.int64)
 
@@ -329,23 +326,21 @@ class World:
                 s, t, n, depth = s[near], t[near], n[near], depth[near]
                 cset = self.pairs.contact_set(near_idx, s, t, n)
                 closing = cset.closing_speeds(v)
-                # a pair that was apart last step and now overlaps while "separating" went past
-                # the middle within one step (a fast fist): turn it back the way it came
-                flip = (depth > 0.0) & (closing < 0.0) & ~self._was_near[near_idx]
+                # a pair whose closest points were on the other side of each other at the start
+                # of the step went past the middle within it (a fast fist): turn it back the
+                # way it came. (The last step ended without overlap, so before this step's
+                # motion the separation along n was positive unless they crossed.)
+                flip = (depth > 0.0) & (cset.separations(self.x_prev) < 0.0)
                 if flip.any():
                     n = np.where(flip[:, None], -n, n)
                     depth = np.where(flip, 2.0 * self.pairs.rsum[near_idx] - depth, depth)
                     closing = np.where(flip, -closing, closing)
                     cset = self.pairs.contact_set(near_idx, s, t, n)
                 contacts = self._contacts(near_idx, s, n, depth, closing)
-        # remember which pairs touch (Contact.new) and which were near (pass-through test)
+        # remember which pairs touch, for Contact.new
         self._touching[self._hit_idx] = False
         self._hit_idx = np.array([c.pair for c in contacts], dtype=np.int64) if contacts else near_idx[:0]
         self._touching[self._hit_idx] = True
-        if self._any_near:
-            self._was_near[:] = False
-        self._was_near[near_idx] = True
-        self._any_near = len(near_idx) > 0
         return contacts, cset, near_idx
 
     def _contacts(self, idx, s, n, depth, closing) -> list[Contact]:
