@@ -21,8 +21,8 @@ Design (details in docs/physics.md):
 - Bones are distance constraints (lo == hi == rest length), joint limits are the same
   constraint with lo < hi (acts only when violated). Relaxed `iterations` times, by default
   Jacobi-style: all sticks at once from the same positions, corrections split by inverse
-  mass and scaled by relaxation / max(count_i, count_j) (the same at both ends, so momentum
-  is conserved). Graph-coloured Gauss-Seidel (solver="gauss_seidel": edge-coloured batches
+  mass and scaled by min(1, relaxation / max(count_i, count_j)) with relaxation = 2 (the
+  same at both ends, so momentum is conserved). Graph-coloured Gauss-Seidel (solver="gauss_seidel": edge-coloured batches
   of independent sticks) converges about twice as fast per iteration but costs one batch per
   colour (6 on the test humanoid); at 17-34 particles numpy's per-call overhead is the cost,
   so Jacobi gets further in the same time (`quickjab bench physics` prints both).
