@@ -73,7 +73,10 @@ def cmd_build(args: argparse.Namespace) -> int:
     lib = load_actions()
     t0 = time.perf_counter()
     table = build_graph(lib, BuildParams(**kw), log=None if args.quiet else print)
-    table.save(args.output)
+    try:
+        table.save(args.output)
+    except OSError as exc:
+        raise InputError(f"{args.output}: cannot write the graph ({exc.strerror or exc})") from None
     size = Path(args.output).stat().st_size
     print(f"wrote {args.output}: {table.n_states} states, {table.n_edges} edges, "
           f"{size / 1e6:.2f} MB, built in {time.perf_counter() - t0:.1f} s")
@@ -91,7 +94,7 @@ def cmd_info(args: argparse.Namespace) -> int:
     b = info["build"]
     print(f"{path}: {info['states']} states, {info['edges']} edges, "
           f"{info.get('file_bytes', 0) / 1e6:.2f} MB")
-    print(f"  build: seed {b.get('seed')}, {b.get('samples')} samples in {b.get('cells_sampled')} "
+    print(f"  build: library {b.get('library')}, seed {b.get('seed')}, {b.get('samples')} samples in {b.get('cells_sampled')} "
           f"cells, opponent_max {b.get('opponent_max')}, {b.get('seconds', {}).get('total')} s")
     print(f"  value iteration: {b.get('vi_iterations')} iterations, residual {b.get('vi_residual'):.2g}")
     print(f"  grid: {json.dumps(info['grid'])}")

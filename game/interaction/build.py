@@ -242,7 +242,7 @@ def build_graph(lib: dict, params: BuildParams | None = None, rules: BoutRules |
     t3 = time.perf_counter()
     unreached = int(len(keys) - len(np.unique(dst)))
     info = {
-        "seed": params.seed, "states_requested": params.states, "sampling_bouts": params.bouts,
+        "library": t.fingerprint(), "seed": params.seed, "states_requested": params.states, "sampling_bouts": params.bouts,
         "bout_steps": params.bout_steps, "sampling_rounds": rounds,
         "samples": int(len(samples[0])), "cells_sampled": int(len(np.unique(samples[0]))),
         "candidates": int(n_cand), "greedy_share": params.greedy_share, "opponent_max": params.opponent_max,
@@ -253,7 +253,7 @@ def build_graph(lib: dict, params: BuildParams | None = None, rules: BoutRules |
     }
     return GraphTable(
         action_names=list(t.names), n_choices=len(t.choices), keys=keys,
-        features=feat.astype(np.float32), other_action=oact, other_frame=oframe,
+        features=feat, other_action=oact, other_frame=oframe,
         visits=visits, best_action=action[sol.best_edge], value=sol.value.astype(np.float32),
         edge_ptr=indptr, edge_dst=dst, edge_action=action, edge_steps=steps,
         edge_flip=flip, edge_reward=reward.astype(np.float32),

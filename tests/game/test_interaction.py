@@ -132,7 +132,7 @@ def test_out_of_reach_misses_and_a_block_covers(lib):
     t, b = _facing_pair(lib, 0.9)
     landed = _play(b, t, "straight_r", "block", 12)
     assert landed.sum() == 0
-    assert b.hp[0, 1] == pytest.approx(100 - 0.15 * 8.0)     # chip damage only
+    assert b.hp[0, 1] == pytest.approx(100 - 0.2 * 8.0)      # chip damage only
 
 
 def test_actions_take_their_frames_and_move_the_root(lib):

@@ -40,7 +40,7 @@ def test_table_compiles_the_library(lib):
     assert t.names[t.win_react[w]] == "hit_head_front_light"
 
 
-def test_a_parry_nullifies_a_straight_in_the_library(lib):
+def test_a_parry_turns_a_straight_into_chip_damage(lib):
     t = compile_table(lib, BoutRules())
     b = Bouts(t, 2)
     b.place(np.array([0.8, 0.8]), np.zeros(2), np.zeros(2))
@@ -50,7 +50,7 @@ def test_a_parry_nullifies_a_straight_in_the_library(lib):
     b.start(np.array([1]), 1, t.index("step_left"))
     for _ in range(14):
         step(b, BoutRules(), Rewards())
-    assert b.hp[0, 1] == 100.0                           # parried
+    assert b.hp[0, 1] == pytest.approx(100.0 - 0.2 * 9.0)   # parried: the referee's fifth
     assert b.hp[1, 1] == pytest.approx(100.0 - 9.0)      # stepping: hit clean
 
 
@@ -63,7 +63,9 @@ def test_small_build_with_the_library_is_deterministic(lib):
 
 
 def test_shipped_graph_matches_the_library(lib, shipped):
-    assert shipped.names == compile_table(lib, shipped.table.rules).names, \
+    table = compile_table(lib, shipped.table.rules)
+    assert shipped.names == table.names
+    assert shipped.table.build["library"] == table.fingerprint(), \
         "the action library changed: rebuild with quickjab graph build -o game/assets/graph.npz"
     assert shipped.n_states >= 55560 and shipped.n_edges >= 107167
     assert DEFAULT_GRAPH.stat().st_size < 8_000_000
@@ -98,3 +100,46 @@ def test_cli_build_writes_a_loadable_graph(tmp_path):
     assert r.returncode == 0, r.stderr
     g = InteractionGraph.load(out)
     assert g.n_states == 200 and g.table.build["seed"] == 0
+
+
+def test_opponent_controller_drives_the_motion_controller(lib, shipped):
+    from game.interaction import OpponentController
+    from game.motion import PlayerController
+
+    pc = PlayerController(lib)
+    oc = OpponentController(shipped, lib, controller=pc)
+    # the other stands at the guard just inside straight range, facing us
+    s = Situation(0.95, 0.0, 0.0, np.pi, "guard", 0.0, "guard", 0.0)
+    chosen, steps = [], 0
+    while len(chosen) < 3 and steps < 400:
+        c = oc.decide(s)
+        if c is not None:
+            chosen.append(c)
+            # it acts only from the guard: right after choosing an action it is busy
+            if c != "guard":
+                assert pc.action == c
+                pc.step()
+                assert oc.decide(s) is None
+        pc.step()
+        steps += 1
+    assert len(chosen) == 3 and all(c in (*ACTION_NAMES, "guard") for c in chosen)
+    assert any(lib[c].kind == "attack" for c in chosen if c != "guard"), chosen
+
+
+def test_bench_graph_on_the_shipped_graph_agrees_with_brute_force():
+    r = subprocess.run([sys.executable, "-m", "game.cli", "bench", "graph", "--graph", str(DEFAULT_GRAPH),
+                        "--lookups", "300", "--loads", "1", "--json"],
+                       cwd=REPO, capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    import json
+    fig = json.loads(r.stdout)
+    assert fig["states"] == 60000 and fig["agreement_with_brute_force"] == 1.0
+    assert fig["lookup_us"] > 0 and fig["brute_force_us"] > 0 and fig["load_s_median"] > 0
+
+
+def test_duel_refuses_a_graph_built_from_another_library(lib, tmp_path):
+    sys.path.insert(0, str(Path(__file__).parent))
+    from hand_actions import hand_library
+    other = build_graph(hand_library(), BuildParams(seed=1, states=100, bouts=32, bout_steps=100, max_rounds=1))
+    with pytest.raises(ValueError, match="rebuild"):
+        duel(InteractionGraph(other), lib, "random", bouts=2, seconds=1.0)
