@@ -2,6 +2,10 @@
 step and every render, and what the stages did not cover is booked as `unaccounted` so the
 parts add up to wall time. Everything lives in preallocated numpy rings: recording a span
 allocates nothing.
+
+Per frame: stage spans (depth 0) + `wait` + `unaccounted` == the frame's wall time, exactly, in
+integer ns. A stage overruns when one run of it exceeds its declared budget; a frame overruns
+when its work (wall time minus waiting) exceeds the frame period (1000 / render_hz ms).
 """
 
 from __future__ import annotations
@@ -36,7 +40,8 @@ def percentiles_ms(durations_ns: np.ndarray) -> dict[str, float]:
 
 class FrameBudget:
     def __init__(self, capacity_frames: int = 3600, spans_per_frame: int = 48, frame_budget_ms: float = FRAME_BUDGET_MS):
-        self.frame_budget_ms = frame_budget_ms
+        self.frame_budget_ms = frame_budget_ms  # one step's budget: the 16.7 ms line
+        self.frame_period_ms = frame_budget_ms  # one rendered frame's slot; the loop sets it
         self.stages: list[Stage] = []
         self._index: dict[str, int] = {}
         self.capacity = capacity_frames
@@ -110,24 +115,32 @@ class FrameBudget:
         self.f_steps[i] = steps
         self.f_dropped[i] = dropped
         self.f_wait[i] = wait_ns
-        if wall - wait_ns > self.frame_budget_ms * 1e6 * max(1, steps):
+        if wall - wait_ns > self.frame_period_ms * 1e6:
             self.frame_overruns += 1
         self.frames += 1
         self.dropped_steps += dropped
         self.steps_per_frame[steps] += 1
 
     # -- reading -------------------------------------------------------------------------
+    def oldest_frame(self) -> int:
+        """The oldest frame whose record and every span are still in the rings. When frames
+        average more than `spans_per_frame` spans the span ring wraps first; frames that lost
+        spans are left out rather than reported short."""
+        oldest = self.frames - min(self.frames, self.capacity)
+        if self.spans > self.span_capacity:
+            first_kept = int(self.s_frame[self.spans % self.span_capacity])
+            oldest = max(oldest, first_kept + 1)
+        return min(oldest, self.frames)
+
     def frame_rows(self) -> np.ndarray:
-        """Ring indices of the recorded frames, oldest first."""
-        n = min(self.frames, self.capacity)
-        return (np.arange(self.frames - n, self.frames)) % self.capacity
+        """Ring indices of the complete recorded frames, oldest first."""
+        return np.arange(self.oldest_frame(), self.frames) % self.capacity
 
     def span_rows(self) -> np.ndarray:
-        """Ring indices of the spans of frames still in the frame ring, oldest first."""
+        """Ring indices of the spans of those frames (and of the frame being recorded)."""
         n = min(self.spans, self.span_capacity)
         rows = np.arange(self.spans - n, self.spans) % self.span_capacity
-        oldest = self.frames - min(self.frames, self.capacity)
-        return rows[self.s_frame[rows] >= oldest]
+        return rows[self.s_frame[rows] >= self.oldest_frame()]
 
     def stage_durations(self, name: str) -> np.ndarray:
         rows = self.span_rows()
@@ -149,11 +162,12 @@ class FrameBudget:
         work = (self.f_end[rows] - self.f_start[rows]) - self.f_wait[rows]
         stages = {}
         for st in self.stages:
-            d = self.stage_durations(st.name)
+            pct = percentiles_ms(self.stage_durations(st.name))
             stages[st.name] = {
-                **percentiles_ms(d),
+                **pct,
                 "budget_ms": st.budget_ms,
-                "share_p99": percentiles_ms(d)["p99"] / self.frame_budget_ms,
+                "share_p50": pct["p50"] / self.frame_budget_ms,
+                "share_p99": pct["p99"] / self.frame_budget_ms,
                 "overruns": st.overruns,
             }
         return {
@@ -162,6 +176,7 @@ class FrameBudget:
             "dropped_steps": self.dropped_steps,
             "frame_overruns": self.frame_overruns,
             "frame_budget_ms": self.frame_budget_ms,
+            "frame_period_ms": self.frame_period_ms,
             "frame_work": percentiles_ms(work),
             "frame_wall": percentiles_ms(self.f_end[rows] - self.f_start[rows]),
             "steps_per_frame": {str(k): v for k, v in sorted(self.steps_per_frame.items())},

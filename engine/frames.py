@@ -17,28 +17,46 @@ from engine.sensors.source import Sample
 FRAME_HZ = 60
 
 
+def frame_offsets(duration: float, hz: int = FRAME_HZ) -> np.ndarray:
+    """k / hz for every step k in [0, duration]: computed from k, never summed, so frame k is
+    exactly k/hz seconds after the first one."""
+    n = int(np.floor(duration * hz + 1e-9)) + 1
+    return np.arange(n, dtype=np.float64) / hz
+
+
 def frame_times(t0: float, t_end: float, hz: int = FRAME_HZ) -> np.ndarray:
-    """The step grid t0 + k/hz covering [t0, t_end]; computed from k, so it never drifts."""
-    n = int(np.floor((t_end - t0) * hz + 1e-9)) + 1
-    return t0 + np.arange(n, dtype=np.float64) / hz
+    """The step grid t0 + k/hz covering [t0, t_end]."""
+    return t0 + frame_offsets(t_end - t0, hz)
+
+
+def interpolate_at(t: np.ndarray, x: np.ndarray, at: np.ndarray, mode: str = "linear") -> np.ndarray:
+    """Values of samples (t (n,), x (n, D)) at instants `at`: linear between the last sample at
+    or before the instant and the next one, held from the last one where no later sample
+    exists (and from the first one before it). The arithmetic is the same as FrameResampler's,
+    so live and offline frames agree to the bit."""
+    if mode not in ("linear", "hold"):
+        raise ValueError(f"mode must be 'linear' or 'hold', not {mode!r}")
+    n = len(t)
+    idx = np.clip(np.searchsorted(t, at, side="right") - 1, 0, n - 1)
+    out = x[idx].copy()
+    if mode == "hold" or n < 2:
+        return out
+    nxt = idx + 1
+    inner = (nxt < n) & (at >= t[idx])
+    inner[inner] &= t[nxt[inner]] > t[idx[inner]]
+    i, j = idx[inner], nxt[inner]
+    w = ((at[inner] - t[i]) / (t[j] - t[i]))[:, None]
+    out[inner] = x[i] * (1.0 - w) + w * x[j]
+    return out
 
 
 def resample(t: np.ndarray, accel: np.ndarray, hz: int = FRAME_HZ, mode: str = "linear") -> tuple[np.ndarray, np.ndarray]:
-    """Resample (n,) times and (n, sensors, 3) or (n, D) values to the grid. Returns
-    (grid_times, frames of shape (m, D)). `mode` is 'linear' or 'hold'."""
+    """Resample (n,) times and (n, sensors, 3) or (n, D) values to the grid t[0] + k/hz.
+    Returns (grid_times, frames of shape (m, D)). `mode` is 'linear' or 'hold'."""
     t = np.asarray(t, dtype=np.float64)
     x = np.asarray(accel, dtype=np.float64).reshape(len(t), -1)
     grid = frame_times(float(t[0]), float(t[-1]), hz)
-    if mode == "hold":
-        idx = np.searchsorted(t, grid, side="right") - 1
-        return grid, x[np.clip(idx, 0, len(t) - 1)]
-    if mode != "linear":
-        raise ValueError(f"mode must be 'linear' or 'hold', not {mode!r}")
-    # np.interp per column; duplicate times are fine (interp takes the later value).
-    frames = np.empty((len(grid), x.shape[1]), dtype=np.float64)
-    for d in range(x.shape[1]):
-        frames[:, d] = np.interp(grid, t, x[:, d])
-    return grid, frames
+    return grid, interpolate_at(t, x, grid, mode)
 
 
 def resample_labels(t: np.ndarray, labels: list[str], grid: np.ndarray) -> list[str]:
@@ -48,16 +66,19 @@ def resample_labels(t: np.ndarray, labels: list[str], grid: np.ndarray) -> list[
 
 
 def recording_frames(rec: Recording, hz: int = FRAME_HZ) -> tuple[np.ndarray, np.ndarray, list[str]]:
-    """(grid times relative to the first sample, frames (m, 3*sensors), labels per frame)."""
+    """(grid times relative to the first sample, exactly k/hz; frames (m, 3*sensors); labels
+    per frame)."""
     grid, frames = resample(rec.t, rec.accel, hz)
-    return grid - rec.t[0], frames, resample_labels(rec.t, rec.labels, grid)
+    return frame_offsets(float(rec.t[-1] - rec.t[0]), hz), frames, resample_labels(rec.t, rec.labels, grid)
 
 
 class FrameResampler:
     """Live resampling: push samples as sources deliver them, ask for the frame at a step's time.
 
-    Keeps only the two samples around the last asked instant, so it allocates nothing per step
-    beyond the output vector it reuses.
+    Keeps only the samples not yet passed, so it allocates little per step. A frame for an
+    instant equals `resample`'s once the first sample after the instant has been pushed;
+    before that it holds the last value. A live consumer that wants interpolated frames asks
+    for an instant a little in the past (one sample period of latency): see docs/engine.md.
     """
 
     def __init__(self, sensors: int, mode: str = "linear"):
@@ -68,6 +89,7 @@ class FrameResampler:
         self._prev = np.zeros(self.dim)
         self._have = False
         self._out = np.zeros(self.dim)
+        self._tmp = np.zeros(self.dim)
 
     def push(self, samples: list[Sample]) -> None:
         self._pending.extend(samples)
@@ -87,8 +109,10 @@ class FrameResampler:
         if self.mode == "linear" and pending and pending[0].t > self._prev_t:
             nxt = np.asarray(pending[0].accel, dtype=np.float64).ravel()
             w = (t - self._prev_t) / (pending[0].t - self._prev_t)
+            # the same arithmetic as interpolate_at: x0 * (1 - w) + w * x1
             np.multiply(self._prev, 1.0 - w, out=self._out)
-            self._out += w * nxt
+            np.multiply(nxt, w, out=self._tmp)
+            self._out += self._tmp
         else:
             self._out[:] = self._prev
         return self._out

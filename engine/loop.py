@@ -4,17 +4,19 @@ Time is an integer accumulator in units of ns x hz, so one step is exactly 1e9 u
 60 Hz step never drifts by rounding. Each rendered frame: read the clock, add the frame time
 (clamped at 0.25 s), run at most `max_steps` due steps (the rest are counted as dropped,
 never carried: no spiral of death), render with the interpolation alpha, then wait for the
-absolute deadline of the next frame (deadlines reset after a stall).
+absolute deadline of the next frame. Deadlines are absolute (anchor + k periods, so waiting
+never accumulates drift) and reset to a fresh anchor after a stall (so a hitch is not
+followed by a burst of zero-wait frames).
 
 Stages receive the step index and dt; none reads a clock. Every stage and the render are
-timed with perf_counter_ns into a FrameBudget.
+timed with perf_counter_ns into a FrameBudget. See docs/engine.md.
 """
 
 from __future__ import annotations
 
 import gc
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 
 from engine.budget import FrameBudget
@@ -23,11 +25,17 @@ from engine.clock import NS_PER_S, RealClock, VirtualClock
 StageFn = Callable[[int, float], None]
 RenderFn = Callable[[float], None]
 
-MAX_FRAME_NS = 250_000_000
+MAX_FRAME_NS = 250_000_000  # frame time clamp: a longer pause costs dropped steps, not a spiral
 MAX_STEPS_PER_FRAME = 5
 
 
 class FixedStepLoop:
+    """Runs registered stages at a fixed `hz` and one render per frame at `render_hz`.
+
+    `auto_freeze_gc=True` calls `gc.freeze()` once, when `run` first starts (everything the caller
+    loaded before that moves to the permanent generation and is never walked again).
+    """
+
     def __init__(
         self,
         clock: RealClock | VirtualClock | None = None,
@@ -35,13 +43,19 @@ class FixedStepLoop:
         render_hz: int | None = None,
         max_steps: int = MAX_STEPS_PER_FRAME,
         budget: FrameBudget | None = None,
+        auto_freeze_gc: bool = True,
     ):
         self.clock = clock or RealClock()
         self.hz = hz
         self.dt = 1.0 / hz
         self.render_hz = render_hz or hz
+        if self.render_hz > hz:
+            raise ValueError("render_hz cannot exceed the step rate")
         self.max_steps = max_steps
         self.budget = budget or FrameBudget(frame_budget_ms=1000.0 / hz)
+        self.budget.frame_period_ms = 1000.0 / self.render_hz
+        self.auto_freeze_gc = auto_freeze_gc
+        self.gc_frozen = False
         self._stages: list[tuple[int, StageFn]] = []
         self._render: tuple[int, RenderFn] | None = None
         self.step_index = 0  # steps run so far; the next step's index
@@ -49,6 +63,8 @@ class FixedStepLoop:
         self.dropped_steps = 0
         self.alpha = 0.0
         self.running = False
+        self.last_lateness_ns = 0  # how late the last wait returned after its deadline
+        self.stalls = 0  # times the deadline schedule was reset after a stall
         self._acc = 0  # ns * hz
         self._last_ns: int | None = None
         self._anchor_ns = 0
@@ -66,22 +82,29 @@ class FixedStepLoop:
             raise ValueError("the render stage's name starts with 'render' (FORMATS.md)")
         self._render = (self.budget.register(name, budget_ms), fn)
 
+    def step_time(self, step: int) -> float:
+        """The simulation instant of a step in seconds, k / hz exactly (never k * dt summed)."""
+        return step / self.hz
+
     @staticmethod
     def freeze_gc() -> None:
-        """Call once everything is loaded: the collector stops walking the assets."""
+        """Collect once, then freeze: the collector stops walking what is loaded so far."""
         gc.collect()
         gc.freeze()
 
     @contextmanager
-    def span(self, name: str):
-        """Time a part of a stage; it nests inside the stage in the trace."""
+    def span(self, name: str) -> Iterator[None]:
+        """Time a part of a stage; it nests inside the stage (or span) around it in the trace."""
         start = time.perf_counter_ns()
         self._depth += 1
         try:
             yield
         finally:
             self._depth -= 1
-            self.budget.add_span(self.budget.stage_id(name), self.step_index, start, time.perf_counter_ns() - start, self._depth + 1)
+            self.budget.add_span(
+                self.budget.stage_id(name), self.step_index, start,
+                time.perf_counter_ns() - start, self._depth + 1,
+            )
 
     # -- running --------------------------------------------------------------------------
     def _frame_period_ns(self, k: int) -> int:
@@ -91,8 +114,10 @@ class FixedStepLoop:
     def run_frame(self) -> int:
         """One rendered frame: due steps, render, wait. Returns the number of steps run."""
         now = self.clock.now_ns()
-        frame_start = time.perf_counter_ns()
-        self.budget.begin_frame(frame_start)
+        perf = time.perf_counter_ns
+        frame_start = perf()
+        budget = self.budget
+        budget.begin_frame(frame_start)
         if self._last_ns is None:
             self._last_ns = now
             self._anchor_ns = now
@@ -106,10 +131,9 @@ class FixedStepLoop:
         due = self._acc // NS_PER_S
         run = min(due, self.max_steps)
         self._acc -= due * NS_PER_S
+        # what could not run, plus whatever the clamp cut off, is dropped, never carried
         dropped = (due - run) + ((raw - clamped) * self.hz) // NS_PER_S
         self.dropped_steps += dropped
-        budget = self.budget
-        perf = time.perf_counter_ns
         for _ in range(run):
             step, dt = self.step_index, self.dt
             for sid, fn in self._stages:
@@ -137,11 +161,22 @@ class FixedStepLoop:
         if now > deadline + self._frame_period_ns(1):
             # stalled: more than a whole frame late; start a fresh schedule from now
             self._anchor_ns, self._deadline_k = now, 0
+            self.stalls += 1
+            self.last_lateness_ns = now - deadline
             return
         self.clock.wait_until(deadline)
+        self.last_lateness_ns = self.clock.now_ns() - deadline
 
-    def run(self, steps: int | None = None, frames: int | None = None, until: Callable[[], bool] | None = None) -> None:
+    def run(
+        self,
+        steps: int | None = None,
+        frames: int | None = None,
+        until: Callable[[], bool] | None = None,
+    ) -> None:
         """Run until `steps` steps or `frames` frames have run, `until()` is true, or stop()."""
+        if self.auto_freeze_gc and not self.gc_frozen:
+            self.freeze_gc()
+            self.gc_frozen = True
         self.running = True
         start_steps, start_frames = self.step_index, self.frame_index
         while self.running:
@@ -156,3 +191,10 @@ class FixedStepLoop:
 
     def stop(self) -> None:
         self.running = False
+
+    def resync(self) -> None:
+        """Forget the time since the last frame (after a pause menu, a load screen): the next
+        frame runs no catch-up steps and drops none, and deadlines start again from now."""
+        if self._last_ns is not None:
+            now = self.clock.now_ns()
+            self._last_ns, self._anchor_ns, self._deadline_k = now, now, 0

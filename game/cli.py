@@ -13,8 +13,15 @@ from engine.errors import InputError
 
 # Modules that add subcommands, in the order `--help` lists them.
 COMMAND_MODULES = [
+    "game.play",
     "tools.record",
+    "tools.devices",
+    "tools.scope",
+    "tools.profile",
     "tools.bench",
+    "tools.synth",
+    "tools.bvh_cmd",
+    "tools.actions_cmd",
     "tools.recognition_commands",
 ]
 
@@ -40,6 +47,9 @@ def main(argv: list[str] | None = None) -> int:
     try:
         return int(args.func(args) or 0)
     except InputError as exc:
+        print(f"quickjab {args.command}: {exc}", file=sys.stderr)
+        return 2
+    except OSError as exc:  # a file the user named cannot be read or written; str names it
         print(f"quickjab {args.command}: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:

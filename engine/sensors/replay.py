@@ -6,7 +6,15 @@ from __future__ import annotations
 import numpy as np
 
 from engine.recording import Recording, read_recording
-from engine.sensors.source import Clock, Sample, Source, SourceError, SourceState, parse_source_url, register_scheme
+from engine.sensors.source import (
+    Clock,
+    Sample,
+    Source,
+    SourceError,
+    SourceState,
+    parse_source_url,
+    register_scheme,
+)
 
 
 class ReplaySource(Source):
@@ -39,7 +47,7 @@ class ReplaySource(Source):
             rel = self._rel[i] + lap * self._length
             if rel > elapsed:
                 break
-            out.append(Sample(self._start + rel / self.speed, self.rec.accel[i]))
+            out.append(Sample(float(self._start + rel / self.speed), self.rec.accel[i]))
             self._next += 1
         return out
 

@@ -88,6 +88,7 @@ _builtin_modules: dict[str, str] = {
     "wiimote": "engine.sensors.wiimote",
     "wiimote-emu": "engine.sensors.wiimote",
     "serial": "engine.sensors.serial_source",
+    "demo": "engine.sensors.demo",
 }
 
 
@@ -113,7 +114,11 @@ def open_source(url: str, *, clock: Clock | None = None) -> Source:
     """Open a source by URL. Raises SourceError for a URL that can never work."""
     scheme, _, _ = parse_source_url(url)
     if scheme not in _factories and scheme in _builtin_modules:
-        importlib.import_module(_builtin_modules[scheme])
+        try:
+            importlib.import_module(_builtin_modules[scheme])
+        except ModuleNotFoundError as exc:
+            # a scheme whose module (or the library it needs, e.g. hidapi) is not installed
+            raise SourceError(f"{scheme}:// is not available here: module {exc.name!r} is missing") from None
     factory = _factories.get(scheme)
     if factory is None:
         raise SourceError(

@@ -1,0 +1,641 @@
+"""A protocol-faithful Wiimote + Nunchuk, standing in for `hid.device`, fed from a recording.
+
+`EmulatedWiimote` is the hardware: an EEPROM image with the calibration blocks at 0x16 and
+0x20, the Nunchuk's registers on the i2c bus (slave 0x52: data at 0x00, calibration at 0x20,
+init at 0xF0/0xFB, ID at 0xFA), the reporting mode, LEDs, rumble and battery. It answers the
+real output reports the way Dolphin's WiimoteEmu and WiiBrew describe a real remote:
+
+- 0x17 reads reply in 0x21 chunks of 16 bytes, one read at a time (a second is ignored), error
+  7 for an absent extension, 8 past the EEPROM; 0x16 writes are always acked (0x22);
+  LEDs/mode/IR/speaker ack only when byte 1 bit 1 asks; rumble (bit 0) rides on every report.
+- 0x12 with a valid mode starts data reports; continuous ones come every 10 ms (+ jitter).
+- a Nunchuk plug/unplug sends an unsolicited 0x20 and stops data reports until 0x12 comes.
+- the Nunchuk's data are scrambled until it is initialised (0x55 -> F0, then 0x00 -> FB).
+- the host's buffer holds 64 reports (Linux hidraw): when nobody reads, newer ones are lost.
+
+`EmulatedBus` is the `hid`/`hidraw` module stand-in (`enumerate`, `device`) the driver's
+transport uses, so the driver under test is the real one. Values come from the recording (in
+g), interpolated at each report's 10 ms slot, turned into raw counts with the emulator's own
+calibration (X 10 bits, Y and Z 9), and the log of what was sent lets tests compare.
+
+`wiimote-emu://recording.csv?opt=value&...` options:
+  jitter_ms=2    delivery delay per report, uniform in [0, jitter_ms)
+  latency_ms=4   reply delay to an output report
+  pad=0          pad every input report to this many bytes (22 = Windows)
+  drop=0         probability of losing each data report
+  clone=0        1/garbage: garbage Nunchuk calibration and a bad EEPROM block at 0x16
+                 (good copy at 0x20); zeros: all-zero Nunchuk calibration
+  nunchuk=1      a Nunchuk is plugged at power-on
+  seed=0         random seed (jitter, drops, garbage)
+  loop=1         loop the recording
+  start=0        begin this many seconds into the recording
+  unplug_at=S, replug_at=S, nunchuk_out_at=S, nunchuk_in_at=S, foreign_mode_at=S
+                 events, S seconds after the emulator starts (comma-separated lists allowed)
+  loss=error     how an unplug looks: 'error' (reads fail, device gone) or 'silent'
+  kernel_driver=0  1: pretend Linux's hid-wiimote is bound to the device
+  status_stops=0 1: every status report stops data reporting (what Linux's hid-wiimote
+                 assumes, "on status reports the drm is reset"; Dolphin stops it only on
+                 extension events)
+  player=1       LED the driver sets
+"""
+
+from __future__ import annotations
+
+import heapq
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from engine.recording import Recording, read_recording
+from engine.sensors.source import SourceError, parse_source_url
+from engine.sensors.wiimote import protocol as p
+from engine.sensors.wiimote.driver import WiimoteSource
+
+EEPROM_SIZE = 0x1700  # Dolphin EEPROM_FREE_SIZE: reads past it fail with error 8
+EXT_SLAVE = 0x52  # the extension's i2c address (0xA4 >> 1)
+HOST_BUFFER = 64  # Linux hidraw keeps 64 reports per reader
+PERIOD_S = 0.01
+CHUNK_GAP_S = 0.005  # between successive 0x21 replies of one read
+
+# A genuine-looking calibration, deliberately not the typical values and with low bits set,
+# so that a driver ignoring the block or its low bits decodes wrongly.
+GENUINE_WIIMOTE = p.Calibration(zero=(514, 506, 518), one_g=(617, 611, 622))
+GENUINE_NUNCHUK = p.Calibration(
+    zero=(509, 514, 506), one_g=(714, 719, 711),
+    stick_min=(0x1E, 0x22), stick_max=(0xE1, 0xDD), stick_center=(0x80, 0x7F),
+)  # fmt: skip
+
+
+@dataclass
+class SentData:
+    """One data report the emulator produced (for tests to compare with the recording)."""
+
+    slot: int  # 10 ms slot index since power-on
+    rec_time: float  # the recording time its values were taken from
+    right: tuple[int, int, int]  # raw counts sent for the Wiimote
+    left: tuple[int, int, int] | None  # raw counts sent for the Nunchuk, None when unplugged
+    dropped: bool = False
+    read_at: float | None = None  # host time the driver read it; None if never read
+
+
+@dataclass(order=True)
+class _Pending:
+    due: float
+    seq: int
+    data: bytes = field(compare=False)
+    sent: SentData | None = field(compare=False, default=None)
+
+
+class EmulatedWiimote:
+    def __init__(
+        self,
+        rec: Recording,
+        clock: Callable[[], float],
+        *,
+        serial: str = "00:19:1d:00:00:01",
+        product_id: int = 0x0306,
+        jitter_ms: float = 2.0,
+        latency_ms: float = 4.0,
+        pad: int = 0,
+        drop: float = 0.0,
+        clone: str = "",
+        nunchuk: bool = True,
+        seed: int = 0,
+        loop: bool = True,
+        loss: str = "error",
+        kernel_driver: bool = False,
+        battery: int = 0xB4,
+        start: float = 0.0,
+        status_stops: bool = False,
+        events: list[tuple[float, str]] | None = None,
+    ):
+        self.rec = rec
+        self.clock = clock
+        self.serial = serial
+        self.product_id = product_id
+        self.jitter = jitter_ms / 1000.0
+        self.latency = latency_ms / 1000.0
+        self.pad = pad
+        self.drop = drop
+        self.loop = loop
+        self.loss = loss
+        self.kernel_driver = "wiimote" if kernel_driver else None
+        self.battery = battery
+        self.rng = np.random.default_rng(seed)
+        self.start = start
+        self.status_stops = status_stops
+        self.t0 = clock()
+        self._rel = rec.t - rec.t[0]
+        period = float(np.median(np.diff(self._rel))) if len(rec) > 1 else PERIOD_S
+        self._length = float(self._rel[-1]) + period
+        self._events = sorted(events or [])
+
+        # The truth the emulator encodes with. A clone's Nunchuk block is unreadable, so what
+        # it "really" is cannot be known; it is built to match the typical values.
+        self.wiimote_cal = GENUINE_WIIMOTE
+        self.nunchuk_cal = p.NUNCHUK_TYPICAL if clone else GENUINE_NUNCHUK
+        self.eeprom = bytearray(EEPROM_SIZE)
+        good = p.encode_calibration(self.wiimote_cal)
+        self.eeprom[0x16:0x20] = good
+        self.eeprom[0x20:0x2A] = good
+        self.ext_regs = bytearray(256)
+        self.ext_regs[0xFA:0x100] = bytes([0x00, 0x00, 0xA4, 0x20, 0x00, 0x00])
+        if clone in ("zeros",):
+            cal_block = bytes(16)
+        elif clone:
+            cal_block = bytes(self.rng.integers(0, 256, 16, dtype=np.uint8))
+            if p.parse_nunchuk_calibration(cal_block) is not None:  # astronomically unlikely
+                cal_block = bytes(16)
+            bad = bytearray(good)
+            bad[9] ^= 0xFF
+            self.eeprom[0x16:0x20] = bad
+        else:
+            cal_block = p.encode_nunchuk_calibration(self.nunchuk_cal)
+        self.ext_regs[0x20:0x30] = cal_block
+        self.ext_regs[0x30:0x40] = cal_block
+
+        self.nunchuk_plugged = nunchuk
+        self.connected = True  # paired and in range
+        self.connection = 0  # bumps on every re-plug: the OS gives it a new node
+        self.sent: list[SentData] = []
+        self.outputs: list[bytes] = []  # every output report received, in order
+        self.stats: dict[str, int] = {}
+        self.lose_outputs = 0  # the next N output reports vanish on the air
+        self._reset_link()
+
+    # ---- link state ---------------------------------------------------------------------
+
+    def _reset_link(self) -> None:
+        """Power-on / new connection: no reporting, LEDs off, extension uninitialised."""
+        self.mode: int | None = None
+        self.continuous = False
+        self.leds = 0
+        self.rumble = False
+        self.ext_stage = 0  # 1 after 0x55 -> F0; 2 (plain data) after 0x00 -> FB
+        self._queue: list[_Pending] = []
+        self._seq = 0
+        self._read_busy_until = -1.0
+        self._next_slot = self._slot_at(self.clock()) + 1
+        self._pumped_to = self.clock()
+
+    @property
+    def path(self) -> bytes:
+        return f"emu-wiimote-{self.serial}-{self.connection}".encode()
+
+    def _count(self, key: str) -> None:
+        self.stats[key] = self.stats.get(key, 0) + 1
+
+    def _slot_at(self, t: float) -> int:
+        return int(np.floor((t - self.t0) / PERIOD_S + 1e-9))
+
+    # ---- events (tests call these directly; URLs schedule them) -------------------------
+
+    def unplug(self) -> None:
+        """The remote switches off or leaves range."""
+        self.connected = False
+        for item in self._queue:
+            if item.sent is not None:
+                item.sent.dropped = True
+        self._queue.clear()
+
+    def replug(self) -> None:
+        """The remote comes back (a new Bluetooth connection: new node, reset state)."""
+        self.connected = True
+        self.connection += 1
+        self._reset_link()
+
+    def plug_nunchuk(self, plugged: bool = True) -> None:
+        if plugged == self.nunchuk_plugged:
+            return
+        self.nunchuk_plugged = plugged
+        self.ext_stage = 0
+        # Dolphin ProcessExtensionPortEvent: reporting stops, an unsolicited 0x20 follows.
+        self.mode = None
+        if self.connected:
+            self._emit(self._status_report(), self.clock() + self.latency)
+
+    def unplug_nunchuk(self) -> None:
+        self.plug_nunchuk(False)
+
+    def foreign_mode(self) -> None:
+        """What Linux's hid-wiimote does when its input device is opened: its own mode."""
+        if self.connected:
+            self.mode, self.continuous = 0x31, True
+
+    def _run_event(self, name: str) -> None:
+        {
+            "unplug": self.unplug,
+            "replug": self.replug,
+            "nunchuk_out": self.unplug_nunchuk,
+            "nunchuk_in": self.plug_nunchuk,
+            "foreign_mode": self.foreign_mode,
+        }[name]()
+
+    # ---- time ---------------------------------------------------------------------------
+
+    def pump(self, now: float | None = None) -> None:
+        """Produce everything due up to `now`: scheduled events and data reports."""
+        now = self.clock() if now is None else now
+        while self._events and self.t0 + self._events[0][0] <= now:
+            at, name = self._events.pop(0)
+            self._stream_until(self.t0 + at)
+            self._run_event(name)
+        self._stream_until(now)
+
+    def _stream_until(self, t: float) -> None:
+        last = self._slot_at(t)
+        if not (self.connected and self.mode is not None and self.continuous):
+            self._next_slot = max(self._next_slot, last + 1)
+            return
+        while self._next_slot <= last:
+            k = self._next_slot
+            self._next_slot += 1
+            data, sent = self._data_report(k)
+            if self.drop and self.rng.random() < self.drop:
+                sent.dropped = True
+                self._count("dropped")
+                self.sent.append(sent)
+                continue
+            self.sent.append(sent)
+            due = self.t0 + k * PERIOD_S + (self.rng.random() * self.jitter if self.jitter else 0.0)
+            self._emit(data, due, sent)
+
+    def _emit(self, data: bytes, due: float, sent: SentData | None = None) -> None:
+        if self.pad and len(data) < self.pad:
+            data = data + bytes(self.pad - len(data))
+        self._seq += 1
+        heapq.heappush(self._queue, _Pending(due, self._seq, data, sent))
+
+    def take(self, now: float) -> bytes | None:
+        """The next input report the host has received by `now`, or None."""
+        self.pump(now)
+        if not self._queue or self._queue[0].due > now:
+            return None
+        due_count = sum(1 for item in self._queue if item.due <= now)
+        if due_count > HOST_BUFFER:  # the buffer filled while nobody read: newest lost
+            keep = heapq.nsmallest(HOST_BUFFER, (i for i in self._queue if i.due <= now))
+            lost = [i for i in self._queue if i.due <= now and i not in keep]
+            for item in lost:
+                if item.sent is not None:
+                    item.sent.dropped = True
+                self._count("overflow")
+            self._queue = [i for i in self._queue if i.due > now] + keep
+            heapq.heapify(self._queue)
+        item = heapq.heappop(self._queue)
+        if item.sent is not None:
+            item.sent.read_at = now
+        return item.data
+
+    # ---- what it sends ------------------------------------------------------------------
+
+    def _values_at(self, k: int) -> tuple[float, np.ndarray]:
+        rel = self.start + k * PERIOD_S
+        rel = rel % self._length if self.loop else min(rel, float(self._rel[-1]))
+        g = np.array([np.interp(rel, self._rel, self.rec.accel[:, s, a]) for s in range(self.rec.sensors) for a in range(3)])
+        return rel, g.reshape(self.rec.sensors, 3)
+
+    def _data_report(self, k: int) -> tuple[bytes, SentData]:
+        rel, g = self._values_at(k)
+        right = quantize(self.wiimote_cal.from_g(g[0]), nine_bit_yz=True)
+        left_g = g[1] if self.rec.sensors > 1 else np.array([0.0, 0.0, 1.0])
+        left = quantize(self.nunchuk_cal.from_g(left_g)) if self.nunchuk_plugged else None
+        sent = SentData(slot=k, rec_time=rel, right=right, left=left)
+        if left is not None:
+            plain = p.encode_nunchuk((0x80, 0x7F), left)
+            self.ext_regs[0:6] = plain
+        ext = self._ext_bytes()
+        core = p.encode_core(0, right)
+        mode = self.mode
+        has_buttons, has_accel, ext_off, ext_len = p.DATA_LAYOUTS[mode]
+        body = bytearray(p.INPUT_REPORT_LENGTHS[mode])
+        body[0] = mode
+        if has_buttons:
+            body[1:3] = core[:2]
+        if has_accel:
+            body[3:6] = core[2:]
+        if ext_len:
+            body[ext_off : ext_off + ext_len] = ext[:ext_len].ljust(ext_len, b"\0")
+        return bytes(body), sent
+
+    def _ext_bytes(self) -> bytes:
+        if not self.nunchuk_plugged:
+            return bytes(21)
+        data = bytes(self.ext_regs[0:21])
+        if self.ext_stage < 2:  # not initialised: what comes out is scrambled
+            data = bytes(((b ^ 0x17) + 0x17) & 0xFF for b in data)
+        return data
+
+    def _status_report(self) -> bytes:
+        flags = (0x01 if self.battery < 0x20 else 0) | (0x02 if self.nunchuk_plugged else 0) | self.leds << 4
+        return bytes([p.IN_STATUS, 0, 0, flags, 0, 0, self.battery])
+
+    def _ack(self, rid: int, error: int, now: float) -> None:
+        self._emit(bytes([p.IN_ACK, 0, 0, rid, error]), now + self.latency)
+
+    # ---- what it receives ---------------------------------------------------------------
+
+    def handle_output(self, data: bytes) -> bool:
+        """One output report from the host. False when the link is down (the write fails)."""
+        now = self.clock()
+        self.pump(now)
+        if not self.connected:
+            return False
+        data = bytes(data)
+        self.outputs.append(data)
+        if self.lose_outputs:  # lost on the air (tests set this)
+            self.lose_outputs -= 1
+            self._count("lost_output")
+            return True
+        if len(data) < 2:
+            self._count("short_output")
+            return True
+        rid, b1 = data[0], data[1]
+        self.rumble = bool(b1 & 0x01)  # every output report carries the motor bit
+        ack = bool(b1 & 0x02)
+        if rid == p.OUT_RUMBLE:
+            pass  # never acked
+        elif rid == p.OUT_LEDS:
+            self.leds = b1 >> 4
+            if ack:
+                self._ack(rid, p.ERR_OK, now)
+        elif rid == p.OUT_REPORT_MODE:
+            if len(data) < 3 or data[2] not in p.DATA_LAYOUTS:
+                self._count("invalid_mode")  # a real remote ignores the whole report
+                return True
+            self.mode, self.continuous = data[2], bool(b1 & 0x04)
+            self._next_slot = self._slot_at(now) + 1
+            if ack:
+                self._ack(rid, p.ERR_OK, now)
+        elif rid == p.OUT_STATUS_REQUEST:
+            self._emit(self._status_report(), now + self.latency)
+            if self.status_stops:
+                self.mode = None
+        elif rid == p.OUT_WRITE_MEMORY:
+            self._write(data, now)
+        elif rid == p.OUT_READ_MEMORY:
+            self._read(data, now)
+        elif rid in (p.OUT_IR_ENABLE, p.OUT_IR_ENABLE2, p.OUT_SPEAKER_ENABLE, p.OUT_SPEAKER_MUTE):
+            if ack:
+                self._ack(rid, p.ERR_OK, now)
+        elif rid == p.OUT_SPEAKER_DATA:
+            pass
+        else:
+            self._count("unknown_output")
+        return True
+
+    def _write(self, data: bytes, now: float) -> None:
+        if len(data) < 6:
+            self._count("short_output")
+            return
+        space = (data[1] >> 2) & 0x3
+        address = data[3] << 8 | data[4]
+        size = data[5]
+        payload = data[6 : 6 + size]
+        if size == 0 or size > 16 or len(payload) < size:
+            self._count("invalid_write")  # a real remote silently ignores it
+            return
+        error = p.ERR_OK
+        if space == 0:
+            if address + size > EEPROM_SIZE:
+                error = p.ERR_INVALID_ADDRESS
+            else:
+                self.eeprom[address : address + size] = payload
+        elif space in (1, 2):
+            slave = data[2] >> 1
+            if slave == EXT_SLAVE and self.nunchuk_plugged:
+                reg = address & 0xFF
+                for i, b in enumerate(payload):
+                    self._ext_register_write((reg + i) & 0xFF, b)
+            elif slave == EXT_SLAVE:
+                error = p.ERR_NACK
+            # other slaves (speaker 0x51, camera 0x58) accept and are not modelled
+        else:
+            error = p.ERR_INVALID_SPACE
+        self._ack(p.OUT_WRITE_MEMORY, error, now)
+
+    def _ext_register_write(self, reg: int, value: int) -> None:
+        if reg == 0xF0:
+            self.ext_stage = 1 if value == 0x55 else 0
+            return
+        if reg == 0xFB:
+            if self.ext_stage >= 1 and value == 0x00:
+                self.ext_stage = 2
+            return
+        if reg >= 0xFA:
+            return  # the ID is read-only
+        self.ext_regs[reg] = value
+
+    def _read(self, data: bytes, now: float) -> None:
+        if len(data) < 7:
+            self._count("short_output")
+            return
+        if now < self._read_busy_until:
+            self._count("read_ignored")  # a real remote ignores a read during a read
+            return
+        space = (data[1] >> 2) & 0x3
+        address = data[3] << 8 | data[4]
+        size = data[5] << 8 | data[6]
+        if size == 0:
+            return
+        t = now + self.latency
+
+        def reply(error: int, addr: int, chunk: bytes, at: float) -> None:
+            n = len(chunk) if not error else 16  # errors report size nibble 0xF (Dolphin)
+            self._emit(bytes([p.IN_READ_REPLY, 0, 0, (n - 1) << 4 | error, addr >> 8 & 0xFF, addr & 0xFF]) + chunk.ljust(16, b"\0"), at)
+
+        if space == 0:
+            if address + size > EEPROM_SIZE:
+                reply(p.ERR_INVALID_ADDRESS, address, b"", t)
+                return
+            source = bytes(self.eeprom)
+        elif space in (1, 2) and data[2] >> 1 == EXT_SLAVE and self.nunchuk_plugged:
+            source = bytes(self.ext_regs)
+            if self.ext_stage < 2:
+                source = bytes(((b ^ 0x17) + 0x17) & 0xFF for b in source)
+                source = source[:0xFA] + bytes(self.ext_regs[0xFA:])  # the ID reads plain
+        else:
+            reply(p.ERR_NACK if space in (1, 2) else p.ERR_INVALID_SPACE, address, b"", t)
+            return
+        done = 0
+        while done < size:
+            n = min(16, size - done)
+            a = address + done
+            if len(source) == 256:  # the i2c register file wraps
+                chunk = bytes(source[(a + i) & 0xFF] for i in range(n))
+            else:
+                chunk = source[a : a + n]
+            reply(p.ERR_OK, a & 0xFFFF, chunk, t)
+            done += n
+            t += CHUNK_GAP_S
+        self._read_busy_until = t
+
+
+def quantize(raw: np.ndarray, nine_bit_yz: bool = False) -> tuple[int, int, int]:
+    """Raw float counts to what the sensor sends: nearest count in 0..1023; the Wiimote's Y and Z
+    have 9 bits (their lowest bit is always 0), so they go to the nearest even count."""
+    v = np.clip(np.rint(raw), 0, 1023).astype(int)
+    if nine_bit_yz:
+        v[1:] = np.clip(2 * np.rint(raw[1:] / 2), 0, 1022).astype(int)
+    return int(v[0]), int(v[1]), int(v[2])
+
+
+class EmulatedHidDevice:
+    """`hid.device` for an emulated remote: open_path, set_nonblocking, read, write, close."""
+
+    def __init__(self, bus: EmulatedBus):
+        self.bus = bus
+        self._remote: EmulatedWiimote | None = None
+        self._connection = -1
+
+    def open(self, vendor_id: int = 0, product_id: int = 0, serial_number: str | None = None) -> None:
+        for r in self.bus.remotes:
+            if r.connected and (not product_id or r.product_id == product_id):
+                return self.open_path(r.path)
+        raise OSError("open failed")
+
+    def open_path(self, path: bytes) -> None:
+        for r in self.bus.remotes:
+            r.pump()
+            if r.connected and r.path == path:
+                self._remote, self._connection = r, r.connection
+                return
+        raise OSError("open failed")
+
+    def set_nonblocking(self, v: int) -> int:
+        return 0
+
+    def _alive(self) -> EmulatedWiimote:
+        r = self._remote
+        if r is None:
+            raise ValueError("not open")
+        if r.loss == "silent" and not r.connected:
+            return r
+        if not r.connected or r.connection != self._connection:
+            raise OSError("read error")  # hidraw: the node went away (ENODEV)
+        return r
+
+    def read(self, max_length: int, timeout_ms: int = 0) -> list[int]:
+        r = self._alive()
+        if not r.connected or r.connection != self._connection:
+            return []  # silent loss: nothing arrives
+        data = r.take(r.clock())
+        return list(data[:max_length]) if data else []
+
+    def write(self, buff: bytes) -> int:
+        r = self._remote
+        if r is None:
+            raise ValueError("not open")
+        data = bytes(buff)
+        if self.bus.require_write_length and len(data) != self.bus.require_write_length:
+            return -1  # Windows' stack rejects writes of another length
+        if r.connection != self._connection:
+            return -1
+        if not r.connected:
+            return len(data) if r.loss == "silent" else -1
+        return len(data) if r.handle_output(data) else -1
+
+    def close(self) -> None:
+        self._remote = None
+
+    def error(self) -> str:
+        return ""
+
+    def get_product_string(self) -> str:
+        return "Nintendo RVL-CNT-01" if self._remote is None or self._remote.product_id == 0x0306 else "Nintendo RVL-CNT-01-TR"
+
+    def get_manufacturer_string(self) -> str:
+        return "Nintendo"
+
+    def get_serial_number_string(self) -> str:
+        return self._remote.serial if self._remote else ""
+
+
+class EmulatedBus:
+    """The `hid` / `hidraw` module stand-in: `enumerate` and `device`."""
+
+    def __init__(self, remotes: list[EmulatedWiimote], require_write_length: int | None = None):
+        self.remotes = remotes
+        self.require_write_length = require_write_length
+
+    def enumerate(self, vendor_id: int = 0, product_id: int = 0) -> list[dict[str, Any]]:
+        out = []
+        for r in self.remotes:
+            r.pump()  # scheduled events (a re-plug) happen whoever looks
+            visible = r.connected or r.loss == "silent"
+            if not visible or (vendor_id and vendor_id != p.VENDOR_ID) or (product_id and product_id != r.product_id):
+                continue
+            out.append(
+                {
+                    "path": r.path,
+                    "vendor_id": p.VENDOR_ID,
+                    "product_id": r.product_id,
+                    "serial_number": r.serial,
+                    "release_number": 0,
+                    "manufacturer_string": "Nintendo",
+                    "product_string": "Nintendo RVL-CNT-01" + ("-TR" if r.product_id == 0x0330 else ""),
+                    "usage_page": 1,
+                    "usage": 5,
+                    "interface_number": -1,
+                }
+            )
+        return out
+
+    def device(self) -> EmulatedHidDevice:
+        return EmulatedHidDevice(self)
+
+    def kernel_driver(self, path: bytes) -> str | None:
+        for r in self.remotes:
+            if r.path == path:
+                return r.kernel_driver
+        return None
+
+
+def _times(params: dict[str, str], key: str, url: str) -> list[float]:
+    try:
+        return [float(x) for x in params.get(key, "").split(",") if x.strip()]
+    except ValueError:
+        raise SourceError(f"{url}: {key} must be seconds (comma-separated)") from None
+
+
+def emulator_from_url(url: str, clock: Callable[[], float]) -> tuple[EmulatedBus, EmulatedWiimote, dict[str, str]]:
+    _, path, params = parse_source_url(url)
+    if not path:
+        raise SourceError(f"{url}: no recording (expected wiimote-emu://path/to/recording.csv)")
+    rec = read_recording(path)
+    events = [(t, name) for key, name in (
+        ("unplug_at", "unplug"), ("replug_at", "replug"), ("nunchuk_out_at", "nunchuk_out"),
+        ("nunchuk_in_at", "nunchuk_in"), ("foreign_mode_at", "foreign_mode"),
+    ) for t in _times(params, key, url)]  # fmt: skip
+    flag = lambda k, d="0": params.get(k, d).lower() in ("1", "true", "yes", "on")  # noqa: E731
+    clone = params.get("clone", "0").lower()
+    clone = "" if clone in ("0", "false", "no", "off", "") else ("zeros" if clone == "zeros" else "garbage")
+    loss = params.get("loss", "error")
+    if loss not in ("error", "silent"):
+        raise SourceError(f"{url}: loss must be 'error' or 'silent'")
+    try:
+        remote = EmulatedWiimote(
+            rec, clock,
+            jitter_ms=float(params.get("jitter_ms", "2")), latency_ms=float(params.get("latency_ms", "4")),
+            pad=int(params.get("pad", "0")), drop=float(params.get("drop", "0")), clone=clone,
+            nunchuk=flag("nunchuk", "1"), seed=int(params.get("seed", "0")), loop=flag("loop", "1"),
+            loss=loss, kernel_driver=flag("kernel_driver"), start=float(params.get("start", "0")),
+            status_stops=flag("status_stops"), events=events,
+        )  # fmt: skip
+    except ValueError as exc:
+        raise SourceError(f"{url}: bad option ({exc})") from None
+    return EmulatedBus([remote]), remote, params
+
+
+def open_emulated(url: str, clock: Callable[[], float]) -> WiimoteSource:
+    """`wiimote-emu://recording.csv?options`: the real driver on an emulated remote."""
+    bus, remote, params = emulator_from_url(url, clock)
+    try:
+        player = int(params.get("player", "1"))
+    except ValueError:
+        raise SourceError(f"{url}: player must be 1-4") from None
+    source = WiimoteSource(url=url, clock=clock, backend=bus, player=player)
+    source.description = f"wiimote-emu {remote.rec.meta.get('source', '')}".strip()
+    source.emulator = remote  # type: ignore[attr-defined]  # for tests and the HUD
+    return source

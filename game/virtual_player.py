@@ -1,0 +1,200 @@
+"""The virtual player: what a Wiimote (right hand) and a Nunchuk (left hand) would read while a
+person performs an action of the library.
+
+From the clip's hand trajectories (root motion included, so steps move the hands too):
+  acceleration = second derivative of position (60 Hz),
+  reading      = acceleration - gravity, in g (a sensor at rest reads +1 g upwards),
+rotated into a sensor frame that follows the forearm (y along elbow -> fist, z the part of
+"up" across the forearm, x completing it; a small grip roll per trial), plus noise, quantised
+to the Wiimote's ~1/26 g steps and clipped at each device's range.
+
+A person holding controllers makes a smaller, smoother gesture than the boxer on screen:
+GESTURE_SCALE shrinks the hand displacement from the guard and a short smoothing stands for
+the arm's inertia, so a punch peaks at a few g as real Wiimote punches do.
+
+Profiles vary tempo and amplitude per trial (experienced about +-10 %, novice +-30 %); the
+novice also starts sloppily (a hesitant wobble, one hand late), mixes in part of a
+neighbouring action and is noisier.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from game.actions import Action
+from game.skeleton import joint_index
+
+FPS = 60.0
+G = 9.81
+QUANTUM_G = 1.0 / 26.0  # Wiimote ADC step: ~26 counts per g
+RANGE_G = np.array([3.5, 2.0])  # clip: Wiimote (right, index 0), Nunchuk (left, index 1)
+HANDS = ("r", "l")  # sensor index 0 = right hand (Wiimote), 1 = left (Nunchuk)
+GESTURE_SCALE = 0.25  # a controller gesture vs. the boxer's full punch (which peaks at 12-28 g)
+STEP_GESTURE_SCALE = 1.5  # a step: hands carried with the body and pushed the way it goes
+SMOOTH_FRAMES = 2.5  # Gaussian sigma (frames) of the arm's low-pass
+
+# the action a novice's motion drifts towards (similar shape, same hand)
+NEIGHBOURS = {
+    "straight_l": "hook_l", "straight_r": "hook_r", "hook_l": "straight_l", "hook_r": "straight_r",
+    "uppercut_l": "straight_l", "uppercut_r": "straight_r", "parry_l": "block", "parry_r": "block",
+    "block": "parry_r", "step_forward": "step_left", "step_back": "step_right",
+    "step_left": "step_back", "step_right": "step_forward",
+}  # fmt: skip
+
+
+@dataclass(frozen=True)
+class Profile:
+    name: str
+    tempo: float  # +- fraction of the clip's duration
+    amplitude: float  # +- fraction of the hand displacement
+    noise_g: float  # sensor noise sigma
+    grip_roll_deg: float  # +- how the controller sits in the fist
+    neighbour_mix: tuple[float, float]  # fraction of the neighbouring action mixed in
+    sloppy_frames: tuple[int, int]  # hesitant wobble before the action starts
+    hand_lag_frames: int  # the idle hand may lag by up to this
+
+
+PROFILES: dict[str, Profile] = {
+    "experienced": Profile("experienced", 0.10, 0.10, 0.015, 4.0, (0.0, 0.0), (0, 0), 0),
+    "novice": Profile("novice", 0.30, 0.30, 0.05, 15.0, (0.10, 0.30), (3, 12), 4),
+}
+
+
+def _profile(profile: str | Profile) -> Profile:
+    if isinstance(profile, Profile):
+        return profile
+    try:
+        return PROFILES[profile]
+    except KeyError:
+        raise ValueError(f"unknown player profile {profile!r}; profiles: {', '.join(PROFILES)}") from None
+
+
+def _smooth(x: np.ndarray, sigma: float) -> np.ndarray:
+    """Gaussian smoothing along axis 0 with edge padding (rest stays rest)."""
+    if sigma <= 0:
+        return x
+    r = int(np.ceil(3 * sigma))
+    k = np.exp(-0.5 * (np.arange(-r, r + 1) / sigma) ** 2)
+    k /= k.sum()
+    pad = np.concatenate([np.repeat(x[:1], r, 0), x, np.repeat(x[-1:], r, 0)])
+    out = np.zeros_like(x)
+    for i, w in enumerate(k):
+        out += w * pad[i : i + len(x)]
+    return out
+
+
+def hand_motion(action: Action, n: int | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Fists (n, 2, 3) and forearm directions (n, 2, 3), hands ordered (right, left), in the
+    clip's starting frame (root motion applied), resampled to n frames (default: the clip's)."""
+    n = action.frames if n is None else max(int(n), 2)
+    fs = np.linspace(0.0, action.frames - 1.0, n)
+    postures, root = action.sample(fs)
+    c, s = np.cos(root[:, 2]), np.sin(root[:, 2])
+    fists, elbows = [], []
+    for hand in HANDS:
+        for out, joint in ((fists, f"fist_{hand}"), (elbows, f"elbow_{hand}")):
+            p = postures[:, joint_index(joint)]
+            # local -> clip-start frame: rotate by the root yaw, then translate
+            wx = c * p[:, 0] + s * p[:, 2] + root[:, 0]
+            wz = -s * p[:, 0] + c * p[:, 2] + root[:, 1]
+            out.append(np.column_stack([wx, p[:, 1], wz]))
+    return np.stack(fists, axis=1), np.stack(elbows, axis=1)
+
+
+def sensor_frames(forearm: np.ndarray, roll: np.ndarray) -> np.ndarray:
+    """(n, 2, 3, 3) rotation rows [x, y, z] of each sensor: y along the forearm, z the part of
+    world up across it (rolled by `roll` radians per hand), x = y cross z."""
+    y = forearm / np.maximum(np.linalg.norm(forearm, axis=-1, keepdims=True), 1e-9)
+    up = np.array([0.0, 1.0, 0.0])
+    z = up - y * (y @ up)[..., None]
+    zn = np.linalg.norm(z, axis=-1, keepdims=True)
+    z = np.where(zn > 1e-6, z / np.maximum(zn, 1e-9), np.array([0.0, 0.0, 1.0]))
+    x = np.cross(y, z)
+    cr, sr = np.cos(roll)[None, :, None], np.sin(roll)[None, :, None]
+    x, z = cr * x + sr * z, -sr * x + cr * z
+    return np.stack([x, y, z], axis=-2)
+
+
+def readings(fists: np.ndarray, forearm: np.ndarray, roll: np.ndarray) -> np.ndarray:
+    """Noise-free accelerometer readings (n, 2, 3) in g from hand positions at 60 Hz."""
+    pad = np.concatenate([fists[:1], fists, fists[-1:]])
+    acc = (pad[2:] - 2.0 * pad[1:-1] + pad[:-2]) * (FPS * FPS)
+    specific = acc / G + np.array([0.0, 1.0, 0.0])  # what an accelerometer feels: a - g
+    rot = sensor_frames(forearm, roll)
+    return np.einsum("nhij,nhj->nhi", rot, specific)
+
+
+def finish(signal: np.ndarray, noise_g: float, rng: np.random.Generator) -> np.ndarray:
+    """Add sensor noise, quantise to the Wiimote's steps and clip at each device's range."""
+    out = signal + rng.normal(0.0, noise_g, signal.shape)
+    out = np.round(out / QUANTUM_G) * QUANTUM_G
+    return np.clip(out, -RANGE_G[None, :, None], RANGE_G[None, :, None])
+
+
+def performed_motion(action: Action, prof: Profile, rng: np.random.Generator,
+                     library: dict[str, Action] | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """The hand positions and forearm directions of one performance (before the sensor)."""  # fmt: skip
+    n = int(round(action.frames * rng.uniform(1.0 - prof.tempo, 1.0 + prof.tempo)))
+    fists, elbows = hand_motion(action, n)
+    rest_f, rest_e = fists[0].copy(), elbows[0].copy()
+    neighbour = NEIGHBOURS.get(action.name)
+    if library is not None and neighbour in library and prof.neighbour_mix[1] > 0:
+        w = rng.uniform(*prof.neighbour_mix)
+        nf, ne = hand_motion(library[neighbour], n)
+        fists = (1.0 - w) * fists + w * (nf - nf[0] + rest_f)
+        elbows = (1.0 - w) * elbows + w * (ne - ne[0] + rest_e)
+    base = STEP_GESTURE_SCALE if action.kind == "step" else GESTURE_SCALE
+    amp = base * rng.uniform(1.0 - prof.amplitude, 1.0 + prof.amplitude, size=(1, 2, 1))
+    fists = rest_f + (fists - rest_f) * amp
+    elbows = rest_e + (elbows - rest_e) * amp
+    if prof.hand_lag_frames:
+        lag = int(rng.integers(0, prof.hand_lag_frames + 1))
+        h = int(rng.integers(0, 2))
+        if lag:
+            fists[:, h] = np.concatenate([np.repeat(fists[:1, h], lag, 0), fists[:-lag, h]])
+            elbows[:, h] = np.concatenate([np.repeat(elbows[:1, h], lag, 0), elbows[:-lag, h]])
+    if prof.sloppy_frames[1] > 0:
+        k = int(rng.integers(prof.sloppy_frames[0], prof.sloppy_frames[1] + 1))
+        wobble = np.sin(np.linspace(0.0, np.pi, k))[:, None, None] * rng.normal(0.0, 0.02, (1, 2, 3))
+        fists = np.concatenate([rest_f + wobble, fists])
+        elbows = np.concatenate([np.repeat(rest_e[None], k, 0), elbows])
+    return _smooth(fists, SMOOTH_FRAMES), _smooth(elbows, SMOOTH_FRAMES)
+
+
+def synthesize_action(
+    action: Action,
+    profile: str | Profile = "experienced",
+    rng: np.random.Generator | None = None,
+    rest_before: int = 0,
+    rest_after: int = 0,
+    library: dict[str, Action] | None = None,
+) -> np.ndarray:
+    """(n, 2, 3) readings in g of the Wiimote (right hand, index 0) and Nunchuk (left, index 1)
+    at 60 Hz while `action` is performed, with `rest_before`/`rest_after` frames of the guard
+    held still. `library` lets the novice mix in a neighbouring action (default: the shipped
+    library)."""
+    prof = _profile(profile)
+    rng = rng if rng is not None else np.random.default_rng()
+    if library is None and prof.neighbour_mix[1] > 0:
+        from game.actions import load_library
+
+        library = load_library()
+    fists, elbows = performed_motion(action, prof, rng, library)
+    fists = np.concatenate([np.repeat(fists[:1], rest_before, 0), fists, np.repeat(fists[-1:], rest_after, 0)])
+    elbows = np.concatenate([np.repeat(elbows[:1], rest_before, 0), elbows, np.repeat(elbows[-1:], rest_after, 0)])
+    roll = np.radians(rng.uniform(-prof.grip_roll_deg, prof.grip_roll_deg, 2))
+    return finish(readings(fists, fists - elbows, roll), prof.noise_g, rng)
+
+
+def synthesize_rest(frames: int, action: Action, profile: str | Profile = "experienced",
+                    rng: np.random.Generator | None = None) -> np.ndarray:
+    """(frames, 2, 3) readings of hands held at the start posture of `action` (the guard)."""  # fmt: skip
+    prof = _profile(profile)
+    rng = rng if rng is not None else np.random.default_rng()
+    fists, elbows = hand_motion(action, 2)
+    fists = np.repeat(fists[:1], max(frames, 0), 0)
+    elbows = np.repeat(elbows[:1], max(frames, 0), 0)
+    roll = np.zeros(2)
+    return finish(readings(fists, fists - elbows, roll), prof.noise_g, rng)

@@ -1,0 +1,162 @@
+"""The action library: every clip starts and ends at the guard, keeps its bone lengths, and the
+attacks and guards are where boxing puts them."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from game.actions import (
+    ACTION_NAMES,
+    REACTION_NAMES,
+    ActionError,
+    load_action,
+    load_library,
+    reaction_for,
+)
+from game.skeleton import (
+    BONE_LENGTHS,
+    JOINTS,
+    bone_lengths,
+    compose_root,
+    joint_index,
+    local_to_world,
+)
+
+LIB = load_library()
+GUARD = LIB["guard"].posture(0)
+FIST = {"l": joint_index("fist_l"), "r": joint_index("fist_r")}
+
+
+def test_library_has_the_contract_actions():
+    assert len(JOINTS) == 17
+    for name in (*ACTION_NAMES, "guard", "knockdown", *REACTION_NAMES):
+        assert name in LIB, name
+    kinds = {n: LIB[n].kind for n in ACTION_NAMES}
+    assert {kinds[n] for n in ACTION_NAMES[:6]} == {"attack"}
+    assert {kinds[n] for n in ("parry_l", "parry_r", "block")} == {"defense"}
+    assert {kinds[n] for n in ACTION_NAMES[9:]} == {"step"}
+
+
+@pytest.mark.parametrize("name", sorted(LIB))
+def test_every_action_starts_and_ends_at_the_guard(name):
+    a = LIB[name]
+    assert np.allclose(a.posture(0), GUARD, atol=1e-6)
+    assert np.allclose(a.posture(a.frames - 1), GUARD, atol=1e-6)
+    # and never stretches a bone, at integer or fractional frames
+    for f in np.linspace(0, a.frames - 1, 37):
+        assert np.allclose(bone_lengths(a.posture(f)), BONE_LENGTHS, atol=1e-6)
+    # the feet stay on the ground, not in it (the ankle joint sits ~8 cm up at rest)
+    assert a.table[:, [joint_index("ankle_l"), joint_index("ankle_r")], 1].min() > 0.02
+
+
+def test_timings_are_boxing_timings():
+    for n in ("straight_l", "straight_r"):
+        assert 0.3 <= LIB[n].frames / 60 <= 0.42
+    for n in ("hook_l", "hook_r", "uppercut_l", "uppercut_r"):
+        assert 0.44 <= LIB[n].frames / 60 <= 0.56
+    for n in ACTION_NAMES[9:]:
+        assert 0.3 <= LIB[n].frames / 60 <= 0.4
+
+
+@pytest.mark.parametrize("hand", ["l", "r"])
+def test_straight_reaches_forward_with_its_own_hand(hand):
+    a = LIB[f"straight_{hand}"]
+    traj = a.hand_trajectory(hand)
+    other = a.hand_trajectory("r" if hand == "l" else "l")
+    gain = traj[:, 2].max() - traj[0, 2]
+    assert gain > 0.4  # the punching fist travels forward ~half a metre
+    assert other[:, 2].max() - other[0, 2] < 0.15  # the other one stays home
+    peak = int(np.argmax(traj[:, 2]))
+    w = a.attacks[0]
+    assert w.hand == hand and w.start <= peak <= w.end
+    # a straight goes straight: little sideways motion compared with its reach
+    assert np.ptp(traj[:, 0]) < 0.5 * gain
+
+
+def test_hooks_arc_sideways_and_uppercuts_rise():
+    for hand, sign in (("l", 1.0), ("r", -1.0)):
+        hook = LIB[f"hook_{hand}"].hand_trajectory(hand)
+        w = LIB[f"hook_{hand}"].attacks[0]
+        # the fist crosses towards the centre line during the window (l: +x, r: -x)
+        assert sign * (hook[w.end, 0] - hook[w.start, 0]) > 0.1
+        elbow = LIB[f"hook_{hand}"].table[:, joint_index(f"elbow_{hand}")]
+        fist = LIB[f"hook_{hand}"].table[:, joint_index(f"fist_{hand}")]
+        mid = (w.start + w.end) // 2
+        assert elbow[mid, 1] > elbow[0, 1] + 0.2  # the elbow comes up...
+        assert abs(elbow[mid, 1] - fist[mid, 1]) < 0.18  # ...about level with the fist
+        up = LIB[f"uppercut_{hand}"]
+        traj = up.hand_trajectory(hand)
+        low = int(np.argmin(traj[:, 1]))
+        w = up.attacks[0]
+        assert traj[low, 1] < traj[0, 1] - 0.15  # drops below the guard first
+        assert low < w.start and traj[w.end, 1] > traj[0, 1] + 0.05  # then rises above it
+
+
+def test_parries_move_a_hand_sideways_and_block_covers_the_head():
+    for hand, sign in (("l", 1.0), ("r", -1.0)):
+        a = LIB[f"parry_{hand}"]
+        traj = a.hand_trajectory(hand)
+        assert (sign * (traj[:, 0] - traj[0, 0])).max() > 0.15  # across the face, l: +x, r: -x
+        assert a.guards and a.guards[0].kind == "parry"
+    b = LIB["block"]
+    mid = b.frames // 2
+    head = b.posture(mid)[joint_index("head")]
+    for hand in "lr":
+        fist = b.posture(mid)[FIST[hand]]
+        assert fist[1] > head[1] - 0.1 and fist[2] > head[2]  # gloves up, in front of the face
+    assert b.guard_at(mid, "head").kind == "block"
+
+
+def test_attack_windows_are_sane():
+    for name in ACTION_NAMES[:6]:
+        a = LIB[name]
+        assert len(a.attacks) == 1
+        w = a.attacks[0]
+        assert 0 < w.start < w.end < a.frames - 1
+        assert w.hand == name[-1]
+        assert w.damage > 0 and set(w.targets) <= {"head", "body"}
+        traj = a.hand_trajectory(w.hand)
+        assert w.reach == pytest.approx(traj[w.start : w.end + 1, 2].max(), abs=2e-3)
+        assert 0.4 < w.reach < 1.0
+    assert LIB["straight_r"].attacks[0].reach > LIB["hook_r"].attacks[0].reach
+    for name in ACTION_NAMES[6:]:
+        assert not LIB[name].attacks
+
+
+def test_steps_move_the_root_about_thirty_centimetres():
+    expect = {"step_forward": (0, 1), "step_back": (0, -1), "step_left": (-1, 0), "step_right": (1, 0)}
+    for name, (dx, dz) in expect.items():
+        a = LIB[name]
+        end = a.root_offset(a.frames - 1)
+        assert 0.25 <= np.hypot(end[0], end[1]) <= 0.35
+        assert np.sign(end[0]) == dx and np.sign(end[1]) == dz
+        # the planted feet do not skate: a foot's world position moves monotonically
+        world = np.array([local_to_world(a.posture(f), compose_root((0, 0, 0), a.root_offset(f)))
+                          for f in range(a.frames)])
+        for foot in ("ankle_l", "ankle_r"):
+            travel = world[:, joint_index(foot), [0, 2]] @ np.array([dx, dz])
+            assert np.all(np.diff(travel) > -0.01)
+
+
+def test_reactions_and_knockdown():
+    assert reaction_for("head", np.array([0.0, 0.0, -1.0]), 2.0) == "hit_head_front_light"
+    assert reaction_for("body", np.array([1.0, 0.0, 0.1]), 8.0) == "hit_body_left_heavy"
+    kd = LIB["knockdown"]
+    lowest = kd.table[:, joint_index("head"), 1].min()
+    assert lowest < 0.4  # actually goes down
+    assert kd.frames > 90
+
+
+def test_bad_action_file_names_itself(tmp_path):
+    good = json.loads(open(LIB["straight_l"].source).read())
+    bad = dict(good, keyframes=good["keyframes"][1:])
+    path = tmp_path / "broken.json"
+    path.write_text(json.dumps(bad))
+    with pytest.raises(ActionError, match="broken.json"):
+        load_action(path)
+    path.write_text("{not json")
+    with pytest.raises(ActionError, match="broken.json"):
+        load_action(path)

@@ -1,0 +1,77 @@
+"""The virtual player's sensor signals and the synth command."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from engine.recording import read_recording
+from game.actions import ACTION_NAMES, load_library
+from game.cli import main
+from game.virtual_player import PROFILES, QUANTUM_G, RANGE_G, synthesize_action, synthesize_rest
+
+LIB = load_library()
+
+
+def test_a_trial_at_rest_reads_one_g():
+    sig = synthesize_action(LIB["guard"], "experienced", np.random.default_rng(0), rest_before=30)
+    mag = np.linalg.norm(sig[:30], axis=-1)
+    assert np.allclose(mag.mean(axis=0), 1.0, atol=0.03)
+    rest = synthesize_rest(60, LIB["guard"], "experienced", np.random.default_rng(1))
+    assert np.allclose(np.linalg.norm(rest, axis=-1).mean(), 1.0, atol=0.03)
+
+
+def test_readings_are_quantised_clipped_and_shaped():
+    sig = synthesize_action(LIB["hook_r"], "experienced", np.random.default_rng(0), 5, 5)
+    assert sig.ndim == 3 and sig.shape[1:] == (2, 3)
+    assert np.allclose(sig / QUANTUM_G, np.round(sig / QUANTUM_G), atol=1e-6)
+    assert np.all(np.abs(sig[:, 0]) <= RANGE_G[0] + 1e-9) and np.all(np.abs(sig[:, 1]) <= RANGE_G[1] + 1e-9)
+
+
+@pytest.mark.parametrize("name", ["straight_r", "hook_r", "uppercut_r"])
+def test_a_right_punch_peaks_at_a_few_g_on_the_wiimote_only(name):
+    sig = synthesize_action(LIB[name], "experienced", np.random.default_rng(3))
+    dev = np.linalg.norm(sig - sig[:1], axis=-1).max(axis=0)
+    assert 1.0 < dev[0] < 7.5  # a few g on the punching hand
+    assert dev[1] < 0.5 * dev[0]  # the guard hand moves much less
+
+
+def test_profiles_vary_tempo_and_the_novice_is_sloppier():
+    rng = np.random.default_rng(5)
+    lens = {p: [len(synthesize_action(LIB["straight_r"], p, rng)) for _ in range(30)] for p in PROFILES}
+    frames = LIB["straight_r"].frames
+    assert frames * 0.85 <= min(lens["experienced"]) and max(lens["experienced"]) <= frames * 1.15
+    assert np.std(lens["novice"]) > np.std(lens["experienced"])
+    a = synthesize_action(LIB["jab" if "jab" in LIB else "straight_l"], "experienced", np.random.default_rng(1))
+    b = synthesize_action(LIB["straight_l"], "experienced", np.random.default_rng(2))
+    assert not np.array_equal(a, b)  # trials differ
+    same = synthesize_action(LIB["straight_l"], "experienced", np.random.default_rng(1))
+    assert np.array_equal(a, same)  # and are reproducible from a seed
+
+
+def test_synth_trials_read_back(tmp_path):
+    assert main(["synth", "--player", "experienced", "--trials", "2", "-o", str(tmp_path), "--seed", "4",
+                 "--actions", "hook_r,step_back"]) == 0
+    files = sorted(tmp_path.rglob("*.csv"))
+    assert [f.relative_to(tmp_path).as_posix() for f in files] == [
+        "hook_r/1.csv", "hook_r/2.csv", "step_back/1.csv", "step_back/2.csv"]
+    rec = read_recording(files[0])
+    assert rec.sensors == 2 and set(rec.labels) == {"hook_r"}
+    assert np.allclose(np.diff(rec.t), 1 / 60, atol=1e-4)
+
+
+def test_synth_session_is_labelled_with_rests(tmp_path):
+    out = tmp_path / "rec.csv"
+    assert main(["synth", "--session", "20", "-o", str(out), "--seed", "2", "--player", "novice"]) == 0
+    rec = read_recording(out)
+    assert len(rec) == 20 * 60
+    labels = rec.labels
+    assert "" in labels and set(labels) - {""} <= set(ACTION_NAMES)
+    assert len(set(labels) - {""}) >= 3
+    rest = np.array([lab == "" for lab in labels])
+    assert np.allclose(np.linalg.norm(rec.accel[rest], axis=-1).mean(), 1.0, atol=0.05)
+
+
+def test_synth_bad_input_is_one_line(capsys, tmp_path):
+    assert main(["synth", "--trials", "1", "-o", str(tmp_path), "--actions", "haymaker"]) == 2
+    assert "haymaker" in capsys.readouterr().err

@@ -1,0 +1,127 @@
+"""A contact sheet of the action library: key frames of every action drawn with pygame in a
+three-quarter view, so a person can check that each action reads as what it claims to be.
+`quickjab actions sheet -o docs/img/actions.png`."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+
+from game.actions import ACTION_NAMES, Action
+from game.skeleton import BONES, JOINTS, compose_root, local_to_world
+
+VIEW_YAW = np.radians(35.0)  # camera turned around the boxer: shows straights and hooks
+CELL_W, CELL_H, SCALE = 130, 190, 95.0
+TOP_H, TOP_SCALE = 78, 90.0  # the view from above under each frame: arcs vs. straight lines
+LEFT_COLOUR, RIGHT_COLOUR, MID_COLOUR = (60, 120, 230), (220, 60, 50), (40, 40, 40)
+
+
+def key_frames(a: Action, n: int = 6) -> list[int]:
+    """n frames that tell the action: evenly spaced, with the middle of each attack window."""
+    frames = set(np.linspace(0, a.frames - 1, n).round().astype(int).tolist())
+    for w in a.attacks:
+        peak = (w.start + w.end) // 2
+        frames.discard(min(frames, key=lambda f: abs(f - peak) if 0 < f < a.frames - 1 else 1e9))
+        frames.add(peak)
+    return sorted(frames)
+
+
+def _project(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    c, s = np.cos(VIEW_YAW), np.sin(VIEW_YAW)
+    sx = c * p[..., 0] + s * p[..., 2]
+    depth = -s * p[..., 0] + c * p[..., 2]
+    sy = p[..., 1] + 0.12 * depth
+    return np.stack([sx, sy], axis=-1), depth
+
+
+def _colour(j: int) -> tuple[int, int, int]:
+    name = JOINTS[j]
+    return LEFT_COLOUR if name.endswith("_l") else RIGHT_COLOUR if name.endswith("_r") else MID_COLOUR
+
+
+def draw_posture(surface, posture: np.ndarray, origin: tuple[float, float], scale: float = SCALE) -> None:
+    import pygame
+
+    xy, depth = _project(posture)
+    pts = np.column_stack([origin[0] + xy[:, 0] * scale, origin[1] - xy[:, 1] * scale])
+    # far bones first so near limbs overlap them
+    order = np.argsort(-(depth[BONES[:, 0]] + depth[BONES[:, 1]]))
+    for b in order:
+        p, c = BONES[b]
+        pygame.draw.line(surface, _colour(c), pts[p], pts[c], 3)
+    head = JOINTS.index("head")
+    pygame.draw.circle(surface, MID_COLOUR, pts[head], 0.11 * scale, 2)
+    for name in ("fist_l", "fist_r"):
+        j = JOINTS.index(name)
+        pygame.draw.circle(surface, _colour(j), pts[j], 0.055 * scale)
+
+
+def draw_top(surface, posture: np.ndarray, trail: np.ndarray, origin: tuple[float, float],
+             scale: float = TOP_SCALE) -> None:
+    """Seen from above (boxer facing up the page, +x to the right): shoulders, arms and the
+    punching hands' paths so far, which tell a straight from a hook from a parry."""
+    import pygame
+
+    def pt(p):
+        return (origin[0] + p[..., 0] * scale, origin[1] - p[..., 2] * scale)
+
+    for hand, colour in (("l", LEFT_COLOUR), ("r", RIGHT_COLOUR)):
+        path = trail[:, JOINTS.index(f"fist_{hand}")]
+        if len(path) > 1:
+            pygame.draw.lines(surface, tuple(int(c * 0.5 + 127) for c in colour), False,
+                              [pt(q) for q in path], 2)  # fmt: skip
+    sh_l, sh_r = JOINTS.index("shoulder_l"), JOINTS.index("shoulder_r")
+    pygame.draw.line(surface, MID_COLOUR, pt(posture[sh_l]), pt(posture[sh_r]), 3)
+    for side, colour in (("l", LEFT_COLOUR), ("r", RIGHT_COLOUR)):
+        chain = [JOINTS.index(f"{j}_{side}") for j in ("shoulder", "elbow", "fist")]
+        pygame.draw.lines(surface, colour, False, [pt(posture[j]) for j in chain], 3)
+        pygame.draw.circle(surface, colour, pt(posture[chain[-1]]), 0.05 * scale)
+    pygame.draw.circle(surface, MID_COLOUR, pt(posture[JOINTS.index("head")]), 0.09 * scale, 2)
+
+
+def render_sheet(lib: dict[str, Action], names: list[str] | None = None, per_row: int = 2):
+    """A pygame Surface with one strip of key frames per action."""
+    import pygame
+
+    pygame.font.init()
+    names = names or [*ACTION_NAMES, "guard", *sorted(n for n in lib if n.startswith("hit_")), "knockdown"]
+    names = [n for n in names if n in lib]
+    cols = max(len(key_frames(lib[n])) for n in names)
+    strip_w = cols * CELL_W + 10
+    rows = (len(names) + per_row - 1) // per_row
+    row_h = CELL_H + TOP_H + 22
+    sheet = pygame.Surface((per_row * strip_w, rows * row_h))
+    sheet.fill((250, 250, 245))
+    font = pygame.font.Font(None, 20)
+    small = pygame.font.Font(None, 16)
+    for i, name in enumerate(names):
+        a = lib[name]
+        x0, y0 = (i % per_row) * strip_w, (i // per_row) * row_h
+        sheet.blit(font.render(f"{name}  ({a.frames} f = {a.frames / 60:.2f} s)", True, (0, 0, 0)), (x0 + 4, y0 + 2))
+        for k, f in enumerate(key_frames(a)):
+            cx = x0 + k * CELL_W
+            hot = a.attack_at(f) is not None or a.guard_at(f) is not None
+            pygame.draw.rect(sheet, (255, 236, 200) if hot else (238, 238, 232),
+                             (cx + 2, y0 + 18, CELL_W - 4, CELL_H + TOP_H - 2))  # fmt: skip
+            # root motion shown as displacement of the whole figure
+            root = compose_root((0.0, 0.0, 0.0), a.root_offset(f))
+            pose = local_to_world(a.posture(f), root)
+            ground = y0 + CELL_H + 4
+            pygame.draw.line(sheet, (160, 160, 150), (cx + 6, ground), (cx + CELL_W - 6, ground), 1)
+            draw_posture(sheet, pose, (cx + CELL_W * 0.42, ground - 0.0))
+            sheet.blit(small.render(f"f{f}", True, (90, 90, 90)), (cx + 5, y0 + 20))
+            local = a.table[: f + 1] if f > 0 else a.table[:1]
+            draw_top(sheet, a.posture(f), local, (cx + CELL_W * 0.5, ground + TOP_H - 12))
+    return sheet
+
+
+def write_sheet(lib: dict[str, Action], path: str | os.PathLike) -> Path:
+    import pygame
+
+    os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    pygame.image.save(render_sheet(lib), str(path))
+    return path

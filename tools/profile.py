@@ -1,0 +1,168 @@
+"""`quickjab profile TRACE.json [--plot out.png] [--json]`: the frame-budget summary of a Chrome
+trace written by the loop (engine/trace.py): per stage p50/p95/p99/max in ms, the p99 as a
+share of the 16.7 ms step budget, overruns; per frame the work time, overruns, dropped steps
+and the steps-per-frame histogram. `--plot` draws the frame-time histogram and stacked
+per-stage bars per frame against the 16.7 ms line.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from collections import Counter
+
+import numpy as np
+
+from engine.budget import UNACCOUNTED, WAIT, percentiles_ms
+from engine.errors import InputError
+from engine.trace import read_chrome_trace
+
+DEFAULT_BUDGET_MS = 1000.0 / 60.0
+
+
+def profile_summary(trace: dict) -> dict:
+    """The summary of a trace read by read_chrome_trace, as plain data."""
+    other = trace.get("otherData") or {}
+    budget_ms = float(other.get("frame_budget_ms") or DEFAULT_BUDGET_MS)
+    period_ms = float(other.get("frame_period_ms") or budget_ms)
+    declared = {k: float(v.get("budget_ms") or 0.0) for k, v in (other.get("stages") or {}).items() if isinstance(v, dict)}
+    xs = [e for e in trace["traceEvents"] if e["ph"] == "X"]
+    frames = sorted((e for e in xs if e["name"] == "frame"), key=lambda e: e["ts"])
+    f_ts = np.array([e["ts"] for e in frames], dtype=np.float64)
+    f_dur = np.array([e["dur"] for e in frames], dtype=np.float64)
+    f_args = [e.get("args") or {} for e in frames]
+    wait_us = np.array([float(a.get("wait_us", 0.0)) for a in f_args])
+    unacc_us = np.array([float(a.get("unaccounted_us", 0.0)) for a in f_args])
+    steps = [int(a.get("steps", 0)) for a in f_args]
+    dropped = int(sum(int(a.get("dropped", 0)) for a in f_args))
+    work_us = f_dur - wait_us
+
+    durations: dict[str, list[float]] = {}
+    nested: set[str] = set()
+    for e in xs:
+        if e["name"] == "frame":
+            continue
+        durations.setdefault(e["name"], []).append(float(e["dur"]))
+        if (e.get("args") or {}).get("depth", 0):
+            nested.add(e["name"])
+    durations.setdefault(UNACCOUNTED, []).extend(unacc_us.tolist())
+
+    stages = {}
+    for name, d in durations.items():
+        d_ns = np.asarray(d) * 1000.0
+        pct = percentiles_ms(d_ns)
+        b = declared.get(name, 0.0)
+        stages[name] = {
+            **pct,
+            "budget_ms": b,
+            "share_p99": pct["p99"] / budget_ms,
+            "overruns": int(np.sum(d_ns > b * 1e6)) if b > 0 else None,
+            "nested": name in nested,
+        }
+    return {
+        "frames": len(frames),
+        "steps": int(sum(steps)),
+        "dropped_steps": dropped,
+        "frame_budget_ms": budget_ms,
+        "frame_period_ms": period_ms,
+        "frame_work": percentiles_ms(work_us * 1000.0),
+        "frame_overruns": int(np.sum(work_us > period_ms * 1000.0)),
+        "steps_per_frame": {str(k): v for k, v in sorted(Counter(steps).items())},
+        "stages": stages,
+        "_frame_ts": f_ts,  # for the plot; dropped before printing
+    }
+
+
+def format_table(s: dict) -> str:
+    b = s["frame_budget_ms"]
+    lines = [
+        f"{s['frames']} frames, {s['steps']} steps, {s['dropped_steps']} dropped steps; "
+        f"step budget {b:.1f} ms, frame period {s['frame_period_ms']:.1f} ms",
+        "",
+        f"{'stage':<22}{'n':>7}{'p50 ms':>9}{'p95 ms':>9}{'p99 ms':>9}{'max ms':>9}{'p99/budget':>11}{'budget':>8}{'overruns':>9}",
+    ]
+    order = sorted(s["stages"], key=lambda k: (k in (WAIT, UNACCOUNTED), k == WAIT, k.startswith("render"), s["stages"][k]["nested"]))
+    for name in order:
+        st = s["stages"][name]
+        label = ("  " + name) if st["nested"] else name
+        budget = f"{st['budget_ms']:.2f}" if st["budget_ms"] else "-"
+        over = "-" if st["overruns"] is None else str(st["overruns"])
+        lines.append(
+            f"{label[:21]:<22}{st['n']:>7}{st['p50']:>9.3f}{st['p95']:>9.3f}{st['p99']:>9.3f}{st['max']:>9.3f}"
+            f"{100 * st['share_p99']:>10.1f}%{budget:>8}{over:>9}"
+        )
+    w = s["frame_work"]
+    lines += [
+        "",
+        f"frame work (wall minus wait): p50 {w['p50']:.3f}  p95 {w['p95']:.3f}  p99 {w['p99']:.3f}  max {w['max']:.3f} ms; "
+        f"{s['frame_overruns']} frames over {s['frame_period_ms']:.1f} ms",
+        "steps per frame: " + ", ".join(f"{k}: {v}" for k, v in s["steps_per_frame"].items()),
+    ]
+    return "\n".join(lines)
+
+
+def plot_profile(trace: dict, summary: dict, out: str, max_bars: int = 600) -> None:
+    """Frame-time histogram and stacked per-stage bars (the last `max_bars` frames)."""
+    try:
+        import matplotlib
+    except ImportError:
+        raise InputError("--plot needs matplotlib (pip install 'quickjab[dev]')") from None
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    budget = summary["frame_budget_ms"]
+    f_ts = summary["_frame_ts"]
+    frames = sorted((e for e in trace["traceEvents"] if e["ph"] == "X" and e["name"] == "frame"), key=lambda e: e["ts"])
+    work = np.array([(e["dur"] - (e.get("args") or {}).get("wait_us", 0.0)) / 1000 for e in frames])
+    names = [n for n in summary["stages"] if n != WAIT and not summary["stages"][n]["nested"]]
+    per_frame = {n: np.zeros(len(frames)) for n in names}
+    for e in trace["traceEvents"]:
+        if e["ph"] != "X" or e["name"] not in per_frame or (e.get("args") or {}).get("depth", 0):
+            continue
+        i = int(np.searchsorted(f_ts, e["ts"], side="right")) - 1
+        if 0 <= i < len(frames):
+            per_frame[e["name"]][i] += e["dur"] / 1000
+    if UNACCOUNTED in per_frame:
+        per_frame[UNACCOUNTED] = np.array([(e.get("args") or {}).get("unaccounted_us", 0.0) / 1000 for e in frames])
+
+    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(13, 4.8), gridspec_kw={"width_ratios": [1, 2]})
+    ax1.hist(work, bins=60, color="#4c72b0")
+    ax1.axvline(budget, color="#c44e52", linestyle="--", label=f"{budget:.1f} ms budget")
+    ax1.set_xlabel("frame work time (ms)")
+    ax1.set_ylabel("frames")
+    ax1.set_title("frame time histogram")
+    ax1.legend()
+    sl = slice(max(0, len(frames) - max_bars), len(frames))
+    x = np.arange(sl.start, sl.stop)
+    bottom = np.zeros(len(x))
+    for n in names:  # stacked bars, one per frame, drawn as stepped areas (fast for many frames)
+        vals = per_frame[n][sl]
+        ax2.fill_between(x, bottom, bottom + vals, step="mid", label=n, linewidth=0)
+        bottom = bottom + vals
+    ax2.axhline(budget, color="#c44e52", linestyle="--", label=f"{budget:.1f} ms")
+    ax2.set_xlabel("frame")
+    ax2.set_ylabel("ms")
+    ax2.set_title("per-stage time per frame (stacked)")
+    ax2.legend(loc="upper right", fontsize=8)
+    fig.tight_layout()
+    fig.savefig(out, dpi=100)
+    plt.close(fig)
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("profile", help="summarize a frame-budget Chrome trace (table, --plot, --json)",
+                       description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("trace", metavar="TRACE.json", help="a Chrome trace written by the loop (e.g. `quickjab scope --trace`)")
+    p.add_argument("--plot", metavar="PNG", help="draw the frame-time histogram and stacked per-stage bars here")
+    p.add_argument("--json", action="store_true", help="print the summary as JSON")
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    trace = read_chrome_trace(args.trace)
+    summary = profile_summary(trace)
+    if args.plot:
+        plot_profile(trace, summary, args.plot)
+    public = {k: v for k, v in summary.items() if not k.startswith("_")}
+    print(json.dumps(public, indent=2) if args.json else format_table(public))
+    return 0

@@ -1,0 +1,137 @@
+"""`quickjab synth`: recordings from the virtual player (game.virtual_player).
+
+  quickjab synth --player experienced --trials 3 -o DIR    DIR/<action>/<n>.csv trial files
+  quickjab synth --session 120 -o rec.csv                  a labelled continuous recording of
+                                                           random actions separated by rests
+Both are written in the recording CSV of FORMATS.md; `--seed` makes them reproducible.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+import numpy as np
+
+from engine.errors import InputError
+from engine.recording import Recording, write_recording
+from game.actions import ACTION_NAMES, Action, load_library
+from game.virtual_player import FPS, PROFILES, synthesize_action, synthesize_rest
+
+SOURCE = "virtual player (game.virtual_player)"
+
+
+def synth_trials(
+    lib: dict[str, Action],
+    profile: str,
+    trials: int,
+    rng: np.random.Generator,
+    actions: list[str] | None = None,
+    rest: int = 0,
+) -> dict[str, list[np.ndarray]]:
+    """{action: [trial (n, 6) in g, ...]}; columns rx, ry, rz, lx, ly, lz."""
+    out: dict[str, list[np.ndarray]] = {}
+    for name in actions or ACTION_NAMES:
+        out[name] = [
+            synthesize_action(lib[name], profile, rng, rest, rest, library=lib).reshape(-1, 6)
+            for _ in range(trials)
+        ]
+    return out
+
+
+def _to_recording(signal: np.ndarray, labels: list[str], meta: dict[str, str]) -> Recording:
+    n = len(signal)
+    return Recording(np.arange(n) / FPS, signal.reshape(n, 2, 3), labels, meta)
+
+
+def write_trials(directory: str | Path, trials: dict[str, list[np.ndarray]], profile: str, seed) -> list[Path]:
+    directory = Path(directory)
+    written = []
+    for name, signals in trials.items():
+        folder = directory / name
+        folder.mkdir(parents=True, exist_ok=True)
+        for i, sig in enumerate(signals, start=1):
+            path = folder / f"{i}.csv"
+            meta = {"source": f"{SOURCE}, profile {profile}", "action": name, "seed": str(seed)}
+            write_recording(path, _to_recording(sig, [name] * len(sig), meta))
+            written.append(path)
+    return written
+
+
+def synth_session(
+    lib: dict[str, Action],
+    seconds: float,
+    profile: str,
+    rng: np.random.Generator,
+    rest_s: tuple[float, float] = (0.5, 1.5),
+    actions: list[str] | None = None,
+) -> tuple[np.ndarray, list[str]]:
+    """A continuous (n, 2, 3) signal of random actions separated by rests, and per-frame labels
+    ('' while resting). Stops before `seconds` is exceeded (ends with a rest)."""
+    guard = lib["guard"]
+    total = int(round(seconds * FPS))
+    parts: list[np.ndarray] = []
+    labels: list[str] = []
+    n = 0
+    names = actions or list(ACTION_NAMES)
+    while True:
+        rest = int(round(rng.uniform(*rest_s) * FPS))
+        name = names[int(rng.integers(len(names)))]
+        sig = synthesize_action(lib[name], profile, rng, library=lib)
+        if n + rest + len(sig) > total:
+            break
+        parts += [synthesize_rest(rest, guard, profile, rng), sig]
+        labels += [""] * rest + [name] * len(sig)
+        n += rest + len(sig)
+    parts.append(synthesize_rest(total - n, guard, profile, rng))
+    labels += [""] * (total - n)
+    return np.concatenate(parts), labels
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("synth", help="synthesize trials or a labelled session from the virtual player",
+                       description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)  # fmt: skip
+    p.add_argument("--player", default="experienced", choices=sorted(PROFILES), help="player profile")
+    mode = p.add_mutually_exclusive_group(required=True)
+    mode.add_argument("--trials", type=int, help="trials per action, written to DIR/<action>/<n>.csv")
+    mode.add_argument("--session", type=float, metavar="SECONDS", help="length of a continuous recording")
+    p.add_argument("-o", "--output", required=True, help="DIR for --trials, a .csv file for --session")
+    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    p.add_argument("--actions", default=None, help="comma-separated subset of actions (default: all 13)")
+    p.add_argument("--rest", type=int, default=0, help="frames of still guard before and after each trial")
+    p.set_defaults(func=run)
+
+
+def _parse_actions(text: str | None) -> list[str] | None:
+    if not text:
+        return None
+    names = [t.strip() for t in text.split(",") if t.strip()]
+    bad = [n for n in names if n not in ACTION_NAMES]
+    if bad:
+        raise InputError(f"unknown action(s) {', '.join(bad)}; actions: {', '.join(ACTION_NAMES)}")
+    return names
+
+
+def run(args: argparse.Namespace) -> int:
+    lib = load_library()
+    rng = np.random.default_rng(args.seed)
+    actions = _parse_actions(args.actions)
+    if args.trials is not None:
+        if args.trials < 1:
+            raise InputError("--trials must be at least 1")
+        trials = synth_trials(lib, args.player, args.trials, rng, actions, max(args.rest, 0))
+        written = write_trials(args.output, trials, args.player, args.seed)
+        print(f"wrote {len(written)} trial files under {args.output}")
+        return 0
+    if not args.session or args.session <= 0:
+        raise InputError("--session needs a positive number of seconds")
+    out = Path(args.output)
+    if out.is_dir():
+        raise InputError(f"{out}: is a directory; --session writes one CSV file")
+    signal, labels = synth_session(lib, args.session, args.player, rng, actions=actions)
+    meta = {"source": f"{SOURCE}, profile {args.player}", "seed": str(args.seed)}
+    out.parent.mkdir(parents=True, exist_ok=True)
+    write_recording(out, _to_recording(signal, labels, meta))
+    count = sum(1 for i, lab in enumerate(labels) if lab and (i == 0 or labels[i - 1] != lab))
+    print(f"wrote {len(signal)} frames ({len(signal) / FPS:.1f} s, {count} actions) to {out}")
+    return 0
