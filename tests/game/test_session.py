@@ -156,3 +156,22 @@ def test_escape_pauses_and_f3_shows_the_budget_overlay() -> None:
     pygame.event.post(pygame.event.Event(pygame.KEYDOWN, key=pygame.K_ESCAPE, mod=0, unicode="", scancode=0))
     s.loop.run(frames=30)
     assert not s.match.paused and s.match.clock_steps < clock
+
+
+def test_a_replayed_recording_drives_the_player_through_the_wiimote_emulator(tmp_path) -> None:
+    from collections import Counter
+
+    from engine.recording import read_recording
+    from game.cli import main
+
+    rec = tmp_path / "session.csv"
+    assert main(["synth", "--session", "8", "--seed", "2", "-o", str(rec)]) == 0
+    labels = [x for x in dict.fromkeys(read_recording(rec).labels) if x]
+    s = make_session(f"wiimote-emu://{rec}", render=False)
+    s.loop.run(steps=8 * 60 + 60)
+    starts = [e["action"] for e in s.events_log if e["event"] == "start"]
+    assert s.hud_state.battery is not None  # the emulated remote reports its battery
+    assert s.hud_state.source_state == "connected"
+    # most of the performed actions were recognized, in order
+    hits = Counter(starts) & Counter(labels)
+    assert sum(hits.values()) >= 0.6 * len(labels)
