@@ -186,7 +186,7 @@ class Session:
         self.events_log: list[dict] = []  # recognizer events, in order (tests, the trace)
         self.blows_log: list[tuple[int, int, str, bool, float]] = []  # (step, attacker, target, blocked, damage)
         self.on_toggle_fullscreen: Callable[[], None] | None = None
-        self._t0 = self.clock.seconds()
+        self._t0: float | None = None
         self._buttons = 0
         self._auto_paused = False
         self._step = 0
@@ -283,6 +283,10 @@ class Session:
                 self.source.press_key(pygame.key.name(event.key))
 
     def _frames(self, step: int, dt: float) -> None:
+        if self._t0 is None:
+            # the step grid is anchored when the loop starts, not when the session was built
+            # (loading takes a moment; anchoring earlier would read the sensors that late)
+            self._t0 = self.clock.seconds() - step * dt
         self.frame_vec = self.resampler.frame_at(self._t0 + step * dt)
 
     def _recognize(self, step: int, dt: float) -> None:
