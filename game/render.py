@@ -182,6 +182,11 @@ class Renderer:
             pad = np.array([posts[i] + [0, 0.45, 0], posts[i] + [0, POST_HEIGHT - 0.05, 0]])
             pxy, _ = cam.project(pad)
             pygame.draw.line(layer, post_cols[i], pxy[0], pxy[1], int(thick * 1.25))
+        if pygame.display.get_init() and pygame.display.get_surface() is not None:
+            # in the display's pixel format: a per-frame blit without conversion
+            back = back.convert()
+            front = front.convert()
+            front.set_colorkey(KEY, pygame.RLEACCEL)
         self._static, self._front = back, front
 
     def screen_box(self, joints: np.ndarray, margin: float = 0.15) -> pygame.Rect:
