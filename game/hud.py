@@ -285,6 +285,8 @@ class Hud:
             else:
                 title = f"{st.result} - {'YOU WIN' if st.winner == 0 else 'CPU WINS'}"
             self._banner(surf, title, big, (w // 2, h * 0.42))
+            if not st.demo:
+                self.blit(surf, "Enter: a new match", mid, (w // 2, h * 0.42 + 60 * u), DIM, "midtop")
         elif st.phase == "count" and st.down is not None:
             self._banner(surf, f"{st.count}", int(140 * u), (w // 2, h * 0.40))
             self.blit(surf, "KNOCKDOWN", mid, (w // 2, h * 0.40 + 70 * u), SWITCH_COLOR, "midtop")

@@ -175,3 +175,18 @@ def test_a_replayed_recording_drives_the_player_through_the_wiimote_emulator(tmp
     # most of the performed actions were recognized, in order
     hits = Counter(starts) & Counter(labels)
     assert sum(hits.values()) >= 0.6 * len(labels)
+
+
+def test_rounds_start_from_the_corners_and_the_attract_mode_starts_over() -> None:
+    from game.match import Match
+
+    s = make_session("keyboard://?seed=9", render=False, demo=True)
+    s.match = Match(round_seconds=2)
+    s.loop.run(steps=2 * 60 + 3 * 60 + 5)  # round 1, the break, the bell of round 2
+    assert s.match.round == 2
+    assert s.player.root[:2] == pytest.approx((0.0, -0.55), abs=0.05)
+    assert s.opponent.root[:2] == pytest.approx((0.0, 0.55), abs=0.05)
+    s.loop.run(steps=2 * 60 * 2 + 3 * 60 + 60)
+    assert s.match.over
+    s.loop.run(steps=8 * 60 + 2)
+    assert not s.match.over and s.match.round == 1 and s.match.health == [100.0, 100.0]
