@@ -53,6 +53,7 @@ class HudState:
     score: float | None = None
     last_event: str = ""
     switch_age: int = MARK_STEPS
+    switch_from: int = 0  # n_p: the clip frame the character continued from
     reject_age: int = MARK_STEPS
     main_fill: int = 0
     main_size: int = 6
@@ -80,6 +81,7 @@ class HudState:
             self.score = event.get("score")
         if kind == "switch":
             self.switch_age = 0
+            self.switch_from = int(event.get("from_frame", 0) or 0)
         elif kind == "reject":
             self.reject_age = 0
             self.action = event.get("action", "") or "no match"
@@ -235,7 +237,7 @@ class Hud:
             self.blit(surf, f"score {st.score:.2f}", int(22 * u), (r.right + 10 * u, y + 24 * u), DIM)
         # marks
         if st.switch_age < MARK_STEPS:
-            self._mark(surf, "SWITCH", SWITCH_COLOR, (panel.right - 8 * u, panel.top + 8 * u), u)
+            self._mark(surf, f"SWITCH @{st.switch_from}", SWITCH_COLOR, (panel.right - 8 * u, panel.top + 8 * u), u)
         if st.reject_age < MARK_STEPS:
             self._mark(surf, "REJECT", REJECT_COLOR, (panel.right - 8 * u, panel.top + 34 * u), u)
         # main buffer: one cell per frame
