@@ -28,6 +28,7 @@ import numpy as np
 import pygame
 
 from engine.clock import RealClock, VirtualClock
+from engine.errors import InputError
 from engine.frames import FrameResampler
 from engine.loop import FixedStepLoop
 from engine.sensors.source import Source, SourceState
@@ -169,6 +170,9 @@ class Session:
         self._pilot_seen = True
         self._pilot_rng = np.random.default_rng(cfg.seed + 1)
         self.templates = load_templates(cfg.templates, cfg.left_handed)
+        if source.sensors * 3 != self.templates.dim:
+            raise InputError(f"{source.url}: the source has {source.sensors} sensor(s), the templates need "
+                             f"{self.templates.dim // 3} (a Wiimote + Nunchuk, or two IMUs)")
         self.recognizer = DualBufferRecognizer(self.templates)
         self.resampler = FrameResampler(sensors=self.templates.dim // 3)
         self.match = Match()
