@@ -173,6 +173,7 @@ class Frame:
         self.t_us = t_us
         self.flags = flags
         self.payload = payload
+        self.jump = False  # set by Decoder: the sequence jumped back (a reboot without HELLO)
 
     def values(self):
         # type: () -> tuple
@@ -253,6 +254,13 @@ class Decoder:
         self.boot_id = None
         self.hello = None  # the last Hello seen
 
+    def resync(self):
+        """Forget the unfinished frame and the sequence position (after a reconnect), keeping
+        the counters and the boot_id."""
+        self._buf = b""
+        self._skipping = False
+        self.last_seq = None
+
     def counts(self):
         # type: () -> dict
         d = {}
@@ -314,6 +322,7 @@ class Decoder:
             gap = (frame.seq - self.last_seq - 1) & SEQ_MASK
             if gap >= 0x8000:
                 self.seq_jumps += 1
+                frame.jump = True
             else:
                 self.lost += gap
         self.last_seq = frame.seq
