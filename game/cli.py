@@ -15,6 +15,7 @@ from engine.errors import InputError
 COMMAND_MODULES = [
     "tools.record",
     "tools.bench",
+    "tools.bridge",
 ]
 
 
