@@ -245,7 +245,7 @@ class SerialSource(Source):
         t = np.asarray(times) + self.devclock.offset
         t = np.maximum.accumulate(np.maximum(t, self.devclock.last_t))  # never backwards
         self.devclock.last_t = float(t[-1])
-        return [Sample(float(ti), a) for ti, a in zip(t, rows)]
+        return [Sample(float(ti), a) for ti, a in zip(t, rows, strict=True)]
 
     def _accel(self, f: protocol.Frame) -> np.ndarray:
         """(sensors, 3) in g; a sensor the HELLO announced but this SAMPLE lacks holds its last value."""
