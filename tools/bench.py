@@ -9,6 +9,7 @@ import importlib
 # target name -> module; modules load only when their target runs
 TARGETS = {
     "loop": "tools.bench_loop",
+    "serial": "tools.bench_serial",
 }
 
 
