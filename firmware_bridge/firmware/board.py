@@ -49,14 +49,25 @@ def boot_id():
         return time.ticks_us() ^ (time.ticks_cpu() << 7)
 
 
-def safe_mode():
-    """BOOTSEL held at power-up (Pico) leaves the board at the REPL for mpremote."""
+def safe_mode(led, window_ms=1000):
+    """BOOTSEL pressed during the first second after boot (Pico; the LED is on meanwhile)
+    leaves the board at the REPL for mpremote instead of streaming."""
     try:
         import rp2
 
-        return rp2.bootsel_button() == 1
+        pressed = rp2.bootsel_button
     except (ImportError, AttributeError):
         return False
+    led.set(True)
+    start = time.ticks_ms()
+    try:
+        while time.ticks_diff(time.ticks_ms(), start) < window_ms:
+            if pressed():
+                return True
+            time.sleep_ms(20)
+        return False
+    finally:
+        led.set(False)
 
 
 class Led:
@@ -67,6 +78,10 @@ class Led:
     def __init__(self):
         pin = PINS.get(sys.platform, (0, 0, 0, None))[3]
         self.pin = machine.Pin(pin, machine.Pin.OUT) if pin is not None else None
+
+    def set(self, on):
+        if self.pin is not None:
+            self.pin.value(1 if on else 0)
 
     def show(self, now_us, code):
         if self.pin is None:

@@ -34,7 +34,7 @@ def wait_for_imus(led, out, bus, bid):
 
 def main():
     led = board.Led()
-    if board.safe_mode():
+    if board.safe_mode(led):
         return  # BOOTSEL held: stay at the REPL
     out = board.StdoutWriter()
     bid = board.boot_id()
