@@ -134,8 +134,9 @@ def test_big_burst_is_drained_in_one_poll():
 def test_emulator_unplug_replug_and_wrap_are_survived(tmp_path):
     link = str(tmp_path / "bridge")
     emu = Emulator(synthetic_motion(), rate_hz=200, link=link, ticks_start=(1 << 30) - 700_000,
-                   faults=Faults(unplug_at=[0.8], unplug_s=0.4, garbage_every=0.1))
-    th = start_in_thread(emu, 3.2)
+                   faults=Faults(unplug_at=[0.8], unplug_s=0.4, garbage_every=0.1, stall_at=[2.6], stall_s=0.3,
+                                 reboot_at=[3.2]))
+    th = start_in_thread(emu, 4.6)
     for _ in range(100):
         if os.path.exists(link):
             break
@@ -153,10 +154,12 @@ def test_emulator_unplug_replug_and_wrap_are_survived(tmp_path):
         th.join(2)
     assert states[:3] == [SourceState.CONNECTED, SourceState.RECONNECTING, SourceState.CONNECTED]
     assert src.stats["disconnects"] == 1 and src.stats["reconnects"] == 1
-    assert src.stats["reboots"] == 1  # a replugged board powers up again
-    assert emu.stats.garbage_bursts > 10
+    assert src.stats["reboots"] == 2  # a replugged board powers up again; then --reboot-at
+    assert emu.stats.garbage_bursts > 10 and emu.stats.stalls == 1
     t = np.array([s.t for s, _ in got])
     assert np.all(np.diff(t) >= 0)
+    # the unplug and the stall each show as a gap in device time, not as bunched samples
+    assert (np.diff(t) >= 0.25).sum() >= 2
     # samples before the unplug, across the 30-bit wrap (at ~0.7 s), and after the replug
     assert len(got) > 200
     assert t[-1] > t[0] + 2.0
