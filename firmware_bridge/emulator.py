@@ -137,6 +137,15 @@ class PtyPort:
                 os.close(fd)
         self.master = self.slave = -1
 
+    def read_host(self) -> bytes:
+        """What the host wrote to the port since the last call (b'' when nothing)."""
+        if self.master < 0:
+            return b""
+        try:
+            return os.read(self.master, 256)
+        except (BlockingIOError, OSError):
+            return b""
+
     def write(self, data: bytes) -> int:
         if self.master < 0:
             return 0
@@ -249,6 +258,8 @@ class Emulator:
         if self._stop.is_set() or (self.seconds is not None and self.elapsed() >= self.seconds):
             self._reason = "end"
             return True
+        if protocol.HELLO_REQUEST in self.port.read_host():
+            sampler.request_hello()
         t = self.elapsed()
         for kind, every in (("garbage", self.faults.garbage_every), ("flip", self.faults.flip_every),
                             ("drop", self.faults.drop_every)):

@@ -43,6 +43,10 @@ MAX_TEXT = 200
 MAX_BODY = HEADER_SIZE + MAX_TEXT + CRC_SIZE  # 212: the largest valid body
 MAX_ENCODED = MAX_BODY + 2  # COBS adds one byte per 254, plus the first code byte
 
+# Host to device: this one byte asks for a HELLO now (a host that just opened the port need not
+# wait for the next one-a-second HELLO). Devices ignore any other byte.
+HELLO_REQUEST = b"?"
+
 SEQ_MASK = 0xFFFF
 T_MASK = 0xFFFFFFFF
 

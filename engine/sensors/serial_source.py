@@ -117,6 +117,7 @@ class SerialSource(Source):
         self._next_try = 0.0
         self._last_byte = clock()
         self._stalled = False
+        self._next_hello_request = 0.0
         self._open()
 
     # -- connection -------------------------------------------------------------------------
@@ -129,7 +130,8 @@ class SerialSource(Source):
             if "://" in name:
                 port = serial.serial_for_url(name, baudrate=self.baud, timeout=0)
             else:
-                port = serial.Serial(name, baudrate=self.baud, timeout=0)
+                # write_timeout=0: asking for a HELLO must never block the game loop
+                port = serial.Serial(name, baudrate=self.baud, timeout=0, write_timeout=0)
         except (*LOST, ValueError):
             return
         self.port, self.port_name = port, name
@@ -140,6 +142,20 @@ class SerialSource(Source):
         self.devclock.reset(self.hello.ts_bits if self.hello else 32)
         self._last_byte = self.clock()
         self._stalled = False
+        self._next_hello_request = 0.0
+        self._ask_hello()
+
+    def _ask_hello(self) -> None:
+        """Ask the device for a HELLO now (protocol.HELLO_REQUEST) instead of waiting up to a
+        second for the next one: pyserial flushed any earlier HELLO when the port opened."""
+        now = self.clock()
+        if self.port is None or now < self._next_hello_request:
+            return
+        self._next_hello_request = now + 0.25
+        try:
+            self.port.write(protocol.HELLO_REQUEST)
+        except (*LOST, serial.SerialTimeoutException):
+            pass  # a read will notice a lost port; a full output buffer just means no request
 
     def _lost(self) -> None:
         self.count("disconnects")
@@ -231,8 +247,9 @@ class SerialSource(Source):
                 self.messages.append(f.payload.decode("utf-8", "replace"))
                 self.count("texts")
             elif f.msg_type == protocol.SAMPLE:
-                if self.hello is None:  # scales unknown until the first HELLO (at most 1 s)
+                if self.hello is None:  # scales unknown until the first HELLO: ask for one
                     self.count("samples_before_hello")
+                    self._ask_hello()
                     continue
                 if f.flags & protocol.FLAG_OVERRUN:
                     self.count("device_overruns")

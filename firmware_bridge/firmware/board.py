@@ -8,10 +8,12 @@ import sys
 import time
 
 import machine
+import protocol
 from lsm6ds3 import LSM6DS3
 from mpu6050 import MPU6050
 
 STOP_WORD = b"!stop!"  # typed to the port, ends streaming (Ctrl-C is disabled while streaming)
+# and a single protocol.HELLO_REQUEST byte ('?') asks for a HELLO at once
 
 # (I2C id, SDA, SCL, LED pin) per port; LED None where the board has none we know of
 PINS = {
@@ -142,7 +144,10 @@ class Watch:
             code = "both"
         self.led.show(now, code)
         while self.poll.poll(0):
-            self.tail = (self.tail + sys.stdin.buffer.read(1))[-len(STOP_WORD):]
+            b = sys.stdin.buffer.read(1)
+            if b == protocol.HELLO_REQUEST:
+                sampler.request_hello()
+            self.tail = (self.tail + b)[-len(STOP_WORD):]
             if self.tail == STOP_WORD:
                 return True
         return False

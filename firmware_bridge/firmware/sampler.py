@@ -76,6 +76,10 @@ class Sampler:
             self.seq, now & self.ts_mask, self.boot_id, self.rate_hz, self.accel_lsb_per_g,
             self.gyro_mlsb_per_dps, self.ts_bits, self.imu_kind, self.present_flags()))
 
+    def request_hello(self):
+        """The host asked (protocol.HELLO_REQUEST): send a HELLO before the next SAMPLE."""
+        self._last_hello = None
+
     def send_text(self, now, text):
         t = self.ticks
         if self._last_text is not None and t.ticks_diff(now, self._last_text) < TEXT_EVERY_US:

@@ -39,12 +39,13 @@ class FakeBus:
 
 @pytest.fixture
 def firmware_path(monkeypatch):
+    monkeypatch.syspath_prepend(str(FIRMWARE.parent))  # protocol.py, as copied next to the others
     monkeypatch.syspath_prepend(str(FIRMWARE))
     machine = types.ModuleType("machine")
     machine.Pin = type("Pin", (), {"OUT": 1, "__init__": lambda self, *a, **k: None, "value": lambda self, v=None: None})
     monkeypatch.setitem(sys.modules, "machine", machine)
     yield
-    for name in ("mpu6050", "lsm6ds3", "board"):
+    for name in ("mpu6050", "lsm6ds3", "board", "protocol"):
         sys.modules.pop(name, None)
 
 

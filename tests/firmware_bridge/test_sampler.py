@@ -106,6 +106,16 @@ def test_read_error_leaves_the_sensor_out_and_says_so():
     assert flags.count(protocol.FLAG_SENSOR_A) == 1 and s.read_errors == 1
 
 
+def test_hello_request_sends_a_hello_before_the_next_sample():
+    wire = Wire()
+    s = Sampler([FakeIMU((1, 1, 1)), None], wire.write, FakeTicks())
+    run(s, 3)
+    s.request_hello()
+    s.step(s.ticks.ticks_us())
+    kinds = [f.msg_type for f in protocol.Decoder().feed(bytes(wire.data))]
+    assert kinds == [protocol.HELLO] + [protocol.SAMPLE] * 3 + [protocol.HELLO, protocol.SAMPLE]
+
+
 def test_gyro_flag_carries_gyro():
     wire = Wire()
     s = Sampler([FakeIMU((1, 2, 3)), None], wire.write, FakeTicks(), gyro=True)

@@ -93,6 +93,7 @@ def test_pty_real_serial_and_hangup():
     src = open_source(f"serial://{name}?retry=0.05")
     try:
         assert src.state is SourceState.CONNECTED
+        assert os.read(master, 16) == protocol.HELLO_REQUEST  # asked for a HELLO on open
         os.write(master, b"\x00garbage" + HELLO2 + samples(50))
         got = []
         for _ in range(50):
@@ -154,6 +155,9 @@ def test_emulator_unplug_replug_and_wrap_are_survived(tmp_path):
         th.join(2)
     assert states[:3] == [SourceState.CONNECTED, SourceState.RECONNECTING, SourceState.CONNECTED]
     assert src.stats["disconnects"] == 1 and src.stats["reconnects"] == 1
+    # the source asks for a HELLO on (re)open and the emulated firmware answers at once, so few
+    # samples wait for scales (the one-a-second HELLO alone would cost up to 200 per open)
+    assert src.stats.get("samples_before_hello", 0) < 60
     assert src.stats["reboots"] == 2  # a replugged board powers up again; then --reboot-at
     assert emu.stats.garbage_bursts > 10 and emu.stats.stalls == 1
     t = np.array([s.t for s, _ in got])
