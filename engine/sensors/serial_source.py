@@ -118,6 +118,7 @@ class SerialSource(Source):
         self._last_byte = clock()
         self._stalled = False
         self._next_hello_request = 0.0
+        self._polled = False
         self._open()
 
     # -- connection -------------------------------------------------------------------------
@@ -132,8 +133,13 @@ class SerialSource(Source):
             else:
                 # write_timeout=0: asking for a HELLO must never block the game loop
                 port = serial.Serial(name, baudrate=self.baud, timeout=0, write_timeout=0)
-        except (*LOST, ValueError):
-            return
+        except LOST:
+            return  # not there (yet): a state, retried every `retry` s
+        except Exception as exc:  # pyserial's own URL and setting checks (ValueError, KeyError...)
+            if self._polled:  # poll never raises: a later failure is counted and retried
+                self.count("open_errors")
+                return
+            raise SourceError(f"{self.url}: cannot open {name}: {exc!r}") from None
         self.port, self.port_name = port, name
         if self.state is not SourceState.CONNECTING:
             self.count("reconnects")
@@ -196,6 +202,7 @@ class SerialSource(Source):
     def poll(self) -> list[Sample]:
         if self.state is SourceState.DISCONNECTED:
             return []
+        self._polled = True
         if self.port is None:
             if self.clock() >= self._next_try:
                 self._open()

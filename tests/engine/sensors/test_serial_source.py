@@ -184,7 +184,7 @@ def test_missing_port_is_a_state_not_an_error():
 
 
 @pytest.mark.parametrize("url", ["serial://", "serial:///dev/x?speed=3", "serial:///dev/x?baud=fast",
-                                 "serial:///dev/x?retry=0"])
+                                 "serial:///dev/x?retry=0", "serial://loop://?retry=1", "serial://nosuch://x"])
 def test_bad_urls_name_themselves(url):
     with pytest.raises(SourceError, match="serial://"):
         open_source(url)
@@ -195,3 +195,41 @@ def test_url_syntax():
     assert parse_serial_url("serial://auto") == (None, {})
     assert parse_serial_url("serial://loop://") == ("loop://", {})
     assert parse_serial_url("serial://socket://localhost:7777") == ("socket://localhost:7777", {})
+
+
+def test_auto_finds_a_known_board_by_vid_pid(monkeypatch):
+    from types import SimpleNamespace
+
+    from engine.sensors.serial_source import find_board
+
+    ports = [SimpleNamespace(device="/dev/ttyUSB0", vid=0x0403, pid=0x6001),
+             SimpleNamespace(device="/dev/ttyACM1", vid=0x2E8A, pid=0x0005),
+             SimpleNamespace(device="/dev/ttyS0", vid=None, pid=None)]
+    monkeypatch.setattr("engine.sensors.serial_source.list_ports.comports", lambda: ports)
+    assert find_board() == "/dev/ttyACM1"
+    assert find_board(0x0403, 0x6001) == "/dev/ttyUSB0"
+    assert find_board(0x1234, None) is None
+
+
+@pytest.mark.parametrize("error", ["oserror", "termios", "serial"])
+def test_every_kind_of_unplug_becomes_a_state(error):
+    import termios
+
+    import serial
+
+    exc = {"oserror": OSError(5, "Input/output error"), "termios": termios.error(5, "EIO"),
+           "serial": serial.SerialException("device disconnected")}[error]
+
+    class Unplugged:
+        @property
+        def in_waiting(self):
+            raise exc
+
+        def close(self):
+            raise exc
+
+    src = open_source("serial://loop://")
+    src.port = Unplugged()
+    assert src.poll() == []
+    assert src.state is SourceState.RECONNECTING and src.port is None
+    assert src.stats["disconnects"] == 1
