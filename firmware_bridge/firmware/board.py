@@ -143,8 +143,12 @@ class Watch:
         else:
             code = "both"
         self.led.show(now, code)
-        while self.poll.poll(0):
+        for _ in range(16):  # bounded: the 200 Hz loop comes first
+            if not self.poll.poll(0):
+                break
             b = sys.stdin.buffer.read(1)
+            if not b:  # readable but empty: the port's closed end, nothing to act on
+                break
             if b == protocol.HELLO_REQUEST:
                 sampler.request_hello()
             self.tail = (self.tail + b)[-len(STOP_WORD):]

