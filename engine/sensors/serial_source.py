@@ -35,7 +35,8 @@ KNOWN_BOARDS = (
     (0x1A86, 0x55D4),  # CH9102 on ESP32 boards
 )
 LOST = (OSError, serial.SerialException, termios.error)
-MAX_READS_PER_POLL = 32  # bounds one poll's work even if the device outruns us
+MAX_READS_PER_POLL = 32
+BACKLOG = 1024  # a read this big may have left more behind: read again in the same poll  # bounds one poll's work even if the device outruns us
 STALL_S = 2.0  # no byte for this long while connected counts one stall
 
 
@@ -121,6 +122,21 @@ class SerialSource(Source):
         self._polled = False
         self._open()
 
+    # The decoder's counters join the source's own when stats is read, not on every poll.
+    @property
+    def stats(self) -> dict[str, int]:
+        own = self.__dict__.setdefault("_own_stats", {})
+        decoder = self.__dict__.get("decoder")
+        return {**own, **decoder.counts()} if decoder is not None else own
+
+    @stats.setter
+    def stats(self, value: dict[str, int]) -> None:
+        self.__dict__["_own_stats"] = value
+
+    def count(self, key: str, n: int = 1) -> None:
+        own = self.__dict__.setdefault("_own_stats", {})
+        own[key] = own.get(key, 0) + n
+
     # -- connection -------------------------------------------------------------------------
     def _open(self) -> None:
         self._next_try = self.clock() + self.retry
@@ -186,15 +202,16 @@ class SerialSource(Source):
         """Everything waiting, without waiting. A zero-timeout read(1) when nothing is waiting
         makes a hung-up pty or unplugged port raise here instead of looking merely quiet."""
         port = self.port
-        chunks = []
+        n = port.in_waiting
+        if not n:
+            return port.read(1)
+        data = port.read(n)
+        if n < BACKLOG:  # the usual case: one ioctl, one read
+            return data
+        chunks = [data]  # a backlog: keep draining while the device refills the buffer
         for _ in range(MAX_READS_PER_POLL):
             n = port.in_waiting
             if not n:
-                if not chunks:
-                    b = port.read(1)
-                    if b:
-                        chunks.append(b)
-                        continue
                 break
             chunks.append(port.read(n))
         return b"".join(chunks)
@@ -221,7 +238,6 @@ class SerialSource(Source):
             return []
         self._last_byte, self._stalled = now, False
         frames = self.decoder.feed(data)
-        self.stats.update(self.decoder.counts())
         return self._samples(frames, now)
 
     def _apply_hello(self, hello: protocol.Hello) -> None:
