@@ -74,6 +74,22 @@ def cobs_encode(data):
 def cobs_decode(enc):
     # type: (bytes) -> bytes | None
     """The inverse of cobs_encode; None when `enc` is not a valid encoding."""
+    blocks = []
+    i = 0
+    n = len(enc)
+    while i < n:
+        code = enc[i]
+        if code == 0 or i + code > n:
+            return None
+        if code == 255:
+            return _cobs_decode_long(enc)
+        blocks.append(enc[i + 1 : i + code])
+        i += code
+    # without a full 254-byte block every block but the last is followed by a zero
+    return b"\x00".join(blocks)
+
+
+def _cobs_decode_long(enc):
     out = bytearray()
     i = 0
     n = len(enc)

@@ -107,7 +107,8 @@ def summarize(name: str, costs: list[float], ages: list[float], stamp_ages: list
 
 def run_readers(readers: dict, seconds: float) -> list[dict]:
     """Poll every reader once per 60 Hz step (alternating which goes first), so both see the
-    same machine. A reader's poll() returns (frames decoded, [(stamp, t_us) per sample])."""
+    same machine. A reader returns (frames decoded, [(stamp, t_us) per sample], t0_ns, t1_ns)
+    where t0..t1 brackets its poll call alone, not the benchmark's bookkeeping."""
     clock = RealClock()
     step = 16_666_667
     deadline = clock.now_ns()
@@ -121,9 +122,7 @@ def run_readers(readers: dict, seconds: float) -> list[dict]:
         k += 1
         for name in names[k % 2 :] + names[: k % 2]:
             costs, ages, stamp_ages, frames_per_poll = acc[name]
-            t0 = time.perf_counter_ns()
-            frames, samples = readers[name]()
-            t1 = time.perf_counter_ns()
+            frames, samples, t0, t1 = readers[name]()
             if frames:
                 costs.append((t1 - t0) / frames / 1000)
                 frames_per_poll.append(frames)
@@ -184,14 +183,19 @@ def run(args: argparse.Namespace) -> int:
 
             def poll_source():
                 captured.clear()
+                t0 = time.perf_counter_ns()
                 samples = src.poll()
+                t1 = time.perf_counter_ns()
                 t_us = [f.t_us for f in captured if f.msg_type == protocol.SAMPLE]
-                return len(captured), [(s.t, t) for s, t in zip(samples, t_us[-len(samples):] if samples else [], strict=True)]
+                paired = zip(samples, t_us[-len(samples):] if samples else [], strict=True)
+                return len(captured), [(s.t, t) for s, t in paired], t0, t1
 
             def poll_naive():
                 before = naive.frames
+                t0 = time.perf_counter_ns()
                 got = naive.poll(clock)
-                return naive.frames - before, [(stamp, t_us) for stamp, _, t_us in got]
+                t1 = time.perf_counter_ns()
+                return naive.frames - before, [(stamp, t_us) for stamp, _, t_us in got], t0, t1
 
             warm_up([src.poll, lambda: naive.poll(clock)])
             ours, peer = run_readers({"serial:// source": poll_source, "peer: naive bytewise": poll_naive}, args.seconds)

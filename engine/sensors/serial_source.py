@@ -114,7 +114,7 @@ class SerialSource(Source):
         self.devclock = DeviceClock(window_s)
         self.hello: protocol.Hello | None = None
         self.messages: deque[str] = deque(maxlen=32)  # the device's TEXT lines
-        self._last_accel = np.zeros((2, 3))
+        self._last_row: np.ndarray | None = None  # the last SAMPLE's accel, (sensors, 3)
         self._next_try = 0.0
         self._last_byte = clock()
         self._stalled = False
@@ -300,10 +300,17 @@ class SerialSource(Source):
                 and all((f.flags & ~protocol.FLAG_OVERRUN) == flags for f in frames):
             per = protocol.sample_values_per_sensor(flags)
             raw = np.frombuffer(b"".join([f.payload for f in frames]), dtype="<i2")
-            acc = raw.reshape(len(frames), self.sensors, per)[:, :, :3] / self.hello.accel_lsb_per_g
-            self._last_accel[: self.sensors] = acc[-1]
+            acc = raw.reshape(len(frames), self.sensors, per)[:, :, :3] * (1.0 / self.hello.accel_lsb_per_g)
+            self._last_row = acc[-1]  # for a later SAMPLE that lacks a sensor
             return acc
         return [self._accel(f) for f in frames]
+
+    def _last(self) -> np.ndarray:
+        """Every sensor's last accel, (sensors, 3); zeros before any."""
+        last = self._last_row
+        if last is None or last.shape[0] != self.sensors:
+            return np.zeros((self.sensors, 3))
+        return last
 
     def _accel(self, f: protocol.Frame) -> np.ndarray:
         """(sensors, 3) in g; a sensor the HELLO announced but this SAMPLE lacks holds its last value."""
@@ -315,7 +322,7 @@ class SerialSource(Source):
             out = raw
         else:
             self.count("sensor_missing")
-            out = self._last_accel[: self.sensors].copy()
+            out = self._last().copy()
             slots = [s for s in (protocol.FLAG_SENSOR_A, protocol.FLAG_SENSOR_B) if want & s]
             k = 0
             for i, s in enumerate(slots):
@@ -323,9 +330,11 @@ class SerialSource(Source):
                     out[i] = raw[k]
                     k += 1
         if out.shape[0] != self.sensors:
-            out = out[: self.sensors] if out.shape[0] > self.sensors else np.vstack(
-                [out, self._last_accel[out.shape[0] : self.sensors]])
-        self._last_accel[: out.shape[0]] = out
+            base = self._last().copy()
+            k = min(out.shape[0], self.sensors)
+            base[:k] = out[:k]
+            out = base
+        self._last_row = out
         return out
 
 
