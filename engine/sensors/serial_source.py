@@ -51,6 +51,7 @@ class DeviceClock:
 
     def __init__(self, window_s: float = 2.0):
         self.window_s = window_s
+        self.last_t = -float("inf")  # the last host time handed out; kept across resets
         self.reset(32)
 
     def reset(self, ts_bits: int) -> None:
@@ -58,7 +59,6 @@ class DeviceClock:
         self._last_raw: int | None = None
         self._us = 0  # unwrapped device microseconds
         self._mins: deque[tuple[float, float]] = deque()  # (host t, offset), offsets increasing
-        self.last_t = -float("inf")
 
     def unwrap(self, raw: int) -> float | None:
         """Device seconds, or None for a jump backwards (a restarted device clock)."""

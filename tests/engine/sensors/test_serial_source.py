@@ -233,3 +233,14 @@ def test_every_kind_of_unplug_becomes_a_state(error):
     assert src.poll() == []
     assert src.state is SourceState.RECONNECTING and src.port is None
     assert src.stats["disconnects"] == 1
+
+
+def test_times_never_go_back_across_a_reboot():
+    src = open_source("serial://loop://")
+    src.port.write(HELLO2 + samples(20, start_seq=1, t0=10_000_000))
+    first = src.poll()
+    # a rebooted board: new boot_id, its clock restarts near zero
+    src.port.write(protocol.encode_hello(0, 100, 78, 200, 4096, 65500, 30, 1, 3) + samples(5, start_seq=1, t0=200))
+    second = src.poll()
+    assert len(first) == 20 and len(second) == 5 and src.stats["reboots"] == 1
+    assert second[0].t >= first[-1].t
