@@ -23,6 +23,7 @@ COMMAND_MODULES = [
     "tools.bvh_cmd",
     "tools.actions_cmd",
     "tools.graph",
+    "tools.bridge",
 ]
 
 

@@ -14,6 +14,7 @@ TARGETS = {
     "physics": "tools.bench_physics",
     "wiimote": "tools.bench_wiimote",
     "graph": "tools.bench_graph",
+    "serial": "tools.bench_serial",
 }
 
 
