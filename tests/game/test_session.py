@@ -190,3 +190,46 @@ def test_rounds_start_from_the_corners_and_the_attract_mode_starts_over() -> Non
     assert s.match.over
     s.loop.run(steps=8 * 60 + 2)
     assert not s.match.over and s.match.round == 1 and s.match.health == [100.0, 100.0]
+
+
+class HeldRemote:
+    """A test double of a Wiimote: rest readings at 60 Hz, buttons, battery, rumble calls."""
+
+    def __init__(self, clock):
+        from engine.sensors import Source
+
+        class _Remote(Source):
+            def poll(inner):
+                now = clock.seconds()
+                out = []
+                while inner.next_t <= now:
+                    out.append(Sample(inner.next_t, np.array([[0.0, 1.0, 0.0], [0.0, 1.0, 0.0]])))
+                    inner.next_t += 1 / 60
+                return out
+
+            def rumble(inner, ms):
+                inner.rumbles.append(ms)
+
+        from engine.sensors import Sample
+
+        self.source = _Remote(url="wiimote-test://", sensors=2, state=SourceState.CONNECTED, battery=0.55)
+        self.source.next_t = 0.0
+        self.source.buttons = 0
+        self.source.rumbles = []
+
+
+def test_home_button_pauses_and_the_battery_shows() -> None:
+    pygame.init()
+    clock = VirtualClock()
+    remote = HeldRemote(clock).source
+    s = Session(remote, SessionConfig(size=SIZE, sound=False, render=False, graph=GRAPH), clock=clock)
+    s.loop.run(steps=10)
+    assert s.hud_state.battery == 0.55 and s.hud_state.source_url == "wiimote-test://"
+    remote.buttons = 0x0080  # Home down: pause (once, not every step it is held)
+    s.loop.run(steps=10)
+    assert s.match.paused
+    remote.buttons = 0
+    s.loop.run(steps=2)
+    remote.buttons = 0x0080
+    s.loop.run(steps=2)
+    assert not s.match.paused
