@@ -93,3 +93,14 @@ def test_a_one_hand_recording_is_a_clear_error(tmp_path, monkeypatch, capsys, gr
     assert main(["play", "--headless", "--frames", "5", "--graph", graph_path, "--source", f"replay://{rec}"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "one_hand.csv" in err[0] and "sensor" in err[0]
+
+
+def test_mirror_posture_swaps_sides() -> None:
+    from game.actions import load_library
+    from game.skeleton import joint_index
+    from game.training import mirror_posture
+
+    p = load_library()["straight_r"].posture(10)
+    m = mirror_posture(p)
+    assert np.allclose(m[joint_index("fist_l")], p[joint_index("fist_r")] * [-1, 1, 1])
+    assert np.allclose(mirror_posture(m), p)
