@@ -180,6 +180,7 @@ class Session:
                                   demo=cfg.demo, mode="LOW POWER" if cfg.low_power else "",
                                   main_size=int(self.recognizer.main) if self.recognizer.main != "auto" else 6,
                                   supp_size=self.recognizer.supplementary)
+        self.hud_state.message = "ROUND 1"
         if hasattr(source, "press_key"):
             from game.keyboard_source import key_help
 
@@ -307,7 +308,8 @@ class Session:
             self.hud_state.mark(ev)
             if self.match.fighting:
                 self.player.controller.on_event(ev)
-                if ev.get("event") == "start" and self.lib[ev["action"]].kind == "attack":
+                clip = self.lib.get(ev.get("action") or "")
+                if ev.get("event") == "start" and clip is not None and clip.kind == "attack":
                     self.sounds.play("punch", 0.5)
         rec = self.recognizer
         active = rec.state == "active"
