@@ -71,8 +71,11 @@ class IncrementalDTW:
         # template cannot win by matching a short prefix of itself to a long query.
         self.min_progress = float(min_progress)
         self._expanded = not exact_costs
-        self._flat = self.tmpl.reshape(self.L * self.T, self.D)
-        self._sqnorm = np.einsum("ltd,ltd->lt", self.tmpl, self.tmpl)
+        sqnorm = np.einsum("ltd,ltd->lt", self.tmpl, self.tmpl)
+        self._flat = np.concatenate(
+            [self.tmpl, sqnorm[..., None], np.ones((self.L, self.T, 1))], axis=2
+        ).reshape(self.L * self.T, self.D + 2)
+        self._q_aug = np.ones(self.D + 2)
         # Positions past a template's end never count: +inf added to their normalized score.
         pos = np.arange(self.L)[:, None]
         self._pad_inf = np.where(pos < self.lengths[None, :], 0.0, np.inf)
@@ -101,10 +104,11 @@ class IncrementalDTW:
     def _local_costs(self, q: np.ndarray) -> np.ndarray:
         c = self._c
         if self._expanded:
-            # |t - q|^2 = |t|^2 - 2 t.q + |q|^2: one BLAS matvec instead of a (L, T, D) temporary.
-            np.dot(self._flat, q * -2.0, out=c.reshape(-1))
-            c += self._sqnorm
-            c += float(q @ q)
+            # |t - q|^2 = [t, |t|^2, 1] . [-2q, 1, |q|^2]: one BLAS matvec, no (L, T, D) temporary.
+            qa = self._q_aug
+            np.multiply(q, -2.0, out=qa[: self.D])
+            qa[self.D + 1] = q @ q
+            np.dot(self._flat, qa, out=c.reshape(-1))
             np.maximum(c, 0.0, out=c)
         else:
             np.subtract(self.tmpl, q, out=self._diff)
@@ -141,7 +145,6 @@ class IncrementalDTW:
         recip = self._recip.get(self.n)
         if recip is None:
             recip = self._recip.setdefault(self.n, 1.0 / (self._steps[:, :1] + self.n))
-        norm = np.multiply(row, recip, out=self._tmp)
         if self.min_progress > 0:
             # best over positions need - 1 <= j < L_k of each template: one reduceat over the
             # position-contiguous copy (T, L); every other segment is the gap, skipped.
@@ -153,10 +156,10 @@ class IncrementalDTW:
                 bounds[0::2] = self._cols * self.L + first
                 bounds[1::2] = self._cols * self.L + self.lengths
                 idx = self._take.setdefault(key, bounds[:-1] if bounds[-1] == self.T * self.L else bounds)
-            flat = self._suffix
-            flat[:] = norm.T
+            flat = np.multiply(row.T, recip.T, out=self._suffix)  # normalized, template-major
             self.scores[:] = np.minimum.reduceat(flat.ravel(), idx)[0::2]
         else:
+            norm = np.multiply(row, recip, out=self._tmp)
             norm += self._pad_inf
             np.min(norm, axis=0, out=self.scores)
         return self.scores
