@@ -101,6 +101,19 @@ class Boxer:
             self.controller.play(name)
         return name
 
+    def turn_towards(self, x: float, z: float, rate: float = 0.2) -> None:
+        """Turn the root's yaw `rate` of the way towards the world point (x, z) (the game keeps
+        the two boxers facing each other)."""
+        rx, rz, yaw = self._root
+        want = float(np.arctan2(x - rx, z - rz))  # yaw 0 faces +z, positive turns towards +x
+        delta = (want - yaw + np.pi) % (2 * np.pi) - np.pi
+        self._root = (rx, rz, yaw + rate * delta)
+
+    def keep_inside(self, limit: float) -> None:
+        """Keep the root within `limit` metres of the ring's centre lines (inside the ropes)."""
+        rx, rz, yaw = self._root
+        self._root = (float(np.clip(rx, -limit, limit)), float(np.clip(rz, -limit, limit)), yaw)
+
     def facing(self) -> np.ndarray:
         """Unit world vector the boxer faces."""
         return yaw_matrix(self._root[2]) @ np.array([0.0, 0.0, 1.0])

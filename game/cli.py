@@ -14,6 +14,7 @@ from engine.errors import InputError
 # Modules that add subcommands, in the order `--help` lists them.
 COMMAND_MODULES = [
     "game.play",
+    "game.training",
     "tools.record",
     "tools.devices",
     "tools.scope",
@@ -22,6 +23,8 @@ COMMAND_MODULES = [
     "tools.synth",
     "tools.bvh_cmd",
     "tools.actions_cmd",
+    "tools.graph",
+    "tools.bridge",
     "tools.recognition_commands",
 ]
 

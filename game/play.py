@@ -1,40 +1,129 @@
-"""`quickjab play`: until the boxing game lands, this starts the sensor scope.
+"""`quickjab play`: a boxing match against the Interaction Graph opponent.
 
-It opens `--source` (default: the first Wiimote, `wiimote://`); when no Wiimote can be
-opened it falls back to the synthetic `demo://` source and says so in a banner.
+Input: `--source URL` (serial://..., replay://..., wiimote-emu://..., keyboard://), by default
+the first Wiimote found, else the keyboard with a banner saying so. `--demo` is the attract
+mode: the virtual player boxes by itself. `--headless --frames N --screenshot out.png --trace
+out.json` runs without a display (SDL dummy driver, virtual clock: reproducible with --seed)
+and writes the last frame and the frame-budget trace.
+
+Keys: Q W E R / U I O P punches and parries, Space block, arrows step; Esc pause, F3 frame
+budget, F11 fullscreen. The Wiimote's Home button pauses too.
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 
-from engine.clock import RealClock, VirtualClock
+from engine.errors import InputError
 
 DEFAULT_SOURCE = "wiimote://"
-FALLBACK_SOURCE = "demo://"
+KEYBOARD_SOURCE = "keyboard://"
+DEMO_SOURCE = "keyboard://?profile=experienced"
+KEYBOARD_BANNER = "No Wiimote found: playing from the keyboard"
+
+
+def parse_size(text: str) -> tuple[int, int]:
+    try:
+        w, h = (int(v) for v in text.lower().split("x"))
+    except ValueError:
+        raise InputError(f"--size {text!r}: expected WIDTHxHEIGHT, e.g. 1280x720") from None
+    if w < 160 or h < 120:
+        raise InputError(f"--size {text!r}: at least 160x120")
+    return w, h
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    from tools.scope import add_view_arguments  # the scope stands in for the game for now
-
-    p = sub.add_parser("play", help="play (for now: the sensor scope on the Wiimote, or the demo source)",
+    p = sub.add_parser("play", help="box: a match against the CPU (Wiimote, serial IMUs or the keyboard)",
                        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("--source", default=DEFAULT_SOURCE, help=f"source URL (default {DEFAULT_SOURCE}, falling back to {FALLBACK_SOURCE})")
-    add_view_arguments(p)
+    p.add_argument("--source", default=None, help=f"source URL (default: {DEFAULT_SOURCE}, else {KEYBOARD_SOURCE})")
+    p.add_argument("--demo", action="store_true", help="attract mode: a synthesized session from the virtual player")
+    p.add_argument("--headless", action="store_true", help="no window: SDL dummy driver and a virtual clock (reproducible)")
+    p.add_argument("--frames", type=int, default=None, help="stop after N rendered frames (default: until the window closes)")
+    p.add_argument("--screenshot", metavar="PNG", help="save the last frame to this PNG")
+    p.add_argument("--trace", metavar="JSON", help="write the loop's Chrome trace here on exit")
+    p.add_argument("--virtual-clock", action="store_true", help="a virtual clock in a real window: the same frames as --headless (tests)")
+    p.add_argument("--seed", type=int, default=0, help="seed for the virtual player and anything random (default 0)")
+    p.add_argument("--size", default="1280x720", help="window size WxH (default 1280x720)")
+    p.add_argument("--fullscreen", action="store_true", help="start fullscreen (F11 toggles)")
+    p.add_argument("--low-power", action="store_true", help="render at 30 Hz on a half-size surface, fewer solver iterations")
+    p.add_argument("--templates", metavar="NPZ", help="recognition templates (default: yours from `quickjab train`, else the shipped set)")
+    p.add_argument("--graph", metavar="NPZ", help="Interaction Graph table (default: the shipped one)")
+    p.add_argument("--difficulty", choices=("easy", "normal", "hard"), default="normal", help="how much the CPU's blows hurt (default normal)")
+    p.add_argument("--left-handed", action="store_true", help="Wiimote in the left hand: mirror the templates (your own trained set is used as it is)")
+    p.add_argument("--budget", action="store_true", help="show the frame-budget overlay from the start (F3 toggles)")
+    p.add_argument("--no-sound", action="store_true", help="no sound")
     p.set_defaults(func=run)
 
 
-def run(args: argparse.Namespace) -> int:
-    from tools.scope import headless_env, open_with_fallback, run_scope, view_from_args
+def headless_env() -> None:
+    """No window, no sound device: SDL's dummy drivers (set before pygame initialises)."""
+    os.environ["SDL_VIDEODRIVER"] = "dummy"
+    os.environ["SDL_AUDIODRIVER"] = "dummy"
 
-    view = view_from_args(args)
+
+def open_player_source(url: str | None, demo: bool, seed: int, clock) -> tuple[object, bool]:
+    """The source to play with and whether the keyboard fallback was taken."""
+    import game.keyboard_source  # noqa: F401 - registers keyboard://
+    from engine.sensors import SourceError, SourceState, open_source
+
+    if demo:
+        return open_source(f"{DEMO_SOURCE}&seed={seed}", clock=clock), False
+    if url is not None:
+        if url.startswith("keyboard://") and "seed=" not in url:
+            url += ("&" if "?" in url else "?") + f"seed={seed}"
+        return open_source(url, clock=clock), False
+    try:
+        source = open_source(DEFAULT_SOURCE, clock=clock)
+    except SourceError as exc:
+        print(f"quickjab: {str(exc).split(';')[0]}; using the keyboard", file=sys.stderr)
+    else:
+        if source.state is not SourceState.DISCONNECTED:
+            return source, False
+        source.close()
+    return open_source(f"{KEYBOARD_SOURCE}?seed={seed}", clock=clock), True
+
+
+def run(args: argparse.Namespace) -> int:
+    size = parse_size(args.size)
+    if args.frames is not None and args.frames < 1:
+        raise InputError("--frames must be at least 1")
     if args.headless:
         headless_env()
-    clock: RealClock | VirtualClock = VirtualClock() if args.headless else RealClock()
-    source, banner = open_with_fallback(args.source, clock.seconds, DEFAULT_SOURCE, FALLBACK_SOURCE)
-    if banner:
-        print(banner, file=sys.stderr)
-    run_scope(source, clock=clock, frames=args.frames, screenshot=args.screenshot, trace=args.trace,
-              banner=banner, view=view)
+    import pygame
+
+    from engine.clock import RealClock, VirtualClock
+    from engine.trace import write_chrome_trace
+    from game.session import Session, SessionConfig
+
+    clock = VirtualClock() if args.headless or args.virtual_clock else RealClock()
+    source, fallback = open_player_source(args.source, args.demo, args.seed, clock.seconds)
+    if fallback:
+        print(f"quickjab play: {KEYBOARD_BANNER}", file=sys.stderr)
+    pygame.init()
+    try:
+        flags = pygame.RESIZABLE | (pygame.FULLSCREEN if args.fullscreen and not args.headless else 0)
+        pygame.display.set_mode(size, flags)
+        pygame.display.set_caption("QuickJab")
+        config = SessionConfig(seed=args.seed, size=size, low_power=args.low_power, demo=args.demo,
+                               keyboard_banner=fallback, templates=args.templates, graph=args.graph,
+                               sound=not args.no_sound and not args.headless,
+                               left_handed=args.left_handed, difficulty=args.difficulty)
+        session = Session(source, config, clock=clock, surface_provider=pygame.display.get_surface)
+        session.hud_state.show_budget = args.budget
+        session.on_toggle_fullscreen = pygame.display.toggle_fullscreen
+        session.loop.freeze_gc()
+        try:
+            session.loop.run(frames=args.frames)
+        finally:
+            if args.screenshot:
+                pygame.image.save(pygame.display.get_surface(), args.screenshot)
+                print(f"quickjab play: wrote {args.screenshot}", file=sys.stderr)
+            if args.trace:
+                write_chrome_trace(session.loop.budget, args.trace)
+                print(f"quickjab play: wrote {args.trace}", file=sys.stderr)
+    finally:
+        source.close()
+        pygame.quit()
     return 0

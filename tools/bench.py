@@ -13,7 +13,9 @@ TARGETS = {
     "synth": "tools.bench_synth",
     "physics": "tools.bench_physics",
     "wiimote": "tools.bench_wiimote",
+    "graph": "tools.bench_graph",
     "recognition": "tools.bench_recognition",
+    "serial": "tools.bench_serial",
 }
 
 

@@ -106,3 +106,27 @@ def test_step_forward_moves_the_root_and_walking_into_each_other_does_not_interp
     assert b.root[1] > a.root[1]
     for boxer in (a, b):
         assert np.linalg.norm((boxer.joint_positions()[0] - boxer.reference[0])[[0, 2]]) < 0.15
+
+
+@pytest.mark.parametrize(("a_name", "b_name"), [("straight_r", "hook_r"), ("straight_l", "hook_l")])
+def test_switching_at_n_p_is_smoother_on_the_simulated_body(a_name, b_name):
+    """Fig. 4 measured on the particle body, not only on the reference postures."""
+    n_p = 8
+    peaks = {}
+    for from_frame in (n_p, 0):
+        w = World()
+        boxer = Boxer(w, LIB, z=0.0)
+        for _ in range(20):
+            boxer.step(DT)
+            w.step(DT)
+        boxer.controller.play(a_name)
+        xs = []
+        for i in range(n_p + 20):
+            if i == n_p:
+                boxer.controller.on_event({"event": "switch", "action": b_name, "from_frame": from_frame})
+            boxer.step(DT)
+            w.step(DT)
+            xs.append(boxer.joint_positions().copy())
+        speed = np.linalg.norm(np.diff(np.array(xs), axis=0), axis=-1) * 60.0
+        peaks[from_frame] = speed[n_p - 1 :].max()
+    assert peaks[n_p] < peaks[0]

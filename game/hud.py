@@ -1,0 +1,380 @@
+"""The heads-up display: health bars, round clock, knockdown count, the recognizer's view (action,
+score, main and supplementary buffers filling, switch and reject marks), the input source and
+its state and battery, key help, banners and overlays, and the F3 frame-budget overlay.
+
+Everything it shows comes in a `HudState` the session fills each step; the HUD only draws.
+Positions are fractions of the window so a resized window keeps the layout. Text surfaces are
+cached: the same string in the same style is rendered once.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from dataclasses import dataclass, field
+
+import numpy as np
+import pygame
+
+from engine.budget import UNACCOUNTED, WAIT, FrameBudget
+
+PLAYER_COLOR = (235, 64, 52)
+OPPONENT_COLOR = (52, 120, 235)
+BAR_BACK = (34, 30, 38)
+BAR_LOSS = (250, 210, 90)  # the recently lost health, shown draining after the fill
+TEXT = (242, 240, 232)
+DIM = (170, 166, 160)
+SWITCH_COLOR = (255, 200, 40)
+REJECT_COLOR = (255, 70, 70)
+OK_COLOR = (90, 220, 120)
+STAGE_COLORS = [
+    (102, 194, 165), (252, 141, 98), (141, 160, 203), (231, 138, 195), (166, 216, 84),
+    (255, 217, 47), (229, 196, 148), (179, 179, 179), (120, 200, 240), (240, 120, 120),
+]
+MARK_STEPS = 45  # how long a switch / reject mark stays lit
+HISTORY_FRAMES = 120  # the F3 overlay's chart: the last two seconds, a stacked column a frame
+
+
+@dataclass
+class HudState:
+    health: list[float] = field(default_factory=lambda: [100.0, 100.0])
+    shown_health: list[float] = field(default_factory=lambda: [100.0, 100.0])  # drains after hits
+    max_health: float = 100.0
+    names: tuple[str, str] = ("YOU", "CPU")
+    round: int = 1
+    rounds: int = 3
+    seconds_left: float = 60.0
+    phase: str = "fight"
+    count: int = 0
+    down: int | None = None
+    knockdowns: list[int] = field(default_factory=lambda: [0, 0])
+    winner: int | None = None
+    result: str = ""
+    paused: bool = False
+    # recognition
+    action: str = ""
+    score: float | None = None
+    last_event: str = ""
+    switch_age: int = MARK_STEPS
+    switch_from: int = 0  # n_p: the clip frame the character continued from
+    reject_age: int = MARK_STEPS
+    main_fill: int = 0
+    main_size: int = 6
+    supp_fill: int = 0
+    supp_size: int = 60
+    # source
+    source_url: str = ""
+    source_state: str = "connected"
+    battery: float | None = None
+    keyboard_banner: bool = False
+    disconnected: bool = False
+    keys: list[tuple[str, str]] = field(default_factory=list)
+    mode: str = ""
+    demo: bool = False
+    show_budget: bool = False
+    message: str = ""  # a transient centre message (round 2, fight!...)
+    message_age: int = 0
+
+    def mark(self, event: dict) -> None:
+        """Note a recognizer event."""
+        kind = event.get("event", "")
+        self.last_event = kind
+        if kind in ("start", "switch"):
+            self.action = event.get("action", "")
+            self.score = event.get("score")
+        if kind == "switch":
+            self.switch_age = 0
+            self.switch_from = int(event.get("from_frame", 0) or 0)
+        elif kind == "reject":
+            self.reject_age = 0
+            self.action = event.get("action", "") or "no match"
+            self.score = event.get("score")
+
+    def tick(self) -> None:
+        """Advance timed marks by one step."""
+        self.switch_age = min(MARK_STEPS, self.switch_age + 1)
+        self.reject_age = min(MARK_STEPS, self.reject_age + 1)
+        self.message_age += 1
+        for i in (0, 1):
+            # the lost-health band drains at 40 health per second, after the fill
+            if self.shown_health[i] > self.health[i]:
+                self.shown_health[i] = max(self.health[i], self.shown_health[i] - 40.0 / 60.0)
+            else:
+                self.shown_health[i] = self.health[i]
+
+
+class TextCache:
+    def __init__(self) -> None:
+        self._fonts: dict[int, pygame.font.Font] = {}
+        self._cache: dict[tuple, pygame.Surface] = {}
+
+    def font(self, size: int) -> pygame.font.Font:
+        if size not in self._fonts:
+            self._fonts[size] = pygame.font.Font(None, size)
+        return self._fonts[size]
+
+    def render(self, text: str, size: int, color=TEXT, shadow: bool = True) -> pygame.Surface:
+        key = (text, size, color, shadow)
+        surf = self._cache.get(key)
+        if surf is None:
+            if len(self._cache) > 512:
+                self._cache.clear()
+            font = self.font(size)
+            fg = font.render(text, True, color)
+            if shadow:
+                surf = pygame.Surface((fg.get_width() + 2, fg.get_height() + 2), pygame.SRCALPHA)
+                surf.blit(font.render(text, True, (0, 0, 0)), (2, 2))
+                surf.blit(fg, (0, 0))
+            else:
+                surf = fg
+            self._cache[key] = surf
+        return surf
+
+
+class Hud:
+    def __init__(self) -> None:
+        self.text = TextCache()
+        self._p99: dict[str, float] = {}
+        self._p99_frame = -10**9
+        self._history: deque[np.ndarray] = deque(maxlen=HISTORY_FRAMES)  # per frame, ms per stage
+        self._history_frame = -1
+
+    # layout helpers (fractions of the window, so resizes keep the layout)
+    @staticmethod
+    def health_rects(size: tuple[int, int]) -> tuple[pygame.Rect, pygame.Rect]:
+        """Outer rectangles of the player's (left) and opponent's (right) health bars."""
+        w, h = size
+        bw, bh = int(w * 0.36), max(12, int(h * 0.035))
+        y = int(h * 0.04)
+        return pygame.Rect(int(w * 0.03), y, bw, bh), pygame.Rect(w - int(w * 0.03) - bw, y, bw, bh)
+
+    def blit(self, surf: pygame.Surface, text: str, size: int, pos, color=TEXT, anchor: str = "topleft") -> pygame.Rect:
+        img = self.text.render(text, size, color)
+        rect = img.get_rect(**{anchor: (int(pos[0]), int(pos[1]))})
+        surf.blit(img, rect)
+        return rect
+
+    def draw(self, surf: pygame.Surface, st: HudState, budget: FrameBudget | None = None) -> None:
+        w, h = surf.get_size()
+        u = h / 720.0  # type scale
+        self._health(surf, st, u)
+        self._clock(surf, st, u)
+        self._source(surf, st, u)
+        self._recognition(surf, st, u)
+        self._keys(surf, st, u)
+        self._centre(surf, st, u)
+        if st.show_budget and budget is not None:
+            self._budget(surf, budget, u)
+        if st.disconnected:
+            self._disconnected(surf, st, u)
+
+    def _health(self, surf: pygame.Surface, st: HudState, u: float) -> None:
+        rects = self.health_rects(surf.get_size())
+        for i, (rect, color) in enumerate(zip(rects, (PLAYER_COLOR, OPPONENT_COLOR), strict=True)):
+            pygame.draw.rect(surf, (0, 0, 0), rect.inflate(6, 6), border_radius=4)
+            pygame.draw.rect(surf, BAR_BACK, rect)
+            frac = max(0.0, min(1.0, st.health[i] / st.max_health))
+            shown = max(frac, min(1.0, st.shown_health[i] / st.max_health))
+            # the player's bar drains towards the centre of the screen (right), the CPU's to the left
+            def part(f: float, rect: pygame.Rect = rect, i: int = i) -> pygame.Rect:
+                wpx = int(rect.width * f)
+                return pygame.Rect(rect.right - wpx if i == 1 else rect.left, rect.top, wpx, rect.height)
+            pygame.draw.rect(surf, BAR_LOSS, part(shown))
+            fill = part(frac)
+            pygame.draw.rect(surf, color, fill)
+            pygame.draw.rect(surf, tuple(min(255, c + 60) for c in color), (fill.left, fill.top, fill.width, max(2, rect.height // 4)))
+            name_anchor = "topleft" if i == 0 else "topright"
+            name_pos = (rect.left, rect.bottom + 4) if i == 0 else (rect.right, rect.bottom + 4)
+            self.blit(surf, st.names[i], int(30 * u), name_pos, TEXT, name_anchor)
+            # knockdown pips
+            for k in range(st.knockdowns[i]):
+                off = 70 * u + k * 18 * u
+                cx = rect.left + off if i == 0 else rect.right - off
+                pygame.draw.circle(surf, (255, 255, 255), (int(cx), int(rect.bottom + 14 * u)), int(6 * u))
+
+    def _clock(self, surf: pygame.Surface, st: HudState, u: float) -> None:
+        w, _ = surf.get_size()
+        secs = max(0, int(np.ceil(st.seconds_left)))
+        box = pygame.Rect(0, 0, int(120 * u), int(78 * u))
+        box.midtop = (w // 2, int(12 * u))
+        pygame.draw.rect(surf, (12, 12, 18), box, border_radius=int(8 * u))
+        pygame.draw.rect(surf, (90, 86, 96), box, 2, border_radius=int(8 * u))
+        label = "BREAK" if st.phase == "break" else f"ROUND {st.round}/{st.rounds}"
+        self.blit(surf, label, int(22 * u), (w // 2, box.top + 6 * u), DIM, "midtop")
+        col = REJECT_COLOR if st.phase == "fight" and secs <= 10 else TEXT
+        self.blit(surf, f"{secs // 60}:{secs % 60:02d}", int(50 * u), (w // 2, box.top + 26 * u), col, "midtop")
+        mode = "  ".join(m for m in (st.mode, "DEMO" if st.demo else "") if m)
+        if mode:
+            self.blit(surf, mode, int(22 * u), (w // 2, box.bottom + 4 * u), SWITCH_COLOR, "midtop")
+
+    def _source(self, surf: pygame.Surface, st: HudState, u: float) -> None:
+        left, _ = self.health_rects(surf.get_size())
+        y = left.bottom + 32 * u
+        state_col = OK_COLOR if st.source_state == "connected" else (SWITCH_COLOR if st.source_state in ("reconnecting", "connecting") else REJECT_COLOR)
+        pygame.draw.circle(surf, state_col, (int(left.left + 7 * u), int(y + 8 * u)), int(6 * u))
+        r = self.blit(surf, f"{st.source_url}  {st.source_state}", int(22 * u), (left.left + 18 * u, y), DIM)
+        if st.battery is not None:
+            bx, by = r.right + 12 * u, y + 2 * u
+            body = pygame.Rect(int(bx), int(by), int(34 * u), int(14 * u))
+            pygame.draw.rect(surf, DIM, body, 2)
+            pygame.draw.rect(surf, DIM, (body.right, body.top + body.height // 4, int(3 * u), body.height // 2))
+            b = max(0.0, min(1.0, st.battery))
+            pygame.draw.rect(surf, OK_COLOR if b > 0.25 else REJECT_COLOR, (body.left + 3, body.top + 3, int((body.width - 6) * b), body.height - 6))
+        if st.keyboard_banner:
+            w, _ = surf.get_size()
+            msg = "No Wiimote found: playing from the keyboard (keys below)"
+            img = self.text.render(msg, int(24 * u), (20, 20, 20), shadow=False)
+            box = img.get_rect(midtop=(w // 2, int(118 * u))).inflate(int(24 * u), int(10 * u))
+            pygame.draw.rect(surf, SWITCH_COLOR, box, border_radius=int(6 * u))
+            surf.blit(img, img.get_rect(center=box.center))
+
+    def _recognition(self, surf: pygame.Surface, st: HudState, u: float) -> None:
+        _, h = surf.get_size()
+        panel = pygame.Rect(int(16 * u), h - int(170 * u), int(330 * u), int(118 * u))
+        bg = pygame.Surface(panel.size, pygame.SRCALPHA)
+        bg.fill((10, 10, 16, 170))
+        surf.blit(bg, panel)
+        x, y = panel.left + 12 * u, panel.top + 8 * u
+        self.blit(surf, "RECOGNIZED", int(18 * u), (x, y), DIM)
+        name = st.action.replace("_", " ") if st.action else "-"
+        r = self.blit(surf, name, int(34 * u), (x, y + 16 * u), TEXT)
+        if st.score is not None:
+            self.blit(surf, f"score {st.score:.2f}", int(22 * u), (r.right + 10 * u, y + 24 * u), DIM)
+        # marks
+        if st.switch_age < MARK_STEPS:
+            self._mark(surf, f"SWITCH @{st.switch_from}", SWITCH_COLOR, (panel.right - 8 * u, panel.top + 8 * u), u)
+        if st.reject_age < MARK_STEPS:
+            self._mark(surf, "REJECT", REJECT_COLOR, (panel.right - 8 * u, panel.top + 34 * u), u)
+        # main buffer: one cell per frame
+        by = panel.top + 62 * u
+        self.blit(surf, "main", int(18 * u), (x, by), DIM)
+        cw = 22 * u
+        for k in range(st.main_size):
+            cell = pygame.Rect(int(x + 70 * u + k * (cw + 4 * u)), int(by), int(cw), int(12 * u))
+            pygame.draw.rect(surf, OK_COLOR if k < st.main_fill else (60, 60, 70), cell)
+        # supplementary buffer: a thin gauge
+        sy = by + 22 * u
+        self.blit(surf, "supp.", int(18 * u), (x, sy), DIM)
+        gauge = pygame.Rect(int(x + 70 * u), int(sy), int(230 * u), int(12 * u))
+        pygame.draw.rect(surf, (60, 60, 70), gauge)
+        f = min(1.0, st.supp_fill / max(1, st.supp_size))
+        pygame.draw.rect(surf, (120, 190, 255), (gauge.left, gauge.top, int(gauge.width * f), gauge.height))
+
+    def _mark(self, surf: pygame.Surface, text: str, color, topright, u: float) -> None:
+        img = self.text.render(text, int(20 * u), (15, 15, 15), shadow=False)
+        box = img.get_rect(topright=(int(topright[0]), int(topright[1]))).inflate(int(10 * u), int(4 * u))
+        pygame.draw.rect(surf, color, box, border_radius=int(4 * u))
+        surf.blit(img, img.get_rect(center=box.center))
+
+    def _keys(self, surf: pygame.Surface, st: HudState, u: float) -> None:
+        w, h = surf.get_size()
+        _, right = self.health_rects(surf.get_size())
+        self.blit(surf, "Esc pause   F3 budget   F11 fullscreen", int(20 * u), (right.right, right.bottom + 32 * u), DIM, "topright")
+        if not st.keys:
+            return
+        parts = [f"{k} {a.replace('_', ' ')}" for k, a in st.keys]
+        line = "   ".join(parts)
+        size = int(19 * u)
+        img = self.text.render(line, size, DIM)
+        if img.get_width() > w - 20:  # two lines on narrow windows
+            half = (len(parts) + 1) // 2
+            for n, chunk in enumerate((parts[:half], parts[half:])):
+                self.blit(surf, "   ".join(chunk), size, (w // 2, h - 44 * u + n * 20 * u), DIM, "midtop")
+        else:
+            self.blit(surf, line, size, (w // 2, h - 26 * u), DIM, "midtop")
+
+    def _centre(self, surf: pygame.Surface, st: HudState, u: float) -> None:
+        w, h = surf.get_size()
+        big, mid = int(96 * u), int(40 * u)
+        if st.phase == "over":
+            if st.winner is None:
+                title = "DRAW"
+            else:
+                title = f"{st.result} - {'YOU WIN' if st.winner == 0 else 'CPU WINS'}"
+            self._banner(surf, title, big, (w // 2, h * 0.42))
+            if not st.demo:
+                self.blit(surf, "Enter: a new match", mid, (w // 2, h * 0.42 + 60 * u), DIM, "midtop")
+        elif st.phase == "count" and st.down is not None:
+            self._banner(surf, f"{st.count}", int(140 * u), (w // 2, h * 0.40))
+            self.blit(surf, "KNOCKDOWN", mid, (w // 2, h * 0.40 + 70 * u), SWITCH_COLOR, "midtop")
+        elif st.paused and not st.disconnected:
+            self._banner(surf, "PAUSED", big, (w // 2, h * 0.42))
+            self.blit(surf, "Esc or Home to resume", mid, (w // 2, h * 0.42 + 56 * u), DIM, "midtop")
+        elif st.message and st.message_age < 90:
+            self._banner(surf, st.message, big, (w // 2, h * 0.42))
+
+    def _banner(self, surf: pygame.Surface, text: str, size: int, center) -> None:
+        img = self.text.render(text, size, TEXT)
+        box = img.get_rect(center=(int(center[0]), int(center[1]))).inflate(40, 16)
+        bg = pygame.Surface(box.size, pygame.SRCALPHA)
+        bg.fill((0, 0, 0, 150))
+        surf.blit(bg, box)
+        surf.blit(img, img.get_rect(center=box.center))
+
+    def _disconnected(self, surf: pygame.Surface, st: HudState, u: float) -> None:
+        w, h = surf.get_size()
+        veil = pygame.Surface((w, h), pygame.SRCALPHA)
+        veil.fill((10, 0, 0, 170))
+        surf.blit(veil, (0, 0))
+        box = pygame.Rect(0, 0, int(w * 0.6), int(150 * u))
+        box.center = (w // 2, h // 2)
+        pygame.draw.rect(surf, (120, 20, 24), box, border_radius=int(10 * u))
+        pygame.draw.rect(surf, REJECT_COLOR, box, 3, border_radius=int(10 * u))
+        self.blit(surf, "CONTROLLER DISCONNECTED", int(54 * u), (w // 2, box.top + 22 * u), TEXT, "midtop")
+        self.blit(surf, f"{st.source_url}: {st.source_state} - the match resumes when it is back",
+                  int(24 * u), (w // 2, box.top + 88 * u), TEXT, "midtop")
+
+    def _budget(self, surf: pygame.Surface, budget: FrameBudget, u: float) -> None:
+        """A stacked bar per stage against the 16.7 ms line, and each stage's p99."""
+        w, h = surf.get_size()
+        chart_h = int(90 * u)
+        panel = pygame.Rect(w - int(440 * u), int(130 * u), int(424 * u), int(60 * u + 20 * u * len(budget.stages)) + chart_h)
+        bg = pygame.Surface(panel.size, pygame.SRCALPHA)
+        bg.fill((0, 0, 0, 190))
+        surf.blit(bg, panel)
+        last = budget.last_frame_ms()
+        names = [s.name for s in budget.stages if s.name not in (WAIT, UNACCOUNTED)] + [UNACCOUNTED]
+        scale_ms = 2.0 * budget.frame_budget_ms  # the bar spans two frame budgets
+        bar = pygame.Rect(panel.left + int(10 * u), panel.top + int(26 * u), panel.width - int(20 * u), int(18 * u))
+        self.blit(surf, f"frame budget {budget.frame_budget_ms:.1f} ms   dropped {budget.dropped_steps}", int(18 * u), (panel.left + 10 * u, panel.top + 6 * u), TEXT)
+        pygame.draw.rect(surf, (50, 50, 56), bar)
+        x = float(bar.left)
+        for k, name in enumerate(names):
+            ms = last.get(name, 0.0)
+            wpx = bar.width * ms / scale_ms
+            if wpx >= 1:
+                pygame.draw.rect(surf, STAGE_COLORS[k % len(STAGE_COLORS)], (int(x), bar.top, int(np.ceil(wpx)), bar.height))
+            x += wpx
+        line_x = bar.left + bar.width * budget.frame_budget_ms / scale_ms
+        pygame.draw.line(surf, REJECT_COLOR, (line_x, bar.top - 4), (line_x, bar.bottom + 4), 2)
+        stages = {s.name: s for s in budget.stages}
+        if budget.frames - self._p99_frame >= 30:  # percentiles over the ring: twice a second
+            self._p99_frame = budget.frames
+            for name in names:
+                d = budget.stage_durations(name)
+                self._p99[name] = float(np.percentile(d, 99)) / 1e6 if len(d) else 0.0
+        # history: a stacked column per frame against the same 16.7 ms line
+        if budget.frames != self._history_frame:
+            self._history_frame = budget.frames
+            self._history.append(np.array([last.get(n, 0.0) for n in names]))
+        chart = pygame.Rect(bar.left, panel.bottom - chart_h - int(4 * u), bar.width, chart_h)
+        pygame.draw.rect(surf, (30, 30, 36), chart)
+        col_w = chart.width / HISTORY_FRAMES
+        px_per_ms = chart.height / scale_ms
+        for i, ms in enumerate(self._history):
+            x0 = chart.left + i * col_w
+            y0 = float(chart.bottom)
+            for k, v in enumerate(ms):
+                hpx = min(v * px_per_ms, y0 - chart.top)
+                if hpx >= 0.5:
+                    pygame.draw.rect(surf, STAGE_COLORS[k % len(STAGE_COLORS)], (int(x0), int(y0 - hpx), max(1, int(np.ceil(col_w))), int(np.ceil(hpx))))
+                    y0 -= hpx
+        line_y = chart.bottom - budget.frame_budget_ms * px_per_ms
+        pygame.draw.line(surf, REJECT_COLOR, (chart.left, line_y), (chart.right, line_y), 1)
+        for k, name in enumerate(names):
+            y = bar.bottom + 8 * u + k * 20 * u
+            pygame.draw.rect(surf, STAGE_COLORS[k % len(STAGE_COLORS)], (int(panel.left + 10 * u), int(y + 3 * u), int(12 * u), int(12 * u)))
+            p99 = self._p99.get(name, 0.0)
+            st = stages[name]
+            over = f"  over {st.overruns}" if st.overruns else ""
+            budget_txt = f"/{st.budget_ms:.1f}" if st.budget_ms else ""
+            self.blit(surf, f"{name:<12} {last.get(name, 0.0):5.2f} ms  p99 {p99:5.2f}{budget_txt}{over}", int(18 * u), (panel.left + 28 * u, y), TEXT)

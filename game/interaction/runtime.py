@@ -1,0 +1,116 @@
+"""The Interaction Graph at run time: load the table, map the live situation to its state,
+look the best action up. The CPU boxer acts only when its body is back at the guard, as in
+Shum et al.; choosing "guard" means waiting `rules.wait_frames` steps before choosing again.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from .lookup import StateIndex
+from .state import Situation
+from .table import GraphTable
+
+DEFAULT_GRAPH = Path(__file__).resolve().parent.parent / "assets" / "graph.npz"
+IDLE = "guard"
+
+
+class InteractionGraph:
+    def __init__(self, table: GraphTable, path: str | Path | None = None):
+        self.table = table
+        self.path = Path(path) if path is not None else None
+        self.names = list(table.action_names)
+        self._ids = {n: i for i, n in enumerate(self.names)}
+        self.wait_id = self._ids[IDLE]
+        self.index = StateIndex(table.grid, table.keys, (table.fill_keys, table.fill_state),
+                                ready_action=self.wait_id)
+        self.ready_frame = table.rules.wait_frames - 1
+        self._best = table.best_action.tolist()
+        self._best_names = [self.names[i] for i in self._best]
+
+    @classmethod
+    def load(cls, path: str | Path = DEFAULT_GRAPH) -> InteractionGraph:
+        return cls(GraphTable.load(path), path)
+
+    @property
+    def n_states(self) -> int:
+        return self.table.n_states
+
+    @property
+    def n_edges(self) -> int:
+        return self.table.n_edges
+
+    def other_code(self, action: str, phase: float) -> tuple[int, float]:
+        """The table's (action id, frame) for the other boxer; idle or unknown -> READY."""
+        aid = self._ids.get(action)
+        if aid is None or aid == self.wait_id:
+            return self.wait_id, self.ready_frame
+        return aid, phase
+
+    def state_of(self, s: Situation) -> int:
+        aid, frame = self.other_code(s.other_action, s.other_phase)
+        return self.index.nearest(s.distance, s.bearing_self, s.bearing_other, aid, frame)
+
+    def best_action(self, s: Situation) -> str:
+        """One of ACTION_NAMES, or "guard" to wait (also for a situation with NaN or
+        infinite numbers, which a glitching body could produce: the loop must not crash)."""
+        aid, frame = self.other_code(s.other_action, s.other_phase)
+        try:
+            sid = self.index.nearest(s.distance, s.bearing_self, s.bearing_other, aid, frame)
+        except (ValueError, OverflowError):
+            return IDLE
+        return self._best_names[sid]
+
+    def best_action_id(self, distance: float, bearing_self: float, bearing_other: float,
+                       other_id: int, other_frame: float) -> int:
+        """The same look-up on table ids (the headless duel's path)."""
+        return self._best[self.index.nearest(distance, bearing_self, bearing_other, other_id,
+                                             other_frame)]
+
+    def info(self) -> dict:
+        t = self.table
+        out = {"states": t.n_states, "edges": t.n_edges, "actions": self.names[:t.n_choices],
+               "grid": t.grid.as_dict(), "rules": t.rules.as_dict(), "rewards": t.rewards.as_dict(),
+               "build": t.build}
+        if self.path is not None and self.path.exists():
+            out["file"] = str(self.path)
+            out["file_bytes"] = self.path.stat().st_size
+        return out
+
+
+class OpponentController:
+    """Drives the CPU boxer's PlayerController from the graph.
+
+    `decide(situation)` is called every step; when the boxer is at the guard (and not
+    waiting out a "guard" choice) it looks the best action up and plays it. Returns the
+    action chosen this step ("guard" for a wait), or None when it did not choose.
+    """
+
+    def __init__(self, graph: InteractionGraph, lib: dict, controller=None):
+        self.graph = graph
+        if controller is None:
+            from game.motion import PlayerController  # the motion helper's module
+            controller = PlayerController(lib)
+        self.controller = controller
+        self._wait = 0
+
+    def at_guard(self) -> bool:
+        return self.controller.action == IDLE
+
+    def decide(self, situation: Situation) -> str | None:
+        if not self.at_guard():
+            self._wait = 0
+            return None
+        if self._wait > 0:
+            self._wait -= 1
+            return None
+        action = self.graph.best_action(situation)
+        if action == IDLE:
+            self._wait = self.graph.table.rules.wait_frames - 1
+        else:
+            self.controller.play(action)
+        return action
+
+    def step(self):
+        """Advance the wrapped controller one 60 Hz step (its reference posture)."""
+        return self.controller.step()

@@ -1,0 +1,371 @@
+"""The ring and the two boxers, drawn under a three-quarter camera.
+
+The static part (arena, apron, canvas, the ropes behind the boxers) is drawn once per window
+size into a cached surface; each frame blits it, draws shadows, both bodies as shaded limbs,
+torso and head, sorted far to near, then the ropes in front and the hit flashes. Bodies come in
+as (17, 3) world joints, already interpolated with the loop's alpha by the caller
+(`lerp_joints`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pygame
+
+from game.camera import Camera
+
+# The 17 joints in the contract's order (game.skeleton.JOINTS; tests check they agree).
+JOINT_NAMES = (
+    "pelvis", "spine", "chest", "neck", "head",
+    "shoulder_l", "elbow_l", "fist_l", "shoulder_r", "elbow_r", "fist_r",
+    "hip_l", "knee_l", "ankle_l", "hip_r", "knee_r", "ankle_r",
+)
+J = {name: i for i, name in enumerate(JOINT_NAMES)}
+
+RING_HALF = 3.0  # inside the ropes
+APRON_HALF = 3.55
+POST_HALF = 3.15
+ROPE_HEIGHTS = (0.55, 0.9, 1.25)
+POST_HEIGHT = 1.4
+
+KEY = (255, 0, 255)
+LIGHT_2D = np.array([-0.55, -0.83])  # the key light comes from the upper left of the screen
+
+
+@dataclass(frozen=True)
+class BoxerLook:
+    skin: tuple[int, int, int]
+    trunks: tuple[int, int, int]
+    gloves: tuple[int, int, int]
+    shoes: tuple[int, int, int]
+
+
+PLAYER_LOOK = BoxerLook(skin=(226, 170, 128), trunks=(200, 30, 40), gloves=(230, 40, 40), shoes=(30, 30, 34))
+OPPONENT_LOOK = BoxerLook(skin=(150, 98, 66), trunks=(30, 80, 210), gloves=(35, 95, 235), shoes=(240, 240, 240))
+
+# (joint a, joint b, radius m, part) drawn as capsules; part picks the colour
+LIMBS = (
+    ("hip_l", "knee_l", 0.08, "skin"), ("knee_l", "ankle_l", 0.065, "skin"),
+    ("hip_r", "knee_r", 0.08, "skin"), ("knee_r", "ankle_r", 0.065, "skin"),
+    ("neck", "head", 0.055, "skin"),
+    ("shoulder_l", "elbow_l", 0.06, "skin"), ("elbow_l", "fist_l", 0.052, "skin"),
+    ("shoulder_r", "elbow_r", 0.06, "skin"), ("elbow_r", "fist_r", 0.052, "skin"),
+)
+SPHERES = (("head", 0.125, "skin"), ("fist_l", 0.1, "gloves"), ("fist_r", 0.1, "gloves"),
+           ("ankle_l", 0.07, "shoes"), ("ankle_r", 0.07, "shoes"))
+
+
+def lerp_joints(prev: np.ndarray, curr: np.ndarray, alpha: float) -> np.ndarray:
+    """The pose between two steps: prev + alpha (curr - prev)."""
+    return prev + (curr - prev) * alpha
+
+
+def shade(c: tuple[int, int, int], k: float) -> tuple[int, int, int]:
+    """Darken (k < 1) or lighten (k > 1, towards white) a colour."""
+    if k <= 1.0:
+        return (int(c[0] * k), int(c[1] * k), int(c[2] * k))
+    t = min(1.0, k - 1.0)
+    return (int(c[0] + (255 - c[0]) * t), int(c[1] + (255 - c[1]) * t), int(c[2] + (255 - c[2]) * t))
+
+
+@dataclass
+class Flash:
+    point: np.ndarray  # world
+    age: int = 0
+    strong: bool = True
+    blocked: bool = False
+
+    LIFE = 14
+
+
+class Renderer:
+    """Draws the ring and the boxers on a surface of any size (the window resizes)."""
+
+    def __init__(self, size: tuple[int, int], detailed: bool = True):
+        self.camera = Camera(size)
+        # low-power mode: one flat colour per limb (no highlight pass), half the draw calls
+        self.detailed = detailed
+        self._static: pygame.Surface | None = None
+        self._front: pygame.Surface | None = None
+        self.flashes: list[Flash] = []
+        self.looks = (PLAYER_LOOK, OPPONENT_LOOK)
+
+    # -- static layers -------------------------------------------------------------------
+    def resize(self, size: tuple[int, int]) -> None:
+        if tuple(size) != self.camera.size:
+            self.camera.resize(size)
+            self._static = self._front = None
+
+    def _poly(self, surf: pygame.Surface, color, pts: np.ndarray, width: int = 0) -> None:
+        pygame.draw.polygon(surf, color, np.asarray(pts).tolist(), width)
+
+    def _build_static(self) -> None:
+        w, h = self.camera.size
+        cam = self.camera
+        back = pygame.Surface((w, h))
+        # arena: a dark gradient with a warm glow above the ring
+        grad = np.linspace(0.0, 1.0, h)[:, None]
+        top, bottom = np.array([14, 16, 26]), np.array([40, 34, 44])
+        rows = (top * (1 - grad) + bottom * grad).astype(np.uint8)
+        arr = np.broadcast_to(rows[None, :, :], (w, h, 3))
+        pygame.surfarray.blit_array(back, np.ascontiguousarray(arr))
+        glow = pygame.Surface((w, h), pygame.SRCALPHA)
+        for i in range(6):
+            r = int(h * (0.75 - i * 0.1))
+            pygame.draw.ellipse(glow, (255, 220, 160, 10), (w // 2 - r * 1.3, int(h * 0.12) - r // 3, r * 2.6, r * 1.1))
+        back.blit(glow, (0, 0))
+        # crowd: rows of dim heads in the dark, seeded so every run draws the same crowd
+        rng = np.random.default_rng(7)
+        horizon = int(cam.project(np.array([0.0, 0.0, 14.0]))[0][1])
+        for row in range(5):
+            y = horizon - 20 - row * int(h * 0.045)
+            n = 40 + row * 6
+            xs = rng.uniform(0, w, n)
+            for x in xs:
+                shade_k = rng.uniform(0.5, 1.0)
+                col = (int(60 * shade_k), int(52 * shade_k), int(64 * shade_k))
+                rr = max(3, int(h * 0.012 * (1 - row * 0.1)))
+                pygame.draw.circle(back, col, (int(x), int(y + rng.uniform(-4, 4))), rr)
+        # apron and canvas
+        a, c = APRON_HALF, RING_HALF
+        apron = np.array([[-a, 0, -a], [a, 0, -a], [a, 0, a], [-a, 0, a]], dtype=float)
+        self._poly(back, (70, 22, 30), cam.project(apron)[0])
+        # the apron's skirt on the two sides that face the camera
+        top, _ = cam.project(apron)
+        low, _ = cam.project(apron + [0.0, -0.4, 0.0])
+        for i, j in ((0, 1), (1, 2)):
+            self._poly(back, (44, 12, 20), np.array([top[i], top[j], low[j], low[i]]))
+        canvas = np.array([[-c, 0.002, -c], [c, 0.002, -c], [c, 0.002, c], [-c, 0.002, c]], dtype=float)
+        self._poly(back, (198, 196, 184), cam.project(canvas)[0])
+        # canvas shading: a soft darker border and the centre logo circle
+        inner = canvas * [0.92, 1, 0.92]
+        edge = pygame.Surface((w, h), pygame.SRCALPHA)
+        self._poly(edge, (0, 0, 0, 28), cam.project(canvas)[0])
+        self._poly(edge, (0, 0, 0, 0), cam.project(inner)[0])
+        back.blit(edge, (0, 0))
+        ang = np.linspace(0, 2 * np.pi, 48, endpoint=False)
+        circle = np.stack([1.1 * np.cos(ang), np.full_like(ang, 0.003), 1.1 * np.sin(ang)], axis=1)
+        self._poly(back, (178, 176, 166), cam.project(circle)[0])
+        self._poly(back, (150, 40, 50), cam.project(circle)[0], max(2, int(h / 240)))
+        # corner pads colours: red near the player's corner, blue at the opponent's
+        posts = np.array([[-POST_HALF, 0, -POST_HALF], [POST_HALF, 0, -POST_HALF],
+                          [POST_HALF, 0, POST_HALF], [-POST_HALF, 0, POST_HALF]], dtype=float)
+        post_cols = [(200, 40, 40), (235, 235, 235), (40, 80, 210), (235, 235, 235)]
+        depth_of = cam.project(posts)[1]
+        mid_depth = cam.project(np.zeros(3))[1]
+        # the front layer is opaque ropes over a colour key: an RLE-accelerated blit costs
+        # only its few opaque pixels, where a per-pixel-alpha layer would cost the whole screen
+        front = pygame.Surface((w, h))
+        front.fill(KEY)
+        front.set_colorkey(KEY, pygame.RLEACCEL)
+        # sides: (post i, post j); near sides go in the front layer
+        for i in range(4):
+            j = (i + 1) % 4
+            near = (depth_of[i] + depth_of[j]) / 2 < mid_depth
+            layer = front if near else back
+            for k, hgt in enumerate(ROPE_HEIGHTS):
+                ends = np.array([posts[i] + [0, hgt, 0], posts[j] + [0, hgt, 0]])
+                xy, z = cam.project(ends)
+                thick = max(2, int(cam.scale_at(z.mean()) * 0.035))
+                col = (235, 235, 235) if k != 1 else (200, 40, 40)
+                pygame.draw.line(layer, shade(col, 0.55), xy[0] + [0, thick * 0.5], xy[1] + [0, thick * 0.5], thick)
+                pygame.draw.line(layer, col, xy[0], xy[1], thick)
+        for i in range(4):
+            near = depth_of[i] < mid_depth
+            layer = front if near else back
+            ends = np.array([posts[i], posts[i] + [0, POST_HEIGHT, 0]])
+            xy, z = cam.project(ends)
+            thick = max(4, int(cam.scale_at(z.mean()) * 0.16))
+            pygame.draw.line(layer, (60, 60, 66), xy[0], xy[1], thick)
+            pad = np.array([posts[i] + [0, 0.45, 0], posts[i] + [0, POST_HEIGHT - 0.05, 0]])
+            pxy, _ = cam.project(pad)
+            pygame.draw.line(layer, post_cols[i], pxy[0], pxy[1], int(thick * 1.25))
+        if pygame.display.get_init() and pygame.display.get_surface() is not None:
+            # in the display's pixel format: a per-frame blit without conversion
+            back = back.convert()
+            front = front.convert()
+            front.set_colorkey(KEY, pygame.RLEACCEL)
+        self._static, self._front = back, front
+
+    def screen_box(self, joints: np.ndarray, margin: float = 0.15) -> pygame.Rect:
+        """The screen rectangle a body's joints (with `margin` metres around them) project to."""
+        xy, z = self.camera.project(joints)
+        pad = float(np.max(self.camera.scale_at(z))) * margin
+        lo, hi = xy.min(axis=0) - pad, xy.max(axis=0) + pad
+        return pygame.Rect(int(lo[0]), int(lo[1]), int(hi[0] - lo[0]), int(hi[1] - lo[1]))
+
+    # -- per frame -----------------------------------------------------------------------
+    def add_flash(self, point: np.ndarray, strong: bool = True, blocked: bool = False) -> None:
+        self.flashes.append(Flash(np.asarray(point, dtype=float).copy(), strong=strong, blocked=blocked))
+
+    def step_effects(self) -> None:
+        """Age the hit flashes by one simulation step."""
+        for f in self.flashes:
+            f.age += 1
+        self.flashes = [f for f in self.flashes if f.age < Flash.LIFE]
+
+    def draw(self, surf: pygame.Surface, bodies: list[np.ndarray]) -> None:
+        """Draw the scene; bodies[i] are boxer i's (17, 3) world joints."""
+        self.resize(surf.get_size())
+        if self._static is None:
+            self._build_static()
+        surf.blit(self._static, (0, 0))
+        self._draw_shadows(surf, bodies)
+        prims: list[tuple[float, int, tuple]] = []
+        for i, joints in enumerate(bodies):
+            prims.extend(self._boxer_prims(joints, self.looks[i % 2]))
+        prims.sort(key=lambda p: -p[0])
+        for _, kind, args in prims:
+            if kind == 0:
+                self._capsule(surf, *args)
+            elif kind == 1:
+                self._sphere(surf, *args)
+            elif kind == 3:
+                self._eyes(surf, *args)
+            else:
+                self._torso(surf, *args)
+        surf.blit(self._front, (0, 0))
+        self._draw_flashes(surf)
+
+    def _draw_shadows(self, surf: pygame.Surface, bodies: list[np.ndarray]) -> None:
+        cam = self.camera
+        for joints in bodies:
+            feet = joints[[J["ankle_l"], J["ankle_r"], J["pelvis"]]] * [1, 0, 1]
+            centre = feet.mean(axis=0)
+            ang = np.linspace(0, 2 * np.pi, 20, endpoint=False)
+            ring = centre + np.stack([0.45 * np.cos(ang), np.full_like(ang, 0.004), 0.32 * np.sin(ang)], axis=1)
+            xy = cam.project(ring)[0]
+            lo, hi = xy.min(axis=0), xy.max(axis=0)
+            size = (int(hi[0] - lo[0]) + 2, int(hi[1] - lo[1]) + 2)
+            if size[0] <= 2 or size[1] <= 2 or size[0] > 4000 or size[1] > 4000:
+                continue
+            sh = pygame.Surface(size, pygame.SRCALPHA)
+            self._poly(sh, (20, 10, 10, 90), xy - lo)
+            surf.blit(sh, (int(lo[0]), int(lo[1])))
+
+    def _boxer_prims(self, joints: np.ndarray, look: BoxerLook) -> list[tuple[float, int, tuple]]:
+        cam = self.camera
+        xy, z = cam.project(joints)
+        scale = cam.scale_at(z)
+        colors = {
+            "skin": look.skin, "trunks_leg": look.trunks, "gloves": look.gloves, "shoes": look.shoes,
+        }
+        prims: list[tuple[float, int, tuple]] = []
+        for a, b, r, part in LIMBS:
+            ia, ib = J[a], J[b]
+            d = (z[ia] + z[ib]) / 2
+            prims.append((d, 0, (xy[ia], xy[ib], r * scale[ia], r * scale[ib], colors[part])))
+        # trunks legs: over the upper half of each thigh
+        for hip, knee in (("hip_l", "knee_l"), ("hip_r", "knee_r")):
+            ia, ib = J[hip], J[knee]
+            mid_xy = xy[ia] + (xy[ib] - xy[ia]) * 0.5
+            d = (z[ia] * 0.75 + z[ib] * 0.25) - 0.01
+            prims.append((d, 0, (xy[ia], mid_xy, 0.09 * scale[ia], 0.085 * scale[ib], look.trunks)))
+        for name, r, part in SPHERES:
+            i = J[name]
+            prims.append((z[i] - r, 1, (xy[i], r * scale[i], colors[part])))
+        # the face: eyes and brows on the side of the head the boxer faces, drawn just after
+        # the head when that side is towards the camera (so a boxer's facing reads at once)
+        right = joints[J["shoulder_r"]] - joints[J["shoulder_l"]]
+        right[1] = 0.0
+        n = float(np.linalg.norm(right))
+        if n > 1e-6:
+            right /= n
+            forward = np.cross(right, (0.0, 1.0, 0.0))
+            head = joints[J["head"]]
+            eyes = np.array([head + forward * 0.11 + right * s + (0.0, 0.02, 0.0) for s in (-0.045, 0.045)])
+            exy, ez = cam.project(eyes)
+            if ez.mean() < z[J["head"]] - 0.03:
+                prims.append((z[J["head"]] - 0.125 - 1e-4, 3, (exy, float(scale[J["head"]]))))
+        # torso: chest block from shoulders to hips, trunks below the navel
+        torso_ids = [J["shoulder_l"], J["shoulder_r"], J["hip_r"], J["hip_l"]]
+        d = float(z[torso_ids].mean()) + 0.02
+        prims.append((d, 2, (xy, scale, look)))
+        return prims
+
+    def _capsule(self, surf: pygame.Surface, a: np.ndarray, b: np.ndarray, ra: float, rb: float, color) -> None:
+        outline = shade(color, 0.45)
+        self._capsule_fill(surf, a, b, ra + 1.5, rb + 1.5, outline)
+        self._capsule_fill(surf, a, b, ra, rb, color)
+        if not self.detailed:
+            return
+        # highlight: a thinner, lighter capsule shifted towards the light
+        off = LIGHT_2D * 0.35
+        self._capsule_fill(surf, a + off * ra, b + off * rb, ra * 0.45, rb * 0.45, shade(color, 1.28))
+
+    def _capsule_fill(self, surf: pygame.Surface, a: np.ndarray, b: np.ndarray, ra: float, rb: float, color) -> None:
+        d = b - a
+        n = float(np.hypot(d[0], d[1]))
+        if n > 1e-6:
+            perp = np.array([-d[1], d[0]]) / n
+            quad = np.array([a + perp * ra, b + perp * rb, b - perp * rb, a - perp * ra])
+            self._poly(surf, color, quad)
+        pygame.draw.circle(surf, color, (float(a[0]), float(a[1])), max(1.0, ra))
+        pygame.draw.circle(surf, color, (float(b[0]), float(b[1])), max(1.0, rb))
+
+    def _eyes(self, surf: pygame.Surface, xy: np.ndarray, k: float) -> None:
+        r = max(1.0, 0.014 * k)
+        for x, y in xy:
+            pygame.draw.circle(surf, (30, 24, 22), (float(x), float(y)), r)
+            pygame.draw.line(surf, (50, 36, 30), (x - 2.2 * r, y - 2.2 * r), (x + 2.2 * r, y - 2.4 * r), max(1, int(r)))
+
+    def _sphere(self, surf: pygame.Surface, c: np.ndarray, r: float, color) -> None:
+        pos = (float(c[0]), float(c[1]))
+        pygame.draw.circle(surf, shade(color, 0.45), pos, r + 1.5)
+        pygame.draw.circle(surf, shade(color, 0.8), pos, r)
+        if not self.detailed:
+            return
+        pygame.draw.circle(surf, color, (pos[0] + LIGHT_2D[0] * r * 0.15, pos[1] + LIGHT_2D[1] * r * 0.15), r * 0.8)
+        pygame.draw.circle(surf, shade(color, 1.35), (pos[0] + LIGHT_2D[0] * r * 0.4, pos[1] + LIGHT_2D[1] * r * 0.4), r * 0.3)
+
+    def _torso(self, surf: pygame.Surface, xy: np.ndarray, scale: np.ndarray, look: BoxerLook) -> None:
+        sl, sr, hl, hr = xy[J["shoulder_l"]], xy[J["shoulder_r"]], xy[J["hip_l"]], xy[J["hip_r"]]
+        pel, chest = xy[J["pelvis"]], xy[J["chest"]]
+        k = float(scale[J["chest"]])
+        # widen the shoulder line and hips a little so the torso reads as a volume
+        def widen(p: np.ndarray, q: np.ndarray, by: float) -> tuple[np.ndarray, np.ndarray]:
+            mid, half = (p + q) / 2, (q - p) / 2
+            n = float(np.hypot(*half))
+            if n < 1e-6:
+                half, n = np.array([1.0, 0.0]), 1.0
+            return mid - half * (1 + by / n), mid + half * (1 + by / n)
+        sl2, sr2 = widen(sl, sr, 0.07 * k)
+        hl2, hr2 = widen(hl, hr, 0.05 * k)
+        waist_l = sl2 + (hl2 - sl2) * 0.62
+        waist_r = sr2 + (hr2 - sr2) * 0.62
+        chest_poly = np.array([sl2, sr2, waist_r, waist_l])
+        trunks_poly = np.array([waist_l, waist_r, hr2, pel + (hr2 - pel) * 0.2 + (pel - chest) * 0.12, hl2])
+        skin, trunks = look.skin, look.trunks
+        # the trunk's volume from any side: a capsule chest -> spine, the trunks round the pelvis
+        spine, pelvis = xy[J["spine"]], xy[J["pelvis"]]
+        self._capsule(surf, chest, spine, 0.15 * k, 0.14 * k, skin)
+        self._capsule(surf, spine + (pelvis - spine) * 0.3, pelvis, 0.14 * k, 0.14 * k, trunks)
+        self._poly(surf, shade(skin, 0.45), chest_poly, 0)
+        self._poly(surf, shade(skin, 0.45), chest_poly, 3)
+        inset = (chest_poly - chest_poly.mean(axis=0)) * 0.92 + chest_poly.mean(axis=0)
+        self._poly(surf, skin, inset)
+        hl_poly = (chest_poly - chest_poly.mean(axis=0)) * 0.45 + chest_poly.mean(axis=0) + LIGHT_2D * 0.06 * k
+        self._poly(surf, shade(skin, 1.18), hl_poly)
+        self._poly(surf, shade(trunks, 0.45), trunks_poly, 0)
+        t_in = (trunks_poly - trunks_poly.mean(axis=0)) * 0.9 + trunks_poly.mean(axis=0)
+        self._poly(surf, trunks, t_in)
+        # waistband, where the hips face the camera enough to show it
+        if float(np.hypot(*(waist_r - waist_l))) > 0.2 * k:
+            pygame.draw.line(surf, (245, 245, 245), waist_l, waist_r, max(2, int(0.035 * k)))
+
+    def _draw_flashes(self, surf: pygame.Surface) -> None:
+        cam = self.camera
+        for f in self.flashes:
+            xy, z = cam.project(f.point[None, :])
+            c = xy[0]
+            life = 1.0 - f.age / Flash.LIFE
+            r = float(cam.scale_at(z[0])) * (0.18 + 0.25 * (1 - life)) * (1.3 if f.strong else 0.8)
+            n = 10
+            ang = np.arange(2 * n) * np.pi / n + f.age * 0.15
+            radii = np.where(np.arange(2 * n) % 2 == 0, r, r * 0.45)
+            star = c + np.stack([np.cos(ang) * radii, np.sin(ang) * radii], axis=1)
+            col = (150, 200, 255) if f.blocked else (255, 236, 120)
+            self._poly(surf, col, star)
+            pygame.draw.circle(surf, (255, 255, 255), (float(c[0]), float(c[1])), r * 0.35 * life + 1)

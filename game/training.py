@@ -1,0 +1,351 @@
+"""Train your moves: `quickjab train`.
+
+Walks the player through the 13 actions. For each: the boxer shows the action (looping
+animation), then three trials: "get ready" (the hands still, so the trial starts at rest),
+"GO!" and a recording window of the active source's 60 Hz frames. Then the trials build the
+player's templates (engine.recognition.Templates.from_trials, paper section III), saved in the
+user's data directory where `quickjab play` finds them from then on.
+
+With the keyboard source a key press (any action key, Space or Enter) performs the action being
+trained with the virtual player; `keyboard://?auto=1` (and `--demo`) performs it by itself.
+Left-handed players (`--left-handed`) see the animations mirrored; the templates hold their
+own motions as recorded, marked left-handed so `play` does not mirror them again.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from engine.errors import InputError
+
+if TYPE_CHECKING:  # pygame loads only when the screen opens (the CLI imports this module)
+    import pygame
+
+HZ = 60
+TRIALS = 3
+SHOW_STEPS = 90  # the animation alone before the first trial of an action
+READY_STEPS = 60  # "get ready": the hands held still
+LEAD_IN = 30  # frames of the ready phase kept at the start of a trial (the rest before)
+RECORD_STEPS = 96  # the recording window after GO
+SAVED_STEPS = 10**9
+
+SHOW, READY, RECORD, DONE = "show", "ready", "record", "done"
+
+MIRROR_JOINT = {}  # joint index -> the mirrored joint's index (filled below)
+
+
+def mirror_posture(posture: np.ndarray) -> np.ndarray:
+    """A (17, 3) local posture seen in a mirror: x negated, left and right joints swapped."""
+    from game.skeleton import JOINTS
+
+    if not MIRROR_JOINT:
+        for i, name in enumerate(JOINTS):
+            other = name[:-2] + ("_r" if name.endswith("_l") else "_l") if name[-2:] in ("_l", "_r") else name
+            MIRROR_JOINT[i] = JOINTS.index(other)
+    out = posture[[MIRROR_JOINT[i] for i in range(len(posture))]].copy()
+    out[:, 0] *= -1.0
+    return out
+
+
+@dataclass
+class Trainer:
+    """The walk through the actions, one step at a time; knows nothing about drawing."""
+
+    actions: list[str]
+    trials: int = TRIALS
+    index: int = 0
+    trial: int = 0
+    phase: str = SHOW
+    phase_step: int = 0
+    recorded: dict[str, list[np.ndarray]] = field(default_factory=dict)
+    _ring: list[np.ndarray] = field(default_factory=list)
+    _buffer: list[np.ndarray] = field(default_factory=list)
+    go: bool = False  # True on the step GO is given (the keyboard source performs then)
+
+    @property
+    def action(self) -> str:
+        return self.actions[min(self.index, len(self.actions) - 1)]
+
+    @property
+    def done(self) -> bool:
+        return self.phase == DONE
+
+    def progress(self) -> float:
+        total = len(self.actions) * self.trials
+        return sum(len(v) for v in self.recorded.values()) / total
+
+    def step(self, frame: np.ndarray | None) -> None:
+        """Advance one 60 Hz step with this step's frame (None before the source delivers)."""
+        self.go = False
+        if self.phase == DONE:
+            return
+        self.phase_step += 1
+        if frame is not None:
+            if self.phase == RECORD:
+                self._buffer.append(frame.copy())
+            else:
+                self._ring.append(frame.copy())
+                del self._ring[:-LEAD_IN]
+        if self.phase == SHOW and self.phase_step >= SHOW_STEPS:
+            self._enter(READY)
+        elif self.phase == READY and self.phase_step >= READY_STEPS:
+            self._buffer = list(self._ring)
+            self._enter(RECORD)
+            self.go = True
+        elif self.phase == RECORD and self.phase_step >= RECORD_STEPS:
+            if len(self._buffer) >= LEAD_IN:
+                self.recorded.setdefault(self.action, []).append(np.array(self._buffer))
+                self.trial += 1
+            self._buffer = []
+            if self.trial >= self.trials:
+                self.index += 1
+                self.trial = 0
+                self._enter(SHOW if self.index < len(self.actions) else DONE)
+            else:
+                self._enter(READY)
+
+    def _enter(self, phase: str) -> None:
+        self.phase = phase
+        self.phase_step = 0
+
+    def templates(self, left_handed: bool = False):
+        """The player's templates from the recorded trials."""
+        from engine.recognition import Templates
+
+        templates = Templates.from_trials(self.recorded)
+        templates.meta["source"] = "quickjab train"
+        templates.meta["left_handed"] = "1" if left_handed else "0"
+        return templates
+
+
+class TrainingScreen:
+    """Draws the trainer: the animated boxer on the left, the checklist and a live plot right."""
+
+    def __init__(self, lib: dict, trainer: Trainer, source_url: str, left_handed: bool = False):
+        from game.hud import TextCache
+        from game.render import Renderer
+
+        self.lib = lib
+        self.trainer = trainer
+        self.source_url = source_url
+        self.left_handed = left_handed
+        self.text = TextCache()
+        self.renderer: Renderer | None = None
+        self.history: list[np.ndarray] = []
+        self.anim_frame = 0.0
+        self.saved_to: str = ""
+
+    def push_frame(self, frame: np.ndarray | None) -> None:
+        if frame is not None:
+            self.history.append(frame.copy())
+            del self.history[:-150]
+
+    def draw(self, surf: pygame.Surface) -> None:
+        import pygame
+
+        from game.camera import Camera
+        from game.render import Renderer
+        from game.skeleton import local_to_world
+
+        w, h = surf.get_size()
+        u = h / 720.0
+        stage = pygame.Rect(0, 0, int(w * 0.58), h)
+        if self.renderer is None or self.renderer.camera.size != stage.size:
+            self.renderer = Renderer(stage.size)
+            self.renderer.camera = Camera(stage.size, eye=(2.2, 2.2, 3.6), target=(0.0, 0.95, 0.0), fov_deg=40)
+        tr = self.trainer
+        clip = self.lib[tr.action]
+        # SHOW loops the move; READY holds the guard; RECORD plays it in time with GO
+        if tr.phase == SHOW:
+            self.anim_frame = (self.anim_frame + 1) % (clip.frames + 20)
+        elif tr.phase == READY:
+            self.anim_frame = 0
+        else:
+            self.anim_frame = tr.phase_step
+        posture = clip.posture(min(self.anim_frame, clip.frames - 1))
+        if self.left_handed:
+            posture = mirror_posture(posture)
+        root = clip.root_offset(min(self.anim_frame, clip.frames - 1))
+        body = local_to_world(posture, (float(root[0]), float(root[1]), float(root[2])))
+        sub = surf.subsurface(stage)
+        self.renderer.draw(sub, [body])
+        # right panel
+        panel = pygame.Rect(stage.right, 0, w - stage.right, h)
+        pygame.draw.rect(surf, (18, 18, 26), panel)
+        x = panel.left + int(24 * u)
+        self._text(surf, "TRAIN YOUR MOVES", int(40 * u), (x, 20 * u), (242, 240, 232))
+        self._text(surf, f"source {self.source_url}" + ("   left-handed" if self.left_handed else ""), int(20 * u), (x, 58 * u), (170, 166, 160))
+        y = 88 * u
+        for i, a in enumerate(tr.actions):
+            done = len(tr.recorded.get(a, []))
+            current = i == tr.index and not tr.done
+            col = (255, 200, 40) if current else ((90, 220, 120) if done >= tr.trials else (200, 196, 190))
+            self._text(surf, a.replace("_", " "), int(24 * u), (x + 18 * u, y), col)
+            for k in range(tr.trials):
+                c = (int(x + 190 * u + k * 16 * u), int(y + 9 * u))
+                pygame.draw.circle(surf, (90, 220, 120) if k < done else (70, 70, 80), c, int(5 * u))
+            if current:
+                pygame.draw.polygon(surf, col, [(x, y + 3 * u), (x + 10 * u, y + 9 * u), (x, y + 15 * u)])
+            y += 24 * u
+        # progress bar
+        bar = pygame.Rect(x, int(y + 10 * u), panel.width - int(48 * u), int(12 * u))
+        pygame.draw.rect(surf, (60, 60, 70), bar)
+        pygame.draw.rect(surf, (90, 220, 120), (bar.left, bar.top, int(bar.width * tr.progress()), bar.height))
+        # live signal plot
+        plot = pygame.Rect(x, bar.bottom + int(16 * u), bar.width, h - bar.bottom - int(30 * u))
+        self._plot(surf, plot)
+        # the instruction over the stage
+        self._instruction(surf, stage, u)
+
+    def _instruction(self, surf: pygame.Surface, stage: pygame.Rect, u: float) -> None:
+        import pygame
+
+        tr = self.trainer
+        if tr.done:
+            title, sub = "ALL DONE", (f"templates saved to {self.saved_to}" if self.saved_to else "building templates...")
+        elif tr.phase == SHOW:
+            title, sub = tr.action.replace("_", " ").upper(), "watch the move, then copy it"
+        elif tr.phase == READY:
+            secs = int(np.ceil((READY_STEPS - tr.phase_step) / HZ))
+            title, sub = f"GET READY {secs}", f"trial {tr.trial + 1} of {tr.trials}: hold your guard still"
+        else:
+            title, sub = "GO!", f"trial {tr.trial + 1} of {tr.trials}: {tr.action.replace('_', ' ')}"
+        col = (255, 200, 40) if tr.phase == RECORD else (242, 240, 232)
+        img = self.text.render(title, int(64 * u), col)
+        surf.blit(img, img.get_rect(midtop=(stage.centerx, int(24 * u))))
+        img2 = self.text.render(sub, int(26 * u), (220, 216, 210))
+        surf.blit(img2, img2.get_rect(midtop=(stage.centerx, int(24 * u) + img.get_height() + 4)))
+        if tr.phase == RECORD:
+            pygame.draw.circle(surf, (235, 50, 50), (int(stage.left + 30 * u), int(stage.bottom - 30 * u)), int(10 * u))
+            self._text(surf, "REC", int(26 * u), (stage.left + 46 * u, stage.bottom - 40 * u), (235, 50, 50))
+
+    def _plot(self, surf: pygame.Surface, rect: pygame.Rect) -> None:
+        import pygame
+
+        pygame.draw.rect(surf, (10, 10, 14), rect)
+        if rect.height < 20:
+            return
+        mid = rect.centery
+        pygame.draw.line(surf, (50, 50, 60), (rect.left, mid), (rect.right, mid))
+        if len(self.history) < 2:
+            return
+        data = np.array(self.history)
+        colors = [(240, 90, 80), (90, 220, 120), (100, 150, 255), (240, 160, 80), (160, 230, 160), (160, 180, 255)]
+        xs = rect.left + np.arange(len(data)) * rect.width / 149.0
+        for d in range(min(6, data.shape[1])):
+            ys = mid - np.clip(data[:, d] / 3.0, -1, 1) * rect.height * 0.45
+            pygame.draw.lines(surf, colors[d], False, np.stack([xs, ys], axis=1).tolist(), 2)
+        self._text(surf, "Wiimote x y z", 16, (rect.left + 6, rect.top + 4), (240, 90, 80))
+        self._text(surf, "Nunchuk x y z", 16, (rect.left + 120, rect.top + 4), (240, 160, 80))
+
+    def _text(self, surf: pygame.Surface, text: str, size: int, pos, color) -> None:
+        surf.blit(self.text.render(text, size, color), (int(pos[0]), int(pos[1])))
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("train", help="Train your moves: record 3 trials of each action, build your templates",
+                       description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--source", default=None, help="source URL (default: the first Wiimote, else the keyboard)")
+    p.add_argument("--demo", action="store_true", help="the virtual player performs every move by itself")
+    p.add_argument("--left-handed", action="store_true", help="mirror the animations for a left-handed player")
+    p.add_argument("--actions", default=None, help="comma-separated subset of actions (default: all 13)")
+    p.add_argument("-o", "--output", default=None, help="where to save the templates (default: your data directory)")
+    p.add_argument("--headless", action="store_true", help="no window: SDL dummy driver, virtual clock")
+    p.add_argument("--frames", type=int, default=None, help="stop after N rendered frames")
+    p.add_argument("--screenshot", metavar="PNG", help="save the last frame to this PNG")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--size", default="1280x720", help="window size WxH (default 1280x720)")
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from game.play import headless_env, open_player_source, parse_size
+
+    size = parse_size(args.size)
+    from game.actions import ACTION_NAMES, load_library
+
+    actions = list(ACTION_NAMES)
+    if args.actions:
+        actions = [a.strip() for a in args.actions.split(",") if a.strip()]
+        unknown = [a for a in actions if a not in ACTION_NAMES]
+        if unknown:
+            raise InputError(f"--actions: unknown {', '.join(unknown)}; known: {', '.join(ACTION_NAMES)}")
+    if args.headless:
+        headless_env()
+    import pygame
+
+    from engine.clock import RealClock, VirtualClock
+    from engine.frames import FrameResampler
+    from engine.loop import FixedStepLoop
+    from game.userdata import user_templates_path
+
+    clock = VirtualClock() if args.headless else RealClock()
+    source, fallback = open_player_source(args.source, False, args.seed, clock.seconds)
+    if fallback:
+        print("quickjab train: No Wiimote found: training from the keyboard (press a key to perform)", file=sys.stderr)
+    auto = args.demo or bool(getattr(source, "auto", False))
+    if hasattr(source, "auto"):
+        source.auto = False  # the trainer decides when the virtual player performs
+    lib = load_library()
+    trainer = Trainer(actions)
+    pygame.init()
+    pygame.display.set_mode(size, pygame.RESIZABLE)
+    pygame.display.set_caption("QuickJab - Train your moves")
+    screen_view = TrainingScreen(lib, trainer, source.url, args.left_handed)
+    resampler = FrameResampler(sensors=2)
+    t0 = clock.seconds()
+    state = {"frame": None}
+    output = Path(args.output) if args.output else user_templates_path()
+    loop = FixedStepLoop(clock)
+
+    def perform() -> None:
+        # the virtual player behind the keyboard has no handedness: it performs the move itself
+        if hasattr(source, "press"):
+            source.press(trainer.action)
+
+    def input_stage(step: int, dt: float) -> None:
+        for event in pygame.event.get():
+            if event.type == pygame.QUIT or (event.type == pygame.KEYDOWN and event.key == pygame.K_ESCAPE):
+                loop.stop()
+            elif event.type == pygame.KEYDOWN and trainer.phase in (READY, RECORD):
+                perform()
+        resampler.push(source.poll())
+        state["frame"] = resampler.frame_at(t0 + step * dt)
+
+    def train_stage(step: int, dt: float) -> None:
+        was_done = trainer.done
+        trainer.step(state["frame"])
+        screen_view.push_frame(state["frame"])
+        if trainer.go and auto:
+            perform()
+        if trainer.done and not was_done:
+            templates = trainer.templates(args.left_handed)
+            output.parent.mkdir(parents=True, exist_ok=True)
+            templates.save(output)
+            screen_view.saved_to = str(output)
+            print(f"quickjab train: saved {len(templates)} templates to {output}", file=sys.stderr)
+
+    def render(alpha: float) -> None:
+        screen_view.draw(pygame.display.get_surface())
+        pygame.display.flip()
+
+    loop.add_stage("input", input_stage, 0.3)
+    loop.add_stage("train", train_stage, 1.0)
+    loop.set_render(render, 8.0)
+    try:
+        loop.run(frames=args.frames, until=lambda: trainer.done and args.frames is None and args.headless)
+    finally:
+        if args.screenshot:
+            pygame.image.save(pygame.display.get_surface(), args.screenshot)
+            print(f"quickjab train: wrote {args.screenshot}", file=sys.stderr)
+        source.close()
+        pygame.quit()
+    if not trainer.done:
+        print(f"quickjab train: stopped after {sum(len(v) for v in trainer.recorded.values())} trials; nothing saved", file=sys.stderr)
+    return 0

@@ -1,0 +1,323 @@
+"""The Interaction Graph: value iteration, the bout model, the build, the file, the look-up."""
+
+from __future__ import annotations
+
+import math
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from game.interaction import (
+    GraphFileError,
+    GraphTable,
+    InteractionGraph,
+    OpponentController,
+    Situation,
+)
+from game.interaction.bout import BoutRules, Bouts, Rewards, step
+from game.interaction.build import BuildParams, build_graph, compile_table
+from game.interaction.duel import duel
+from game.interaction.solve import solve
+from game.interaction.state import grid_distance2, relative_pose
+
+sys.path.insert(0, str(Path(__file__).parent))
+from hand_actions import hand_library  # noqa: E402
+
+SMALL = BuildParams(seed=3, states=400, bouts=64, bout_steps=300, max_rounds=1)
+REPO = Path(__file__).resolve().parents[2]
+
+
+@pytest.fixture(scope="module")
+def lib():
+    return hand_library()
+
+
+@pytest.fixture(scope="module")
+def small_table(lib):
+    return build_graph(lib, SMALL)
+
+
+@pytest.fixture(scope="module")
+def small_graph(small_table, tmp_path_factory):
+    path = tmp_path_factory.mktemp("g") / "graph.npz"
+    small_table.save(path)
+    return InteractionGraph.load(path)
+
+
+# ---------------------------------------------------------------- value iteration
+
+def _csr(edges):
+    """edges: list per state of (dst, reward, steps, flip) -> solve() arguments."""
+    ptr = np.cumsum([0] + [len(e) for e in edges])
+    flat = [x for e in edges for x in e]
+    dst, rew, steps, flip = (np.array(c) for c in zip(*flat, strict=True))
+    return ptr, dst, rew.astype(float), 0.9 ** steps, flip.astype(bool)
+
+
+def test_value_iteration_prefers_the_delayed_larger_reward():
+    # 0 -a-> 1 (+1) -> 3 ;  0 -b-> 2 (0) -> 3 (+5) ; 3 absorbs with 0
+    edges = [
+        [(1, 1.0, 1, False), (2, 0.0, 1, False)],
+        [(3, 0.0, 1, False)],
+        [(3, 5.0, 1, False)],
+        [(3, 0.0, 1, False)],
+    ]
+    sol = solve(*_csr(edges))
+    assert sol.best_edge[0] == 1                      # b: 0.9 * 5 > 1
+    np.testing.assert_allclose(sol.value, [4.5, 0.0, 5.0, 0.0], atol=1e-3)
+
+
+def _turn_game():
+    # state 0: ours. a -> 1 (the other's turn), b -> 2 (the other's turn); 3 absorbs.
+    # In 1 the other can win 10 or lose 10; in 2 it gets 1 either way.
+    return [
+        [(1, 0.0, 0, True), (2, 0.0, 0, True)],
+        [(3, 10.0, 0, True), (3, -10.0, 0, True)],
+        [(3, 1.0, 0, True), (3, 1.0, 0, True)],
+        [(3, 0.0, 1, False)],
+    ]
+
+
+def test_minmax_assumes_the_opponents_best_response():
+    sol = solve(*_csr(_turn_game()), opponent_max=1.0)
+    ptr = np.cumsum([0, 2])
+    assert sol.best_edge[0] - ptr[0] == 1             # b: lose 1 rather than risk losing 10
+    assert sol.value[0] == pytest.approx(-1.0)
+
+
+def test_expectation_assumes_a_random_opponent():
+    sol = solve(*_csr(_turn_game()), opponent_max=0.0)
+    assert sol.best_edge[0] == 0                      # a: on average the other gets 0
+    assert sol.value[0] == pytest.approx(0.0, abs=1e-6)
+
+
+def test_solve_rejects_a_state_without_edges():
+    with pytest.raises(ValueError):
+        solve(np.array([0, 1, 1]), np.array([0]), np.zeros(1), np.ones(1), np.zeros(1, bool))
+
+
+# ---------------------------------------------------------------- bout model
+
+def _facing_pair(lib, distance):
+    t = compile_table(lib, BoutRules())
+    b = Bouts(t, 1)
+    b.place(np.array([distance]), np.zeros(1), np.zeros(1))
+    b.hp[:] = 100.0
+    return t, b
+
+
+def _play(b, t, a0, a1, steps):
+    b.start(np.array([0]), 0, t.index(a0))
+    b.start(np.array([0]), 1, t.index(a1))
+    landed = np.zeros(2)
+    for _ in range(steps):
+        landed += step(b, BoutRules(), Rewards()).landed[0]
+    return landed
+
+
+def test_a_straight_in_reach_lands_and_interrupts(lib):
+    t, b = _facing_pair(lib, 0.9)
+    landed = _play(b, t, "straight_r", "guard", 12)
+    assert landed.tolist() == [1.0, 0.0]
+    assert b.hp[0, 1] == pytest.approx(92.0)
+    assert t.names[b.act[0, 1]] == "hit_head"
+
+
+def test_out_of_reach_misses_and_a_block_covers(lib):
+    t, b = _facing_pair(lib, 1.5)
+    assert _play(b, t, "straight_r", "guard", 20).sum() == 0
+    t, b = _facing_pair(lib, 0.9)
+    landed = _play(b, t, "straight_r", "block", 12)
+    assert landed.sum() == 0
+    assert b.hp[0, 1] == pytest.approx(100 - 0.2 * 8.0)      # chip damage only
+
+
+def test_actions_take_their_frames_and_move_the_root(lib):
+    t, b = _facing_pair(lib, 2.0)
+    b.start(np.array([0]), 0, t.index("step_forward"))
+    b.start(np.array([0]), 1, t.index("block"))
+    n = 0
+    while not b.done()[0, 0]:
+        step(b, BoutRules(), Rewards())
+        n += 1
+    assert n == lib["step_forward"].frames
+    d, _, _ = relative_pose(b.pos[0, 0], 0.0, b.pos[0, 1], 0.0)
+    assert d == pytest.approx(1.7, abs=1e-6)
+
+
+# ---------------------------------------------------------------- build, file
+
+def test_build_is_deterministic_for_a_seed(lib, small_table):
+    again = build_graph(lib, SMALL)
+    for name in ("keys", "features", "best_action", "edge_dst", "edge_reward", "edge_flip"):
+        np.testing.assert_array_equal(getattr(small_table, name), getattr(again, name))
+    other = build_graph(lib, BuildParams(**{**SMALL.__dict__, "seed": 4}))
+    assert not np.array_equal(other.keys, small_table.keys)
+
+
+def test_build_has_every_action_from_every_state(small_table):
+    t = small_table
+    assert t.n_states == SMALL.states
+    assert t.n_edges == t.n_states * t.n_choices
+    assert (np.diff(t.edge_ptr) == t.n_choices).all()
+    assert (np.diff(t.keys) > 0).all()
+    assert set(np.unique(t.best_action)) <= set(range(t.n_choices))
+
+
+def test_file_round_trips(small_table, tmp_path):
+    path = tmp_path / "g.npz"
+    small_table.save(path)
+    back = GraphTable.load(path)
+    assert back.action_names == small_table.action_names
+    assert back.meta() == small_table.meta()
+    for name in ("keys", "features", "other_action", "other_frame", "visits", "best_action",
+                 "value", "edge_ptr", "edge_dst", "edge_action", "edge_steps", "edge_flip",
+                 "edge_reward"):
+        np.testing.assert_array_equal(np.asarray(getattr(back, name)),
+                                      np.asarray(getattr(small_table, name)).astype(
+                                          np.asarray(getattr(back, name)).dtype))
+
+
+def _corrupt_variants(small_table, tmp_path):
+    good = tmp_path / "good.npz"
+    small_table.save(good)
+    raw = good.read_bytes()
+    (tmp_path / "garbage.npz").write_bytes(b"not a graph at all" * 10)
+    (tmp_path / "truncated.npz").write_bytes(raw[: len(raw) // 2])
+    with np.load(good) as z:
+        arrays = {k: z[k] for k in z.files}
+    np.savez(tmp_path / "missing.npz", **{k: v for k, v in arrays.items() if k != "edge_dst"})
+    bad_dst = dict(arrays, edge_dst=arrays["edge_dst"] + len(arrays["keys"]))
+    np.savez(tmp_path / "bad_dst.npz", **bad_dst)
+    np.savez(tmp_path / "bad_meta.npz", **dict(arrays, meta=np.array("{")))
+    return ["garbage", "truncated", "missing", "bad_dst", "bad_meta"]
+
+
+def test_a_corrupt_file_is_a_clear_error(small_table, tmp_path):
+    for name in _corrupt_variants(small_table, tmp_path):
+        path = tmp_path / f"{name}.npz"
+        with pytest.raises(GraphFileError) as err:
+            InteractionGraph.load(path)
+        assert str(path) in str(err.value), name
+    with pytest.raises(GraphFileError, match="no such"):
+        InteractionGraph.load(tmp_path / "absent.npz")
+
+
+def test_cli_reports_a_corrupt_file_in_one_line(tmp_path):
+    path = tmp_path / "bad.npz"
+    path.write_bytes(b"\x00" * 100)
+    r = subprocess.run([sys.executable, "-m", "game.cli", "graph", "info", str(path)],
+                       cwd=REPO, capture_output=True, text=True)
+    assert r.returncode == 2
+    assert str(path) in r.stderr and len(r.stderr.strip().splitlines()) == 1
+
+
+def test_cli_info_json(small_table, tmp_path):
+    path = tmp_path / "g.npz"
+    small_table.save(path)
+    r = subprocess.run([sys.executable, "-m", "game.cli", "graph", "info", str(path), "--json"],
+                       cwd=REPO, capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    import json
+    info = json.loads(r.stdout)
+    assert info["states"] == small_table.n_states and info["edges"] == small_table.n_edges
+    assert info["file_bytes"] == path.stat().st_size and info["build"]["seed"] == SMALL.seed
+
+
+# ---------------------------------------------------------------- look-up, run time
+
+def test_lookup_maps_a_live_situation_to_its_nearest_state(small_graph):
+    g = small_graph
+    rng = np.random.default_rng(0)
+    t = g.table
+    # live situations name the other's action; an idle other ("guard") is always READY, so
+    # states of an other in the middle of a wait are not reachable by name
+    live = np.flatnonzero(t.other_action != g.wait_id)
+    for i in range(300):
+        sid = int(rng.choice(live))
+        d, bs, bo = (float(x) for x in t.features[sid])
+        if i % 2:      # a live situation near, not at, a sampled one
+            d, bs, bo = abs(d + rng.normal(0, 0.1)), bs + rng.normal(0, 0.3), bo + rng.normal(0, 0.3)
+        a = int(t.other_action[sid])
+        s = Situation(d, bs, bo, 0.0, "guard", 0.0, g.names[a], float(t.other_frame[sid]))
+        got = g.state_of(s)
+        aid, frame = g.other_code(s.other_action, s.other_phase)
+        peer = g.index.brute_force(d, bs, bo, aid, frame)
+        # the same state, or one exactly as near (a situation on a cell border)
+        q = g.table.grid.cell_centres(np.array([g.table.grid.key(d, bs, bo, aid, frame)]))[0]
+        near = [grid_distance2(g.index.centres[k], q, g.table.grid.n_angle) for k in (got, peer)]
+        assert got == peer or near[0] == pytest.approx(near[1])
+        assert g.table.other_action[got] == g.table.other_action[peer]
+        if i % 2 == 0:
+            assert got == sid          # a sampled state's own features map to it
+        assert g.best_action(s) == g.names[t.best_action[got]]
+
+
+def test_scalar_and_vectorized_lookup_agree(small_graph):
+    g = small_graph
+    rng = np.random.default_rng(1)
+    n = 500
+    d = rng.uniform(0, 4.5, n)
+    bs, bo = rng.uniform(-math.pi, math.pi, (2, n))
+    act = g.table.other_action[rng.integers(0, g.n_states, n)]
+    frame = rng.integers(0, 30, n)
+    many = g.index.nearest_many(d, bs, bo, act, frame)
+    one = [g.index.nearest(d[i], bs[i], bo[i], int(act[i]), int(frame[i])) for i in range(n)]
+    np.testing.assert_array_equal(many, one)
+
+
+def test_fill_and_scan_agree_with_brute_force(small_graph):
+    g = small_graph
+    rng = np.random.default_rng(2)
+    n = 400
+    d = rng.uniform(0, 4.5, n)
+    bs, bo = rng.uniform(-math.pi, math.pi, (2, n))
+    act = rng.integers(0, len(g.names), n)
+    frame = rng.integers(0, 30, n)
+    many = g.index.nearest_many(d, bs, bo, act, frame)
+    peer = [g.index.brute_force(d[i], bs[i], bo[i], int(act[i]), int(frame[i])) for i in range(n)]
+    np.testing.assert_array_equal(many, peer)
+
+
+def test_a_broken_situation_means_wait(small_graph):
+    for bad in (math.nan, math.inf):
+        assert small_graph.best_action(Situation(bad, 0.0, 0.0, 0.0, "guard", 0, "guard", 0)) == "guard"
+        assert small_graph.best_action(Situation(1.0, bad, 0.0, 0.0, "guard", 0, "jab", bad)) == "guard"
+
+
+def test_idle_other_is_ready(small_graph):
+    g = small_graph
+    assert g.other_code("guard", 3.0) == (g.wait_id, g.table.rules.wait_frames - 1)
+    assert g.other_code("no_such_action", 3.0)[0] == g.wait_id
+
+
+class FakeController:
+    def __init__(self):
+        self.action, self.played = "guard", []
+
+    def play(self, name, from_frame=0):
+        self.action = name
+        self.played.append(name)
+
+
+def test_opponent_acts_only_at_the_guard(small_graph, lib):
+    fc = FakeController()
+    oc = OpponentController(small_graph, lib, controller=fc)
+    s = Situation(0.9, 0.0, 0.0, math.pi, "guard", 0.0, "guard", 0.0)
+    first = oc.decide(s)
+    assert first == small_graph.best_action(s)
+    fc.action = "straight_r"
+    assert oc.decide(s) is None
+    fc.action = "guard"
+    assert oc.decide(s) is not None or first == "guard"
+
+
+def test_duel_counts_are_consistent(small_graph, lib):
+    r = duel(small_graph, lib, "greedy", bouts=6, seconds=5.0, seed=0)
+    assert r.wins + r.losses + r.draws == 6
+    assert r.hits_landed >= 0 and r.damage_dealt >= 0
+    again = duel(small_graph, lib, "greedy", bouts=6, seconds=5.0, seed=0)
+    assert again.as_dict() == r.as_dict()

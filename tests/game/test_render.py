@@ -1,0 +1,138 @@
+"""A rendered frame has both boxers and the HUD where they belong (pixels checked)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pygame
+import pytest
+
+from game.actions import load_library
+from game.hud import OPPONENT_COLOR, PLAYER_COLOR, Hud, HudState
+from game.render import JOINT_NAMES, OPPONENT_LOOK, PLAYER_LOOK, Renderer
+from game.skeleton import JOINTS, local_to_world
+
+SIZE = (1280, 720)
+
+
+@pytest.fixture(scope="module")
+def lib():
+    return load_library()
+
+
+def colour_count(surf: pygame.Surface, rect: pygame.Rect, colour, tol: int = 40) -> int:
+    rect = rect.clip(surf.get_rect())
+    arr = pygame.surfarray.array3d(surf)[rect.left:rect.right, rect.top:rect.bottom].astype(int)
+    return int((np.abs(arr - np.array(colour)).max(axis=2) <= tol).sum())
+
+
+def scene(lib, player_action="guard", frame=0):
+    player = local_to_world(lib[player_action].posture(frame), (0.0, -0.9, 0.0))
+    opponent = local_to_world(lib["guard"].posture(0), (0.0, 0.9, np.pi))
+    return player, opponent
+
+
+def test_joint_order_matches_the_skeleton() -> None:
+    assert tuple(JOINT_NAMES) == tuple(JOINTS)
+
+
+def test_both_boxers_are_drawn_where_they_stand(lib) -> None:
+    pygame.init()
+    surf = pygame.Surface(SIZE)
+    r = Renderer(SIZE)
+    player, opponent = scene(lib, "straight_r", 10)
+    r.draw(surf, [player, opponent])
+    pbox, obox = r.screen_box(player), r.screen_box(opponent)
+    assert surf.get_rect().contains(pbox) and surf.get_rect().contains(obox)
+    # each boxer's trunks and gloves are inside its own box ...
+    assert colour_count(surf, pbox, PLAYER_LOOK.trunks) > 300
+    assert colour_count(surf, pbox, PLAYER_LOOK.gloves) > 100
+    assert colour_count(surf, obox, OPPONENT_LOOK.trunks) > 150
+    assert colour_count(surf, obox, OPPONENT_LOOK.gloves) > 60
+    # ... and the opponent's blue is not in the far corners of the screen (no stray drawing)
+    corner = pygame.Rect(0, 0, 200, 150)
+    assert colour_count(surf, corner, OPPONENT_LOOK.trunks, tol=30) == 0
+    # the ring canvas is in the middle of the floor, in front of the player
+    canvas = surf.get_at((int(SIZE[0] * 0.5), int(SIZE[1] * 0.9)))[:3]
+    assert min(canvas) > 140
+
+
+def test_the_colours_come_from_the_boxers_not_the_ring(lib) -> None:
+    pygame.init()
+    empty, full = pygame.Surface(SIZE), pygame.Surface(SIZE)
+    r = Renderer(SIZE)
+    player, opponent = scene(lib)
+    r.draw(empty, [])
+    r.draw(full, [player, opponent])
+    for body, look in ((player, PLAYER_LOOK), (opponent, OPPONENT_LOOK)):
+        box = r.screen_box(body)
+        # the ring has red ropes and a blue corner: what matters is what the boxer adds
+        with_boxer = colour_count(full, box, look.trunks, tol=25)
+        assert with_boxer > 150
+        assert colour_count(empty, box, look.trunks, tol=25) < 0.3 * with_boxer
+
+
+def test_health_bars_show_health_at_their_positions(lib) -> None:
+    pygame.init()
+    surf = pygame.Surface(SIZE)
+    Renderer(SIZE).draw(surf, list(scene(lib)))
+    st = HudState(health=[75.0, 30.0], shown_health=[75.0, 30.0])
+    Hud().draw(surf, st)
+    left, right = Hud.health_rects(SIZE)
+    y = left.centery + left.height // 4  # below the highlight stripe
+    # the player's bar: filled from the left to 75 %, empty beyond
+    assert surf.get_at((left.left + 5, y))[:3] == PLAYER_COLOR
+    assert surf.get_at((left.left + int(left.width * 0.7), y))[:3] == PLAYER_COLOR
+    assert surf.get_at((left.left + int(left.width * 0.8), y))[:3] != PLAYER_COLOR
+    # the CPU's bar drains towards the centre: filled on its right 30 %
+    assert surf.get_at((right.right - 5, y))[:3] == OPPONENT_COLOR
+    assert surf.get_at((right.right - int(right.width * 0.25), y))[:3] == OPPONENT_COLOR
+    assert surf.get_at((right.right - int(right.width * 0.4), y))[:3] != OPPONENT_COLOR
+
+
+def test_hud_keeps_its_layout_when_resized(lib) -> None:
+    pygame.init()
+    small = (800, 450)
+    surf = pygame.Surface(small)
+    Renderer(small).draw(surf, list(scene(lib)))
+    Hud().draw(surf, HudState())
+    left, right = Hud.health_rects(small)
+    assert surf.get_at((left.left + 5, left.centery + 3))[:3] == PLAYER_COLOR
+    assert surf.get_at((right.right - 5, right.centery + 3))[:3] == OPPONENT_COLOR
+
+
+def test_disconnected_overlay_darkens_the_scene(lib) -> None:
+    pygame.init()
+    a, b = pygame.Surface(SIZE), pygame.Surface(SIZE)
+    for surf, off in ((a, False), (b, True)):
+        Renderer(SIZE).draw(surf, list(scene(lib)))
+        Hud().draw(surf, HudState(disconnected=off, source_state="disconnected" if off else "connected"))
+    probe = (int(SIZE[0] * 0.5), int(SIZE[1] * 0.9))  # the canvas, outside the message box
+    assert sum(b.get_at(probe)[:3]) < 0.5 * sum(a.get_at(probe)[:3])
+
+
+def test_recognition_panel_shows_buffers_and_marks() -> None:
+    from game.hud import OK_COLOR, REJECT_COLOR, SWITCH_COLOR
+
+    pygame.init()
+    panel = pygame.Rect(0, SIZE[1] - 180, 360, 180)
+
+    def draw(**kw) -> pygame.Surface:
+        surf = pygame.Surface(SIZE)
+        surf.fill((0, 0, 0))
+        Hud().draw(surf, HudState(**kw))
+        return surf
+
+    idle = draw()
+    assert colour_count(idle, panel, OK_COLOR, tol=5) == 0
+    assert colour_count(idle, panel, SWITCH_COLOR, tol=5) == 0
+    st = HudState()
+    st.mark({"event": "start", "action": "hook_r", "score": 0.3})
+    st.mark({"event": "switch", "action": "uppercut_r", "from_frame": 6, "score": 0.2})
+    assert st.action == "uppercut_r" and st.switch_from == 6
+    busy = draw(main_fill=6, supp_fill=30, switch_age=0, reject_age=0, action="uppercut_r", score=0.2)
+    assert colour_count(busy, panel, OK_COLOR, tol=5) > 6 * 150  # six lit main-buffer cells
+    assert colour_count(busy, panel, SWITCH_COLOR, tol=5) > 300
+    assert colour_count(busy, panel, REJECT_COLOR, tol=5) > 300
+    for _ in range(60):
+        st.tick()
+    assert st.switch_age >= 45  # the mark goes out

@@ -1,0 +1,235 @@
+"""The session end to end under the dummy video driver: a scripted headless match is
+reproducible to the bit, keys posted to pygame make the player's boxer act through the real
+recognizer, and a source that disconnects shows an overlay that clears on reconnect."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import numpy as np
+import pygame
+import pytest
+
+from engine.clock import VirtualClock
+from engine.sensors import SourceState, open_source
+from game.session import Session, SessionConfig
+
+sys.path.insert(0, str(Path(__file__).parent))
+from game_graph import graph_path  # noqa: E402,F401 - the fixture
+
+SIZE = (640, 360)
+
+
+@pytest.fixture(autouse=True)
+def own_data_dir(tmp_path, monkeypatch):
+    """Never read (or write) the real user's trained templates."""
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "xdg"))
+
+
+@pytest.fixture(autouse=True)
+def _graph(graph_path):  # noqa: F811 - the imported fixture
+    global GRAPH
+    GRAPH = graph_path
+
+
+GRAPH = ""
+
+
+def make_session(url: str, seed: int = 0, render: bool = True, display: bool = False, demo: bool = False) -> Session:
+    import game.keyboard_source  # noqa: F401 - registers keyboard://
+
+    pygame.init()
+    clock = VirtualClock()
+    source = open_source(url, clock=clock.seconds)
+    provider = None
+    if display:
+        pygame.display.set_mode(SIZE)
+        provider = pygame.display.get_surface
+    cfg = SessionConfig(seed=seed, size=SIZE, sound=False, render=render, graph=GRAPH, demo=demo)
+    return Session(source, cfg, clock=clock, surface_provider=provider)
+
+
+def test_scripted_match_is_reproducible() -> None:
+    hashes, summaries = [], []
+    for _ in range(2):
+        # the attract mode's pilot: the graph picks the player's moves, the virtual player
+        # performs them, the recognizer recognizes them; the CPU plays from the graph
+        s = make_session("keyboard://?seed=5", seed=5, render=False, demo=True)
+        s.loop.run(steps=3600)
+        assert s.loop.step_index == 3600
+        hashes.append(s.state_hash())
+        summaries.append((len(s.events_log), len(s.blows_log), s.match.state()))
+    assert hashes[0] == hashes[1]
+    assert summaries[0] == summaries[1]
+    # it was a match, not an idle ring: the recognizer started many actions, punches landed
+    # and the round ran out
+    starts = [e["action"] for e in s.events_log if e["event"] == "start"]
+    assert len(starts) > 30 and len(set(starts)) >= 3
+    assert {b[1] for b in s.blows_log} == {0, 1}  # both boxers landed blows
+    assert min(s.match.health) < 100
+    assert s.match.round > 1 or s.match.over or s.match.clock_steps < 30 * 60  # the clock ran
+
+
+def test_a_different_seed_plays_differently() -> None:
+    a = make_session("keyboard://?seed=1", seed=1, render=False, demo=True)
+    b = make_session("keyboard://?seed=2", seed=2, render=False, demo=True)
+    a.loop.run(steps=300)
+    b.loop.run(steps=300)
+    assert a.state_hash() != b.state_hash()
+
+
+def test_key_press_makes_the_boxer_act_through_the_recognizer() -> None:
+    s = make_session("keyboard://?seed=3", display=True)
+    s.loop.run(steps=30)  # the recognizer learns the resting gravity
+    assert s.player.controller.action == "guard"
+    seen = []
+    original = s.player.controller.on_event
+
+    def spy(ev):
+        seen.append(ev)
+        original(ev)
+
+    s.player.controller.on_event = spy
+    pygame.event.post(pygame.event.Event(pygame.KEYDOWN, key=pygame.K_p, mod=0, unicode="p", scancode=0))
+    actions = []
+    for _ in range(60):
+        s.loop.run(steps=1)
+        actions.append(s.player.controller.action)
+    assert s.source.pressed == ["straight_r"]  # the key reached the keyboard source ...
+    starts = [e for e in seen if e["event"] == "start"]
+    assert starts and starts[0]["action"] == "straight_r"  # ... the recognizer decided it ...
+    assert "straight_r" in actions  # ... and the boxer played it
+    assert actions.index("straight_r") > 0  # not instantly: after the main buffer filled
+
+
+def test_disconnect_shows_overlay_and_reconnect_clears_it() -> None:
+    s = make_session("keyboard://?seed=4", display=True)
+    surf = pygame.display.get_surface()
+    probe = (SIZE[0] // 2, int(SIZE[1] * 0.93))
+    s.loop.run(frames=5)
+    bright = sum(surf.get_at(probe)[:3])
+    clock_before = s.match.clock_steps
+    s.source.disconnect()
+    s.loop.run(frames=5)
+    assert s.hud_state.disconnected and s.source.state == SourceState.DISCONNECTED
+    assert sum(surf.get_at(probe)[:3]) < 0.5 * bright
+    assert s.match.paused and s.match.clock_steps == clock_before  # the clock waits
+    s.source.reconnect()
+    s.loop.run(frames=5)
+    assert not s.hud_state.disconnected and not s.match.paused
+    assert sum(surf.get_at(probe)[:3]) == pytest.approx(bright, abs=30)
+    assert s.match.clock_steps < clock_before
+
+
+def test_rumble_on_the_player_when_hit() -> None:
+    s = make_session("keyboard://?seed=6", render=False)
+    calls = []
+    s.source.rumble = calls.append
+    hit = {"attacker": 1, "target": "head", "hand": "r", "speed": 5.0, "direction": np.array([0, 0, -1.0]),
+           "blocked": False, "damage": 9.0}
+    s.apply_hit(0, hit)
+    assert calls and s.match.health[0] < 100
+    assert s.player.controller.action.startswith("hit_head")  # the reaction plays
+    s.apply_hit(1, {**hit, "attacker": 0})
+    assert len(calls) == 1  # the CPU being hit does not rumble the player's controller
+
+
+def test_escape_pauses_and_f3_shows_the_budget_overlay() -> None:
+    s = make_session("keyboard://?seed=8", display=True)
+    surf = pygame.display.get_surface()
+    s.loop.run(frames=3)
+    before = pygame.surfarray.array3d(surf).copy()
+    pygame.event.post(pygame.event.Event(pygame.KEYDOWN, key=pygame.K_F3, mod=0, unicode="", scancode=0))
+    s.loop.run(frames=2)
+    assert s.hud_state.show_budget
+    panel = pygame.Rect(SIZE[0] - 215, 70, 200, 120)  # the overlay's corner of the screen
+    after = pygame.surfarray.array3d(surf)
+    region = (slice(panel.left, panel.right), slice(panel.top, panel.bottom))
+    assert np.abs(after[region].astype(int) - before[region].astype(int)).mean() > 10
+    pygame.event.post(pygame.event.Event(pygame.KEYDOWN, key=pygame.K_ESCAPE, mod=0, unicode="", scancode=0))
+    s.loop.run(frames=2)
+    assert s.match.paused
+    clock = s.match.clock_steps
+    s.loop.run(frames=30)
+    assert s.match.clock_steps == clock
+    pygame.event.post(pygame.event.Event(pygame.KEYDOWN, key=pygame.K_ESCAPE, mod=0, unicode="", scancode=0))
+    s.loop.run(frames=30)
+    assert not s.match.paused and s.match.clock_steps < clock
+
+
+def test_a_replayed_recording_drives_the_player_through_the_wiimote_emulator(tmp_path) -> None:
+    from collections import Counter
+
+    from engine.recording import read_recording
+    from game.cli import main
+
+    rec = tmp_path / "session.csv"
+    assert main(["synth", "--session", "8", "--seed", "2", "-o", str(rec)]) == 0
+    labels = [x for x in dict.fromkeys(read_recording(rec).labels) if x]
+    s = make_session(f"wiimote-emu://{rec}", render=False)
+    s.loop.run(steps=8 * 60 + 60)
+    starts = [e["action"] for e in s.events_log if e["event"] == "start"]
+    assert s.hud_state.battery is not None  # the emulated remote reports its battery
+    assert s.hud_state.source_state == "connected"
+    # most of the performed actions were recognized, in order
+    hits = Counter(starts) & Counter(labels)
+    assert sum(hits.values()) >= 0.6 * len(labels)
+
+
+def test_rounds_start_from_the_corners_and_the_attract_mode_starts_over() -> None:
+    from game.match import Match
+
+    s = make_session("keyboard://?seed=9", render=False, demo=True)
+    s.match = Match(round_seconds=2)
+    s.loop.run(steps=2 * 60 + 3 * 60 + 5)  # round 1, the break, the bell of round 2
+    assert s.match.round == 2
+    assert s.player.root[:2] == pytest.approx((0.0, -0.55), abs=0.05)
+    assert s.opponent.root[:2] == pytest.approx((0.0, 0.55), abs=0.05)
+    s.loop.run(steps=2 * 60 * 2 + 3 * 60 + 60)
+    assert s.match.over
+    s.loop.run(steps=8 * 60 + 2)
+    assert not s.match.over and s.match.round == 1 and s.match.health == [100.0, 100.0]
+
+
+class HeldRemote:
+    """A test double of a Wiimote: rest readings at 60 Hz, buttons, battery, rumble calls."""
+
+    def __init__(self, clock):
+        from engine.sensors import Source
+
+        class _Remote(Source):
+            def poll(inner):
+                now = clock.seconds()
+                out = []
+                while inner.next_t <= now:
+                    out.append(Sample(inner.next_t, np.array([[0.0, 1.0, 0.0], [0.0, 1.0, 0.0]])))
+                    inner.next_t += 1 / 60
+                return out
+
+            def rumble(inner, ms):
+                inner.rumbles.append(ms)
+
+        from engine.sensors import Sample
+
+        self.source = _Remote(url="wiimote-test://", sensors=2, state=SourceState.CONNECTED, battery=0.55)
+        self.source.next_t = 0.0
+        self.source.buttons = 0
+        self.source.rumbles = []
+
+
+def test_home_button_pauses_and_the_battery_shows() -> None:
+    pygame.init()
+    clock = VirtualClock()
+    remote = HeldRemote(clock).source
+    s = Session(remote, SessionConfig(size=SIZE, sound=False, render=False, graph=GRAPH), clock=clock)
+    s.loop.run(steps=10)
+    assert s.hud_state.battery == 0.55 and s.hud_state.source_url == "wiimote-test://"
+    remote.buttons = 0x0080  # Home down: pause (once, not every step it is held)
+    s.loop.run(steps=10)
+    assert s.match.paused
+    remote.buttons = 0
+    s.loop.run(steps=2)
+    remote.buttons = 0x0080
+    s.loop.run(steps=2)
+    assert not s.match.paused

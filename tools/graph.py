@@ -1,0 +1,134 @@
+"""`quickjab graph`: build, inspect and evaluate the CPU opponent's Interaction Graph."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from pathlib import Path
+
+from engine.errors import InputError
+
+
+def load_actions() -> dict:
+    """The game's action library (the motion helper's game.actions)."""
+    try:
+        from game.actions import load_library
+    except ImportError as exc:   # pragma: no cover - only before the motion work is merged
+        raise InputError(f"the action library (game.actions) is not available: {exc}") from None
+    return load_library()
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("graph", help="build, inspect and evaluate the Interaction Graph",
+                       description=__doc__)
+    cmds = p.add_subparsers(dest="graph_command", metavar="SUBCOMMAND", required=True)
+
+    b = cmds.add_parser("build", help="sample, solve and save a graph",
+                        description="Sample bouts in the bout model, merge states, expand every "
+                        "action from every state, solve by value iteration, save the .npz.")
+    b.add_argument("-o", "--output", required=True, help="where to write the .npz")
+    b.add_argument("--seed", type=int, default=0, help="random seed (the build is deterministic for it)")
+    b.add_argument("--states", type=int, default=60000, help="states to keep (most visited cells)")
+    b.add_argument("--bouts", type=int, default=None, help="sampling bouts run at once")
+    b.add_argument("--opponent-max", type=float, default=None,
+                   help="1 = min-max (opponent's best response), 0 = its expectation; blends between")
+    b.add_argument("--quiet", action="store_true", help="no progress lines")
+    b.set_defaults(func=cmd_build)
+
+    i = cmds.add_parser("info", help="states, edges, build parameters and file size",
+                        description="Print what a graph file holds.")
+    i.add_argument("graph", nargs="?", default=None, help="the .npz (default: the shipped graph)")
+    i.add_argument("--json", action="store_true", help="machine-readable output")
+    i.set_defaults(func=cmd_info)
+
+    d = cmds.add_parser("duel", help="headless bouts: the graph against random / greedy",
+                        description="Run headless bouts of the graph opponent against a random "
+                        "and/or a greedy one in the bout model; print wins, hits landed and received.")
+    d.add_argument("--graph", default=None, help="the .npz (default: the shipped graph)")
+    d.add_argument("--bouts", type=int, default=200, help="bouts per opponent")
+    d.add_argument("--opponent", choices=["random", "greedy", "both"], default="both")
+    d.add_argument("--player", choices=["graph", "random", "greedy"], default="graph",
+                   help="who plays boxer 0 (a baseline other than the graph, for comparison)")
+    d.add_argument("--seconds", type=float, default=60.0, help="bout length (ends earlier by knockout)")
+    d.add_argument("--seed", type=int, default=1)
+    d.add_argument("--json", action="store_true", help="machine-readable output")
+    d.set_defaults(func=cmd_duel)
+
+
+def _graph_path(path: str | None) -> Path:
+    from game.interaction import DEFAULT_GRAPH
+    return Path(path) if path else DEFAULT_GRAPH
+
+
+def cmd_build(args: argparse.Namespace) -> int:
+    from game.interaction.build import BuildParams, build_graph
+    if args.states < 10:
+        raise InputError(f"--states {args.states}: need at least 10")
+    kw = {"seed": args.seed, "states": args.states}
+    if args.bouts:
+        kw["bouts"] = args.bouts
+    if args.opponent_max is not None:
+        kw["opponent_max"] = args.opponent_max
+    lib = load_actions()
+    t0 = time.perf_counter()
+    table = build_graph(lib, BuildParams(**kw), log=None if args.quiet else print)
+    try:
+        table.save(args.output)
+    except OSError as exc:
+        raise InputError(f"{args.output}: cannot write the graph ({exc.strerror or exc})") from None
+    size = Path(args.output).stat().st_size
+    print(f"wrote {args.output}: {table.n_states} states, {table.n_edges} edges, "
+          f"{size / 1e6:.2f} MB, built in {time.perf_counter() - t0:.1f} s")
+    return 0
+
+
+def cmd_info(args: argparse.Namespace) -> int:
+    from game.interaction import InteractionGraph
+    path = _graph_path(args.graph)
+    g = InteractionGraph.load(path)
+    info = g.info()
+    if args.json:
+        print(json.dumps(info, indent=2, sort_keys=True))
+        return 0
+    b = info["build"]
+    print(f"{path}: {info['states']} states, {info['edges']} edges, "
+          f"{info.get('file_bytes', 0) / 1e6:.2f} MB")
+    print(f"  build: library {b.get('library')}, seed {b.get('seed')}, {b.get('samples')} samples in {b.get('cells_sampled')} "
+          f"cells, opponent_max {b.get('opponent_max')}, {b.get('seconds', {}).get('total')} s")
+    print(f"  value iteration: {b.get('vi_iterations')} iterations, residual {b.get('vi_residual'):.2g}")
+    print(f"  grid: {json.dumps(info['grid'])}")
+    print(f"  rules: {json.dumps(info['rules'])}")
+    print(f"  rewards: {json.dumps(info['rewards'])}")
+    return 0
+
+
+def cmd_duel(args: argparse.Namespace) -> int:
+    from game.interaction import InteractionGraph
+    from game.interaction.duel import duel
+    if args.bouts < 1:
+        raise InputError(f"--bouts {args.bouts}: need at least 1")
+    g = InteractionGraph.load(_graph_path(args.graph))
+    lib = load_actions()
+    opponents = ["random", "greedy"] if args.opponent == "both" else [args.opponent]
+    results = []
+    for opp in opponents:
+        t0 = time.perf_counter()
+        try:
+            r = duel(g, lib, opp, bouts=args.bouts, seconds=args.seconds, seed=args.seed,
+                     us=args.player)
+        except ValueError as exc:
+            raise InputError(f"{g.path}: {exc}") from None
+        d = r.as_dict()
+        d["player"] = args.player
+        d["seconds"] = round(time.perf_counter() - t0, 2)
+        results.append(d)
+    if args.json:
+        print(json.dumps(results, indent=2))
+        return 0
+    for d in results:
+        print(f"{d['player']} vs {d['opponent']:6s}: {d['wins']}/{d['bouts']} wins ({100 * d['win_rate']:.1f} %), "
+              f"{d['losses']} losses, {d['draws']} draws, {d['knockouts']} KOs; hits landed "
+              f"{d['hits_landed']}, received {d['hits_received']}; damage {d['damage_dealt']:.0f} "
+              f"dealt, {d['damage_taken']:.0f} taken ({d['seconds']} s)")
+    return 0
