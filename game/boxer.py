@@ -21,7 +21,7 @@ from game.actions import Action, reaction_for
 from game.body import add_boxer_body
 from game.hits import hits_from_contacts
 from game.motion import PlayerController
-from game.skeleton import compose_root, local_to_world, world_to_local, yaw_matrix
+from game.skeleton import compose_root, local_to_world, world_to_local
 
 __all__ = ["Boxer", "hits_from_contacts"]
 
@@ -116,4 +116,4 @@ class Boxer:
 
     def facing(self) -> np.ndarray:
         """Unit world vector the boxer faces."""
-        return yaw_matrix(self._root[2]) @ np.array([0.0, 0.0, 1.0])
+        return np.array([np.sin(self._root[2]), 0.0, np.cos(self._root[2])])

@@ -101,14 +101,29 @@ def yaw_matrix(yaw: float) -> np.ndarray:
 
 def local_to_world(points: np.ndarray, root: tuple[float, float, float]) -> np.ndarray:
     """Points (..., 3) in a boxer's local frame -> world, for root = (x, z, yaw)."""
+    # written out rather than `@`: matmul goes to BLAS, whose kernels round differently on
+    # different CPUs, and the state hash must be the same on every machine
     x, z, yaw = root
-    return np.asarray(points) @ yaw_matrix(yaw).T + np.array([x, 0.0, z])
+    p = np.asarray(points, dtype=np.float64)
+    c, s = np.cos(yaw), np.sin(yaw)
+    out = np.empty(p.shape)
+    out[..., 0] = c * p[..., 0] + s * p[..., 2] + x
+    out[..., 1] = p[..., 1]
+    out[..., 2] = c * p[..., 2] - s * p[..., 0] + z
+    return out
 
 
 def world_to_local(points: np.ndarray, root: tuple[float, float, float]) -> np.ndarray:
     """Inverse of local_to_world."""
     x, z, yaw = root
-    return (np.asarray(points) - np.array([x, 0.0, z])) @ yaw_matrix(yaw)
+    p = np.asarray(points, dtype=np.float64)
+    c, s = np.cos(yaw), np.sin(yaw)
+    dx, dz = p[..., 0] - x, p[..., 2] - z
+    out = np.empty(p.shape)
+    out[..., 0] = c * dx - s * dz
+    out[..., 1] = p[..., 1]
+    out[..., 2] = s * dx + c * dz
+    return out
 
 
 def compose_root(root: tuple[float, float, float], offset: np.ndarray) -> tuple[float, float, float]:

@@ -7,8 +7,8 @@ Figures (all measured in this run, µs per step unless said):
   implicit PD pull per particle, then each stick relaxed in turn, ground), no collision;
 - one relaxation iteration alone (numpy Jacobi, numpy coloured Gauss-Seidel, pure Python), and
   how far each solver gets in a fixed time: the reason Jacobi is the default.
-The two bodies are the tests' 17-particle humanoid (tests/engine/physics/humanoid.py), so run
-this from the repository root.
+The two bodies are the game's boxer bodies (game.body) in the guard posture of the action
+library.
 """
 
 from __future__ import annotations
@@ -33,23 +33,19 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--json", action="store_true", help="print JSON instead of a table")
 
 
-def _humanoid():
-    try:
-        from tests.engine.physics import humanoid
-    except ImportError as e:  # the fixture body lives with the tests
-        raise SystemExit(f"bench physics: needs tests/engine/physics/humanoid.py (run from the repo root): {e}") from e
-    return humanoid
-
-
 def _world(gap: float, iterations: int, solver: str = "jacobi") -> tuple[World, list]:
     """Two humanoids facing each other, roots `gap` metres apart, pulled to their guard."""
-    h = _humanoid()
+    from game.actions import load_library
+    from game.body import add_boxer_body
+    from game.skeleton import local_to_world
+
+    guard = load_library()["guard"].posture(0)
     w = World(iterations=iterations, solver=solver)
     roots = [(0.0, -gap / 2, 0.0), (0.02, gap / 2, math.pi)]
     targets = []
-    for x, z, yaw in roots:
-        bid = h.add_humanoid(w, x, z, yaw)
-        targets.append((bid, h.place(h.GUARD, x, z, yaw)))
+    for root in roots:
+        posture = local_to_world(guard, root)
+        targets.append((add_boxer_body(w, posture), posture))
     return w, targets
 
 
