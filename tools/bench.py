@@ -13,6 +13,7 @@ TARGETS = {
     "wiimote": "tools.bench_wiimote",
     "graph": "tools.bench_graph",
     "recognition": "tools.bench_recognition",
+    "frame": "tools.bench_frame",
 }
 
 
