@@ -23,6 +23,8 @@ COMMAND_MODULES = [
     "tools.graph",
     "tools.recognition_commands",
     "tools.synth",
+    "tools.bvh_cmd",
+    "tools.actions_cmd",
 ]
 
 

@@ -163,13 +163,13 @@ class Hud:
 
     def _health(self, surf: pygame.Surface, st: HudState, u: float) -> None:
         rects = self.health_rects(surf.get_size())
-        for i, (rect, color) in enumerate(zip(rects, (PLAYER_COLOR, OPPONENT_COLOR))):
+        for i, (rect, color) in enumerate(zip(rects, (PLAYER_COLOR, OPPONENT_COLOR), strict=True)):
             pygame.draw.rect(surf, (0, 0, 0), rect.inflate(6, 6), border_radius=4)
             pygame.draw.rect(surf, BAR_BACK, rect)
             frac = max(0.0, min(1.0, st.health[i] / st.max_health))
             shown = max(frac, min(1.0, st.shown_health[i] / st.max_health))
             # the player's bar drains towards the centre of the screen (right), the CPU's to the left
-            def part(f: float) -> pygame.Rect:
+            def part(f: float, rect: pygame.Rect = rect, i: int = i) -> pygame.Rect:
                 wpx = int(rect.width * f)
                 return pygame.Rect(rect.right - wpx if i == 1 else rect.left, rect.top, wpx, rect.height)
             pygame.draw.rect(surf, BAR_LOSS, part(shown))
@@ -196,8 +196,9 @@ class Hud:
         self.blit(surf, label, int(22 * u), (w // 2, box.top + 6 * u), DIM, "midtop")
         col = REJECT_COLOR if st.phase == "fight" and secs <= 10 else TEXT
         self.blit(surf, f"{secs // 60}:{secs % 60:02d}", int(50 * u), (w // 2, box.top + 26 * u), col, "midtop")
-        if st.mode:
-            self.blit(surf, st.mode, int(20 * u), (w // 2, box.bottom + 4 * u), SWITCH_COLOR, "midtop")
+        mode = "  ".join(m for m in (st.mode, "DEMO" if st.demo else "") if m)
+        if mode:
+            self.blit(surf, mode, int(22 * u), (w // 2, box.bottom + 4 * u), SWITCH_COLOR, "midtop")
 
     def _source(self, surf: pygame.Surface, st: HudState, u: float) -> None:
         left, _ = self.health_rects(surf.get_size())
@@ -259,9 +260,11 @@ class Hud:
         surf.blit(img, img.get_rect(center=box.center))
 
     def _keys(self, surf: pygame.Surface, st: HudState, u: float) -> None:
+        w, h = surf.get_size()
+        _, right = self.health_rects(surf.get_size())
+        self.blit(surf, "Esc pause   F3 budget   F11 fullscreen", int(20 * u), (right.right, right.bottom + 32 * u), DIM, "topright")
         if not st.keys:
             return
-        w, h = surf.get_size()
         parts = [f"{k} {a.replace('_', ' ')}" for k, a in st.keys]
         line = "   ".join(parts)
         size = int(19 * u)
@@ -272,7 +275,6 @@ class Hud:
                 self.blit(surf, "   ".join(chunk), size, (w // 2, h - 44 * u + n * 20 * u), DIM, "midtop")
         else:
             self.blit(surf, line, size, (w // 2, h - 26 * u), DIM, "midtop")
-        self.blit(surf, "Esc pause  F3 budget  F11 fullscreen", int(18 * u), (w - 12 * u, h - 170 * u), DIM, "topright")
 
     def _centre(self, surf: pygame.Surface, st: HudState, u: float) -> None:
         w, h = surf.get_size()
@@ -291,8 +293,6 @@ class Hud:
             self.blit(surf, "Esc or Home to resume", mid, (w // 2, h * 0.42 + 56 * u), DIM, "midtop")
         elif st.message and st.message_age < 90:
             self._banner(surf, st.message, big, (w // 2, h * 0.42))
-        if st.demo:
-            self.blit(surf, "DEMO", int(28 * u), (w - 16 * u, h * 0.17), SWITCH_COLOR, "topright")
 
     def _banner(self, surf: pygame.Surface, text: str, size: int, center) -> None:
         img = self.text.render(text, size, TEXT)

@@ -16,7 +16,15 @@ from collections import deque
 
 import numpy as np
 
-from engine.sensors.source import Clock, Sample, Source, SourceError, SourceState, parse_source_url, register_scheme
+from engine.sensors.source import (
+    Clock,
+    Sample,
+    Source,
+    SourceError,
+    SourceState,
+    parse_source_url,
+    register_scheme,
+)
 
 HZ = 60
 
@@ -34,7 +42,7 @@ KEY_LABELS = {"space": "Space", "up": "Up", "down": "Down", "left": "Left", "rig
 # The attract mode picks among these (weights: mostly punches, some defence and footwork)
 AUTO_ACTIONS = ("straight_l", "straight_r", "hook_l", "hook_r", "uppercut_l", "uppercut_r",
                 "block", "parry_l", "parry_r", "step_forward", "step_back", "step_left", "step_right")
-AUTO_WEIGHTS = np.array([4, 4, 3, 3, 2, 2, 1, 1, 1, 2, 1, 1, 1], dtype=np.float64)
+AUTO_WEIGHTS = np.array([4, 4, 3, 3, 2, 2, 1, 1, 1, 3, 1, 1, 1], dtype=np.float64)
 
 
 def key_help() -> list[tuple[str, str]]:

@@ -20,7 +20,7 @@ from engine.errors import InputError
 
 DEFAULT_SOURCE = "wiimote://"
 KEYBOARD_SOURCE = "keyboard://"
-DEMO_SOURCE = "keyboard://?auto=1"
+DEMO_SOURCE = "keyboard://?profile=experienced"
 KEYBOARD_BANNER = "No Wiimote found: playing from the keyboard"
 
 
@@ -43,6 +43,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--frames", type=int, default=None, help="stop after N rendered frames (default: until the window closes)")
     p.add_argument("--screenshot", metavar="PNG", help="save the last frame to this PNG")
     p.add_argument("--trace", metavar="JSON", help="write the loop's Chrome trace here on exit")
+    p.add_argument("--virtual-clock", action="store_true", help="a virtual clock in a real window: the same frames as --headless (tests)")
     p.add_argument("--seed", type=int, default=0, help="seed for the virtual player and anything random (default 0)")
     p.add_argument("--size", default="1280x720", help="window size WxH (default 1280x720)")
     p.add_argument("--fullscreen", action="store_true", help="start fullscreen (F11 toggles)")
@@ -95,7 +96,7 @@ def run(args: argparse.Namespace) -> int:
     from engine.trace import write_chrome_trace
     from game.session import Session, SessionConfig
 
-    clock = VirtualClock() if args.headless else RealClock()
+    clock = VirtualClock() if args.headless or args.virtual_clock else RealClock()
     source, fallback = open_player_source(args.source, args.demo, args.seed, clock.seconds)
     if fallback:
         print(f"quickjab play: {KEYBOARD_BANNER}", file=sys.stderr)

@@ -34,7 +34,6 @@ from engine.sensors.source import Source, SourceState
 from engine.state_hash import state_hash
 from game.hud import Hud, HudState
 from game.match import Match
-from game.referee import Referee, reaction_name
 from game.render import Renderer
 
 HZ = 60
@@ -45,8 +44,10 @@ STAGE_BUDGETS_MS = {
 RENDER_BUDGET_MS = 8.0
 LOW_POWER_RENDER_BUDGET_MS = 4.0
 LOW_POWER_SCALE = 0.5  # the low-power mode renders at half size and scales up
-START_GAP = 1.6  # metres between the two roots at the bell
-MIN_GAP = 0.75  # roots never closer than this: the bodies clinch, they do not merge
+START_GAP = 1.1  # metres between the two roots at the bell: just out of a straight's reach
+RING_LIMIT = 2.6  # metres from the centre a root may go (the ropes are at 3)
+REFERENCE_SPEED = 4.0  # m/s: a blow closing at this speed does its window's damage
+BLOCKED_SHARE = 0.2  # the share of the damage that goes through a block
 HOME_BUTTON = 0x0080  # Wiimote core buttons: Home
 RUMBLE_MS = 120
 KNOCKDOWN_HOLD = 0.55  # the fraction of the knockdown clip held while the referee counts
@@ -103,6 +104,29 @@ def load_templates(path: str | Path | None = None, left_handed: bool = False):
     return templates
 
 
+def load_graph(path: str | Path | None = None):
+    """The Interaction Graph: `path`, else the shipped table, else one cached in the user's
+    data directory, else a small one built now (~3 s) and cached there."""
+    import sys
+
+    from game.interaction import DEFAULT_GRAPH, InteractionGraph
+    from game.userdata import data_dir
+
+    if path is not None:
+        return InteractionGraph.load(path)
+    if DEFAULT_GRAPH.exists():
+        return InteractionGraph.load(DEFAULT_GRAPH)
+    cached = data_dir() / "graph-small.npz"
+    if not cached.exists():
+        from game.actions import load_library
+        from game.interaction.build import BuildParams, build_graph
+
+        print(f"quickjab: no shipped Interaction Graph; building a small one in {cached} (once)", file=sys.stderr)
+        cached.parent.mkdir(parents=True, exist_ok=True)
+        build_graph(load_library(), BuildParams(states=3000, bouts=256)).save(cached)
+    return InteractionGraph.load(cached)
+
+
 class Session:
     """Build with a source and a surface to draw on; `loop.run(...)` plays."""
 
@@ -112,8 +136,8 @@ class Session:
         from engine.physics import World
         from engine.recognition import DualBufferRecognizer
         from game.actions import load_library
-        from game.fighter import Boxer
-        from game.interaction import InteractionGraph, OpponentController
+        from game.boxer import Boxer
+        from game.interaction import OpponentController
         from game.sound import Sounds
 
         self.config = cfg = config or SessionConfig()
@@ -125,12 +149,13 @@ class Session:
         self.boxers = (Boxer(self.world, self.lib, x=0.0, z=-START_GAP / 2, yaw=0.0),
                        Boxer(self.world, self.lib, x=0.0, z=START_GAP / 2, yaw=math.pi))
         self.player, self.opponent = self.boxers
-        graph = InteractionGraph.load(cfg.graph) if cfg.graph else InteractionGraph.load()
+        graph = load_graph(cfg.graph)
+        self.graph = graph
         self.opponent_ai = OpponentController(graph, self.lib, controller=self.opponent.controller)
+        self._pilot_wait = 0
         self.templates = load_templates(cfg.templates, cfg.left_handed)
         self.recognizer = DualBufferRecognizer(self.templates)
         self.resampler = FrameResampler(sensors=self.templates.dim // 3)
-        self.referee = Referee(self.lib)
         self.match = Match()
         self.hud_state = HudState(keys=[], source_url=source.url, keyboard_banner=cfg.keyboard_banner,
                                   demo=cfg.demo, mode="LOW POWER" if cfg.low_power else "",
@@ -178,6 +203,8 @@ class Session:
         if pygame.display.get_init():
             for event in pygame.event.get():
                 self.handle_event(event)
+        if self.config.demo:
+            self._pilot()
         samples = self.source.poll()
         buttons = int(getattr(self.source, "buttons", 0) or 0)
         if buttons & HOME_BUTTON and not self._buttons & HOME_BUTTON:
@@ -194,6 +221,29 @@ class Session:
                 self.match.toggle_pause()
             self._auto_paused = False
         self.hud_state.disconnected = disconnected
+
+    def _pilot(self) -> None:
+        """The attract mode's player: the Interaction Graph picks the player's move from the
+        player's side, the virtual player performs it on the keyboard source, and the REAL
+        recognizer has to recognize it before the boxer moves."""
+        from game.interaction import Situation
+
+        if not hasattr(self.source, "press") or self.source.busy or not self.match.fighting:
+            return
+        if self.player.controller.action != "guard":
+            return
+        if self._pilot_wait > 0:
+            self._pilot_wait -= 1
+            return
+        me, them = self.player.controller, self.opponent.controller
+        situation = Situation.from_roots(self.player.root, me.action, me.frame,
+                                         self.opponent.root, them.action, them.frame)
+        action = self.graph.best_action(situation)
+        if action in self.lib and action != "guard":
+            self.source.press(action)
+            self._pilot_wait = 12  # the hands come back to rest before the next motion
+        else:
+            self._pilot_wait = 8
 
     def handle_event(self, event: pygame.event.Event) -> None:
         if event.type == pygame.QUIT:
@@ -231,7 +281,8 @@ class Session:
     def _player(self, step: int, dt: float) -> None:
         self._hold_knockdown(0)
         ox, oz, _ = self.opponent.root
-        self.player.face(ox, oz)
+        self.player.turn_towards(ox, oz)
+        self.player.keep_inside(RING_LIMIT)
         self.player.step(dt)
         if self.player.controller.finished_action():
             self.recognizer.character_finished()
@@ -246,18 +297,9 @@ class Session:
                                              self.player.root, them.action, them.frame)
             self.opponent_ai.decide(situation)
         px, pz, _ = self.player.root
-        self.opponent.face(px, pz)
+        self.opponent.turn_towards(px, pz)
+        self.opponent.keep_inside(RING_LIMIT)
         self.opponent.step(dt)
-        self._keep_apart()
-
-    def _keep_apart(self) -> None:
-        (px, pz, _), (ox, oz, _) = self.player.root, self.opponent.root
-        d = math.hypot(ox - px, oz - pz)
-        if d < MIN_GAP:
-            ux, uz = ((ox - px) / d, (oz - pz) / d) if d > 1e-6 else (0.0, 1.0)
-            push = (MIN_GAP - d) / 2
-            self.player.push_root(-ux * push, -uz * push)
-            self.opponent.push_root(ux * push, uz * push)
 
     def _hold_knockdown(self, i: int) -> None:
         """While the referee counts, the downed boxer stays down (the clip's low frame)."""
@@ -274,22 +316,32 @@ class Session:
         self.renderer.step_effects()
 
     def _hits(self, step: int, dt: float) -> None:
-        blows = self.referee.judge(self.contacts, (self.player.body_id, self.opponent.body_id),
-                                   (self.player.controller, self.opponent.controller))
-        for blow in blows:
-            target = 1 - blow.attacker
-            if not self.match.hit(target, blow.damage):
-                continue
-            self.blows_log.append((step, blow.attacker, blow.target, blow.blocked, round(blow.damage, 4)))
-            self.renderer.add_flash(blow.point, strong=blow.damage >= 8, blocked=blow.blocked)
-            if blow.blocked:
-                self.sounds.play("block")
-            else:
-                self.sounds.play("hit" if blow.damage >= 8 else "hit_light")
-                if self.match.down != target:
-                    self.boxers[target].controller.play(reaction_name(blow, self.lib))
-            if target == 0:
-                self.source.rumble(RUMBLE_MS)
+        from game.hits import hits_from_contacts
+
+        for hit in hits_from_contacts(self.contacts, list(self.boxers)):
+            self.apply_hit(step, hit)
+
+    def apply_hit(self, step: int, hit: dict) -> None:
+        """A hit event (CONTRACTS.md keys, plus the window's damage and the point): damage
+        scaled by the closing speed, a fifth through a block; reaction, flash, sound, rumble."""
+        target = 1 - hit["attacker"]
+        scale = float(np.clip(hit["speed"] / REFERENCE_SPEED, 0.5, 1.5))
+        damage = float(hit.get("damage", 8.0)) * scale * (BLOCKED_SHARE if hit["blocked"] else 1.0)
+        if not self.match.hit(target, damage):
+            return
+        self.blows_log.append((step, hit["attacker"], hit["target"], hit["blocked"], round(damage, 4)))
+        point = hit.get("point")
+        if point is None:
+            point = self.boxers[target].joint_positions()[4]
+        self.renderer.add_flash(point, strong=damage >= 8, blocked=hit["blocked"])
+        if hit["blocked"]:
+            self.sounds.play("block")
+        else:
+            self.sounds.play("hit" if damage >= 8 else "hit_light")
+            if self.match.down != target:
+                self.boxers[target].react(hit)
+        if target == 0:
+            self.source.rumble(RUMBLE_MS)
 
     def _match(self, step: int, dt: float) -> None:
         m = self.match

@@ -57,6 +57,7 @@ _CHILD_LENGTH = np.zeros(len(JOINTS))
 for (_p, _c), _length in zip(BONES, BONE_LENGTHS, strict=True):
     _CHILD_LENGTH[_c] = _length
 _PARENT_ARR = np.array(PARENTS, dtype=np.int64)
+_LEVEL_PARENTS = [_PARENT_ARR[level] for level in LEVELS]
 
 
 def joint_index(name: str) -> int:
@@ -83,12 +84,11 @@ def impose_bone_lengths(posture: np.ndarray, lengths: np.ndarray | None = None) 
     if lengths is not None:
         child_len = np.zeros(len(JOINTS))
         child_len[BONES[:, 1]] = lengths
-    for level in LEVELS:
-        parents = _PARENT_ARR[level]
+    for level, parents in zip(LEVELS, _LEVEL_PARENTS, strict=True):
         d = src[..., level, :] - src[..., parents, :]
-        norm = np.linalg.norm(d, axis=-1, keepdims=True)
-        d = d / np.maximum(norm, 1e-9)
-        out[..., level, :] = out[..., parents, :] + d * child_len[level][:, None]
+        norm = np.sqrt((d * d).sum(-1))[..., None]
+        d *= (child_len[level][:, None] / np.maximum(norm, 1e-9))
+        out[..., level, :] = out[..., parents, :] + d
     return out
 
 

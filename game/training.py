@@ -18,11 +18,14 @@ import argparse
 import sys
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
-import pygame
 
 from engine.errors import InputError
+
+if TYPE_CHECKING:  # pygame loads only when the screen opens (the CLI imports this module)
+    import pygame
 
 HZ = 60
 TRIALS = 3
@@ -151,6 +154,8 @@ class TrainingScreen:
             del self.history[:-150]
 
     def draw(self, surf: pygame.Surface) -> None:
+        import pygame
+
         from game.camera import Camera
         from game.render import Renderer
         from game.skeleton import local_to_world
@@ -200,6 +205,8 @@ class TrainingScreen:
         self._instruction(surf, stage, u)
 
     def _instruction(self, surf: pygame.Surface, stage: pygame.Rect, u: float) -> None:
+        import pygame
+
         tr = self.trainer
         if tr.done:
             title, sub = "ALL DONE", (f"templates saved to {self.saved_to}" if self.saved_to else "building templates...")
@@ -220,6 +227,8 @@ class TrainingScreen:
             self._text(surf, "REC", int(26 * u), (stage.left + 46 * u, stage.bottom - 40 * u), (235, 50, 50))
 
     def _plot(self, surf: pygame.Surface, rect: pygame.Rect) -> None:
+        import pygame
+
         pygame.draw.rect(surf, (10, 10, 14), rect)
         if rect.height < 20:
             return
@@ -270,6 +279,8 @@ def run(args: argparse.Namespace) -> int:
             raise InputError(f"--actions: unknown {', '.join(unknown)}; known: {', '.join(ACTION_NAMES)}")
     if args.headless:
         headless_env()
+    import pygame
+
     from engine.clock import RealClock, VirtualClock
     from engine.frames import FrameResampler
     from engine.loop import FixedStepLoop
@@ -285,7 +296,7 @@ def run(args: argparse.Namespace) -> int:
     lib = load_library()
     trainer = Trainer(actions)
     pygame.init()
-    screen = pygame.display.set_mode(size, pygame.RESIZABLE)
+    pygame.display.set_mode(size, pygame.RESIZABLE)
     pygame.display.set_caption("QuickJab - Train your moves")
     screen_view = TrainingScreen(lib, trainer, source.url, args.left_handed)
     resampler = FrameResampler(sensors=2)

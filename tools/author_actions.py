@@ -90,13 +90,13 @@ def straight_r() -> Action:
 def hook_l() -> Action:
     g = GUARD
     impact = g.but(chest_yaw=-12, hip_yaw=4, lean_side=3, pelvis=(0.0, 0.88, 0.02), head_yaw=0,
-                   fist_l=(0.0, 1.46, 0.46), elbow_l=(-1.0, 0.9, 0.0))  # fmt: skip
+                   fist_l=(0.0, 1.46, 0.56), elbow_l=(-1.0, 0.9, 0.0))  # fmt: skip
     return _action("hook_l", "attack", 30, [
         (0, g),
         (5, g.but(chest_yaw=42, hip_yaw=30, lean_side=-5, fist_l=(-0.32, 1.44, 0.30),
                   elbow_l=(-1.0, 0.3, 0.0))),
         (11, impact),
-        (15, impact.but(chest_yaw=-22, fist_l=(0.13, 1.45, 0.38), elbow_l=(-1.0, 0.9, -0.3))),
+        (15, impact.but(chest_yaw=-22, fist_l=(0.13, 1.45, 0.44), elbow_l=(-1.0, 0.9, -0.3))),
         (22, g.but(chest_yaw=14, fist_l=(-0.08, 1.44, 0.33))),
         (29, g),
     ], attacks=[("l", 8, 14, ("head", "body"), 8.0)],
@@ -106,13 +106,13 @@ def hook_l() -> Action:
 def hook_r() -> Action:
     g = GUARD
     impact = g.but(chest_yaw=-36, hip_yaw=-5, lean_fwd=6, lean_side=-3, pelvis=(-0.02, 0.88, 0.04),
-                   head_yaw=10, fist_r=(0.0, 1.46, 0.46), elbow_r=(1.0, 0.9, 0.0),
+                   head_yaw=10, fist_r=(0.0, 1.46, 0.58), elbow_r=(1.0, 0.9, 0.0),
                    fist_l=(-0.12, 1.44, 0.25), ankle_r=(0.16, 0.11, -0.20), knee_r=(-0.4, 0.0, 1.0))  # fmt: skip
     return _action("hook_r", "attack", 32, [
         (0, g),
         (5, g.but(chest_yaw=44, hip_yaw=32, fist_r=(0.32, 1.42, 0.10), elbow_r=(1.0, 0.3, 0.0))),
         (12, impact),
-        (16, impact.but(chest_yaw=-46, fist_r=(-0.14, 1.45, 0.38), elbow_r=(1.0, 0.9, -0.3))),
+        (16, impact.but(chest_yaw=-46, fist_r=(-0.14, 1.45, 0.44), elbow_r=(1.0, 0.9, -0.3))),
         (24, g.but(chest_yaw=10, fist_r=(0.10, 1.42, 0.25))),
         (31, g),
     ], attacks=[("r", 9, 15, ("head", "body"), 11.0)],
@@ -122,13 +122,13 @@ def hook_r() -> Action:
 def uppercut_l() -> Action:
     g = GUARD
     impact = g.but(chest_yaw=8, hip_yaw=15, lean_fwd=4, lean_side=3, pelvis=(0.0, 0.91, 0.03),
-                   head_yaw=-10, fist_l=(-0.02, 1.58, 0.44), elbow_l=(0.0, -1.0, 0.3))  # fmt: skip
+                   head_yaw=-10, fist_l=(-0.02, 1.58, 0.54), elbow_l=(0.0, -1.0, 0.3))  # fmt: skip
     return _action("uppercut_l", "attack", 30, [
         (0, g),
         (5, g.but(pelvis=(-0.03, 0.83, 0.0), lean_side=-9, lean_fwd=10, chest_yaw=40,
                   fist_l=(-0.15, 1.10, 0.30), elbow_l=(-0.3, -1.0, -0.4))),
         (12, impact),
-        (16, impact.but(fist_l=(0.0, 1.62, 0.38))),
+        (16, impact.but(fist_l=(0.0, 1.62, 0.46))),
         (23, g.but(chest_yaw=20, fist_l=(-0.08, 1.46, 0.33))),
         (29, g),
     ], attacks=[("l", 9, 15, ("head", "body"), 8.0)],
@@ -138,14 +138,14 @@ def uppercut_l() -> Action:
 def uppercut_r() -> Action:
     g = GUARD
     impact = g.but(chest_yaw=-22, hip_yaw=4, lean_fwd=6, lean_side=-3, pelvis=(-0.01, 0.91, 0.04),
-                   head_yaw=5, fist_r=(0.03, 1.58, 0.46), elbow_r=(0.0, -1.0, 0.3),
+                   head_yaw=5, fist_r=(0.03, 1.58, 0.56), elbow_r=(0.0, -1.0, 0.3),
                    ankle_r=(0.16, 0.11, -0.20))  # fmt: skip
     return _action("uppercut_r", "attack", 32, [
         (0, g),
         (5, g.but(pelvis=(0.03, 0.82, -0.01), lean_side=9, lean_fwd=10, chest_yaw=42, hip_yaw=30,
                   fist_r=(0.17, 1.08, 0.14), elbow_r=(0.3, -1.0, -0.4))),
         (13, impact),
-        (17, impact.but(fist_r=(0.01, 1.62, 0.40))),
+        (17, impact.but(fist_r=(0.01, 1.62, 0.48))),
         (25, g.but(chest_yaw=18, fist_r=(0.10, 1.43, 0.25))),
         (31, g),
     ], attacks=[("r", 10, 16, ("head", "body"), 10.0)],

@@ -9,6 +9,7 @@ import importlib
 # target name -> module; modules load only when their target runs
 TARGETS = {
     "loop": "tools.bench_loop",
+    "synth": "tools.bench_synth",
     "physics": "tools.bench_physics",
     "wiimote": "tools.bench_wiimote",
     "graph": "tools.bench_graph",

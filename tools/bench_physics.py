@@ -20,6 +20,7 @@ import time
 
 import numpy as np
 
+from engine.errors import InputError
 from engine.physics import World
 
 DT = 1.0 / 60.0
@@ -184,6 +185,9 @@ def _relaxation(steps: int) -> dict:
 
 
 def run(args: argparse.Namespace) -> int:
+    for name in ("steps", "repeats", "iterations"):
+        if getattr(args, name) < 1:
+            raise InputError(f"bench physics: --{name} must be >= 1, got {getattr(args, name)}")
     it = args.iterations
     configs = {
         "apart": _world(1.2, it), "clinch": _world(0.45, it),

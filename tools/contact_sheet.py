@@ -14,6 +14,7 @@ from game.skeleton import BONES, JOINTS, compose_root, local_to_world
 
 VIEW_YAW = np.radians(35.0)  # camera turned around the boxer: shows straights and hooks
 CELL_W, CELL_H, SCALE = 130, 190, 95.0
+TOP_H, TOP_SCALE = 78, 90.0  # the view from above under each frame: arcs vs. straight lines
 LEFT_COLOUR, RIGHT_COLOUR, MID_COLOUR = (60, 120, 230), (220, 60, 50), (40, 40, 40)
 
 
@@ -57,6 +58,29 @@ def draw_posture(surface, posture: np.ndarray, origin: tuple[float, float], scal
         pygame.draw.circle(surface, _colour(j), pts[j], 0.055 * scale)
 
 
+def draw_top(surface, posture: np.ndarray, trail: np.ndarray, origin: tuple[float, float],
+             scale: float = TOP_SCALE) -> None:
+    """Seen from above (boxer facing up the page, +x to the right): shoulders, arms and the
+    punching hands' paths so far, which tell a straight from a hook from a parry."""
+    import pygame
+
+    def pt(p):
+        return (origin[0] + p[..., 0] * scale, origin[1] - p[..., 2] * scale)
+
+    for hand, colour in (("l", LEFT_COLOUR), ("r", RIGHT_COLOUR)):
+        path = trail[:, JOINTS.index(f"fist_{hand}")]
+        if len(path) > 1:
+            pygame.draw.lines(surface, tuple(int(c * 0.5 + 127) for c in colour), False,
+                              [pt(q) for q in path], 2)  # fmt: skip
+    sh_l, sh_r = JOINTS.index("shoulder_l"), JOINTS.index("shoulder_r")
+    pygame.draw.line(surface, MID_COLOUR, pt(posture[sh_l]), pt(posture[sh_r]), 3)
+    for side, colour in (("l", LEFT_COLOUR), ("r", RIGHT_COLOUR)):
+        chain = [JOINTS.index(f"{j}_{side}") for j in ("shoulder", "elbow", "fist")]
+        pygame.draw.lines(surface, colour, False, [pt(posture[j]) for j in chain], 3)
+        pygame.draw.circle(surface, colour, pt(posture[chain[-1]]), 0.05 * scale)
+    pygame.draw.circle(surface, MID_COLOUR, pt(posture[JOINTS.index("head")]), 0.09 * scale, 2)
+
+
 def render_sheet(lib: dict[str, Action], names: list[str] | None = None, per_row: int = 2):
     """A pygame Surface with one strip of key frames per action."""
     import pygame
@@ -67,18 +91,20 @@ def render_sheet(lib: dict[str, Action], names: list[str] | None = None, per_row
     cols = max(len(key_frames(lib[n])) for n in names)
     strip_w = cols * CELL_W + 10
     rows = (len(names) + per_row - 1) // per_row
-    sheet = pygame.Surface((per_row * strip_w, rows * (CELL_H + 18)))
+    row_h = CELL_H + TOP_H + 22
+    sheet = pygame.Surface((per_row * strip_w, rows * row_h))
     sheet.fill((250, 250, 245))
     font = pygame.font.Font(None, 20)
     small = pygame.font.Font(None, 16)
     for i, name in enumerate(names):
         a = lib[name]
-        x0, y0 = (i % per_row) * strip_w, (i // per_row) * (CELL_H + 18)
+        x0, y0 = (i % per_row) * strip_w, (i // per_row) * row_h
         sheet.blit(font.render(f"{name}  ({a.frames} f = {a.frames / 60:.2f} s)", True, (0, 0, 0)), (x0 + 4, y0 + 2))
         for k, f in enumerate(key_frames(a)):
             cx = x0 + k * CELL_W
             hot = a.attack_at(f) is not None or a.guard_at(f) is not None
-            pygame.draw.rect(sheet, (255, 236, 200) if hot else (238, 238, 232), (cx + 2, y0 + 18, CELL_W - 4, CELL_H - 2))
+            pygame.draw.rect(sheet, (255, 236, 200) if hot else (238, 238, 232),
+                             (cx + 2, y0 + 18, CELL_W - 4, CELL_H + TOP_H - 2))  # fmt: skip
             # root motion shown as displacement of the whole figure
             root = compose_root((0.0, 0.0, 0.0), a.root_offset(f))
             pose = local_to_world(a.posture(f), root)
@@ -86,6 +112,8 @@ def render_sheet(lib: dict[str, Action], names: list[str] | None = None, per_row
             pygame.draw.line(sheet, (160, 160, 150), (cx + 6, ground), (cx + CELL_W - 6, ground), 1)
             draw_posture(sheet, pose, (cx + CELL_W * 0.42, ground - 0.0))
             sheet.blit(small.render(f"f{f}", True, (90, 90, 90)), (cx + 5, y0 + 20))
+            local = a.table[: f + 1] if f > 0 else a.table[:1]
+            draw_top(sheet, a.posture(f), local, (cx + CELL_W * 0.5, ground + TOP_H - 12))
     return sheet
 
 

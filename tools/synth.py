@@ -3,6 +3,9 @@
   quickjab synth --player experienced --trials 3 -o DIR    DIR/<action>/<n>.csv trial files
   quickjab synth --session 120 -o rec.csv                  a labelled continuous recording of
                                                            random actions separated by rests
+  quickjab synth --templates -o game/assets/templates.npz  the shipped default templates, built
+                                                           with engine.recognition from 3
+                                                           synthesized experienced trials/action
 Both are written in the recording CSV of FORMATS.md; `--seed` makes them reproducible.
 """
 
@@ -88,6 +91,26 @@ def synth_session(
     return np.concatenate(parts), labels
 
 
+DEFAULT_TEMPLATE_SEED = 2011  # the paper's year: the shipped templates are rebuilt bit for bit
+
+
+def build_default_templates(path: str | Path, seed: int = DEFAULT_TEMPLATE_SEED, trials: int = 3,
+                            profile: str = "experienced") -> Path:
+    """Build recognition templates from synthesized trials (the paper's 3 per action, Eq. 1)
+    with engine.recognition and save them to `path` (npz, no pickles)."""  # fmt: skip
+    try:
+        from engine.recognition import Templates
+    except ImportError:
+        raise InputError("engine.recognition.Templates is not available in this tree") from None
+    lib = load_library()
+    trial_sets = synth_trials(lib, profile, trials, np.random.default_rng(seed))
+    templates = Templates.from_trials(trial_sets)
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    templates.save(str(path))
+    return path
+
+
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("synth", help="synthesize trials or a labelled session from the virtual player",
                        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)  # fmt: skip
@@ -95,8 +118,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     mode = p.add_mutually_exclusive_group(required=True)
     mode.add_argument("--trials", type=int, help="trials per action, written to DIR/<action>/<n>.csv")
     mode.add_argument("--session", type=float, metavar="SECONDS", help="length of a continuous recording")
-    p.add_argument("-o", "--output", required=True, help="DIR for --trials, a .csv file for --session")
-    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    mode.add_argument("--templates", action="store_true",
+                      help="build recognition templates (-o NPZ) from 3 synthesized trials per action")
+    p.add_argument("-o", "--output", required=True,
+                   help="DIR for --trials, a .csv file for --session, an .npz for --templates")
+    p.add_argument("--seed", type=int, default=None,
+                   help=f"random seed (default 0; {DEFAULT_TEMPLATE_SEED} for --templates)")
     p.add_argument("--actions", default=None, help="comma-separated subset of actions (default: all 13)")
     p.add_argument("--rest", type=int, default=0, help="frames of still guard before and after each trial")
     p.set_defaults(func=run)
@@ -113,6 +140,20 @@ def _parse_actions(text: str | None) -> list[str] | None:
 
 
 def run(args: argparse.Namespace) -> int:
+    try:
+        return _run(args)
+    except OSError as exc:  # an output we cannot write: one line naming it
+        raise InputError(f"{exc.filename or args.output}: cannot write ({exc.strerror or exc})") from None
+
+
+def _run(args: argparse.Namespace) -> int:
+    if args.templates:
+        seed = DEFAULT_TEMPLATE_SEED if args.seed is None else args.seed
+        path = build_default_templates(args.output, seed, profile=args.player)
+        print(f"wrote templates for {len(ACTION_NAMES)} actions to {path} (seed {seed})")
+        return 0
+    if args.seed is None:
+        args.seed = 0
     lib = load_library()
     rng = np.random.default_rng(args.seed)
     actions = _parse_actions(args.actions)

@@ -57,14 +57,14 @@ def _params(a, b, c, e, f) -> tuple[np.ndarray, np.ndarray]:
     return s, t
 
 
-# rows: d1 = q1 - p1, d2 = q2 - p2, r = p1 - p2, from the four ends stacked (p1, q1, p2, q2)
-_EDGES = np.array([[-1.0, 1.0, 0.0, 0.0], [0.0, 0.0, -1.0, 1.0], [1.0, 0.0, -1.0, 0.0]])
+# from the four ends stacked (p1, q1, p2, q2): d1 = q1 - p1, d2 = q2 - p2, r = p1 - p2
+_PLUS = np.array([1, 3, 0])
+_MINUS = np.array([0, 2, 2])
 
 
 def _gram(ends: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """ends (4, K, 3) -> the three edge vectors V (3, K, 3) and their Gram matrices (3, 3, K)."""
-    k = ends.shape[1]
-    v = (_EDGES @ ends.reshape(4, -1)).reshape(3, k, 3)
+    v = ends[_PLUS] - ends[_MINUS]
     return v, np.einsum("aki,bki->abk", v, v)
 
 
@@ -80,7 +80,7 @@ def segment_distance(p1: np.ndarray, q1: np.ndarray, p2: np.ndarray, q2: np.ndar
     s, t = closest_params(p1, q1, p2, q2)
     ca = p1 + s[:, None] * (q1 - p1)
     cb = p2 + t[:, None] * (q2 - p2)
-    return np.sqrt(np.einsum("ij,ij->i", cb - ca, cb - ca))
+    return np.sqrt(((cb - ca) ** 2).sum(1))
 
 
 class CapsulePairs:
@@ -98,22 +98,11 @@ class CapsulePairs:
         self.quad = np.stack([self.ia, self.ja, self.ib, self.jb])  # (4, K) for one gather
         self.rsum = radii[cap_a] + radii[cap_b]
         self.inv_mass = inv_mass
-        self.inv_mass3 = np.repeat(inv_mass, 3)  # per coordinate of x.ravel()
         self.n = n_particles
-        # broad-phase matrices: pair_mid @ x = midpoint(b) - midpoint(a) for every pair,
-        # half @ x = half axis of every capsule, pair_caps @ |half| = sum of the two half lengths
-        c = np.arange(len(caps))
-        mid = np.zeros((len(caps), n_particles))
-        np.add.at(mid, (c, caps[:, 0]), 0.5)
-        np.add.at(mid, (c, caps[:, 1]), 0.5)
-        self.pair_mid = mid[cap_b] - mid[cap_a]
-        self.half = np.zeros((len(caps), n_particles))
-        np.add.at(self.half, (c, caps[:, 1]), 0.5)
-        np.add.at(self.half, (c, caps[:, 0]), -0.5)
-        k = np.arange(len(cap_a))
-        self.pair_caps = np.zeros((len(cap_a), len(caps)))
-        self.pair_caps[k, cap_a] += 1.0
-        self.pair_caps[k, cap_b] += 1.0
+        # broad phase: every capsule's two ends in one gather, then the pairs' capsules in one
+        self.cap_ends = np.concatenate([caps[:, 0], caps[:, 1]])
+        self.n_caps = len(caps)
+        self.pair_ab = np.concatenate([cap_a, cap_b])
 
     def __len__(self) -> int:
         return len(self.cap_a)
@@ -121,10 +110,16 @@ class CapsulePairs:
     def candidates(self, x: np.ndarray, margin: float) -> np.ndarray:
         """Indices of pairs whose bounding spheres (capsule midpoint, half length + radius)
         come within `margin`: a cheap broad phase before the exact segment test."""
-        d = self.pair_mid @ x
-        h = self.half @ x
-        reach = self.pair_caps @ np.sqrt(np.einsum("ij,ij->i", h, h)) + (self.rsum + margin)
-        return np.flatnonzero(np.einsum("ij,ij->i", d, d) < reach * reach)
+        c = self.n_caps
+        ends = x[self.cap_ends]
+        both = np.concatenate([ends[:c] + ends[c:], ends[c:] - ends[:c]], axis=1)  # 2 mid, 2 half
+        k = len(self.cap_a)
+        pair = both[self.pair_ab]  # rows: side a then side b
+        d = pair[k:, :3] - pair[:k, :3]  # 2 (mid_b - mid_a)
+        axes = pair[:, 3:]
+        length = np.sqrt((axes * axes).sum(1))  # full capsule lengths
+        reach = length[:k] + length[k:] + 2.0 * (self.rsum + margin)  # 2 x reach
+        return np.flatnonzero((d * d).sum(1) < reach * reach)
 
     def narrow(self, x: np.ndarray, idx: np.ndarray):
         """For the pairs `idx`: (s, t, unit normal a->b, depth); depth > 0 means the capsules
@@ -132,7 +127,7 @@ class CapsulePairs:
         v, g = _gram(x[self.quad[:, idx]])
         s, t = _params(g[0, 0], g[0, 1], g[0, 2], g[1, 1], g[1, 2])
         d = t[:, None] * v[1] - s[:, None] * v[0] - v[2]  # closest point on b - on a
-        dist = np.sqrt(np.einsum("ij,ij->i", d, d))
+        dist = np.sqrt((d * d).sum(1))
         depth = self.rsum[idx] - dist
         bad = dist < 1e-9
         if bad.any():
@@ -153,42 +148,43 @@ class CapsulePairs:
 
     def contact_set(self, idx: np.ndarray, s: np.ndarray, t: np.ndarray, n: np.ndarray) -> ContactSet:
         """Contact constraints for pairs `idx`, linearized at this step's closest points."""
-        k = np.arange(len(idx))
-        g = np.zeros((len(idx), self.n))
-        # G @ x = (closest point on b) - (closest point on a); the two bodies share no particle,
-        # and a sphere's two ends are one particle whose weights add up to 1
-        g[k, self.ib[idx]] = 1.0 - t
-        g[k, self.jb[idx]] += t
-        g[k, self.ia[idx]] = s - 1.0
-        g[k, self.ja[idx]] -= s
-        return ContactSet(g, n, self.rsum[idx], self.inv_mass, self.inv_mass3)
+        # weights of the four ends in (closest point on b) - (closest point on a); a sphere's
+        # two ends are one particle: all its weight on the first, so no particle appears twice
+        # in one contact and sum w g^2 below is right
+        wa0 = np.where(self.ia[idx] == self.ja[idx], -1.0, s - 1.0)
+        wa1 = np.where(self.ia[idx] == self.ja[idx], 0.0, -s)
+        wb0 = np.where(self.ib[idx] == self.jb[idx], 1.0, 1.0 - t)
+        wb1 = np.where(self.ib[idx] == self.jb[idx], 0.0, t)
+        return ContactSet(self.quad[:, idx], np.stack([wa0, wa1, wb0, wb1]), n, self.rsum[idx], self.inv_mass)
 
 
 class ContactSet:
-    """Non-penetration constraints C_k = (G_k @ x) . n_k - rsum_k >= 0 for one step: the
-    barycentric weights (s, t) and the normal n come from the closest points at detection and
-    stay fixed for the step's iterations (standard PBD practice), so each iteration is a few
-    matmuls. Projection (Jacobi over the contacts): lambda_k = max(-C_k, 0) / sum_p w_p G_kp^2,
-    dx_p = w_p sum_k G_kp n_k lambda_k: the separation grows by exactly the depth, heavier
-    particles moving less, and momentum is conserved."""
+    """Non-penetration constraints C_k = (sum_q g_qk x_qk) . n_k - rsum_k >= 0 for one step,
+    over the four segment ends q of each pair: the barycentric weights g and the normal n come
+    from the closest points at detection and stay fixed for the step's iterations (standard
+    PBD practice), so each iteration is one gather, one reduction and one scatter. Projection
+    (Jacobi over the contacts): lambda_k = max(-C_k, 0) / sum_q w_q g_qk^2 and
+    dx_q = w_q g_qk n_k lambda_k: the separation grows by exactly the depth, heavier particles
+    moving less, and momentum is conserved. No BLAS: the sums are numpy's own, in a fixed
+    order, so a run hashes the same on every CPU (BLAS kernels differ between CPUs)."""
 
-    def __init__(self, g: np.ndarray, n: np.ndarray, rsum: np.ndarray, inv_mass: np.ndarray,
-                 inv_mass3: np.ndarray) -> None:
-        self.g = g
-        self.n = n
+    def __init__(self, quad: np.ndarray, g: np.ndarray, n: np.ndarray, rsum: np.ndarray,
+                 inv_mass: np.ndarray) -> None:
+        self.quad = quad  # (4, K) particle indices
         self.rsum = rsum
-        k, m = g.shape
-        # flattened over (particle, axis): gn @ x.ravel() = (G @ x) . n per contact, and
-        # push.T @ lambda = the displacement of every coordinate (inverse mass folded in)
-        self.gn = (g[:, :, None] * n[:, None, :]).reshape(k, 3 * m)
-        inv_wsum = 1.0 / np.maximum((g * g) @ inv_mass, _EPS)
-        self.push = (self.gn * inv_mass3) * inv_wsum[:, None]
+        self.gn = g[:, :, None] * n[None, :, :]  # (4, K, 3)
+        w = inv_mass[quad]  # (4, K)
+        inv_wsum = 1.0 / np.maximum(np.einsum("qk,qk->k", w, g * g), _EPS)
+        self.push = self.gn * (w * inv_wsum)[:, :, None]  # displacement per unit lambda
+        self.flat = (quad[:, :, None] * 3 + np.arange(3)).reshape(-1)  # x.ravel() indices
+        self.size = 3 * len(inv_mass)
 
     def project(self, x: np.ndarray) -> None:
-        flat = x.reshape(-1)  # a view: x is C-contiguous
-        depth = self.rsum - self.gn @ flat
-        flat += np.maximum(depth, 0.0, out=depth) @ self.push
+        depth = self.rsum - np.einsum("qki,qki->k", self.gn, x[self.quad])
+        lam = np.maximum(depth, 0.0, out=depth)
+        dx = np.bincount(self.flat, weights=(self.push * lam[:, None]).reshape(-1), minlength=self.size)
+        x += dx.reshape(x.shape)
 
     def closing_speeds(self, v: np.ndarray) -> np.ndarray:
         """Speed at which each pair's closest points approach along its normal (> 0 closing)."""
-        return -(self.gn @ v.reshape(-1))
+        return -np.einsum("qki,qki->k", self.gn, v[self.quad])

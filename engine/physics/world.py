@@ -57,14 +57,16 @@ class World:
     collision between bodies and the ground plane. See engine/physics/__init__.py."""
 
     def __init__(self, gravity=(0.0, -9.81, 0.0), ground_y: float = 0.0, damping: float = 0.01,
-                 iterations: int = 4, solver: str = "jacobi", relaxation: float = 1.5, max_accel: float = 200.0,
+                 iterations: int = 4, solver: str = "jacobi", relaxation: float = 2.0, max_accel: float = 200.0,
                  max_speed: float = 15.0, ground_friction: float = 0.0,
                  collision_margin: float = 0.05) -> None:
         if iterations < 1:
             raise ValueError("iterations must be >= 1")
         self.gravity = np.asarray(gravity, dtype=float).reshape(3)
         self.ground_y = float(ground_y)
-        self.damping = float(damping)  # fraction of velocity lost per step
+        if not 0.0 <= damping < 1.0:
+            raise ValueError("damping must be in [0, 1)")
+        self.damping = float(damping)  # fraction of velocity lost per 1/60 s (Jakobsen's per step)
         self.iterations = int(iterations)
         self.solver = solver  # "jacobi" (default) or "gauss_seidel", see constraints.py
         self.relaxation = float(relaxation)  # Jacobi over-relaxation factor omega
@@ -237,7 +239,9 @@ class World:
         x, v, dv = self.x, self._v, self._dv
         dt_prev = self._dt_prev or dt
         np.subtract(x, self.x_prev, out=v)
-        v *= (1.0 - self.damping) / dt_prev
+        # the same damping per second whatever dt: (1 - d) per 60 Hz step
+        keep = (1.0 - self.damping) ** (dt * 60.0) if dt != 1.0 / 60.0 else 1.0 - self.damping
+        v *= keep / dt_prev
         v += self.gravity * dt
         # Backward Euler on x'' = w2 (T - x') - c (v' - v_T), x' = x + dt v' gives
         #   v' - v = (dt w2 (T - x) + dt c v_T - (dt c + dt^2 w2) v) / (1 + dt c + dt^2 w2)
@@ -257,11 +261,11 @@ class World:
         dv -= self._pd_kd * v
         # max acceleration clamp: a discontinuous target moves the body smoothly
         amax = self.max_accel * dt
-        n2 = np.einsum("ij,ij->i", dv, dv)
+        n2 = (dv * dv).sum(1)
         if n2.max(initial=0.0) > amax * amax:
             dv *= np.minimum(1.0, amax / np.sqrt(np.maximum(n2, 1e-30)))[:, None]
         v += dv
-        n2 = np.einsum("ij,ij->i", v, v)
+        n2 = (v * v).sum(1)
         if n2.max(initial=0.0) > self.max_speed * self.max_speed:
             v *= np.minimum(1.0, self.max_speed / np.sqrt(np.maximum(n2, 1e-30)))[:, None]
         self.x_prev[:] = x

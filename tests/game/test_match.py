@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from game.match import BREAK, COUNT, FIGHT, OVER, Match
+from game.match import BREAK, COUNT, FIGHT, Match
 
 
 def run(m: Match, steps: int) -> None:

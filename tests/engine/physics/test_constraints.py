@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from engine.physics import World
 from engine.physics.constraints import DistanceConstraints, edge_colouring
@@ -124,3 +126,27 @@ def test_body_at_rest_under_gravity_keeps_its_bones(solver):
     lengths = np.linalg.norm(x[STICKS[:, 1]] - x[STICKS[:, 0]], axis=1)
     assert np.max(np.abs(lengths - rest) / rest) < 0.02
     assert np.abs(x - GUARD).max() < 0.05  # gravity sag only
+
+_coord = st.floats(-2.0, 2.0, allow_nan=False)
+
+
+@settings(max_examples=200, deadline=None)
+@given(a=st.tuples(_coord, _coord, _coord), b=st.tuples(_coord, _coord, _coord),
+       m=st.tuples(st.floats(0.1, 20.0), st.floats(0.1, 20.0)), rest=st.floats(0.05, 3.0),
+       solver=st.sampled_from(SOLVERS))
+def test_any_stick_moves_its_ends_the_right_way(a, b, m, rest, solver):
+    x = np.array([a, b], dtype=float)
+    length = np.linalg.norm(x[1] - x[0])
+    if length < 1e-3 or abs(length - rest) < 1e-6:
+        return
+    c = _pair(solver, rest, rest, masses=m)
+    new = x.copy()
+    c.relax(new)
+    towards = x[1] - x[0]  # from end 0 to end 1
+    moved0, moved1 = new[0] - x[0], new[1] - x[1]
+    sign = 1.0 if length > rest else -1.0  # stretched: together; compressed: apart
+    assert sign * (moved0 @ towards) >= -1e-12
+    assert sign * (moved1 @ -towards) >= -1e-12
+    assert abs(np.linalg.norm(new[1] - new[0]) - rest) < abs(length - rest)
+    # the centre of mass stays where it was
+    np.testing.assert_allclose(m[0] * new[0] + m[1] * new[1], m[0] * x[0] + m[1] * x[1], atol=1e-9)

@@ -235,3 +235,51 @@ def test_three_bodies_collide_pairwise():
         w.step(DT)
     gaps = np.diff(np.sort(w.x[:, 0]))
     assert np.all(gaps >= 0.4 - 0.002)
+
+
+_HASH_RUN = """
+import numpy as np
+from engine.physics import World
+from tests.engine.physics.humanoid import GUARD, add_humanoid, place
+w = World()
+a = add_humanoid(w, 0.0, -1.0, 0.0)
+b = add_humanoid(w, 0.05, 1.0, np.pi)
+for i in range(150):
+    z = min(-1.0 + 0.6 * i / 60, -0.05)
+    w.set_targets(a, place(GUARD, 0.0, z, 0.0), 5.0)
+    w.set_targets(b, place(GUARD, 0.05, -z, np.pi), 5.0)
+    w.step(1 / 60)
+print(w.state_hash())
+"""
+
+
+def test_state_hash_does_not_depend_on_the_cpu_kernels():
+    """The step uses no BLAS (whose kernels OpenBLAS picks per CPU and which round
+    differently), so forcing another kernel set, or numpy without its AVX paths, must give
+    the same bits: two bodies walking into each other, contacts included."""
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[3]
+    hashes = set()
+    for extra in ({}, {"OPENBLAS_CORETYPE": "Prescott", "NPY_DISABLE_CPU_FEATURES": "X86_V3 X86_V4"}):
+        env = {**os.environ, **extra}
+        out = subprocess.run([sys.executable, "-c", _HASH_RUN], cwd=root, env=env, capture_output=True,
+                             text=True, timeout=120)
+        assert out.returncode == 0, out.stderr
+        hashes.add(out.stdout.strip())
+    assert len(hashes) == 1
+
+
+def test_damping_is_per_second_not_per_step():
+    def speed_after_1s(dt: float) -> float:
+        w = World(gravity=(0, 0, 0), ground_y=-100.0, damping=0.05)
+        w.add_body([[0.0, 0.0, 0.0]], [1.0], np.zeros((0, 2)), np.zeros((0, 2)), [], [])
+        w.x_prev[0] = (-2.0 * dt, 0.0, 0.0)  # 2 m/s
+        for _ in range(round(1.0 / dt)):
+            w.step(dt)
+        return float(w.velocity(dt)[0, 0])
+    assert speed_after_1s(1 / 60) == pytest.approx(2.0 * 0.95**60, rel=1e-9)
+    assert speed_after_1s(1 / 120) == pytest.approx(speed_after_1s(1 / 60), rel=1e-9)

@@ -1,0 +1,119 @@
+"""A boxer: a Jakobsen particle body in the physics world, a PlayerController that plays its
+actions, and the root transform (x, z, yaw) that places the clip's local postures in the ring.
+
+Each step: the controller yields the local reference posture and the clip's root motion; the
+root moves by it; the reference goes to the world frame and the body is pulled towards it
+(PD pull of the physics world, with the reference's own velocity so fast punches do not lag).
+The root also follows the body when the body is held back (two boxers walking into each
+other, a hit that shoves): beyond ROOT_SLACK of horizontal disagreement between the simulated
+and the reference pelvis, the root gives way, so the pull never fights a wall forever.
+
+    world = World(); lib = load_library()
+    a = Boxer(world, lib, x=0.0, z=-0.5, yaw=0.0); b = Boxer(world, lib, z=0.5, yaw=math.pi)
+    a.step(dt); b.step(dt); contacts = world.step(dt); hits = hits_from_contacts(contacts, [a, b])
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from game.actions import Action, reaction_for
+from game.body import add_boxer_body
+from game.hits import hits_from_contacts
+from game.motion import PlayerController
+from game.skeleton import compose_root, local_to_world, world_to_local, yaw_matrix
+
+__all__ = ["Boxer", "hits_from_contacts"]
+
+STIFFNESS_HZ = 7.0  # body and legs
+ARM_STIFFNESS_HZ = 12.0  # elbows and fists follow punches closely
+ROOT_SLACK = 0.06  # metres the simulated pelvis may trail the reference before the root gives
+_ARM = np.array([6, 7, 9, 10])
+
+
+class Boxer:
+    def __init__(self, world, lib: dict[str, Action], x: float = 0.0, z: float = -1.0, yaw: float = 0.0,
+                 controller: PlayerController | None = None):  # fmt: skip
+        self.world = world
+        self.lib = lib
+        self.controller = controller or PlayerController(lib)
+        self._root = (float(x), float(z), float(yaw))
+        self.reference = local_to_world(self.controller.output, self._root)
+        self.body = add_boxer_body(world, self.reference)
+        self.stiffness = np.full(len(self.reference), STIFFNESS_HZ)
+        self.stiffness[_ARM] = ARM_STIFFNESS_HZ
+        self._spent: set[str] = set()
+        self._swing = (self.controller.action, self.controller.frame)
+
+    @property
+    def root(self) -> tuple[float, float, float]:
+        return self._root
+
+    def place(self, x: float, z: float, yaw: float) -> None:
+        """Teleport to a root (between rounds): body at rest in the current posture."""
+        self._root = (float(x), float(z), float(yaw))
+        self.reference = local_to_world(self.controller.output, self._root)
+        self.world.set_positions(self.body, self.reference)
+
+    def step(self, dt: float) -> np.ndarray:
+        """Controller step, root motion, PD targets on the body. Returns the world reference."""
+        pc = self.controller
+        posture = pc.step()
+        self._track_swing()
+        x, z, yaw = compose_root(self._root, pc.root_delta)
+        # the root gives way when the body is held back or pushed
+        pelvis = self.joint_positions()[0]
+        lag = np.array([pelvis[0] - self.reference[0, 0], pelvis[2] - self.reference[0, 2]])
+        dist = float(np.hypot(*lag))
+        if dist > ROOT_SLACK:
+            x, z = x + lag[0] * (1 - ROOT_SLACK / dist), z + lag[1] * (1 - ROOT_SLACK / dist)
+        self._root = (x, z, yaw)
+        previous = self.reference
+        self.reference = local_to_world(posture, self._root)
+        velocities = (self.reference - previous) / dt
+        self.world.set_targets(self.body, self.reference, self.stiffness, 1.0, velocities=velocities)
+        return self.reference
+
+    def joint_positions(self) -> np.ndarray:
+        """(17, 3) simulated joints, WORLD frame."""
+        return self.world.x[self.world.bodies[self.body].slice]
+
+    # ---- hits -------------------------------------------------------------------------------
+    def _track_swing(self) -> None:
+        pc = self.controller
+        last_action, last_frame = self._swing
+        if pc.action != last_action or pc.frame < last_frame:
+            self._spent.clear()  # a new clip: both hands may land again
+        self._swing = (pc.action, pc.frame)
+
+    def hand_spent(self, hand: str) -> bool:
+        return hand in self._spent
+
+    def spend_hand(self, hand: str) -> None:
+        self._spent.add(hand)
+
+    def react(self, hit: dict, heavy_speed: float | None = None) -> str:
+        """Play the reaction to `hit` (an event where this boxer was struck); returns its name."""
+        direction = world_to_local(np.asarray(hit["direction"], dtype=float), (0.0, 0.0, self._root[2]))
+        name = reaction_for(hit["target"], direction, hit["speed"]) if heavy_speed is None else \
+            reaction_for(hit["target"], direction, hit["speed"] * 5.0 / heavy_speed)  # fmt: skip
+        if name in self.lib:
+            self.controller.play(name)
+        return name
+
+    def turn_towards(self, x: float, z: float, rate: float = 0.2) -> None:
+        """Turn the root's yaw `rate` of the way towards the world point (x, z) (the game keeps
+        the two boxers facing each other)."""
+        rx, rz, yaw = self._root
+        want = float(np.arctan2(x - rx, z - rz))  # yaw 0 faces +z, positive turns towards +x
+        delta = (want - yaw + np.pi) % (2 * np.pi) - np.pi
+        self._root = (rx, rz, yaw + rate * delta)
+
+    def keep_inside(self, limit: float) -> None:
+        """Keep the root within `limit` metres of the ring's centre lines (inside the ropes)."""
+        rx, rz, yaw = self._root
+        self._root = (float(np.clip(rx, -limit, limit)), float(np.clip(rz, -limit, limit)), yaw)
+
+    def facing(self) -> np.ndarray:
+        """Unit world vector the boxer faces."""
+        return yaw_matrix(self._root[2]) @ np.array([0.0, 0.0, 1.0])

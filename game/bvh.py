@@ -1,0 +1,540 @@
+"""BVH motion capture: import (any hierarchy, any channel order), retarget onto our skeleton,
+cut actions from it, and export played motion so Blender opens it.
+
+Import runs forward kinematics over every frame at once: a joint's local transform is its
+OFFSET plus any position channels, rotated by its rotation channels composed in the order they
+are listed (BVH's convention: v_parent = R_ch1 R_ch2 R_ch3 v_child). A name table maps the
+source's joints onto our 17 (Character Creator `CC_Base_*`, CMU/Motionbuilder and Mixamo
+names). Retargeting scales the performer to our leg length, mirrors BVH's right-handed axes
+into our frame (+x is the boxer's right), takes the root (x, z, yaw) from the pelvis and hips,
+and re-imposes our bone lengths along the source's bone directions.
+
+Export writes our skeleton: the pelvis carries position and rotation, every other joint
+rotations (ZXY), computed from joint positions as the smallest rotation that points each bone
+where it goes. Children of the pelvis and the chest hang from zero-length helper joints so
+every bone can point independently and an export -> import round trip gives the positions
+back.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from engine.errors import InputError
+from game.actions import FPS, Action
+from game.skeleton import (
+    BONE_LENGTHS,
+    BONES,
+    JOINTS,
+    PARENTS,
+    impose_bone_lengths,
+    joint_index,
+    local_to_world,
+    world_to_local,
+)
+
+
+class BVHError(InputError):
+    """A BVH file that cannot be read; the message names the file and line."""
+
+
+@dataclass
+class BVHJoint:
+    name: str
+    parent: int
+    offset: np.ndarray  # (3,)
+    channels: list[str]
+    end_site: np.ndarray | None = None
+
+
+@dataclass
+class BVH:
+    joints: list[BVHJoint]
+    motion: np.ndarray  # (frames, total channels)
+    frame_time: float
+    path: str = ""
+
+    @property
+    def frames(self) -> int:
+        return len(self.motion)
+
+    def index(self, name: str) -> int:
+        for i, j in enumerate(self.joints):
+            if j.name == name:
+                return i
+        raise KeyError(name)
+
+    def global_positions(self) -> np.ndarray:
+        """(frames, joints, 3) world positions of every joint, in the file's units and axes."""
+        return forward_kinematics(self)[0]
+
+
+# ------------------------------------------------------------------------------ reading
+
+
+def read_bvh(path: str | os.PathLike) -> BVH:
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8", errors="replace")
+    except OSError as exc:
+        raise BVHError(f"{path}: cannot read ({exc})") from None
+    return parse_bvh(text, str(path))
+
+
+def parse_bvh(text: str, name: str = "<bvh>") -> BVH:
+    lines = text.splitlines()
+    joints: list[BVHJoint] = []
+    stack: list[int] = []
+    i = 0
+    pending: int | None = None  # joint whose '{' we expect
+    in_end = False
+    end_owner = -1
+
+    def fail(msg: str, line: int) -> BVHError:
+        return BVHError(f"{name}:{line + 1}: {msg}")
+
+    while i < len(lines):
+        tok = lines[i].split()
+        if not tok:
+            i += 1
+            continue
+        key = tok[0].upper()
+        if key == "HIERARCHY":
+            pass
+        elif key in ("ROOT", "JOINT"):
+            if len(tok) < 2:
+                raise fail(f"{key} without a name", i)
+            parent = stack[-1] if stack else -1
+            if key == "JOINT" and parent < 0:
+                raise fail("JOINT outside a ROOT", i)
+            joints.append(BVHJoint(" ".join(tok[1:]), parent, np.zeros(3), []))
+            pending = len(joints) - 1
+        elif key == "END":
+            in_end, end_owner = True, stack[-1] if stack else -1
+        elif key == "{":
+            if in_end:
+                stack.append(-2)
+            elif pending is not None:
+                stack.append(pending)
+                pending = None
+            else:
+                raise fail("unexpected '{'", i)
+        elif key == "}":
+            if not stack:
+                raise fail("unbalanced '}'", i)
+            top = stack.pop()
+            if top == -2:
+                in_end = False
+        elif key == "OFFSET":
+            try:
+                off = np.array([float(v) for v in tok[1:4]])
+            except ValueError:
+                raise fail("OFFSET needs 3 numbers", i) from None
+            if len(off) != 3:
+                raise fail("OFFSET needs 3 numbers", i)
+            if in_end:
+                joints[end_owner].end_site = off
+            elif stack:
+                joints[stack[-1]].offset = off
+        elif key == "CHANNELS":
+            try:
+                n = int(tok[1])
+            except (IndexError, ValueError):
+                raise fail("CHANNELS needs a count", i) from None
+            chans = tok[2 : 2 + n]
+            if len(chans) != n or not stack or stack[-1] < 0:
+                raise fail("bad CHANNELS line", i)
+            for c in chans:
+                if c.lower() not in _CHANNELS:
+                    raise fail(f"unknown channel {c!r}", i)
+            joints[stack[-1]].channels = [c.lower() for c in chans]
+        elif key == "MOTION":
+            break
+        else:
+            raise fail(f"unexpected {tok[0]!r} in the hierarchy", i)
+        i += 1
+    if not joints:
+        raise BVHError(f"{name}: no HIERARCHY joints")
+    if i >= len(lines):
+        raise BVHError(f"{name}: no MOTION section")
+    i += 1
+    frames = frame_time = None
+    while i < len(lines) and (frames is None or frame_time is None):
+        t = lines[i].strip()
+        if t.lower().startswith("frames:"):
+            frames = int(t.split(":", 1)[1])
+        elif t.lower().startswith("frame time:"):
+            frame_time = float(t.split(":", 1)[1])
+        elif t:
+            raise BVHError(f"{name}:{i + 1}: expected 'Frames:' and 'Frame Time:'")
+        i += 1
+    if frames is None or frame_time is None or frame_time <= 0:
+        raise BVHError(f"{name}: missing or bad 'Frames:'/'Frame Time:'")
+    total = sum(len(j.channels) for j in joints)
+    rows = [ln for ln in lines[i:] if ln.strip()]
+    if len(rows) < frames:
+        raise BVHError(f"{name}: {frames} frames announced, {len(rows)} found")
+    try:
+        motion = np.array([[float(v) for v in r.split()] for r in rows[:frames]], dtype=np.float64)
+    except ValueError:
+        raise BVHError(f"{name}: a motion line is not numbers") from None
+    if motion.ndim != 2 or motion.shape[1] != total:
+        raise BVHError(f"{name}: motion lines need {total} values each")
+    return BVH(joints, motion.reshape(frames, total), frame_time, name)
+
+
+_CHANNELS = {"xposition", "yposition", "zposition", "xrotation", "yrotation", "zrotation"}
+
+
+def _axis_rotation(axis: str, deg: np.ndarray) -> np.ndarray:
+    a = np.radians(deg)
+    c, s = np.cos(a), np.sin(a)
+    o, z = np.ones_like(a), np.zeros_like(a)
+    if axis == "x":
+        m = [[o, z, z], [z, c, -s], [z, s, c]]
+    elif axis == "y":
+        m = [[c, z, s], [z, o, z], [-s, z, c]]
+    else:
+        m = [[c, -s, z], [s, c, z], [z, z, o]]
+    return np.moveaxis(np.array(m), (0, 1), (-2, -1))
+
+
+def forward_kinematics(bvh: BVH) -> tuple[np.ndarray, np.ndarray]:
+    """World positions (frames, J, 3) and rotations (frames, J, 3, 3) of every joint."""
+    n = bvh.frames
+    pos = np.zeros((n, len(bvh.joints), 3))
+    rot = np.zeros((n, len(bvh.joints), 3, 3))
+    col = 0
+    for j, joint in enumerate(bvh.joints):
+        t = np.repeat(joint.offset[None], n, 0)
+        r = np.repeat(np.eye(3)[None], n, 0)
+        for ch in joint.channels:
+            v = bvh.motion[:, col]
+            col += 1
+            if ch.endswith("position"):
+                t[:, "xyz".index(ch[0])] += v
+            else:
+                r = r @ _axis_rotation(ch[0], v)
+        if joint.parent < 0:
+            pos[:, j], rot[:, j] = t, r
+        else:
+            p = joint.parent
+            pos[:, j] = pos[:, p] + np.einsum("nij,nj->ni", rot[:, p], t)
+            rot[:, j] = rot[:, p] @ r
+    return pos, rot
+
+
+# ------------------------------------------------------------------------------ retargeting
+
+# our joint -> names it goes by in common BVH skeletons (first match wins)
+NAME_TABLE: dict[str, tuple[str, ...]] = {
+    "pelvis": ("CC_Base_Hip", "Hips", "hip", "mixamorig:Hips", "pelvis"),
+    "spine": ("CC_Base_Spine01", "Spine", "LowerBack", "abdomen", "mixamorig:Spine", "spine"),
+    "chest": ("CC_Base_Spine02", "Spine1", "chest", "mixamorig:Spine2", "Chest"),
+    "neck": ("CC_Base_NeckTwist01", "Neck", "neck", "mixamorig:Neck"),
+    "head": ("CC_Base_Head", "Head", "head", "mixamorig:Head"),
+    "shoulder_l": ("CC_Base_L_Upperarm", "LeftArm", "lShldr", "mixamorig:LeftArm", "shoulder_l"),
+    "elbow_l": ("CC_Base_L_Forearm", "LeftForeArm", "lForeArm", "mixamorig:LeftForeArm", "elbow_l"),
+    "fist_l": ("CC_Base_L_Hand", "LeftHand", "lHand", "mixamorig:LeftHand", "fist_l"),
+    "shoulder_r": ("CC_Base_R_Upperarm", "RightArm", "rShldr", "mixamorig:RightArm", "shoulder_r"),
+    "elbow_r": ("CC_Base_R_Forearm", "RightForeArm", "rForeArm", "mixamorig:RightForeArm", "elbow_r"),
+    "fist_r": ("CC_Base_R_Hand", "RightHand", "rHand", "mixamorig:RightHand", "fist_r"),
+    "hip_l": ("CC_Base_L_Thigh", "LeftUpLeg", "lThigh", "mixamorig:LeftUpLeg", "hip_l"),
+    "knee_l": ("CC_Base_L_Calf", "LeftLeg", "lShin", "mixamorig:LeftLeg", "knee_l"),
+    "ankle_l": ("CC_Base_L_Foot", "LeftFoot", "lFoot", "mixamorig:LeftFoot", "ankle_l"),
+    "hip_r": ("CC_Base_R_Thigh", "RightUpLeg", "rThigh", "mixamorig:RightUpLeg", "hip_r"),
+    "knee_r": ("CC_Base_R_Calf", "RightLeg", "rShin", "mixamorig:RightLeg", "knee_r"),
+    "ankle_r": ("CC_Base_R_Foot", "RightFoot", "rFoot", "mixamorig:RightFoot", "ankle_r"),
+}
+
+
+def map_joints(bvh: BVH, table: dict[str, tuple[str, ...]] = NAME_TABLE) -> list[int]:
+    """For each of our JOINTS, the index of its BVH joint; BVHError lists what is missing."""
+    names = {j.name: i for i, j in enumerate(bvh.joints)}
+    lower = {j.name.lower(): i for i, j in enumerate(bvh.joints)}
+    out, missing = [], []
+    for ours in JOINTS:
+        hit = next((names[n] for n in table[ours] if n in names), None)
+        if hit is None:
+            hit = next((lower[n.lower()] for n in table[ours] if n.lower() in lower), None)
+        if hit is None:
+            missing.append(ours)
+        out.append(hit if hit is not None else -1)
+    if missing:
+        raise BVHError(f"{bvh.path}: no joint for {', '.join(missing)} (see game.bvh.NAME_TABLE)")
+    return out
+
+
+@dataclass
+class Retargeted:
+    """Motion on our skeleton: local postures (n, 17, 3) and world roots (n, 3) = (x, z, yaw),
+    resampled to 60 Hz."""
+
+    postures: np.ndarray
+    roots: np.ndarray
+    source_positions: np.ndarray  # (n, 17, 3) mapped source joints, metres, our axes, unscaled
+
+
+def _units_to_metres(pos: np.ndarray) -> float:
+    """Guess the unit of (n, 17, 3) mapped positions from the leg length: m, cm, inches, mm."""
+    leg = np.linalg.norm(pos[0, joint_index("hip_l")] - pos[0, joint_index("knee_l")])
+    leg += np.linalg.norm(pos[0, joint_index("knee_l")] - pos[0, joint_index("ankle_l")])
+    for scale in (1.0, 0.01, 0.0254, 0.001):
+        if 0.5 < leg * scale < 1.3:
+            return scale
+    return 1.0 / leg * 0.86
+
+
+def roots_from_positions(p: np.ndarray) -> np.ndarray:
+    """(n, 3) roots (x, z, yaw) from world joint positions in our axes: under the pelvis,
+    facing the hips' forward (right x up)."""
+    right = p[:, joint_index("hip_r")] - p[:, joint_index("hip_l")]
+    right += p[:, joint_index("shoulder_r")] - p[:, joint_index("shoulder_l")]
+    fwd = np.cross(right, np.array([0.0, 1.0, 0.0]))
+    yaw = np.arctan2(fwd[:, 0], fwd[:, 2])
+    pel = p[:, joint_index("pelvis")]
+    return np.column_stack([pel[:, 0], pel[:, 2], np.unwrap(yaw)])
+
+
+def retarget(bvh: BVH, table: dict[str, tuple[str, ...]] = NAME_TABLE) -> Retargeted:
+    idx = map_joints(bvh, table)
+    pos = bvh.global_positions()[:, idx]
+    pos = pos * _units_to_metres(pos)
+    pos[..., 0] *= -1.0  # BVH is right-handed with the performer's left at +x; ours has +x right
+    source = pos.copy()
+    # performer scaled to our leg length, feet on the ground
+    ours = BONE_LENGTHS[[_bone("knee_l"), _bone("ankle_l")]].sum()
+    theirs = np.median(
+        np.linalg.norm(pos[:, joint_index("hip_l")] - pos[:, joint_index("knee_l")], axis=-1)
+        + np.linalg.norm(pos[:, joint_index("knee_l")] - pos[:, joint_index("ankle_l")], axis=-1)
+    )
+    pos = pos * (ours / theirs)
+    # resample to 60 Hz
+    src_t = np.arange(bvh.frames) * bvh.frame_time
+    n = max(int(np.floor(src_t[-1] * FPS)) + 1, 1)
+    t = np.arange(n) / FPS
+    flat = pos.reshape(bvh.frames, -1)
+    pos = np.stack([np.interp(t, src_t, flat[:, k]) for k in range(flat.shape[1])], axis=1).reshape(n, 17, 3)
+    roots = roots_from_positions(pos)
+    local = np.stack([world_to_local(p, tuple(r)) for p, r in zip(pos, roots, strict=True)])
+    # ankle joints sit ~8 cm up: put the lower foot of the first frame there
+    lift = 0.08 - local[0, [joint_index("ankle_l"), joint_index("ankle_r")], 1].min()
+    local[..., 1] += lift
+    return Retargeted(impose_bone_lengths(local), roots, source)
+
+
+def _bone(child: str) -> int:
+    return int(np.nonzero(BONES[:, 1] == joint_index(child))[0][0])
+
+
+def cut_action(
+    motion: Retargeted,
+    start: int,
+    end: int,
+    name: str,
+    kind: str = "attack",
+    guard: np.ndarray | None = None,
+    blend_frames: int = 8,
+    key_every: int = 2,
+) -> Action:
+    """An Action from 60 Hz frames [start, end] of retargeted motion. Its root track is the
+    motion of the root relative to the cut's first frame; with `guard`, the first and last
+    `blend_frames` are blended into the guard so the action leaves and returns to the fat node."""
+    if not 0 <= start < end < len(motion.postures):
+        raise InputError(f"frame range {start}..{end} is empty or outside the motion (0..{len(motion.postures) - 1})")
+    post = motion.postures[start : end + 1].copy()
+    frames = len(post)
+    if guard is not None:
+        b = min(blend_frames, frames // 2)
+        w = np.ones(frames)
+        ramp = np.linspace(0.0, 1.0, b + 1)[1:]
+        ramp = ramp * ramp * (3 - 2 * ramp)
+        w[:b] = np.concatenate([[0.0], ramp[:-1]])[:b]
+        w[frames - b :] = w[:b][::-1]
+        post = impose_bone_lengths(guard[None] * (1 - w[:, None, None]) + post * w[:, None, None])
+    r0 = motion.roots[start]
+    roots = motion.roots[start : end + 1]
+    d = roots[:, :2] - r0[:2]
+    c, s = np.cos(r0[2]), np.sin(r0[2])
+    rel = np.column_stack([c * d[:, 0] - s * d[:, 1], s * d[:, 0] + c * d[:, 1], roots[:, 2] - r0[2]])
+    keys = sorted(set(range(0, frames, key_every)) | {frames - 1})
+    return Action(name, kind, frames, np.array(keys), post[keys],
+                  np.column_stack([np.array(keys, float), rel[keys]]), source="bvh")  # fmt: skip
+
+
+# ------------------------------------------------------------------------------ writing
+
+_HELPERS = {"pelvis": ("spine", "hip_l", "hip_r"), "chest": ("neck", "shoulder_l", "shoulder_r")}
+EXPORT_ORDER = "ZXY"
+
+
+def _export_hierarchy(rest: np.ndarray) -> list[tuple[str, int, np.ndarray, int | None]]:
+    """(name, parent index in this list, offset, our joint index or None for helpers)."""
+    out: list[tuple[str, int, np.ndarray, int | None]] = []
+    where: dict[int, int] = {}
+
+    def add(j: int, parent: int) -> None:
+        name = JOINTS[j]
+        off = rest[j] - rest[PARENTS[j]] if PARENTS[j] >= 0 else rest[j].copy()
+        if PARENTS[j] >= 0 and JOINTS[PARENTS[j]] in _HELPERS:
+            out.append((f"{JOINTS[PARENTS[j]]}_to_{name}", parent, np.zeros(3), None))
+            parent = len(out) - 1
+        out.append((name, parent, off, j))
+        where[j] = len(out) - 1
+        for c in range(len(JOINTS)):
+            if PARENTS[c] == j:
+                add(c, where[j])
+
+    add(0, -1)
+    return out
+
+
+def _swing(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """(n, 3, 3) smallest rotations taking unit vectors a (3,) onto b (n, 3)."""
+    a = a / np.linalg.norm(a)
+    b = b / np.maximum(np.linalg.norm(b, axis=-1, keepdims=True), 1e-12)
+    v = np.cross(a, b)
+    c = b @ a
+    k = np.zeros((len(b), 3, 3))
+    k[:, 0, 1], k[:, 0, 2], k[:, 1, 2] = -v[:, 2], v[:, 1], -v[:, 0]
+    k[:, 1, 0], k[:, 2, 0], k[:, 2, 1] = v[:, 2], -v[:, 1], v[:, 0]
+    denom = np.where(1.0 + c > 1e-9, 1.0 / (1.0 + c), 0.0)
+    r = np.eye(3)[None] + k + (k @ k) * denom[:, None, None]
+    flip = 1.0 + c <= 1e-9  # opposite: half turn about any perpendicular
+    if np.any(flip):
+        perp = np.cross(a, [1.0, 0.0, 0.0])
+        if np.linalg.norm(perp) < 1e-6:
+            perp = np.cross(a, [0.0, 1.0, 0.0])
+        perp /= np.linalg.norm(perp)
+        r[flip] = 2.0 * np.outer(perp, perp) - np.eye(3)
+    return r
+
+
+def _euler_zxy(r: np.ndarray) -> np.ndarray:
+    """(n, 3) degrees (z, x, y) with R = Rz Rx Ry."""
+    x = np.arcsin(np.clip(r[:, 2, 1], -1.0, 1.0))
+    z = np.arctan2(-r[:, 0, 1], r[:, 1, 1])
+    y = np.arctan2(-r[:, 2, 0], r[:, 2, 2])
+    return np.degrees(np.column_stack([z, x, y]))
+
+
+def _to_bvh_axes(p: np.ndarray) -> np.ndarray:
+    """Ours (+x right) -> BVH's right-handed axes (+x the performer's left); also the inverse."""
+    q = np.array(p, dtype=np.float64, copy=True)
+    q[..., 0] *= -1.0
+    return q
+
+
+def write_bvh(path: str | os.PathLike, positions: np.ndarray, fps: float = FPS, rest: np.ndarray | None = None) -> Path:
+    """Write WORLD joint positions (n, 17, 3) in metres as a BVH (centimetres, Y up) with our
+    skeleton; `rest` (17, 3) is the rest pose for the offsets (default: the first frame)."""
+    pos = _to_bvh_axes(np.asarray(positions, dtype=np.float64)) * 100.0
+    n = len(pos)
+    rest_pose = _to_bvh_axes(np.asarray(rest if rest is not None else positions[0])) * 100.0
+    hier = _export_hierarchy(rest_pose)
+    children: dict[int, list[int]] = {i: [] for i in range(len(hier))}
+    for i, (_, parent, _, _) in enumerate(hier):
+        if parent >= 0:
+            children[parent].append(i)
+    glob = np.zeros((len(hier), n, 3, 3))
+    local = np.zeros((len(hier), n, 3, 3))
+    for i, (_, parent, _, j) in enumerate(hier):
+        pr = glob[parent] if parent >= 0 else np.repeat(np.eye(3)[None], n, 0)
+        kids = children[i]
+        if len(kids) == 1:
+            kid = kids[0]
+            kj = hier[kid][3]
+            if kj is None:  # a helper hangs below: aim at the pelvis/chest's child through it
+                kj = hier[children[kid][0]][3]
+                off = hier[children[kid][0]][2]
+            else:
+                off = hier[kid][2]
+            me = j if j is not None else hier[parent][3]
+            want = np.einsum("nji,nj->ni", pr, pos[:, kj] - pos[:, me])
+            local[i] = _swing(off, want)
+        elif len(kids) > 1:
+            # the pelvis / chest itself: orient by its children (Kabsch), helpers do the rest
+            offs, wants = [], []
+            for kid in kids:
+                g = children[kid][0]
+                offs.append(hier[g][2])
+                wants.append(np.einsum("nji,nj->ni", pr, pos[:, hier[g][3]] - pos[:, j]))
+            a = np.array(offs)
+            b = np.stack(wants, axis=1)
+            h = np.einsum("ki,nkj->nij", a, b)
+            u, _, vt = np.linalg.svd(h)
+            d = np.sign(np.linalg.det(np.swapaxes(vt, 1, 2) @ np.swapaxes(u, 1, 2)))
+            fix = np.repeat(np.eye(3)[None], n, 0)
+            fix[:, 2, 2] = d
+            local[i] = np.swapaxes(vt, 1, 2) @ fix @ np.swapaxes(u, 1, 2)
+        else:
+            local[i] = np.repeat(np.eye(3)[None], n, 0)
+        glob[i] = pr @ local[i]
+    lines = ["HIERARCHY"]
+    order_names = " ".join(f"{a}rotation" for a in EXPORT_ORDER)
+
+    def emit(i: int, depth: int) -> None:
+        name, parent, off, _ = hier[i]
+        pad = "  " * depth
+        lines.append(f"{pad}{'ROOT' if parent < 0 else 'JOINT'} {name}")
+        lines.append(f"{pad}{{")
+        lines.append(f"{pad}  OFFSET {off[0]:.6f} {off[1]:.6f} {off[2]:.6f}")
+        if parent < 0:
+            lines.append(f"{pad}  CHANNELS 6 Xposition Yposition Zposition {order_names}")
+        else:
+            lines.append(f"{pad}  CHANNELS 3 {order_names}")
+        if children[i]:
+            for c in children[i]:
+                emit(c, depth + 1)
+        else:
+            lines.append(f"{pad}  End Site")
+            lines.append(f"{pad}  {{")
+            lines.append(f"{pad}    OFFSET 0.000000 5.000000 0.000000")
+            lines.append(f"{pad}  }}")
+        lines.append(f"{pad}}}")
+
+    emit(0, 0)
+    cols = [pos[:, 0] - hier[0][2]]
+    for i in range(len(hier)):
+        cols.append(_euler_zxy(local[i]))
+    data = np.concatenate(cols, axis=1)
+    lines += ["MOTION", f"Frames: {n}", f"Frame Time: {1.0 / fps:.6f}"]
+    lines += [" ".join(f"{v:.6f}" for v in row) for row in data]
+    path = Path(path)
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    return path
+
+
+def played_positions(lib: dict[str, Action], names: list[str], root=(0.0, 0.0, 0.0),
+                     rest_frames: int = 20) -> np.ndarray:
+    """WORLD joint positions (n, 17, 3) of a PlayerController playing `names` one after another
+    (each from the guard), root motion applied: what `quickjab bvh export` writes."""  # fmt: skip
+    from game.motion import PlayerController
+    from game.skeleton import compose_root
+
+    pc = PlayerController(lib)
+    out = []
+    root = tuple(root)
+    for _ in range(rest_frames):
+        out.append(local_to_world(pc.step(), root))
+    for name in names:
+        pc.play(name)
+        while True:
+            posture = pc.step()
+            root = compose_root(root, pc.root_delta)
+            out.append(local_to_world(posture, root))
+            if pc.finished_action():
+                break
+    for _ in range(rest_frames):
+        out.append(local_to_world(pc.step(), root))
+    return np.array(out)
+
+
+def bvh_positions_ours(bvh: BVH) -> np.ndarray:
+    """World positions (n, 17, 3) in metres and our axes of a BVH written by write_bvh."""
+    idx = [bvh.index(name) for name in JOINTS]
+    return _to_bvh_axes(bvh.global_positions()[:, idx]) / 100.0

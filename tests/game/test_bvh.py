@@ -1,0 +1,139 @@
+"""BVH import (the CMU clip), retargeting, cutting, export and the round trip."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from game.actions import load_library
+from game.bvh import (
+    BVHError,
+    bvh_positions_ours,
+    cut_action,
+    forward_kinematics,
+    map_joints,
+    parse_bvh,
+    played_positions,
+    read_bvh,
+    retarget,
+    write_bvh,
+)
+from game.cli import main
+from game.skeleton import BONE_LENGTHS, JOINTS, bone_lengths, joint_index
+
+LIB = load_library()
+CMU = "mocap/cmu_02_05_punch_strike.bvh"
+
+
+@pytest.fixture(scope="module")
+def cmu(shared_data):
+    return read_bvh(shared_data / CMU)
+
+
+def test_cmu_clip_imports_with_rigid_limbs(cmu):
+    assert cmu.frames == 927 and cmu.frame_time == pytest.approx(1 / 60, rel=1e-3)
+    idx = map_joints(cmu)
+    assert cmu.joints[idx[joint_index("fist_r")]].name == "CC_Base_R_Hand"
+    pos = cmu.global_positions()[:, idx]
+    lengths = bone_lengths(pos)
+    # limbs that are one BVH bone each keep their length through all 927 frames (FK is right)
+    for child in ("elbow_l", "fist_l", "elbow_r", "fist_r", "knee_l", "ankle_l", "knee_r", "ankle_r"):
+        b = JOINTS.index(child) - 1  # BONES are ordered by child joint
+        assert np.ptp(lengths[:, b]) / lengths[:, b].mean() < 0.01, child
+    # a standing performer in centimetres: head well above the pelvis, feet near the floor
+    assert 150 < pos[0, joint_index("head"), 1] < 190
+    assert pos[:, joint_index("ankle_l"), 1].min() < 20
+
+
+def test_retargeted_cmu_keeps_our_bone_lengths_within_one_percent(cmu):
+    motion = retarget(cmu)
+    assert motion.postures.shape == (927, 17, 3)
+    assert np.abs(bone_lengths(motion.postures) / BONE_LENGTHS - 1).max() < 0.01
+    # retargeting keeps the source's bone directions
+    src = motion.source_positions
+    for a, b in (("shoulder_r", "elbow_r"), ("knee_l", "ankle_l")):
+        ia, ib = joint_index(a), joint_index(b)
+        d_src = src[:, ib] - src[:, ia]
+        # compare in world: rotate our local result back with the root yaw
+        yaw = motion.roots[:, 2]
+        loc = motion.postures[:, ib] - motion.postures[:, ia]
+        wx = np.cos(yaw) * loc[:, 0] + np.sin(yaw) * loc[:, 2]
+        wz = -np.sin(yaw) * loc[:, 0] + np.cos(yaw) * loc[:, 2]
+        ours = np.column_stack([wx, loc[:, 1], wz])
+        cos = np.sum(ours * d_src, axis=1) / np.linalg.norm(ours, axis=1) / np.linalg.norm(d_src, axis=1)
+        assert cos.min() > 0.999
+    # feet on the ground, pelvis at standing height
+    assert 0.7 < motion.postures[0, joint_index("pelvis"), 1] < 1.1
+
+
+def test_cut_action_from_the_cmu_clip_starts_and_ends_at_the_guard(cmu):
+    motion = retarget(cmu)
+    guard = LIB["guard"].posture(0)
+    a = cut_action(motion, 100, 160, "cmu_punch", "attack", guard)
+    assert a.frames == 61
+    assert np.allclose(a.posture(0), guard, atol=1e-6) and np.allclose(a.posture(60), guard, atol=1e-6)
+    assert np.allclose(a.root_offset(0), 0.0)
+    mid = a.posture(30)
+    assert np.abs(bone_lengths(mid) / BONE_LENGTHS - 1).max() < 1e-6
+    with pytest.raises(Exception, match="outside"):
+        cut_action(motion, 900, 2000, "x")
+
+
+def test_export_import_round_trip(tmp_path):
+    positions = played_positions(LIB, ["straight_l", "hook_r", "step_forward", "knockdown"])
+    path = write_bvh(tmp_path / "played.bvh", positions, rest=LIB["guard"].posture(0))
+    back = read_bvh(path)
+    assert back.frames == len(positions)
+    assert np.abs(bvh_positions_ours(back) - positions).max() < 1e-4
+    assert back.joints[0].channels[:3] == ["xposition", "yposition", "zposition"]
+
+
+def test_any_channel_order_is_honoured():
+    # one bone along +y under a root rotated 90 degrees about z then x: order matters
+    text = """HIERARCHY
+ROOT a
+{
+  OFFSET 0 0 0
+  CHANNELS 6 Xposition Yposition Zposition Xrotation Zrotation Yrotation
+  JOINT b
+  {
+    OFFSET 0 1 0
+    CHANNELS 3 Zrotation Xrotation Yrotation
+    End Site
+    {
+      OFFSET 0 1 0
+    }
+  }
+}
+MOTION
+Frames: 1
+Frame Time: 0.0333333
+0 0 0 90 90 0 0 0 0
+"""
+    pos, _ = forward_kinematics(parse_bvh(text))
+    # R = Rx(90) Rz(90): (0,1,0) -Rz-> (-1,0,0) -Rx-> (-1,0,0)
+    assert np.allclose(pos[0, 1], [-1.0, 0.0, 0.0], atol=1e-9)
+    swapped = text.replace("Xrotation Zrotation Yrotation", "Zrotation Xrotation Yrotation")
+    pos2, _ = forward_kinematics(parse_bvh(swapped))
+    # R = Rz(90) Rx(90): (0,1,0) -Rx-> (0,0,1) -Rz-> (0,0,1)
+    assert np.allclose(pos2[0, 1], [0.0, 0.0, 1.0], atol=1e-9)
+
+
+def test_bad_bvh_names_itself(tmp_path):
+    bad = tmp_path / "bad.bvh"
+    bad.write_text("HIERARCHY\nROOT a\n{\n OFFSET 0 0\n}\n")
+    with pytest.raises(BVHError, match="bad.bvh"):
+        read_bvh(bad)
+    assert main(["bvh", "info", str(bad)]) == 2
+
+
+def test_bvh_commands(tmp_path, shared_data, capsys):
+    out = tmp_path / "m.bvh"
+    assert main(["bvh", "export", "--play", "straight_r,block", "-o", str(out)]) == 0
+    assert read_bvh(out).frames > LIB["straight_r"].frames
+    js = tmp_path / "cut.json"
+    assert main(["bvh", "cut", str(shared_data / CMU), "--start", "200", "--end", "250",
+                 "--name", "cmu_strike", "-o", str(js)]) == 0
+    from game.actions import load_action
+
+    assert load_action(js).frames == 51

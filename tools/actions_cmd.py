@@ -1,0 +1,57 @@
+"""`quickjab actions`: the action library.
+
+  quickjab actions list                          every action, kind, duration, windows
+  quickjab actions sheet -o docs/img/actions.png a contact sheet of key frames (pygame)
+  quickjab actions author [-o DIR]               rewrite the shipped JSON from tools/author_actions.py
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+
+from game.actions import load_library
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("actions", help="list, draw or re-author the action library", description=__doc__,
+                       formatter_class=argparse.RawDescriptionHelpFormatter)  # fmt: skip
+    cmds = p.add_subparsers(dest="actions_command", metavar="SUBCOMMAND", required=True)
+    ls = cmds.add_parser("list", help="every action with its kind, duration and windows")
+    ls.add_argument("--dir", default=None, help="action folder (default: the shipped library)")
+    ls.set_defaults(func=run_list)
+    sheet = cmds.add_parser("sheet", help="draw a contact sheet PNG of every action's key frames")
+    sheet.add_argument("-o", "--output", default="docs/img/actions.png")
+    sheet.add_argument("--dir", default=None, help="action folder (default: the shipped library)")
+    sheet.set_defaults(func=run_sheet)
+    author = cmds.add_parser("author", help="regenerate the action JSON files")
+    author.add_argument("-o", "--output", default=None, help="folder (default: game/assets/actions)")
+    author.set_defaults(func=run_author)
+
+
+def run_list(args: argparse.Namespace) -> int:
+    lib = load_library(args.dir)
+    for name, a in sorted(lib.items(), key=lambda kv: (kv[1].kind, kv[0])):
+        windows = [f"{w.hand}:{w.start}-{w.end} reach {w.reach:.2f} m dmg {w.damage:g}" for w in a.attacks]
+        windows += [f"{g.kind} {'+'.join(g.covers)}:{g.start}-{g.end}" for g in a.guards]
+        end = a.root_offset(a.frames - 1)
+        move = f" root ({end[0]:+.2f}, {end[1]:+.2f})" if abs(end[:2]).max() > 1e-6 else ""
+        print(f"{name:22s} {a.kind:8s} {a.frames:4d} f {a.frames / 60:5.2f} s{move} {'; '.join(windows)}")
+    return 0
+
+
+def run_sheet(args: argparse.Namespace) -> int:
+    os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
+    from tools.contact_sheet import write_sheet
+
+    path = write_sheet(load_library(args.dir), args.output)
+    print(f"wrote {path}")
+    return 0
+
+
+def run_author(args: argparse.Namespace) -> int:
+    from tools.author_actions import write_library
+
+    written = write_library(args.output)
+    print(f"wrote {len(written)} action files to {written[0].parent}")
+    return 0

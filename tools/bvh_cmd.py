@@ -1,0 +1,73 @@
+"""`quickjab bvh`: motion capture in and out.
+
+  quickjab bvh info FILE.bvh                           joints, frames, what maps onto ours
+  quickjab bvh cut FILE.bvh --start S --end E --name NAME -o NAME.json
+                                                       retarget and cut an action (60 Hz frames)
+  quickjab bvh export --play straight_l,hook_r -o out.bvh
+                                                       play actions and write a BVH for Blender
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+from engine.errors import InputError
+from game.actions import KINDS, load_library
+from game.bvh import cut_action, map_joints, played_positions, read_bvh, retarget, write_bvh
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("bvh", help="import, cut and export BVH motion capture", description=__doc__,
+                       formatter_class=argparse.RawDescriptionHelpFormatter)  # fmt: skip
+    cmds = p.add_subparsers(dest="bvh_command", metavar="SUBCOMMAND", required=True)
+    info = cmds.add_parser("info", help="what a BVH file holds and how it maps onto our skeleton")
+    info.add_argument("file")
+    info.set_defaults(func=run_info)
+    cut = cmds.add_parser("cut", help="retarget a BVH and cut an action from a frame range")
+    cut.add_argument("file")
+    cut.add_argument("--start", type=int, required=True, help="first frame (60 Hz, after resampling)")
+    cut.add_argument("--end", type=int, required=True, help="last frame (inclusive)")
+    cut.add_argument("--name", required=True, help="action name")
+    cut.add_argument("--kind", default="attack", choices=KINDS)
+    cut.add_argument("--no-guard-blend", action="store_true", help="do not blend the ends into the guard")
+    cut.add_argument("-o", "--output", required=True, help="action JSON to write")
+    cut.set_defaults(func=run_cut)
+    exp = cmds.add_parser("export", help="play actions of the library and write them as BVH")
+    exp.add_argument("--play", required=True, help="comma-separated action names, played in order")
+    exp.add_argument("-o", "--output", required=True, help="BVH file to write")
+    exp.set_defaults(func=run_export)
+
+
+def run_info(args: argparse.Namespace) -> int:
+    bvh = read_bvh(args.file)
+    print(f"{args.file}: {len(bvh.joints)} joints, {bvh.frames} frames at {1 / bvh.frame_time:.1f} Hz")
+    idx = map_joints(bvh)
+    from game.skeleton import JOINTS
+
+    for ours, j in zip(JOINTS, idx, strict=True):
+        print(f"  {ours:11s} <- {bvh.joints[j].name}")
+    return 0
+
+
+def run_cut(args: argparse.Namespace) -> int:
+    bvh = read_bvh(args.file)
+    motion = retarget(bvh)
+    guard = None if args.no_guard_blend else load_library()["guard"].posture(0)
+    action = cut_action(motion, args.start, args.end, args.name, args.kind, guard)
+    Path(args.output).write_text(json.dumps(action.to_json(), indent=1) + "\n", encoding="utf-8")
+    print(f"wrote {args.name} ({action.frames} frames) to {args.output}")
+    return 0
+
+
+def run_export(args: argparse.Namespace) -> int:
+    lib = load_library()
+    names = [n.strip() for n in args.play.split(",") if n.strip()]
+    bad = [n for n in names if n not in lib]
+    if not names or bad:
+        raise InputError(f"unknown action(s) {', '.join(bad) or '(none given)'}; see game/assets/actions")
+    positions = played_positions(lib, names)
+    write_bvh(args.output, positions, rest=lib["guard"].posture(0))
+    print(f"wrote {len(positions)} frames to {args.output}")
+    return 0
