@@ -267,6 +267,8 @@ class Renderer:
     def _capsule(self, surf: pygame.Surface, a: np.ndarray, b: np.ndarray, ra: float, rb: float, color) -> None:
         outline = shade(color, 0.45)
         self._capsule_fill(surf, a, b, ra + 1.5, rb + 1.5, outline)
+        if self.antialias:  # smooth the silhouette: the outline's edges and end caps
+            self._capsule_edges(surf, a, b, ra + 1.5, rb + 1.5, outline)
         self._capsule_fill(surf, a, b, ra, rb, color)
         # highlight: a thinner, lighter capsule shifted towards the light
         off = LIGHT_2D * 0.35
@@ -282,9 +284,21 @@ class Renderer:
         pygame.draw.circle(surf, color, (float(a[0]), float(a[1])), max(1.0, ra))
         pygame.draw.circle(surf, color, (float(b[0]), float(b[1])), max(1.0, rb))
 
+    def _capsule_edges(self, surf: pygame.Surface, a: np.ndarray, b: np.ndarray, ra: float, rb: float, color) -> None:
+        d = b - a
+        n = float(np.hypot(d[0], d[1]))
+        if n > 1e-6:
+            px, py = -d[1] / n, d[0] / n
+            pygame.draw.aaline(surf, color, (a[0] + px * ra, a[1] + py * ra), (b[0] + px * rb, b[1] + py * rb))
+            pygame.draw.aaline(surf, color, (a[0] - px * ra, a[1] - py * ra), (b[0] - px * rb, b[1] - py * rb))
+        pygame.draw.aacircle(surf, color, (float(a[0]), float(a[1])), max(1.0, ra))
+        pygame.draw.aacircle(surf, color, (float(b[0]), float(b[1])), max(1.0, rb))
+
     def _sphere(self, surf: pygame.Surface, c: np.ndarray, r: float, color) -> None:
         pos = (float(c[0]), float(c[1]))
         pygame.draw.circle(surf, shade(color, 0.45), pos, r + 1.5)
+        if self.antialias:
+            pygame.draw.aacircle(surf, shade(color, 0.45), pos, r + 1.5)
         pygame.draw.circle(surf, shade(color, 0.8), pos, r)
         pygame.draw.circle(surf, color, (pos[0] + LIGHT_2D[0] * r * 0.15, pos[1] + LIGHT_2D[1] * r * 0.15), r * 0.8)
         pygame.draw.circle(surf, shade(color, 1.35), (pos[0] + LIGHT_2D[0] * r * 0.4, pos[1] + LIGHT_2D[1] * r * 0.4), r * 0.3)

@@ -35,6 +35,7 @@ from engine.state_hash import state_hash
 from game.hud import Hud, HudState
 from game.match import Match
 from game.render import Renderer
+from game.render_low_power import LowPowerRenderer
 
 HZ = 60
 STAGE_BUDGETS_MS = {
@@ -167,9 +168,11 @@ class Session:
             self.hud_state.keys = key_help()
         self.hud = Hud()
         self.sounds = Sounds(enabled=cfg.sound, seed=cfg.seed)
-        self.renderer = Renderer(cfg.size, antialias=not cfg.low_power)
+        # low power: flat shading, no antialiasing (game/render_low_power.py says why)
+        self.renderer = (LowPowerRenderer if cfg.low_power else Renderer)(cfg.size, antialias=not cfg.low_power)
         self._surface_provider = surface_provider
         self._offscreen: pygame.Surface | None = None
+        self._low_power_surface: pygame.Surface | None = None
         self.events_log: list[dict] = []  # recognizer events, in order (tests, the trace)
         self.blows_log: list[tuple[int, int, str, bool, float]] = []  # (step, attacker, target, blocked, damage)
         self.on_toggle_fullscreen: Callable[[], None] | None = None
@@ -373,16 +376,19 @@ class Session:
         if self.config.low_power:
             w, h = target.get_size()
             size = (max(1, int(w * LOW_POWER_SCALE)), max(1, int(h * LOW_POWER_SCALE)))
-            if self._offscreen is None or self._offscreen.get_size() != size or self._offscreen is target:
-                self._offscreen = pygame.Surface(size)
-            surf = self._offscreen
+            # its own surface: the headless target is self._offscreen, which must keep its size
+            if self._low_power_surface is None or self._low_power_surface.get_size() != size:
+                self._low_power_surface = pygame.Surface(size)
+            surf = self._low_power_surface
         else:
             surf = target
         bodies = [self.prev_joints[i] + (self.curr_joints[i] - self.prev_joints[i]) * alpha for i in (0, 1)]
         self.renderer.draw(surf, bodies)
-        self.hud.draw(surf, self.hud_state, self.loop.budget)
         if surf is not target:
             pygame.transform.scale(surf, target.get_size(), target)
+        # the HUD at full size even in low power: its text is cached blits (~0.2 ms), and
+        # half-size text scaled up is unreadable
+        self.hud.draw(target, self.hud_state, self.loop.budget)
         if self._surface_provider is not None and pygame.display.get_init() and pygame.display.get_surface() is target:
             pygame.display.flip()
 

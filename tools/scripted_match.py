@@ -54,7 +54,9 @@ def build_session(seed: int = 0, low_power: bool = False, render: bool = True,
 
     pygame.init()
     clock = clock if clock is not None else VirtualClock()
-    source = open_source(f"keyboard://?auto=1&seed={seed}", clock=clock.seconds)
+    from game.play import DEMO_SOURCE
+
+    source = open_source(f"{DEMO_SOURCE}&seed={seed}", clock=clock.seconds)
     cfg = SessionConfig(seed=seed, size=size, low_power=low_power, demo=True, sound=False, render=render,
                         templates=templates if templates is not None else default_templates(), graph=graph)
     return Session(source, cfg, clock=clock)
