@@ -23,6 +23,7 @@ COMMAND_MODULES = [
     "tools.graph",
     "tools.recognition_commands",
     "tools.synth",
+    "tools.soak",
     "tools.bvh_cmd",
     "tools.actions_cmd",
 ]

@@ -16,7 +16,9 @@ from pathlib import Path
 
 
 def headless_env() -> None:
-    """SDL's dummy video and audio drivers (before pygame initialises)."""
+    """SDL's dummy video and audio drivers (before pygame initialises), and no pygame banner
+    on stdout (it would corrupt --json output)."""
+    os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
     os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
     os.environ.setdefault("SDL_AUDIODRIVER", "dummy")
 
