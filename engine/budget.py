@@ -122,17 +122,25 @@ class FrameBudget:
         self.steps_per_frame[steps] += 1
 
     # -- reading -------------------------------------------------------------------------
+    def oldest_frame(self) -> int:
+        """The oldest frame whose record and every span are still in the rings. When frames
+        average more than `spans_per_frame` spans the span ring wraps first; frames that lost
+        spans are left out rather than reported short."""
+        oldest = self.frames - min(self.frames, self.capacity)
+        if self.spans > self.span_capacity:
+            first_kept = int(self.s_frame[self.spans % self.span_capacity])
+            oldest = max(oldest, first_kept + 1)
+        return min(oldest, self.frames)
+
     def frame_rows(self) -> np.ndarray:
-        """Ring indices of the recorded frames, oldest first."""
-        n = min(self.frames, self.capacity)
-        return (np.arange(self.frames - n, self.frames)) % self.capacity
+        """Ring indices of the complete recorded frames, oldest first."""
+        return np.arange(self.oldest_frame(), self.frames) % self.capacity
 
     def span_rows(self) -> np.ndarray:
-        """Ring indices of the spans of frames still in the frame ring, oldest first."""
+        """Ring indices of the spans of those frames (and of the frame being recorded)."""
         n = min(self.spans, self.span_capacity)
         rows = np.arange(self.spans - n, self.spans) % self.span_capacity
-        oldest = self.frames - min(self.frames, self.capacity)
-        return rows[self.s_frame[rows] >= oldest]
+        return rows[self.s_frame[rows] >= self.oldest_frame()]
 
     def stage_durations(self, name: str) -> np.ndarray:
         rows = self.span_rows()

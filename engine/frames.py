@@ -89,6 +89,7 @@ class FrameResampler:
         self._prev = np.zeros(self.dim)
         self._have = False
         self._out = np.zeros(self.dim)
+        self._tmp = np.zeros(self.dim)
 
     def push(self, samples: list[Sample]) -> None:
         self._pending.extend(samples)
@@ -110,7 +111,8 @@ class FrameResampler:
             w = (t - self._prev_t) / (pending[0].t - self._prev_t)
             # the same arithmetic as interpolate_at: x0 * (1 - w) + w * x1
             np.multiply(self._prev, 1.0 - w, out=self._out)
-            self._out += w * nxt
+            np.multiply(nxt, w, out=self._tmp)
+            self._out += self._tmp
         else:
             self._out[:] = self._prev
         return self._out

@@ -200,3 +200,10 @@ class FixedStepLoop:
 
     def stop(self) -> None:
         self.running = False
+
+    def resync(self) -> None:
+        """Forget the time since the last frame (after a pause menu, a load screen): the next
+        frame runs no catch-up steps and drops none, and deadlines start again from now."""
+        if self._last_ns is not None:
+            now = self.clock.now_ns()
+            self._last_ns, self._anchor_ns, self._deadline_k = now, now, 0

@@ -66,7 +66,7 @@ def read_recording(path: str | os.PathLike) -> Recording:
     """Read a recording CSV. Raises RecordingError (file and line) on anything malformed."""
     path = Path(path)
     try:
-        text = path.read_text(encoding="utf-8")
+        text = path.read_text(encoding="utf-8-sig")  # a spreadsheet's BOM is not part of "t"
     except (OSError, UnicodeDecodeError) as exc:
         raise RecordingError(path, None, f"cannot read: {exc}") from None
     meta: dict[str, str] = {}
@@ -92,32 +92,37 @@ def read_recording(path: str | os.PathLike) -> Recording:
     numeric = [header.index(c) for c in _header_columns(sensors)]
     label_col = header.index("label") if "label" in header else None
 
-    rows = lines[lineno + 1 :]
-    values = np.empty((len(rows), len(numeric)), dtype=np.float64)
+    fields: list[list[str]] = []  # the numeric fields of each data row, as text
+    linenos: list[int] = []
     labels: list[str] = []
-    n = 0
-    for i, row in enumerate(csv.reader(rows)):
+    need = max(numeric) + 1
+    for i, row in enumerate(csv.reader(lines[lineno + 1 :])):
         if not row or (len(row) == 1 and not row[0].strip()):
             continue
-        line = header_line + 1 + i
-        if len(row) <= max(numeric):
-            raise RecordingError(path, line, f"{len(row)} fields, header has {len(header)}")
-        try:
-            values[n] = [float(row[j]) for j in numeric]
-        except (ValueError, IndexError):
-            bad = next((row[j] for j in numeric if j < len(row) and not _is_float(row[j])), "?")
-            raise RecordingError(path, line, f"not a number: {bad!r}") from None
-        if not np.all(np.isfinite(values[n])):
-            raise RecordingError(path, line, "not a finite number")
-        if n and values[n, 0] < values[n - 1, 0]:
-            raise RecordingError(
-                path, line, f"time goes backwards ({values[n, 0]} after {values[n - 1, 0]})"
-            )
+        if len(row) < need:
+            raise RecordingError(path, header_line + 1 + i, f"{len(row)} fields, header has {len(header)}")
+        fields.append([row[j] for j in numeric])
+        linenos.append(header_line + 1 + i)
         labels.append(row[label_col].strip() if label_col is not None and label_col < len(row) else "")
-        n += 1
-    if n == 0:
+    if not fields:
         raise RecordingError(path, None, "no samples")
-    return Recording(values[:n, 0], values[:n, 1:].reshape(n, sensors, 3), labels, meta)
+    try:
+        values = np.array(fields, dtype=np.float64)  # one C-level conversion for the whole file
+    except ValueError:
+        for line, row in zip(linenos, fields, strict=True):  # find the culprit for the message
+            bad = next((f for f in row if not _is_float(f)), None)
+            if bad is not None:
+                raise RecordingError(path, line, f"not a number: {bad!r}") from None
+        raise RecordingError(path, None, "numbers that cannot be parsed") from None
+    finite = np.isfinite(values).all(axis=1)
+    if not finite.all():
+        raise RecordingError(path, linenos[int(np.argmin(finite))], "not a finite number")
+    back = np.flatnonzero(np.diff(values[:, 0]) < 0)
+    if len(back):
+        k = int(back[0]) + 1
+        raise RecordingError(path, linenos[k], f"time goes backwards ({values[k, 0]} after {values[k - 1, 0]})")
+    n = len(values)
+    return Recording(values[:, 0], values[:, 1:].reshape(n, sensors, 3), labels, meta)
 
 
 def _is_float(s: str) -> bool:
@@ -131,11 +136,16 @@ def _is_float(s: str) -> bool:
 def _format_row(t: float, accel: np.ndarray, label: str) -> str:
     # t to the microsecond (430 Hz phones are 2.3 ms apart), g to 0.1 mg (sensor noise is ~10 mg)
     vals = ",".join(f"{v:.4f}" for v in np.asarray(accel, dtype=np.float64).ravel())
+    if any(c in label for c in ',"\r\n'):
+        label = '"' + label.replace('"', '""').replace("\r", " ").replace("\n", " ") + '"'
     return f"{t:.6f},{vals},{label}\n"
 
 
 def _metadata_lines(meta: dict[str, str]) -> str:
-    return "".join(f"# {k}: {v}\n" for k, v in meta.items())
+    def one_line(x: object) -> str:
+        return " ".join(str(x).splitlines())
+
+    return "".join(f"# {one_line(k)}: {one_line(v)}\n" for k, v in meta.items())
 
 
 def write_recording(path: str | os.PathLike, rec: Recording) -> None:

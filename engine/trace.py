@@ -1,7 +1,9 @@
 """Export a FrameBudget to the Chrome Trace Event Format (FORMATS.md), and read one back.
 
 One `frame` X event per rendered frame; inside it one X event per stage per step, the render
-stage (its name starts with `render`) and `wait`; spans inside a stage nest in it. The frame's
+stage (its name starts with `render`) and `wait`; spans inside a stage nest in it. A stage
+run over its declared budget carries `"overrun": true` in its args, a frame whose work
+exceeded the frame period too. The frame's
 `unaccounted` time (the loop's own bookkeeping between stages) is scattered in small gaps, so
 it goes into the frame event's args rather than as an X event that would overlap its
 neighbours. C events carry the frame's budget use and the dropped-step count; M events name
@@ -51,6 +53,7 @@ def chrome_trace(budget: FrameBudget) -> dict:
     origin = int(budget.f_start[frames[0]])
     first_frame = budget.frames - len(frames)
     names = [s.name for s in budget.stages]
+    limits_ns = [s.budget_ms * 1e6 if s.budget_ms else float("inf") for s in budget.stages]
     unaccounted_id = names.index(UNACCOUNTED)
     dropped_total = budget.dropped_steps - int(budget.f_dropped[frames].sum())
     # group spans by frame number once (rows are ordered by frame)
@@ -68,6 +71,7 @@ def chrome_trace(budget: FrameBudget) -> dict:
                 "dropped": int(budget.f_dropped[fr]),
                 "wait_us": _us(int(budget.f_wait[fr])),
                 "unaccounted_us": 0.0,
+                "overrun": work > budget.frame_period_ms * 1e6,
             },
         }
         events.append(frame_event)
@@ -76,11 +80,14 @@ def chrome_trace(budget: FrameBudget) -> dict:
             if stage == unaccounted_id:
                 frame_event["args"]["unaccounted_us"] = _us(int(budget.s_dur[r]))
                 continue
+            depth, dur = int(budget.s_depth[r]), int(budget.s_dur[r])
+            args = {"step": int(budget.s_step[r]), "depth": depth}
+            if depth == 0 and dur > limits_ns[stage]:
+                args["overrun"] = True  # over the stage's declared budget: visible in Perfetto
             events.append({
-                "ph": "X", "name": names[stage], "cat": "stage" if budget.s_depth[r] == 0 else "span",
+                "ph": "X", "name": names[stage], "cat": "stage" if depth == 0 else "span",
                 "pid": PID, "tid": TID,
-                "ts": _us(int(budget.s_start[r]) - origin), "dur": _us(int(budget.s_dur[r])),
-                "args": {"step": int(budget.s_step[r]), "depth": int(budget.s_depth[r])},
+                "ts": _us(int(budget.s_start[r]) - origin), "dur": _us(dur), "args": args,
             })
         dropped_total += int(budget.f_dropped[fr])
         events.append({

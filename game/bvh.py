@@ -538,3 +538,67 @@ def bvh_positions_ours(bvh: BVH) -> np.ndarray:
     """World positions (n, 17, 3) in metres and our axes of a BVH written by write_bvh."""
     idx = [bvh.index(name) for name in JOINTS]
     return _to_bvh_axes(bvh.global_positions()[:, idx]) / 100.0
+
+
+class BVHRecorder:
+    """Collects the boxers' WORLD joint positions every step of a match and writes one BVH per
+    boxer (`match.bvh` -> `match_boxer0.bvh`, `match_boxer1.bvh`; one boxer: `match.bvh`), all
+    in the same world frame, so Blender imports them side by side."""
+
+    def __init__(self, fps: float = FPS):
+        self.fps = fps
+        self.frames: list[np.ndarray] = []
+
+    def add(self, positions_per_boxer: list[np.ndarray]) -> None:
+        self.frames.append(np.array([np.asarray(p, dtype=np.float64) for p in positions_per_boxer]))
+
+    def write(self, path: str | os.PathLike, rest: np.ndarray | None = None) -> list[Path]:
+        if not self.frames:
+            raise InputError(f"{path}: nothing recorded")
+        data = np.array(self.frames)  # (n, boxers, 17, 3)
+        path = Path(path)
+        if data.shape[1] == 1:
+            return [write_bvh(path, data[:, 0], self.fps, rest)]
+        return [
+            write_bvh(path.with_name(f"{path.stem}_boxer{i}{path.suffix or '.bvh'}"), data[:, i], self.fps, rest)
+            for i in range(data.shape[1])
+        ]
+
+
+def simulate_bout(lib: dict[str, Action], player: list[str], opponent: list[str], gap: float = 0.85,
+                  rest_frames: int = 20) -> tuple[BVHRecorder, list[dict]]:
+    """Two Boxers in a physics world, `gap` metres apart, each playing its list of actions
+    back to back (hits make the struck boxer react); returns the recording and the hits."""  # fmt: skip
+    import math
+
+    from engine.physics import World
+    from game.boxer import Boxer, hits_from_contacts
+
+    world = World()
+    boxers = [Boxer(world, lib, z=-gap / 2, yaw=0.0), Boxer(world, lib, z=gap / 2, yaw=math.pi)]
+    queues = [list(player), list(opponent)]
+    rec = BVHRecorder()
+    hits_all: list[dict] = []
+    idle = 0
+    dt = 1.0 / FPS
+    while idle < rest_frames or any(queues) or not all(b.controller.idle for b in boxers):
+        for b, q in zip(boxers, queues, strict=True):
+            if b.controller.idle and q and idle >= rest_frames:
+                b.controller.play(q.pop(0))
+        for b in boxers:
+            b.step(dt)
+        hits = hits_from_contacts(world.step(dt), boxers)
+        for h in hits:
+            if not h["blocked"]:
+                boxers[1 - h["attacker"]].react(h)
+        hits_all += hits
+        rec.add([b.joint_positions() for b in boxers])
+        idle += 1
+        if len(rec.frames) > 60 * 120:  # a runaway script: stop after two minutes
+            break
+    for _ in range(rest_frames):
+        for b in boxers:
+            b.step(dt)
+        world.step(dt)
+        rec.add([b.joint_positions() for b in boxers])
+    return rec, hits_all

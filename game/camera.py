@@ -6,8 +6,8 @@ from __future__ import annotations
 import numpy as np
 
 # Behind the player's right shoulder, raised: the classic three-quarter boxing-game view.
-DEFAULT_EYE = (2.9, 2.9, -5.3)
-DEFAULT_TARGET = (0.0, 0.85, 0.3)
+DEFAULT_EYE = (4.3, 2.8, -4.4)
+DEFAULT_TARGET = (0.0, 0.85, 0.2)
 DEFAULT_FOV_DEG = 38.0
 
 

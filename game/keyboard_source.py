@@ -3,16 +3,16 @@
 A key per action. A key press synthesizes that action's accelerometer signal with the virtual
 player (game.virtual_player) and plays it out as samples at 60 Hz on the source's clock, so
 the REAL recognizer sees it: early guesses, switches and rejections happen as they would with
-a Wiimote. Between motions the source reads the resting guard (gravity only). A press during a
-motion cuts it and starts the new one, as a player changing their mind would.
+a Wiimote. Between motions the source reads hands resting at the guard (gravity and sensor
+noise): game.virtual_player.VirtualPlayerStream does the synthesis. A press during a motion
+cuts it and starts the new one, as a player changing their mind would.
 
 URL options: `keyboard://?profile=novice&seed=3` (virtual player profile, noise seed),
-`keyboard://?auto=1` plays random actions by itself (the attract mode, `--demo`).
+`keyboard://?auto=1` performs random actions by itself. (`play --demo` drives the source from
+the Interaction Graph instead: see game.session.)
 """
 
 from __future__ import annotations
-
-from collections import deque
 
 import numpy as np
 
@@ -57,28 +57,23 @@ class KeyboardSource(Source):
                  auto: bool = False):
         super().__init__(url=url, sensors=2, clock=clock, state=SourceState.CONNECTED,
                          rate_hz=float(HZ), description="keyboard (virtual player)")
-        from game.virtual_player import synthesize_action  # the motion helper's module
+        from game.virtual_player import VirtualPlayerStream  # the motion helper's module
 
-        self._synth = synthesize_action
         self.lib = lib
         self.profile = profile
         self.rng = np.random.default_rng(seed)
         self.auto = auto
-        # the resting reading: the guard frame the virtual player starts every motion from
-        first = self._synth(lib["straight_r"], profile=profile, rng=np.random.default_rng(seed), rest_before=1, rest_after=0)
-        self.rest = np.asarray(first[0], dtype=np.float64).reshape(2, 3).copy()
-        self._queue: deque[np.ndarray] = deque()
+        # the virtual player: rests at the guard (with sensor noise) until told to perform
+        self.stream = VirtualPlayerStream(lib, profile=profile, rng=self.rng)
         self._next_t: float | None = None
         self._auto_wait = 0
         self.pressed: list[str] = []  # actions pressed, for tests and the HUD
 
     def press(self, action: str) -> None:
-        """Start synthesizing `action` from the next sample on."""
+        """Start performing `action` from the next sample on (cutting one under way)."""
         if action not in self.lib:
             raise KeyError(f"unknown action {action!r}")
-        sig = self._synth(self.lib[action], profile=self.profile, rng=self.rng, rest_before=0, rest_after=0)
-        self._queue.clear()
-        self._queue.extend(np.asarray(sig, dtype=np.float64).reshape(len(sig), 2, 3))
+        self.stream.perform(action)
         self.pressed.append(action)
 
     def press_key(self, key_name: str) -> str | None:
@@ -90,7 +85,7 @@ class KeyboardSource(Source):
 
     @property
     def busy(self) -> bool:
-        return bool(self._queue)
+        return self.stream.performing is not None
 
     def poll(self) -> list[Sample]:
         """Samples up to now, one per 1/60 s: the motion being played, else the rest."""
@@ -105,10 +100,9 @@ class KeyboardSource(Source):
         if now - self._next_t > 0.5:
             self._next_t = now - 0.5
         while self._next_t <= now + 1e-9:
-            if self.auto and not self._queue:
+            if self.auto and not self.busy:
                 self._auto_step()
-            accel = self._queue.popleft() if self._queue else self.rest
-            out.append(Sample(self._next_t, accel))
+            out.append(Sample(self._next_t, self.stream.next_frame()))
             self._next_t += 1.0 / HZ
         self.count("samples", len(out))
         return out
@@ -124,7 +118,6 @@ class KeyboardSource(Source):
     # a lost keyboard is not a thing, but tests and the overlay exercise the states through these
     def disconnect(self) -> None:
         self.state = SourceState.DISCONNECTED
-        self._queue.clear()
 
     def reconnect(self) -> None:
         self.state = SourceState.CONNECTED

@@ -50,6 +50,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--low-power", action="store_true", help="render at 30 Hz on a half-size surface, fewer solver iterations")
     p.add_argument("--templates", metavar="NPZ", help="recognition templates (default: yours from `quickjab train`, else the shipped set)")
     p.add_argument("--graph", metavar="NPZ", help="Interaction Graph table (default: the shipped one)")
+    p.add_argument("--difficulty", choices=("easy", "normal", "hard"), default="normal", help="how much the CPU's blows hurt (default normal)")
     p.add_argument("--left-handed", action="store_true", help="Wiimote in the left hand: mirror the templates (your own trained set is used as it is)")
     p.add_argument("--budget", action="store_true", help="show the frame-budget overlay from the start (F3 toggles)")
     p.add_argument("--no-sound", action="store_true", help="no sound")
@@ -107,7 +108,7 @@ def run(args: argparse.Namespace) -> int:
     config = SessionConfig(seed=args.seed, size=size, low_power=args.low_power, demo=args.demo,
                            keyboard_banner=fallback, templates=args.templates, graph=args.graph,
                            sound=not args.no_sound and not args.headless,
-                           left_handed=args.left_handed)
+                           left_handed=args.left_handed, difficulty=args.difficulty)
     session = Session(source, config, clock=clock, surface_provider=pygame.display.get_surface)
     session.hud_state.show_budget = args.budget
 

@@ -83,9 +83,11 @@ class Flash:
 class Renderer:
     """Draws the ring and the boxers on a surface of any size (the window resizes)."""
 
-    def __init__(self, size: tuple[int, int], antialias: bool = True):
+    def __init__(self, size: tuple[int, int], detailed: bool = True):
         self.camera = Camera(size)
-        self.antialias = antialias
+        # low-power mode: one flat colour per limb (no highlight pass), half the draw calls
+        self.detailed = detailed
+        self.antialias = detailed  # the full look smooths the silhouettes; low power does not
         self._static: pygame.Surface | None = None
         self._front: pygame.Surface | None = None
         self.flashes: list[Flash] = []
@@ -181,6 +183,11 @@ class Renderer:
             pad = np.array([posts[i] + [0, 0.45, 0], posts[i] + [0, POST_HEIGHT - 0.05, 0]])
             pxy, _ = cam.project(pad)
             pygame.draw.line(layer, post_cols[i], pxy[0], pxy[1], int(thick * 1.25))
+        if pygame.display.get_init() and pygame.display.get_surface() is not None:
+            # in the display's pixel format: a per-frame blit without conversion
+            back = back.convert()
+            front = front.convert()
+            front.set_colorkey(KEY, pygame.RLEACCEL)
         self._static, self._front = back, front
 
     def screen_box(self, joints: np.ndarray, margin: float = 0.15) -> pygame.Rect:
@@ -254,7 +261,7 @@ class Renderer:
             ia, ib = J[hip], J[knee]
             mid_xy = xy[ia] + (xy[ib] - xy[ia]) * 0.5
             d = (z[ia] * 0.75 + z[ib] * 0.25) - 0.01
-            prims.append((d, 0, (xy[ia], mid_xy, 0.1 * scale[ia], 0.095 * scale[ib], look.trunks)))
+            prims.append((d, 0, (xy[ia], mid_xy, 0.09 * scale[ia], 0.085 * scale[ib], look.trunks)))
         for name, r, part in SPHERES:
             i = J[name]
             prims.append((z[i] - r, 1, (xy[i], r * scale[i], colors[part])))
@@ -270,6 +277,8 @@ class Renderer:
         if self.antialias:  # smooth the silhouette: the outline's edges and end caps
             self._capsule_edges(surf, a, b, ra + 1.5, rb + 1.5, outline)
         self._capsule_fill(surf, a, b, ra, rb, color)
+        if not self.detailed:
+            return
         # highlight: a thinner, lighter capsule shifted towards the light
         off = LIGHT_2D * 0.35
         self._capsule_fill(surf, a + off * ra, b + off * rb, ra * 0.45, rb * 0.45, shade(color, 1.28))
@@ -300,6 +309,8 @@ class Renderer:
         if self.antialias:
             pygame.draw.aacircle(surf, shade(color, 0.45), pos, r + 1.5)
         pygame.draw.circle(surf, shade(color, 0.8), pos, r)
+        if not self.detailed:
+            return
         pygame.draw.circle(surf, color, (pos[0] + LIGHT_2D[0] * r * 0.15, pos[1] + LIGHT_2D[1] * r * 0.15), r * 0.8)
         pygame.draw.circle(surf, shade(color, 1.35), (pos[0] + LIGHT_2D[0] * r * 0.4, pos[1] + LIGHT_2D[1] * r * 0.4), r * 0.3)
 
@@ -321,6 +332,10 @@ class Renderer:
         chest_poly = np.array([sl2, sr2, waist_r, waist_l])
         trunks_poly = np.array([waist_l, waist_r, hr2, pel + (hr2 - pel) * 0.2 + (pel - chest) * 0.12, hl2])
         skin, trunks = look.skin, look.trunks
+        # the trunk's volume from any side: a capsule chest -> spine, the trunks round the pelvis
+        spine, pelvis = xy[J["spine"]], xy[J["pelvis"]]
+        self._capsule(surf, chest, spine, 0.15 * k, 0.14 * k, skin)
+        self._capsule(surf, spine + (pelvis - spine) * 0.3, pelvis, 0.14 * k, 0.14 * k, trunks)
         self._poly(surf, shade(skin, 0.45), chest_poly, 0)
         self._poly(surf, shade(skin, 0.45), chest_poly, 3)
         inset = (chest_poly - chest_poly.mean(axis=0)) * 0.92 + chest_poly.mean(axis=0)
@@ -330,8 +345,9 @@ class Renderer:
         self._poly(surf, shade(trunks, 0.45), trunks_poly, 0)
         t_in = (trunks_poly - trunks_poly.mean(axis=0)) * 0.9 + trunks_poly.mean(axis=0)
         self._poly(surf, trunks, t_in)
-        # waistband
-        pygame.draw.line(surf, (245, 245, 245), waist_l, waist_r, max(2, int(0.035 * k)))
+        # waistband, where the hips face the camera enough to show it
+        if float(np.hypot(*(waist_r - waist_l))) > 0.2 * k:
+            pygame.draw.line(surf, (245, 245, 245), waist_l, waist_r, max(2, int(0.035 * k)))
 
     def _draw_flashes(self, surf: pygame.Surface) -> None:
         cam = self.camera

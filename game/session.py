@@ -49,8 +49,17 @@ START_GAP = 1.1  # metres between the two roots at the bell: just out of a strai
 RING_LIMIT = 2.6  # metres from the centre a root may go (the ropes are at 3)
 REFERENCE_SPEED = 4.0  # m/s: a blow closing at this speed does its window's damage
 BLOCKED_SHARE = 0.2  # the share of the damage that goes through a block
+# The CPU reads the situation from a solved table and never hesitates: its blows count for less
+# so that a human (whose moves wait for the recognizer) has a fair fight.
+DIFFICULTY = {"easy": 0.45, "normal": 0.7, "hard": 1.0}
+# ... and it catches its breath between moves (steps at the guard before it may act again)
+CPU_REST_STEPS = {"easy": 40, "normal": 24, "hard": 8}
 HOME_BUTTON = 0x0080  # Wiimote core buttons: Home
 RUMBLE_MS = 120
+PILOT_SETTLE_STEPS = 90  # the pilot's hands rest first: the recognizer learns gravity at rest
+PILOT_VARIETY = 0.4
+PILOT_REACH = 1.0
+PILOT_ATTACKS = ("straight_l", "straight_r", "hook_l", "hook_r", "uppercut_l", "uppercut_r", "block", "step_left", "step_right")
 KNOCKDOWN_HOLD = 0.55  # the fraction of the knockdown clip held while the referee counts
 
 
@@ -66,6 +75,7 @@ class SessionConfig:
     sound: bool = True
     physics_iterations: int = 4
     left_handed: bool = False
+    difficulty: str = "normal"
     render: bool = True  # False: no render stage (headless benchmarks and reproducibility tests)
 
 
@@ -153,7 +163,10 @@ class Session:
         graph = load_graph(cfg.graph)
         self.graph = graph
         self.opponent_ai = OpponentController(graph, self.lib, controller=self.opponent.controller)
-        self._pilot_wait = 0
+        self._pilot_wait = PILOT_SETTLE_STEPS
+        self._cpu_rest = 0
+        self._pilot_seen = True
+        self._pilot_rng = np.random.default_rng(cfg.seed + 1)
         self.templates = load_templates(cfg.templates, cfg.left_handed)
         self.recognizer = DualBufferRecognizer(self.templates)
         self.resampler = FrameResampler(sensors=self.templates.dim // 3)
@@ -168,15 +181,15 @@ class Session:
             self.hud_state.keys = key_help()
         self.hud = Hud()
         self.sounds = Sounds(enabled=cfg.sound, seed=cfg.seed)
-        # low power: flat shading, no antialiasing (game/render_low_power.py says why)
-        self.renderer = (LowPowerRenderer if cfg.low_power else Renderer)(cfg.size, antialias=not cfg.low_power)
+        # low power: flat shading (game/render_low_power.py: half the render time of detailed=False)
+        self.renderer = LowPowerRenderer(cfg.size) if cfg.low_power else Renderer(cfg.size)
         self._surface_provider = surface_provider
         self._offscreen: pygame.Surface | None = None
         self._low_power_surface: pygame.Surface | None = None
         self.events_log: list[dict] = []  # recognizer events, in order (tests, the trace)
         self.blows_log: list[tuple[int, int, str, bool, float]] = []  # (step, attacker, target, blocked, damage)
         self.on_toggle_fullscreen: Callable[[], None] | None = None
-        self._t0 = self.clock.seconds()
+        self._t0: float | None = None
         self._buttons = 0
         self._auto_paused = False
         self._step = 0
@@ -219,8 +232,10 @@ class Session:
             if not self.match.paused:
                 self.match.toggle_pause()
                 self._auto_paused = True
-        elif not disconnected and self.hud_state.disconnected and self._auto_paused:
-            if self.match.paused:
+        elif not disconnected and self.hud_state.disconnected:
+            # back: the controller may sit differently in the hand; learn gravity afresh
+            self.recognizer.reset()
+            if self._auto_paused and self.match.paused:
                 self.match.toggle_pause()
             self._auto_paused = False
         self.hud_state.disconnected = disconnected
@@ -242,8 +257,16 @@ class Session:
         situation = Situation.from_roots(self.player.root, me.action, me.frame,
                                          self.opponent.root, them.action, them.frame)
         action = self.graph.best_action(situation)
+        unrecognized = not self._pilot_seen  # the last motion started nothing: try another
+        if unrecognized or self._pilot_rng.random() < PILOT_VARIETY:
+            # an attract mode that only ever throws the one best punch is dull to watch: now
+            # and then a different move (closing in when out of reach)
+            near = situation.distance < PILOT_REACH
+            choices = PILOT_ATTACKS if near else ("step_forward",)
+            action = choices[int(self._pilot_rng.integers(len(choices)))]
         if action in self.lib and action != "guard":
             self.source.press(action)
+            self._pilot_seen = False
             self._pilot_wait = 12  # the hands come back to rest before the next motion
         else:
             self._pilot_wait = 8
@@ -263,6 +286,10 @@ class Session:
                 self.source.press_key(pygame.key.name(event.key))
 
     def _frames(self, step: int, dt: float) -> None:
+        if self._t0 is None:
+            # the step grid is anchored when the loop starts, not when the session was built
+            # (loading takes a moment; anchoring earlier would read the sensors that late)
+            self._t0 = self.clock.seconds() - step * dt
         self.frame_vec = self.resampler.frame_at(self._t0 + step * dt)
 
     def _recognize(self, step: int, dt: float) -> None:
@@ -271,6 +298,7 @@ class Session:
         events = self.recognizer.push(self.frame_vec, t=step * dt)
         for ev in events:
             self.events_log.append(ev)
+            self._pilot_seen |= ev.get("event") == "start"
             self.hud_state.mark(ev)
             if self.match.fighting:
                 self.player.controller.on_event(ev)
@@ -294,7 +322,9 @@ class Session:
         from game.interaction import Situation
 
         self._hold_knockdown(1)
-        if self.match.fighting:
+        if self._cpu_rest > 0:
+            self._cpu_rest -= 1
+        elif self.match.fighting:
             me, them = self.opponent.controller, self.player.controller
             situation = Situation.from_roots(self.opponent.root, me.action, me.frame,
                                              self.player.root, them.action, them.frame)
@@ -303,6 +333,8 @@ class Session:
         self.opponent.turn_towards(px, pz)
         self.opponent.keep_inside(RING_LIMIT)
         self.opponent.step(dt)
+        if self.opponent.controller.finished_action():
+            self._cpu_rest = CPU_REST_STEPS[self.config.difficulty]
 
     def _hold_knockdown(self, i: int) -> None:
         """While the referee counts, the downed boxer stays down (the clip's low frame)."""
@@ -330,6 +362,8 @@ class Session:
         target = 1 - hit["attacker"]
         scale = float(np.clip(hit["speed"] / REFERENCE_SPEED, 0.5, 1.5))
         damage = float(hit.get("damage", 8.0)) * scale * (BLOCKED_SHARE if hit["blocked"] else 1.0)
+        if hit["attacker"] == 1:
+            damage *= DIFFICULTY[self.config.difficulty]
         if not self.match.hit(target, damage):
             return
         self.blows_log.append((step, hit["attacker"], hit["target"], hit["blocked"], round(damage, 4)))
@@ -385,9 +419,8 @@ class Session:
         bodies = [self.prev_joints[i] + (self.curr_joints[i] - self.prev_joints[i]) * alpha for i in (0, 1)]
         self.renderer.draw(surf, bodies)
         if surf is not target:
+            # the scene at half size, scaled up; the HUD's text drawn sharp at full size
             pygame.transform.scale(surf, target.get_size(), target)
-        # the HUD at full size even in low power: its text is cached blits (~0.2 ms), and
-        # half-size text scaled up is unreadable
         self.hud.draw(target, self.hud_state, self.loop.budget)
         if self._surface_provider is not None and pygame.display.get_init() and pygame.display.get_surface() is target:
             pygame.display.flip()

@@ -168,7 +168,13 @@ class TrainingScreen:
             self.renderer.camera = Camera(stage.size, eye=(2.2, 2.2, 3.6), target=(0.0, 0.95, 0.0), fov_deg=40)
         tr = self.trainer
         clip = self.lib[tr.action]
-        self.anim_frame = (self.anim_frame + 1) % (clip.frames + 20)
+        # SHOW loops the move; READY holds the guard; RECORD plays it in time with GO
+        if tr.phase == SHOW:
+            self.anim_frame = (self.anim_frame + 1) % (clip.frames + 20)
+        elif tr.phase == READY:
+            self.anim_frame = 0
+        else:
+            self.anim_frame = tr.phase_step
         posture = clip.posture(min(self.anim_frame, clip.frames - 1))
         if self.left_handed:
             posture = mirror_posture(posture)

@@ -219,3 +219,36 @@ def synthesize_rest(frames: int, action: Action, profile: str | Profile = "exper
     elbows = np.repeat(elbows[:1], max(frames, 0), 0)
     roll = np.zeros(2)
     return finish(readings(fists, fists - elbows, roll), prof.noise_g, rng)
+
+
+class VirtualPlayerStream:
+    """Frame-by-frame readings of a virtual player who rests at the guard until told to
+    perform an action (for a keyboard-driven source): `perform(name)` queues the action's
+    whole signal, `next_frame()` returns the next (2, 3) reading in g. Performing while an
+    action is still under way starts the new one at once (as a player would)."""
+
+    def __init__(self, lib: dict[str, Action], profile: str | Profile = "experienced",
+                 rng: np.random.Generator | None = None, rest_chunk: int = 60):  # fmt: skip
+        self.lib = lib
+        self.profile = _profile(profile)
+        self.rng = rng if rng is not None else np.random.default_rng()
+        self._rest_chunk = max(int(rest_chunk), 1)
+        self._queue = np.zeros((0, 2, 3))
+        self._pos = 0
+        self.performing: str | None = None  # the action whose signal is being played, if any
+
+    def perform(self, name: str) -> int:
+        """Start performing `name`; returns its length in frames."""
+        if name not in self.lib:
+            raise KeyError(f"no action {name!r} in the library")
+        signal = synthesize_action(self.lib[name], self.profile, self.rng, library=self.lib)
+        self._queue, self._pos, self.performing = signal, 0, name
+        return len(signal)
+
+    def next_frame(self) -> np.ndarray:
+        if self._pos >= len(self._queue):
+            self._queue = synthesize_rest(self._rest_chunk, self.lib["guard"], self.profile, self.rng)
+            self._pos, self.performing = 0, None
+        frame = self._queue[self._pos]
+        self._pos += 1
+        return frame

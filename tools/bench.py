@@ -6,7 +6,8 @@ from __future__ import annotations
 import argparse
 import importlib
 
-# target name -> module; modules load only when their target runs
+# target name -> module; each is imported when the parser is built (for its arguments),
+# so a target module imports its heavy dependencies inside run()
 TARGETS = {
     "loop": "tools.bench_loop",
     "synth": "tools.bench_synth",

@@ -46,7 +46,11 @@ def situations(g, n: int, rng: np.random.Generator) -> list:
 
 
 def run(args: argparse.Namespace) -> int:
+    from engine.errors import InputError
     from game.interaction import InteractionGraph
+    for name in ("states", "lookups", "loads"):
+        if getattr(args, name) < (10 if name == "states" else 1):
+            raise InputError(f"--{name} {getattr(args, name)}: too small")
     fig: dict = {}
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(args.graph) if args.graph else Path(tmp) / "graph.npz"

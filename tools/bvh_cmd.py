@@ -5,6 +5,9 @@
                                                        retarget and cut an action (60 Hz frames)
   quickjab bvh export --play straight_l,hook_r -o out.bvh
                                                        play actions and write a BVH for Blender
+  quickjab bvh export --play straight_l,hook_r --opponent block,straight_r -o bout.bvh
+                                                       simulate a bout of two physics boxers and
+                                                       write bout_boxer0.bvh and bout_boxer1.bvh
 """
 
 from __future__ import annotations
@@ -15,7 +18,15 @@ from pathlib import Path
 
 from engine.errors import InputError
 from game.actions import KINDS, load_library
-from game.bvh import cut_action, map_joints, played_positions, read_bvh, retarget, write_bvh
+from game.bvh import (
+    cut_action,
+    map_joints,
+    played_positions,
+    read_bvh,
+    retarget,
+    simulate_bout,
+    write_bvh,
+)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -36,6 +47,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     cut.set_defaults(func=run_cut)
     exp = cmds.add_parser("export", help="play actions of the library and write them as BVH")
     exp.add_argument("--play", required=True, help="comma-separated action names, played in order")
+    exp.add_argument("--opponent", default=None,
+                     help="actions of a second boxer: simulate both in the physics world (a bout)")
+    exp.add_argument("--gap", type=float, default=0.85, help="distance between the boxers in a bout (m)")
     exp.add_argument("-o", "--output", required=True, help="BVH file to write")
     exp.set_defaults(func=run_export)
 
@@ -61,12 +75,22 @@ def run_cut(args: argparse.Namespace) -> int:
     return 0
 
 
-def run_export(args: argparse.Namespace) -> int:
-    lib = load_library()
-    names = [n.strip() for n in args.play.split(",") if n.strip()]
+def _names(text: str, lib: dict) -> list[str]:
+    names = [n.strip() for n in text.split(",") if n.strip()]
     bad = [n for n in names if n not in lib]
     if not names or bad:
         raise InputError(f"unknown action(s) {', '.join(bad) or '(none given)'}; see game/assets/actions")
+    return names
+
+
+def run_export(args: argparse.Namespace) -> int:
+    lib = load_library()
+    names = _names(args.play, lib)
+    if args.opponent is not None:
+        rec, hits = simulate_bout(lib, names, _names(args.opponent, lib), args.gap)
+        paths = rec.write(args.output, rest=lib["guard"].posture(0))
+        print(f"simulated {len(rec.frames)} steps, {len(hits)} hit(s); wrote {', '.join(map(str, paths))}")
+        return 0
     positions = played_positions(lib, names)
     write_bvh(args.output, positions, rest=lib["guard"].posture(0))
     print(f"wrote {len(positions)} frames to {args.output}")

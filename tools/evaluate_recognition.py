@@ -27,6 +27,7 @@ from engine.recognition.templates import activity, rest_gravity
 
 UNNOTICEABLE_FRAMES = 6
 PAD_BEFORE, PAD_AFTER = 20, 40
+CLIP_FRAMES = 24  # the simulated character's punch clip: 0.4 s (0 = never finishes)
 EARLY_TOLERANCE = 20  # frames a stream start may precede its labelled interval (1/3 s)
 GROUPS = ("correct", "unnoticeable switch", "noticeable switch", "wrong or missed")
 
@@ -156,9 +157,10 @@ def stream_trials(frames: np.ndarray, ivs: Sequence[tuple[str, int, int]], lead:
     return out
 
 
-def replay_stream(rec: DualBufferRecognizer, frames: np.ndarray, clip_frames: Mapping[str, int]) -> list[dict]:
-    """Events of a whole stream, with a simulated character that finishes each action after
-    its clip length (from the start; a switch continues at n_p, so the end does not move)."""
+def replay_stream(rec: DualBufferRecognizer, frames: np.ndarray, clip_frames: int = CLIP_FRAMES) -> list[dict]:
+    """Events of a whole stream, with a simulated character that finishes each action
+    `clip_frames` after its start (a switch continues at n_p, so the end does not move) and
+    then calls `character_finished()`; with clip_frames=0 it never does."""
     rec.reset()
     events: list[dict] = []
     clip_end = None
@@ -167,7 +169,7 @@ def replay_stream(rec: DualBufferRecognizer, frames: np.ndarray, clip_frames: Ma
         for e in evs:
             if e["event"] in ("start", "switch"):
                 start = e["frame"] - e.get("from_frame", 0)
-                clip_end = start + clip_frames.get(e["action"], 30)
+                clip_end = start + clip_frames if clip_frames > 0 else None
         events.extend(evs)
         if clip_end is not None and i >= clip_end:
             rec.character_finished()
@@ -212,6 +214,7 @@ def evaluate_stream_folds(
     mains: Sequence[int | str],
     folds: int = 2,
     template_kwargs: Mapping | None = None,
+    clip_frames: int = CLIP_FRAMES,
     **rec_kwargs,
 ) -> list[Summary]:
     """K contiguous folds: templates from the intervals of the other folds, tested on this
@@ -227,7 +230,7 @@ def evaluate_stream_folds(
         templates = Templates.from_trials(stream_trials(frames, train), **(template_kwargs or {}))
         for m, pool in zip(mains, pooled, strict=True):
             rec = DualBufferRecognizer(templates, main=m, **rec_kwargs)
-            events = replay_stream(rec, frames[lo:hi], clip_lengths(rec))
+            events = replay_stream(rec, frames[lo:hi], clip_frames)
             s = score_stream(events, test, hi - lo, m)
             pool.outcomes += s.outcomes
             pool.false_starts += s.false_starts
@@ -235,22 +238,20 @@ def evaluate_stream_folds(
     return pooled
 
 
-def clip_lengths(rec: DualBufferRecognizer) -> dict[str, int]:
-    """The simulated character's clip length per action: the median length of the action's
-    templates from the gate onset to the end of the motion (the clip plays the motion)."""
-    acts = rec._tmpl_action
-    return {a: 24 + 0*int(np.median(rec.template_lengths[acts == i])) for i, a in enumerate(rec.action_names)}
-
-
 def evaluate_stream(
-    templates: Templates, frames: np.ndarray, labels: Sequence[str], mains: Sequence[int | str], **rec_kwargs
+    templates: Templates,
+    frames: np.ndarray,
+    labels: Sequence[str],
+    mains: Sequence[int | str],
+    clip_frames: int = CLIP_FRAMES,
+    **rec_kwargs,
 ) -> list[Summary]:
-    """A labelled stream against given templates (clip lengths from `clip_lengths`)."""
+    """A labelled stream against given templates."""
     ivs = intervals(labels)
     out = []
     for m in mains:
         rec = DualBufferRecognizer(templates, main=m, **rec_kwargs)
-        out.append(score_stream(replay_stream(rec, frames, clip_lengths(rec)), ivs, len(frames), m))
+        out.append(score_stream(replay_stream(rec, frames, clip_frames), ivs, len(frames), m))
     return out
 
 

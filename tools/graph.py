@@ -48,6 +48,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     d.add_argument("--graph", default=None, help="the .npz (default: the shipped graph)")
     d.add_argument("--bouts", type=int, default=200, help="bouts per opponent")
     d.add_argument("--opponent", choices=["random", "greedy", "both"], default="both")
+    d.add_argument("--player", choices=["graph", "random", "greedy"], default="graph",
+                   help="who plays boxer 0 (a baseline other than the graph, for comparison)")
     d.add_argument("--seconds", type=float, default=60.0, help="bout length (ends earlier by knockout)")
     d.add_argument("--seed", type=int, default=1)
     d.add_argument("--json", action="store_true", help="machine-readable output")
@@ -71,7 +73,10 @@ def cmd_build(args: argparse.Namespace) -> int:
     lib = load_actions()
     t0 = time.perf_counter()
     table = build_graph(lib, BuildParams(**kw), log=None if args.quiet else print)
-    table.save(args.output)
+    try:
+        table.save(args.output)
+    except OSError as exc:
+        raise InputError(f"{args.output}: cannot write the graph ({exc.strerror or exc})") from None
     size = Path(args.output).stat().st_size
     print(f"wrote {args.output}: {table.n_states} states, {table.n_edges} edges, "
           f"{size / 1e6:.2f} MB, built in {time.perf_counter() - t0:.1f} s")
@@ -89,7 +94,7 @@ def cmd_info(args: argparse.Namespace) -> int:
     b = info["build"]
     print(f"{path}: {info['states']} states, {info['edges']} edges, "
           f"{info.get('file_bytes', 0) / 1e6:.2f} MB")
-    print(f"  build: seed {b.get('seed')}, {b.get('samples')} samples in {b.get('cells_sampled')} "
+    print(f"  build: library {b.get('library')}, seed {b.get('seed')}, {b.get('samples')} samples in {b.get('cells_sampled')} "
           f"cells, opponent_max {b.get('opponent_max')}, {b.get('seconds', {}).get('total')} s")
     print(f"  value iteration: {b.get('vi_iterations')} iterations, residual {b.get('vi_residual'):.2g}")
     print(f"  grid: {json.dumps(info['grid'])}")
@@ -110,17 +115,19 @@ def cmd_duel(args: argparse.Namespace) -> int:
     for opp in opponents:
         t0 = time.perf_counter()
         try:
-            r = duel(g, lib, opp, bouts=args.bouts, seconds=args.seconds, seed=args.seed)
+            r = duel(g, lib, opp, bouts=args.bouts, seconds=args.seconds, seed=args.seed,
+                     us=args.player)
         except ValueError as exc:
             raise InputError(f"{g.path}: {exc}") from None
         d = r.as_dict()
+        d["player"] = args.player
         d["seconds"] = round(time.perf_counter() - t0, 2)
         results.append(d)
     if args.json:
         print(json.dumps(results, indent=2))
         return 0
     for d in results:
-        print(f"graph vs {d['opponent']:6s}: {d['wins']}/{d['bouts']} wins ({100 * d['win_rate']:.1f} %), "
+        print(f"{d['player']} vs {d['opponent']:6s}: {d['wins']}/{d['bouts']} wins ({100 * d['win_rate']:.1f} %), "
               f"{d['losses']} losses, {d['draws']} draws, {d['knockouts']} KOs; hits landed "
               f"{d['hits_landed']}, received {d['hits_received']}; damage {d['damage_dealt']:.0f} "
               f"dealt, {d['damage_taken']:.0f} taken ({d['seconds']} s)")

@@ -135,10 +135,10 @@ def plot_profile(trace: dict, summary: dict, out: str, max_bars: int = 600) -> N
     sl = slice(max(0, len(frames) - max_bars), len(frames))
     x = np.arange(sl.start, sl.stop)
     bottom = np.zeros(len(x))
-    for n in names:
+    for n in names:  # stacked bars, one per frame, drawn as stepped areas (fast for many frames)
         vals = per_frame[n][sl]
-        ax2.bar(x, vals, bottom=bottom, width=1.0, label=n, linewidth=0)
-        bottom += vals
+        ax2.fill_between(x, bottom, bottom + vals, step="mid", label=n, linewidth=0)
+        bottom = bottom + vals
     ax2.axhline(budget, color="#c44e52", linestyle="--", label=f"{budget:.1f} ms")
     ax2.set_xlabel("frame")
     ax2.set_ylabel("ms")

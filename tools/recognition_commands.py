@@ -47,6 +47,9 @@ def _recognizer_args(p: argparse.ArgumentParser, main_default: str = "6") -> Non
     g.add_argument("--null-frames", type=int, default=6, help="quiet frames that end a motion (default 6)")
     g.add_argument("--discard-frames", type=int, default=20, help="frames discarded after the character finishes (default 20)")
     g.add_argument("--no-reject", action="store_true", help="never reject (ignore the learned thresholds)")
+    g.add_argument("--complete", type=float, default=0.0, metavar="F",
+                   help="also end a motion once its template is matched past this fraction (e.g. 0.9): "
+                        "splits back-to-back punches when no character calls character_finished (default off)")
 
 
 def _rec_kwargs(args: argparse.Namespace) -> dict:
@@ -56,6 +59,7 @@ def _rec_kwargs(args: argparse.Namespace) -> dict:
         "null_frames": args.null_frames,
         "discard_frames": args.discard_frames,
         "reject": not args.no_reject,
+        "complete_fraction": args.complete,
     }
 
 
@@ -100,6 +104,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     e.add_argument("--mains", type=_mains, default=_mains("1-12"), help="main-buffer sizes (default 1-12; e.g. 6 or 1-12,auto)")
     e.add_argument("--method", choices=METHODS, default=None, help="template method when building")
     e.add_argument("--plot", default=None, metavar="PNG", help="draw Figs. 8-9 style bars")
+    e.add_argument("--clip-frames", type=int, default=ev.CLIP_FRAMES,
+                   help=f"streams: the simulated character's clip length, then character_finished() (default {ev.CLIP_FRAMES}; 0 = never)")
     e.add_argument("--json", action="store_true", help="print the rows as JSON lines instead of a table")
     _recognizer_args(e)
     e.set_defaults(func=cmd_evaluate)
@@ -172,9 +178,11 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
             if not any(labels):
                 raise InputError(f"{inp}: no labelled intervals (label column empty)")
             if templates is None:
-                res = ev.evaluate_stream_folds(frames, labels, args.mains, folds=args.folds, template_kwargs=tk, **kw)
+                res = ev.evaluate_stream_folds(
+                    frames, labels, args.mains, folds=args.folds, template_kwargs=tk, clip_frames=args.clip_frames, **kw
+                )
             else:
-                res = ev.evaluate_stream(templates, frames, labels, args.mains, **kw)
+                res = ev.evaluate_stream(templates, frames, labels, args.mains, clip_frames=args.clip_frames, **kw)
         results[path.name] = [s.row() for s in res]
     if not results:
         raise InputError("nothing to evaluate: give INPUTs, --uwave DIR, or see --help")

@@ -21,10 +21,12 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def record(url: str, output: str, seconds: float | None, label: str = "", poll_s: float = 0.005) -> int:
-    """Record until `seconds` pass, the source ends, or Ctrl-C. Returns the number of rows."""
+    """Record until `seconds` pass, the source ends, or Ctrl-C. Returns the number of rows.
+    The output file is created when the first sample arrives (or at the end, empty), so a
+    source that cannot be opened leaves nothing behind."""
     source = open_source(url)
     meta = {"source": source.description or url, "recorded_from": url}
-    writer = None
+    writer: RecordingWriter | None = None
     start = time.perf_counter()
     last_state = None
     try:
@@ -36,6 +38,8 @@ def record(url: str, output: str, seconds: float | None, label: str = "", poll_s
                 if writer is None:
                     writer = RecordingWriter(output, source.sensors, meta)
                 writer.write(sample, label)
+            if writer is not None:
+                writer.flush_if_due()  # a silent source still gets its rows synced
             if source.state is SourceState.ENDED:
                 break
             time.sleep(poll_s)
@@ -43,8 +47,10 @@ def record(url: str, output: str, seconds: float | None, label: str = "", poll_s
         pass
     finally:
         source.close()
-        if writer is None:
-            writer = RecordingWriter(output, source.sensors, meta)
+        if writer is not None:
+            writer.close()
+    if writer is None:
+        writer = RecordingWriter(output, source.sensors, meta)
         writer.close()
     print(f"wrote {writer.rows} samples to {output}", file=sys.stderr)
     return writer.rows

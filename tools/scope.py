@@ -14,6 +14,7 @@ from __future__ import annotations
 import argparse
 import os
 import sys
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -21,8 +22,9 @@ import numpy as np
 from engine.clock import RealClock, VirtualClock
 from engine.errors import InputError
 from engine.loop import FixedStepLoop
-from engine.sensors import Sample, Source, SourceState, open_source
+from engine.sensors import Sample, Source, SourceError, SourceState, open_source
 from engine.sensors.rate import RateMeter
+from engine.state_hash import state_hash
 from engine.trace import write_chrome_trace
 
 AXIS_COLORS = ((235, 85, 85), (90, 205, 90), (95, 145, 255))  # x, y, z
@@ -105,9 +107,13 @@ class Scope:
         self.ring = SampleRing(cap, 6)
         self.samples = 0
         self.quit = False
-        pygame.display.init()
+        try:
+            pygame.display.init()
+            self.screen = pygame.display.set_mode((self.view.width, self.view.height))
+        except pygame.error as exc:
+            source.close()
+            raise InputError(f"cannot open a window ({exc}); without a display use --headless") from None
         pygame.font.init()
-        self.screen = pygame.display.set_mode((self.view.width, self.view.height))
         pygame.display.set_caption(f"QuickJab scope: {source.url}")
         self.font = pygame.font.Font(None, 20)
         self.small = pygame.font.Font(None, 16)
@@ -182,6 +188,14 @@ class Scope:
         if self.banner:
             screen.blit(self.small.render(self.banner, True, (230, 190, 70)), (8, 44))
 
+    def state_hash(self) -> str:
+        """Hash of what the scope holds: two headless runs of the same source must agree."""
+        n = min(self.ring.count, self.ring.capacity)
+        idx = np.arange(self.ring.count - n, self.ring.count) % self.ring.capacity
+        loop = self.loop
+        return state_hash(self.ring.t[idx], self.ring.x[idx], self.samples,
+                          loop.step_index if loop else 0, loop.dropped_steps if loop else 0)
+
     def close(self) -> None:
         self.final_state = self.source.state  # before close() turns it to disconnected
         self.source.close()
@@ -216,6 +230,28 @@ def run_scope(
     finally:
         scope.close()
     return scope
+
+
+def open_with_fallback(url: str, clock: Callable[[], float], default: str = "wiimote://",
+                       fallback: str = "demo://") -> tuple[Source, str]:
+    """Open `url`; if it is the `default` device URL and no such device can be opened (an
+    error, or a source already disconnected), open `fallback` instead. Returns (source,
+    banner); the banner says what happened and is empty unless the fallback was taken."""
+    try:
+        source = open_source(url, clock=clock)
+    except SourceError as exc:
+        if url != default:
+            raise
+        reason = str(exc)
+    else:
+        if source.state is not SourceState.DISCONNECTED or url != default:
+            return source, ""
+        reason = "disconnected"
+        source.close()
+    print(f"quickjab: no device at {default}: {reason}", file=sys.stderr)
+    device = "Wiimote" if default.startswith("wiimote") else f"device at {default}"
+    banner = f"No {device} found: showing the synthetic {fallback} source. Pair one, or pass --source URL."
+    return open_source(fallback, clock=clock), banner
 
 
 def headless_env() -> None:
@@ -260,4 +296,6 @@ def run(args: argparse.Namespace) -> int:
     scope = run_scope(source, clock=clock, frames=args.frames, screenshot=args.screenshot, trace=args.trace, view=view)
     print(f"scope: {scope.samples} samples from {args.source} in {scope.loop.frame_index} frames, "
           f"source {scope.final_state.value}", file=sys.stderr)
+    if args.headless:  # reproducible: the same source and frame count give the same hash
+        print(f"state {scope.state_hash()}")
     return 0

@@ -18,7 +18,8 @@ class Contact:
     that normal before resolution (m/s, > 0 when the capsules move towards each other);
     `point` lies midway between the two surfaces; `depth` is the penetration in metres.
     body_a < body_b always (pairs are ordered by body id), so a fist can be on either side;
-    capsule_a/b index the body's own capsule list and tag_a/b are its tags."""
+    capsule_a/b index the body's own capsule list and tag_a/b are its tags. A touch that
+    lasts is reported every step; `new` is True only on its first step (one punch, one hit)."""
 
     body_a: int
     capsule_a: int
@@ -30,6 +31,8 @@ class Contact:
     normal: np.ndarray
     rel_speed: float
     depth: float = 0.0
+    new: bool = True  # False when the same two capsules already touched the step before
+    pair: int = -1  # index of the capsule pair in world.pairs
 
 
 def _params(a, b, c, e, f) -> tuple[np.ndarray, np.ndarray]:
@@ -103,6 +106,10 @@ class CapsulePairs:
         self.cap_ends = np.concatenate([caps[:, 0], caps[:, 1]])
         self.n_caps = len(caps)
         self.pair_ab = np.concatenate([cap_a, cap_b])
+        self.not_sphere_a = (self.ia != self.ja).astype(float)
+        self.not_sphere_b = (self.ib != self.jb).astype(float)
+        self.quad_flat = self.quad[:, :, None] * 3 + np.arange(3)  # (4, K, 3) x.ravel() indices
+        self.diameters = 2.0 * radii
 
     def __len__(self) -> int:
         return len(self.cap_a)
@@ -111,14 +118,16 @@ class CapsulePairs:
         """Indices of pairs whose bounding spheres (capsule midpoint, half length + radius)
         come within `margin`: a cheap broad phase before the exact segment test."""
         c = self.n_caps
-        ends = x[self.cap_ends]
-        both = np.concatenate([ends[:c] + ends[c:], ends[c:] - ends[:c]], axis=1)  # 2 mid, 2 half
         k = len(self.cap_a)
-        pair = both[self.pair_ab]  # rows: side a then side b
-        d = pair[k:, :3] - pair[:k, :3]  # 2 (mid_b - mid_a)
-        axes = pair[:, 3:]
-        length = np.sqrt((axes * axes).sum(1))  # full capsule lengths
-        reach = length[:k] + length[k:] + 2.0 * (self.rsum + margin)  # 2 x reach
+        ends = x[self.cap_ends]
+        mid2 = ends[:c] + ends[c:]  # twice each capsule's midpoint
+        axis = ends[c:] - ends[:c]
+        # twice each capsule's bounding-sphere radius: its length plus twice its radius
+        extent = np.sqrt((axis * axis).sum(1)) + self.diameters
+        pair_mid = mid2[self.pair_ab]  # (2K, 3): side a rows, then side b rows
+        d = pair_mid[k:] - pair_mid[:k]
+        pair_ext = extent[self.pair_ab]
+        reach = pair_ext[:k] + pair_ext[k:] + 2.0 * margin
         return np.flatnonzero((d * d).sum(1) < reach * reach)
 
     def narrow(self, x: np.ndarray, idx: np.ndarray):
@@ -151,11 +160,10 @@ class CapsulePairs:
         # weights of the four ends in (closest point on b) - (closest point on a); a sphere's
         # two ends are one particle: all its weight on the first, so no particle appears twice
         # in one contact and sum w g^2 below is right
-        wa0 = np.where(self.ia[idx] == self.ja[idx], -1.0, s - 1.0)
-        wa1 = np.where(self.ia[idx] == self.ja[idx], 0.0, -s)
-        wb0 = np.where(self.ib[idx] == self.jb[idx], 1.0, 1.0 - t)
-        wb1 = np.where(self.ib[idx] == self.jb[idx], 0.0, t)
-        return ContactSet(self.quad[:, idx], np.stack([wa0, wa1, wb0, wb1]), n, self.rsum[idx], self.inv_mass)
+        sa = s * self.not_sphere_a[idx]
+        tb = t * self.not_sphere_b[idx]
+        g = np.stack([sa - 1.0, -sa, 1.0 - tb, tb])
+        return ContactSet(self.quad[:, idx], self.quad_flat[:, idx], g, n, self.rsum[idx], self.inv_mass)
 
 
 class ContactSet:
@@ -168,15 +176,15 @@ class ContactSet:
     moving less, and momentum is conserved. No BLAS: the sums are numpy's own, in a fixed
     order, so a run hashes the same on every CPU (BLAS kernels differ between CPUs)."""
 
-    def __init__(self, quad: np.ndarray, g: np.ndarray, n: np.ndarray, rsum: np.ndarray,
-                 inv_mass: np.ndarray) -> None:
+    def __init__(self, quad: np.ndarray, quad_flat: np.ndarray, g: np.ndarray, n: np.ndarray,
+                 rsum: np.ndarray, inv_mass: np.ndarray) -> None:
         self.quad = quad  # (4, K) particle indices
         self.rsum = rsum
         self.gn = g[:, :, None] * n[None, :, :]  # (4, K, 3)
         w = inv_mass[quad]  # (4, K)
         inv_wsum = 1.0 / np.maximum(np.einsum("qk,qk->k", w, g * g), _EPS)
         self.push = self.gn * (w * inv_wsum)[:, :, None]  # displacement per unit lambda
-        self.flat = (quad[:, :, None] * 3 + np.arange(3)).reshape(-1)  # x.ravel() indices
+        self.flat = quad_flat.reshape(-1)  # x.ravel() indices of the push
         self.size = 3 * len(inv_mass)
 
     def project(self, x: np.ndarray) -> None:
@@ -184,6 +192,11 @@ class ContactSet:
         lam = np.maximum(depth, 0.0, out=depth)
         dx = np.bincount(self.flat, weights=(self.push * lam[:, None]).reshape(-1), minlength=self.size)
         x += dx.reshape(x.shape)
+
+    def separations(self, x: np.ndarray) -> np.ndarray:
+        """(closest point on b - closest point on a) . n at positions x, with this step's
+        barycentric weights and normals -> (K,)."""
+        return np.einsum("qki,qki->k", self.gn, x[self.quad])
 
     def closing_speeds(self, v: np.ndarray) -> np.ndarray:
         """Speed at which each pair's closest points approach along its normal (> 0 closing)."""

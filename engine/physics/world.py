@@ -77,7 +77,7 @@ class World:
         self.contact_passes = 3  # re-linearized contact passes after the iterations, at most
         self.contact_tolerance = 0.001  # m of overlap those passes leave alone
         self.bodies: list[Body] = []
-        self._pd_key: list = []  # per body: the scalar (stiffness, damping) last set, or None
+        self._pd_key: list = []  # per body: the (stiffness, damping) last set, as bytes
         self._target_vel_on: list[bool] = []
         self.steps = 0
         self._dt_prev: float | None = None
@@ -175,10 +175,9 @@ class World:
         self._forget_contacts()
 
     def _forget_contacts(self) -> None:
-        """Which pairs were in contact last step is unknown (new body, teleport): assume all, so
-        that no overlap is taken for a fast pass-through (see step)."""
-        self._was_near = np.ones(len(self.pairs), dtype=bool)
-        self._any_near = True
+        """Forget which pairs touched last step (new body, teleport): Contact.new starts over."""
+        self._touching = np.zeros(len(self.pairs), dtype=bool)  # pairs overlapping last step
+        self._hit_idx = np.zeros(0, dtype=np.int64)
 
     # ---- control --------------------------------------------------------------------------
 
@@ -197,11 +196,13 @@ class World:
         if not np.isfinite(t).all():  # one NaN would spread through the sticks to every particle
             raise ValueError("targets must be finite")
         self.targets[sl] = t
-        key = (stiffness, damping_ratio) if np.isscalar(stiffness) and np.isscalar(damping_ratio) else None
-        if key is None or self._pd_key[bid] != key:  # the game sets the same gains every step
-            omega = 2.0 * np.pi * np.asarray(stiffness, dtype=float)
+        k = np.asarray(stiffness, dtype=float)
+        z = np.asarray(damping_ratio, dtype=float)
+        key = (k.tobytes(), k.shape, z.tobytes(), z.shape)
+        if self._pd_key[bid] != key:  # the game sets the same gains every step: skip the work
+            omega = 2.0 * np.pi * k
             self._w2[sl] = omega * omega
-            self._c[sl] = 2.0 * np.asarray(damping_ratio, dtype=float) * omega
+            self._c[sl] = 2.0 * z * omega
             self._pd_dt = None
             self._pd_key[bid] = key
         if velocities is not None:
@@ -279,35 +280,7 @@ class World:
         x = self.x
         v = self._integrate(dt)
         self._dt_prev = dt
-
-        contacts: list[Contact] = []
-        cset = None
-        if len(self.pairs):
-            cand = self.pairs.candidates(x, self.collision_margin)
-            if len(cand):
-                s, t, n, depth = self.pairs.narrow(x, cand)
-                # pairs already touching or within the margin become this step's contact
-                # constraints, so relaxing the sticks cannot push them into each other
-                near = np.flatnonzero(depth > -self.collision_margin)
-                if len(near):
-                    near_idx = cand[near]
-                    s, t, n, depth = s[near], t[near], n[near], depth[near]
-                    cset = self.pairs.contact_set(near_idx, s, t, n)
-                    closing = cset.closing_speeds(v)
-                    # a pair that was apart last step and now overlaps while "separating" went
-                    # past the middle within one step (a fast fist): turn it back the way it came
-                    flip = (depth > 0.0) & (closing < 0.0) & ~self._was_near[near_idx]
-                    if flip.any():
-                        n = np.where(flip[:, None], -n, n)
-                        depth = np.where(flip, 2.0 * self.pairs.rsum[near_idx] - depth, depth)
-                        closing = np.where(flip, -closing, closing)
-                        cset = self.pairs.contact_set(near_idx, s, t, n)
-                    contacts = self._contacts(near_idx, s, n, depth, closing)
-        if self._any_near:
-            self._was_near[:] = False
-        self._any_near = cset is not None
-        if cset is not None:
-            self._was_near[near_idx] = True
+        contacts, cset, near_idx = self._detect(v)
 
         ground = x[:, 1]
         relax = self.constraints.relax
@@ -317,14 +290,15 @@ class World:
                 cset.project(x)
             np.maximum(ground, self.ground_y, out=ground)
         if cset is not None:
-            # one more contact pass linearized at the relaxed positions: the closest points
-            # moved during the iterations, and what the user sees must not interpenetrate
+            # contact passes linearized at the relaxed positions: the closest points moved
+            # during the iterations, and what the user sees must not interpenetrate
             for _ in range(self.contact_passes):
                 s, t, n, depth = self.pairs.narrow(x, near_idx)
                 pen = depth > self.contact_tolerance
                 if not pen.any():
                     break
                 self.pairs.contact_set(near_idx[pen], s[pen], t[pen], n[pen]).project(x)
+            np.maximum(ground, self.ground_y, out=ground)
 
         if self.ground_friction > 0.0:
             on = x[:, 1] <= self.ground_y + 1e-9
@@ -335,6 +309,39 @@ class World:
                     x[on, k] = pk + (xk - pk) * keep
         self.steps += 1
         return contacts
+
+    def _detect(self, v: np.ndarray):
+        """Contacts at the integrated positions, and this step's contact constraints: the pairs
+        touching or within `collision_margin` (so relaxing the sticks cannot push them into
+        each other). Returns (contacts, ContactSet or None, their pair indices)."""
+        contacts: list[Contact] = []
+        cset = None
+        near_idx = np.zeros(0, dtype=np.int64)
+        cand = self.pairs.candidates(self.x, self.collision_margin) if len(self.pairs) else near_idx
+        if len(cand):
+            s, t, n, depth = self.pairs.narrow(self.x, cand)
+            near = np.flatnonzero(depth > -self.collision_margin)
+            if len(near):
+                near_idx = cand[near]
+                s, t, n, depth = s[near], t[near], n[near], depth[near]
+                cset = self.pairs.contact_set(near_idx, s, t, n)
+                closing = cset.closing_speeds(v)
+                # a pair whose closest points were on the other side of each other at the start
+                # of the step went past the middle within it (a fast fist): turn it back the
+                # way it came. (The last step ended without overlap, so before this step's
+                # motion the separation along n was positive unless they crossed.)
+                flip = (depth > 0.0) & (cset.separations(self.x_prev) < 0.0)
+                if flip.any():
+                    n = np.where(flip[:, None], -n, n)
+                    depth = np.where(flip, 2.0 * self.pairs.rsum[near_idx] - depth, depth)
+                    closing = np.where(flip, -closing, closing)
+                    cset = self.pairs.contact_set(near_idx, s, t, n)
+                contacts = self._contacts(near_idx, s, n, depth, closing)
+        # remember which pairs touch, for Contact.new
+        self._touching[self._hit_idx] = False
+        self._hit_idx = np.array([c.pair for c in contacts], dtype=np.int64) if contacts else near_idx[:0]
+        self._touching[self._hit_idx] = True
+        return contacts, cset, near_idx
 
     def _contacts(self, idx, s, n, depth, closing) -> list[Contact]:
         """Contacts among pairs `idx` that overlap at the integrated positions (before any
@@ -353,8 +360,9 @@ class World:
                    self._cap_body[gb].tolist(), self._cap_local[gb].tolist(), gb.tolist(),
                    point, n, closing[hit].tolist(), depth.tolist(), strict=True)
         tags = self._cap_tags
-        return [Contact(ba, la, tags[a], bb, lb, tags[b], pt, nn, sp, de)
-                for ba, la, a, bb, lb, b, pt, nn, sp, de in rows]
+        fresh = (~self._touching[k]).tolist()
+        return [Contact(ba, la, tags[a], bb, lb, tags[b], pt, nn, sp, de, nw, pr)
+                for (ba, la, a, bb, lb, b, pt, nn, sp, de), nw, pr in zip(rows, fresh, k.tolist(), strict=True)]
 
     def state_hash(self) -> str:
         """Hash of the simulation state (positions, previous positions, step count)."""

@@ -73,8 +73,14 @@ class IncrementalDTW:
         self._steps = (pos + 1.0) * np.ones((1, self.T))  # j + 1, reused for normalization
         self._cols = np.arange(self.T)
         shape = (self.L, self.T)
-        self._row = np.empty(shape)
-        self._prev = np.empty(shape)
+        self._ext = [np.full((self.L + 1, self.T), np.inf) for _ in range(2)]
+        self._init = np.full((self.L + 1, self.T), np.inf)
+        self._init[0] = 0.0
+        self._cur = 0
+        self._row = self._ext[0][1:]
+        self._suffix = np.empty(shape)
+        self._recip: dict[int, np.ndarray] = {}
+        self._take: dict[tuple[int, float], np.ndarray] = {}
         self._c = np.empty(shape)
         self._a = np.empty(shape)
         self._tmp = np.empty(shape)
@@ -103,17 +109,17 @@ class IncrementalDTW:
     def push(self, frame: np.ndarray) -> np.ndarray:
         q = np.asarray(frame, dtype=np.float64)
         c = self._local_costs(q)
+        # Rows are stored with one sentinel position in front (index 0): +inf for real rows, 0
+        # in the virtual row before the first frame, so D[0, 0] = 2 c_0 needs no special case.
+        prev_ext = self._init if self.n == 0 else self._ext[self._cur]
+        self._cur ^= 1
+        new_ext = self._ext[self._cur]
+        row = new_ext[1:]
+        # a_j = min(D[i-1, j] + c_j, D[i-1, j-1] + 2 c_j) = c_j + min(D[i-1, j], D[i-1, j-1] + c_j)
         a = self._a
-        prev, row = self._row, self._prev  # last push's row is D[i-1]; overwrite the older one
-        if self.n == 0:
-            a.fill(np.inf)
-            a[0] = 2.0 * c[0]
-        else:
-            # a_j = min(D[i-1, j] + c_j, D[i-1, j-1] + 2 c_j): vertical and diagonal steps
-            np.add(prev, c, out=a)
-            np.multiply(c[1:], 2.0, out=self._tmp[1:])
-            self._tmp[1:] += prev[:-1]
-            np.minimum(a[1:], self._tmp[1:], out=a[1:])
+        np.add(prev_ext[:-1], c, out=a)
+        np.minimum(prev_ext[1:], a, out=a)
+        a += c
         if self.method == "scan":
             cum = np.cumsum(c, axis=0, out=self._tmp)
             np.subtract(a, cum, out=row)
@@ -124,16 +130,22 @@ class IncrementalDTW:
             for j in range(1, self.L):
                 np.add(row[j - 1], c[j], out=row[j])
                 np.minimum(row[j], a[j], out=row[j])
-        self._row, self._prev = row, prev
+        self._row = row
         self.n += 1
-        norm = np.add(self._steps, float(self.n), out=self._tmp)
-        np.divide(row, norm, out=norm)
+        recip = self._recip.get(self.n)
+        if recip is None:
+            recip = self._recip.setdefault(self.n, 1.0 / (self._steps[:, :1] + self.n))
+        norm = np.multiply(row, recip, out=self._tmp)
         norm += self._pad_inf
         if self.min_progress > 0:
             # best over positions j >= need - 1: a suffix minimum, then one row per template
-            first = np.minimum(self.lengths, int(np.ceil(self.min_progress * self.n))) - 1
-            suffix = np.minimum.accumulate(norm[::-1], axis=0)
-            np.take(suffix.ravel(), (self.L - 1 - first) * self.T + self._cols, out=self.scores)
+            key = (self.n, self.min_progress)
+            idx = self._take.get(key)
+            if idx is None:
+                first = np.minimum(self.lengths, int(np.ceil(self.min_progress * self.n))) - 1
+                idx = self._take.setdefault(key, (self.L - 1 - first) * self.T + self._cols)
+            suffix = np.minimum.accumulate(norm[::-1], axis=0, out=self._suffix)
+            np.take(suffix.ravel(), idx, out=self.scores)
         else:
             np.min(norm, axis=0, out=self.scores)
         return self.scores

@@ -30,7 +30,7 @@ import math
 import numpy as np
 
 from engine.recognition.dtw import IncrementalDTW
-from engine.recognition.templates import MIN_PROGRESS, Templates, activity, features
+from engine.recognition.templates import LOG_SCALE_G, MIN_PROGRESS, Templates, activity, features
 
 G = 9.81
 AUTO_MIN_MAIN = 3
@@ -42,6 +42,9 @@ GRAVITY_FOLLOW = 0.05  # how fast g follows the signal while the gate is closed
 # A template is only accepted once the motion has been at least this strong relative to the
 # template's own peak activity (a weak wiggle must not launch a punch just because its shape
 # resembles the punch's gentle first frames; a real punch gets there within a few frames).
+CLOSED_END = 1e9  # a min_progress that leaves only each template's last position
+# The consumed-template end needs the motion to have lasted this fraction of the template.
+COMPLETE_MIN_LENGTH = 0.6
 ENERGY_RATIO = 0.4
 
 IDLE, ACTIVE, DISCARD = "idle", "active", "discard"
@@ -64,8 +67,9 @@ class DualBufferRecognizer:
         reject: bool = True,
         dtw_method: str = "auto",
         min_progress: float = MIN_PROGRESS,
-        complete_fraction: float = 0.9,
+        complete_fraction: float = 0.0,
         complete_frames: int = 2,
+        closed_after: int = 1,
     ):
         if not isinstance(templates, Templates):
             raise TypeError("templates must be a Templates")
@@ -84,8 +88,10 @@ class DualBufferRecognizer:
         self.reject = bool(reject)
         self.complete_fraction = float(complete_fraction)
         self.complete_frames = int(complete_frames)
+        self.closed_after = int(closed_after) if closed_after > 0 else 1 << 30
         self.dim = templates.dim
         self.feature = templates.feature
+        self._feat = np.empty(self.dim)
 
         # Templates sorted by action so per-action minima are one reduceat.
         names = templates.action_names
@@ -99,6 +105,7 @@ class DualBufferRecognizer:
         cut = [self._cut_at_gate(templates, k) for k in order]
         self._peak_act = self._template_peaks(templates, order)
         self.template_lengths = np.array([len(c) for c in cut])
+        self.min_progress = float(min_progress)
         self.dtw = IncrementalDTW(cut, method=dtw_method, min_progress=min_progress)
         self.reset()
 
@@ -152,9 +159,9 @@ class DualBufferRecognizer:
         self.pending = False  # past the first decision point with nothing good enough yet
         self.discarded = 0
         self._g0 = None
-        self._velocity = np.zeros((self.dim // 3, 3))
+        self._velocity = [0.0] * self.dim
         self._peak_speed = 0.0
-        self._peak_dir = np.zeros(3)
+        self._peak_dir = [0.0, 0.0, 0.0]
         self._peak_g = 0.0
         self._peak_act_seen = 0.0
         self._done = 0
@@ -197,6 +204,7 @@ class DualBufferRecognizer:
             self.state = ACTIVE
             self.onset_frame = self.frame
             self._g0 = self.gravity.copy()
+            self._g0_list = self._g0.tolist()
             self.dtw.reset()
         self._step_active(x, valid, events)
         return events
@@ -217,7 +225,7 @@ class DualBufferRecognizer:
                 still_now = False
             gx, gy, gz = ax - g[k], ay - g[k + 1], az - g[k + 2]
             act += math.sqrt(gx * gx + gy * gy + gz * gz)
-        self._last = xs
+        self._last = self._xs = xs
         self._still = self._still + 1 if still_now else 0
         if self._still >= STILL_FRAMES:
             self.gravity[:] = x
@@ -232,10 +240,14 @@ class DualBufferRecognizer:
         self.count += 1
         self.quiet = 0 if valid else self.quiet + 1
         self._peak_act_seen = max(self._peak_act_seen, self._act)
-        self._track_speed(x)
+        self._track_speed()
         complete = False
         if self.count <= self.window:
-            scores = self.dtw.push(features(x, self._g0, self.feature))
+            # While the hand moves, the motion may be partial: open end (the query's end may sit
+            # anywhere past min_progress * n in a template). Once it is quiet the motion has
+            # probably ended, and the whole template must be matched (closed end).
+            self.dtw.min_progress = self.min_progress if (valid or self.quiet < self.closed_after) else CLOSED_END
+            scores = self.dtw.push(self._features(x))
             self._decide(scores, events)
             complete = self._complete(scores)
         if self.quiet >= self.null_frames or complete:
@@ -287,6 +299,9 @@ class DualBufferRecognizer:
         lo = self._action_starts[self.action]
         hi = self._action_starts[self.action + 1] if self.action + 1 < len(self._action_starts) else len(scores)
         k = lo + int(np.argmin(scores[lo:hi]))
+        if self.count < COMPLETE_MIN_LENGTH * self.template_lengths[k]:
+            self._done = 0  # too early: an alignment can jump to a template's end at the start
+            return False
         pos = self.dtw.position(k)
         self._done = self._done + 1 if pos + 1 >= self.complete_fraction * self.template_lengths[k] else 0
         return self._done >= self.complete_frames
@@ -302,20 +317,35 @@ class DualBufferRecognizer:
         first, second = np.partition(per_action, 1)[:2]
         return second > 0 and (second - first) / second >= self.auto_lead
 
-    def _track_speed(self, x: np.ndarray) -> None:
+    def _track_speed(self) -> None:
         """Integrate the gravity-removed acceleration since the onset: a rough hand velocity,
-        enough to tell a hard punch from a soft one (the paper's future work)."""
-        dyn = (x - self._g0).reshape(-1, 3)
-        v = self._velocity
-        v += dyn * (G / 60.0)
-        for k in range(v.shape[0]):
-            vx, vy, vz = v[k].tolist()
-            sp = math.sqrt(vx * vx + vy * vy + vz * vz)
-            dx, dy, dz = dyn[k].tolist()
+        enough to tell a hard punch from a soft one (the paper's future work). Plain floats."""
+        xs, g0, v = self._xs, self._g0_list, self._velocity
+        k_dt = G / 60.0
+        for k in range(0, len(xs), 3):
+            dx, dy, dz = xs[k] - g0[k], xs[k + 1] - g0[k + 1], xs[k + 2] - g0[k + 2]
             self._peak_g = max(self._peak_g, math.sqrt(dx * dx + dy * dy + dz * dz))
+            v[k] += dx * k_dt
+            v[k + 1] += dy * k_dt
+            v[k + 2] += dz * k_dt
+            sp = math.sqrt(v[k] * v[k] + v[k + 1] * v[k + 1] + v[k + 2] * v[k + 2])
             if sp > self._peak_speed:
                 self._peak_speed = sp
-                self._peak_dir = v[k] / sp
+                self._peak_dir = [v[k] / sp, v[k + 1] / sp, v[k + 2] / sp]
+
+    def _features(self, x: np.ndarray) -> np.ndarray:
+        """templates.features() for one frame, into a reused buffer (same values)."""
+        out = self._feat
+        if self.feature == "log":
+            np.abs(x, out=out)
+            out *= 1.0 / LOG_SCALE_G
+            np.log1p(out, out=out)
+            np.copysign(out, x, out=out)
+        elif self.feature == "dynamic":
+            np.subtract(x, self._g0, out=out)
+        else:
+            out[:] = x
+        return out
 
     def _event(self, kind: str, action: str | None, score: float | None, **extra) -> dict:
         ev: dict = {"event": kind, "action": action, "frame": self.frame}
@@ -327,7 +357,7 @@ class DualBufferRecognizer:
             ev["score"] = round(score, 5)
         if kind in ("start", "switch"):
             ev["speed"] = round(self._peak_speed, 3)
-            ev["direction"] = [round(float(v), 3) for v in self._peak_dir]
+            ev["direction"] = [round(v, 3) for v in self._peak_dir]
             ev["peak_g"] = round(self._peak_g, 3)
             ev["onset_frame"] = self.onset_frame
         ev.update({k: v for k, v in extra.items() if v})

@@ -47,7 +47,7 @@ class ReplaySource(Source):
             rel = self._rel[i] + lap * self._length
             if rel > elapsed:
                 break
-            out.append(Sample(self._start + rel / self.speed, self.rec.accel[i]))
+            out.append(Sample(float(self._start + rel / self.speed), self.rec.accel[i]))
             self._next += 1
         return out
 

@@ -7,12 +7,15 @@ Timing (the game's): a boxer that chooses an action plays its clip frames 0..F-1
 root moves by the clip's root_offset increment, expressed in its facing at the clip start.
 A hit lands when one of the attacker's AttackWindows covers the current frame, the target's
 root is within `reach` (+ body radius) ahead of the attacker and within a lateral tolerance,
-and the window has not landed yet. The target part is the first of the window's targets not
-covered by a GuardWindow of the defender at that frame (a guard covers only attacks from the
-front). Clean hits cost hp and interrupt the defender into a hit reaction; blocked hits cost a
-little; parried hits cost nothing and stagger the attacker when the library has a reaction
-for it. Boxers turn towards each other at a bounded rate while at the guard or stepping
-(the library has no turning clips) and cannot overlap.
+and the window has not landed yet. The punch aims at the window's first target; it is
+guarded when a GuardWindow of the defender covers that part at that frame (a guard covers
+only attacks from the front). Clean hits cost hp and interrupt the defender into the hit
+reaction hit_<part>_<side>_<light|heavy> (side: where the blow comes from, hooks from the
+side of the punching hand's opposite, others from the front; heavy from `heavy_damage`);
+guarded hits (block or parry) do `chip` of the damage, as the game's referee scores them; a
+parry also staggers the attacker when the library has a reaction for that. As in the game's
+session, every step each boxer turns `face_fraction` of the way towards the other (the library
+has no turning clips; steps are sideways) and the roots stay `min_separation` apart.
 """
 
 from __future__ import annotations
@@ -35,12 +38,13 @@ class BoutRules:
     """Numbers of the bout model that are not in the action library."""
 
     wait_frames: int = 8           # how long "guard" (waiting) lasts before choosing again
-    body_radius: float = 0.15      # a punch reaching this short of the root still lands
+    body_radius: float = 0.20      # fist + head capsule radii: a punch lands this far past its reach
     lateral_tolerance: float = 0.30
     guard_arc_deg: float = 60.0    # guards cover attacks from within this angle of the front
-    min_separation: float = 0.45
-    face_rate_deg: float = 6.0     # turning towards the other per step, at guard/stepping
-    chip: float = 0.15             # fraction of damage a blocked hit still does
+    min_separation: float = 0.75   # roots never closer (the game's MIN_GAP)
+    face_fraction: float = 0.2     # share of the way each boxer turns to face the other per step
+    chip: float = 0.2              # fraction of damage a guarded hit still does (the referee's)
+    heavy_damage: float = 9.0      # hits this strong play the heavy reaction
     hp: float = 100.0
 
     def as_dict(self) -> dict:
@@ -84,15 +88,24 @@ class ActionTable:
     win_end: np.ndarray           # (W,) last active frame
     guard_cover: np.ndarray       # (A, Fmax) bitmask
     guard_kind: np.ndarray        # (A, Fmax) GUARD_*
-    turns: np.ndarray             # (A,) bool: may turn towards the other (guard, steps)
     choices: np.ndarray           # action ids a boxer may choose (ACTION_NAMES + WAIT)
     wait: int
-    react_head: int
-    react_body: int
+    win_react: np.ndarray         # (W,) the reaction a clean hit of this window causes
     react_stagger: int            # -1 when the library has none
     spent_before: np.ndarray      # (A, Fmax + 1) bits of the windows over before this frame
     max_damage: float = 1.0
     attack_ids: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
+
+    def fingerprint(self) -> str:
+        """A hash of everything the bout model reads from the library: a graph built from
+        another library (changed timings, reaches, damage) is stale."""
+        import hashlib
+        h = hashlib.sha256("|".join(self.names).encode())
+        for arr in (self.frames, self.offset.round(6), self.window, self.win_reach.round(6),
+                    self.win_damage.round(6), self.win_targets, self.win_react, self.guard_cover,
+                    self.guard_kind):
+            h.update(np.ascontiguousarray(arr).tobytes())
+        return h.hexdigest()[:16]
 
     @property
     def ready_frame(self) -> int:
@@ -105,7 +118,8 @@ class ActionTable:
     @classmethod
     def from_library(cls, lib: dict, choosable: list[str], rules: BoutRules) -> ActionTable:
         """Compile `lib` (name -> Action). `choosable` are the names a boxer may pick."""
-        reactions = sorted(n for n, a in lib.items() if a.kind == "reaction")
+        # the knockdown ends a bout; it is never a state to decide in
+        reactions = sorted(n for n, a in lib.items() if a.kind == "reaction" and n != "knockdown")
         names = list(choosable) + [WAIT] + [n for n in reactions if n not in choosable]
         frames = []
         for n in names:
@@ -118,6 +132,7 @@ class ActionTable:
         cover = np.zeros((A, fmax), dtype=np.int64)
         gkind = np.zeros((A, fmax), dtype=np.int64)
         reach, damage, targets, slot, wend, win_action = [], [], [], [], [], []
+        win_hand, win_hook = [], []
         kinds = []
         for i, n in enumerate(names):
             F = int(frames[i])
@@ -139,7 +154,9 @@ class ActionTable:
                 window[i, s:e + 1] = len(reach)
                 reach.append(float(w.reach))
                 damage.append(float(w.damage))
-                targets.append(sum(PART_BITS.get(p, 0) for p in w.targets) or (HEAD | BODY))
+                targets.append(PART_BITS.get(w.targets[0], HEAD) if len(w.targets) else HEAD)
+                win_hand.append(w.hand)
+                win_hook.append("hook" in n)
                 slot.append(k)
                 wend.append(e)
                 win_action.append(i)
@@ -149,35 +166,36 @@ class ActionTable:
                 cover[i, s:e + 1] |= sum(PART_BITS.get(p, 0) for p in g.covers)
                 gkind[i, s:e + 1] = np.maximum(gkind[i, s:e + 1],
                                                GUARD_PARRY if g.kind == "parry" else GUARD_BLOCK)
-        turns = np.array([k in ("idle", "step") for k in kinds])
         spent_before = np.zeros((A, fmax + 1), dtype=np.int64)
         for wid in range(len(reach)):
             spent_before[win_action[wid], wend[wid] + 1:] |= 1 << slot[wid]
 
         def pick(*words: str) -> int:
-            for w in words:
+            """The first reaction whose name has all these words (else fewer of them)."""
+            for k in range(len(words), 0, -1):
                 for n in reactions:
-                    if w in n:
+                    if all(w in n.split("_") for w in words[:k]):
                         return names.index(n)
             return -1
 
-        react_head = pick("head", "hit")
-        react_body = pick("body", "hit")
-        if react_head < 0 and reactions:
-            react_head = names.index(reactions[0])
-        if react_body < 0:
-            react_body = react_head
-        if react_head < 0:
+        if not reactions:
             raise ValueError("the action library has no hit reaction (kind 'reaction')")
+        win_react = []
+        for k in range(len(reach)):
+            part = "head" if targets[k] == HEAD else "body"
+            side = ("left" if win_hand[k] == "r" else "right") if win_hook[k] else "front"
+            strength = "heavy" if damage[k] >= rules.heavy_damage else "light"
+            r = pick(part, side, strength)
+            win_react.append(r if r >= 0 else names.index(reactions[0]))
         damage_arr = np.array(damage, dtype=float)
         return cls(
             names=names, kinds=kinds, frames=frames, offset=offset, window=window,
             win_reach=np.array(reach, dtype=float), win_damage=damage_arr,
             win_targets=np.array(targets, dtype=np.int64), win_slot=np.array(slot, dtype=np.int64),
             win_end=np.array(wend, dtype=np.int64), guard_cover=cover, guard_kind=gkind,
-            turns=turns, spent_before=spent_before, choices=np.arange(len(choosable) + 1), wait=len(choosable),
-            react_head=react_head, react_body=react_body,
-            react_stagger=pick("stagger", "parried", "recoil"),
+            spent_before=spent_before, choices=np.arange(len(choosable) + 1), wait=len(choosable),
+            win_react=np.array(win_react, dtype=np.int64),
+            react_stagger=max(pick("stagger"), pick("parried")),
             max_damage=float(damage_arr.max()) if len(damage_arr) else 1.0,
             attack_ids=np.array([i for i, k in enumerate(kinds) if k == "attack"], dtype=np.int64),
         )
@@ -275,15 +293,20 @@ def step(b: Bouts, rules: BoutRules, rewards: Rewards) -> StepResult:
     rows = np.arange(n)
     prev_pos = b.pos.copy()
     prev_f = np.clip(b.frame, 0, None)
+    # every step each boxer turns part of the way to face the other (the game does the same)
+    dv = b.pos[:, 1] - b.pos[:, 0]
+    head0 = np.arctan2(dv[:, 0], dv[:, 1])
+    heads = np.stack([head0, head0 + math.pi], axis=1)
+    b.base_yaw += rules.face_fraction * wrap_angle(heads - b.yaw)
     b.frame += 1
     f = np.minimum(b.frame, t.offset.shape[1] - 1)
-    # root motion: the clip's increment, in the facing at the clip start
+    # root motion: the clip's increment, in the facing at the clip start (plus turns since)
     delta = t.offset[b.act, f] - t.offset[b.act, prev_f]
     delta[b.frame == 0] = 0.0
     c, s = np.cos(b.base_yaw), np.sin(b.base_yaw)
     b.pos[..., 0] += delta[..., 0] * c + delta[..., 1] * s
     b.pos[..., 1] += -delta[..., 0] * s + delta[..., 1] * c
-    # no overlap
+    # the roots keep apart (the bodies clinch, they do not merge)
     dv = b.pos[:, 1] - b.pos[:, 0]
     dist = np.hypot(dv[:, 0], dv[:, 1])
     push = np.maximum(rules.min_separation - dist, 0.0) / 2
@@ -291,15 +314,7 @@ def step(b: Bouts, rules: BoutRules, rewards: Rewards) -> StepResult:
     unit[dist < 1e-9] = (0.0, 1.0)
     b.pos[:, 0] -= unit * push[:, None]
     b.pos[:, 1] += unit * push[:, None]
-    # turn towards the other while at the guard or stepping
-    head0 = np.arctan2(dv[:, 0], dv[:, 1])
-    heads = np.stack([head0, head0 + math.pi], axis=1)
     yaw = b.yaw
-    err = wrap_angle(heads - yaw)
-    rate = math.radians(rules.face_rate_deg)
-    turn = np.clip(err, -rate, rate) * t.turns[b.act]
-    b.base_yaw += turn
-    yaw = yaw + turn
 
     gain = np.zeros((n, 2))
     # running away: moving further off when already far
@@ -339,7 +354,7 @@ def step(b: Bouts, rules: BoutRules, rewards: Rewards) -> StepResult:
             guarded = hit & (open_ == 0)
             parried = guarded & (kind == GUARD_PARRY)
             dmg = t.win_damage[wi]
-            took = np.where(clean, dmg, np.where(guarded & ~parried, rules.chip * dmg, 0.0))
+            took = np.where(clean, dmg, np.where(guarded, rules.chip * dmg, 0.0))
             damage = took
             b.hp -= took[:, ::-1]
             landed = clean.astype(float)
@@ -351,7 +366,7 @@ def step(b: Bouts, rules: BoutRules, rewards: Rewards) -> StepResult:
             gain += np.where(parried, rewards.parry_credit * dmg, 0.0)[:, ::-1]
             b.spent |= np.where(hit, 1 << slot, 0)
             # reactions: a clean hit interrupts the defender, a parry staggers the attacker
-            react = np.where(open_ & HEAD, t.react_head, t.react_body)
+            react = t.win_react[wi]
             for i in (0, 1):
                 o = 1 - i
                 r = np.flatnonzero(clean[:, i])

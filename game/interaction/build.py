@@ -3,19 +3,21 @@
 1. **Sampling.** Many bouts run at once in the bout model with a mixed policy (uniformly
    random actions, and the greedy "attack when in reach" one); every decision (a boxer back
    at the guard) is recorded as a state seen by that boxer.
-2. **Merging and selection.** Samples in the same grid cell are one state (the grid steps are
-   the merge threshold); the cells visited most often are kept, up to `states`; a state's
-   continuous features are the mean of its samples.
-3. **Edges.** From every kept state, every choosable action is simulated in the bout model
-   until the next decision of either boxer; the edge carries the action, the reward, the
-   steps it took and the nearest kept state it ends in. Expanding every action (not only the
-   sampled ones) gives each state its full choice for the dynamic programming; states that
-   no edge reaches are counted in the build info.
+2. **Merging.** Samples in the same grid cell are one state (the grid steps are the merge
+   threshold); a state's continuous features are the mean of its samples. The most visited
+   cells (`candidate_factor` x `states`) are candidates.
+3. **Edges and selection.** From every candidate, every choosable action is simulated in the
+   bout model until the next decision of either boxer. Candidates that some other state's
+   edge reaches are preferred (well connected), then the most visited; `states` are kept and
+   their edges re-mapped to the nearest kept state. An edge carries the action, the reward,
+   the steps it took, the state it ends in and whose turn that is. Expanding every action
+   (not only the sampled ones) gives each state its full choice for the dynamic programming.
 4. **Dynamic programming** (solve.py) gives one best action per state.
 """
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass
 
@@ -41,7 +43,8 @@ class BuildParams:
     max_rounds: int = 12           # sampling rounds at most (each: `bouts` x `bout_steps`)
     sample_factor: float = 1.3     # sample until this many x `states` distinct cells exist
     greedy_share: float = 0.35     # share of sampled decisions taken by the greedy policy
-    opponent_max: float = 1.0      # 1: min-max; 0: the opponent's expectation (random)
+    candidate_factor: float = 1.15  # cells expanded before keeping the best connected `states`
+    opponent_max: float = 0.5      # 1: min-max; 0: the opponent's expectation (random)
 
 
 def compile_table(lib: dict, rules: BoutRules) -> ActionTable:
@@ -142,9 +145,11 @@ def select_states(samples, grid: StateGrid, n_states: int):
     return uniq[keep], feat, other_action, other_frame, visits[keep]
 
 
-def expand_edges(t: ActionTable, index: StateIndex, feat, other_action, other_frame,
+def expand_edges(t: ActionTable, feat, other_action, other_frame,
                  rules: BoutRules, rewards: Rewards):
-    """Every choosable action from every state, simulated to the next decision."""
+    """Every choosable action from every state, simulated to the next decision. Returns per
+    edge (grouped by source state, len(choices) each): the ending situation (d, bs, bo,
+    other action, other frame), the action, reward, steps and whether it flips the turn."""
     S = len(feat)
     C = len(t.choices)
     E = S * C
@@ -186,10 +191,22 @@ def expand_edges(t: ActionTable, index: StateIndex, feat, other_action, other_fr
         k += 1
         if k > 10 * int(t.frames.max()) + 100:
             raise RuntimeError("edge simulation did not reach a decision")
-    dst = index.nearest_many(res[:, 0], res[:, 1], res[:, 2], res[:, 3].astype(np.int64),
-                             res[:, 4].astype(np.int64))
-    indptr = np.arange(S + 1) * C
-    return indptr, dst, action, reward, steps, flip
+    return res, action, reward, steps, flip
+
+
+def map_edges(index: StateIndex, res: np.ndarray) -> np.ndarray:
+    """The state each edge ends in: the nearest state of its ending situation."""
+    return index.nearest_many(res[:, 0], res[:, 1], res[:, 2], res[:, 3].astype(np.int64),
+                              res[:, 4].astype(np.int64))
+
+
+def prefer_connected(keys, visits, dst, C: int, n: int) -> np.ndarray:
+    """Indices of the `n` candidates to keep: first those some other state's edge reaches
+    (well connected), then by visits (often visited), then by key (deterministic)."""
+    src = np.arange(len(dst)) // C
+    indeg = np.bincount(dst[dst != src], minlength=len(keys))
+    order = np.lexsort((keys, -visits.astype(np.int64), (indeg == 0)))
+    return np.sort(order[:n])
 
 
 def build_graph(lib: dict, params: BuildParams | None = None, rules: BoutRules | None = None,
@@ -205,20 +222,30 @@ def build_graph(lib: dict, params: BuildParams | None = None, rules: BoutRules |
     t = compile_table(lib, rules)
     samples, rounds = sample_states(t, grid, params, rules, rewards, rng, log)
     t1 = time.perf_counter()
-    keys, feat, oact, oframe, visits = select_states(samples, grid, params.states)
-    index = StateIndex(grid, keys, ready_action=t.wait)
+    # candidates: the most visited cells, a few more than wanted
+    n_cand = int(math.ceil(params.candidate_factor * params.states))
+    keys, feat, oact, oframe, visits = select_states(samples, grid, n_cand)
+    res, action, reward, steps, flip = expand_edges(t, feat, oact, oframe, rules, rewards)
+    C = len(t.choices)
+    dst = map_edges(StateIndex(grid, keys, ready_action=t.wait), res)
+    keep = prefer_connected(keys, visits, dst, C, params.states)
     if log:
-        log(f"kept {len(keys)} states of {len(np.unique(samples[0]))} cells")
-    indptr, dst, action, reward, steps, flip = expand_edges(t, index, feat, oact, oframe, rules, rewards)
+        log(f"kept {len(keep)} states of {len(keys)} candidates ({len(np.unique(samples[0]))} cells)")
+    keys, feat, oact, oframe, visits = keys[keep], feat[keep], oact[keep], oframe[keep], visits[keep]
+    rows = (keep[:, None] * C + np.arange(C)[None, :]).ravel()
+    res, action, reward, steps, flip = res[rows], action[rows], reward[rows], steps[rows], flip[rows]
+    index = StateIndex(grid, keys, ready_action=t.wait)
+    dst = map_edges(index, res)
+    indptr = np.arange(len(keys) + 1) * C
     t2 = time.perf_counter()
     sol = solve(indptr, dst, reward, rewards.discount ** steps, flip, opponent_max=params.opponent_max)
     t3 = time.perf_counter()
     unreached = int(len(keys) - len(np.unique(dst)))
     info = {
-        "seed": params.seed, "states_requested": params.states, "sampling_bouts": params.bouts,
+        "library": t.fingerprint(), "seed": params.seed, "states_requested": params.states, "sampling_bouts": params.bouts,
         "bout_steps": params.bout_steps, "sampling_rounds": rounds,
         "samples": int(len(samples[0])), "cells_sampled": int(len(np.unique(samples[0]))),
-        "greedy_share": params.greedy_share, "opponent_max": params.opponent_max,
+        "candidates": int(n_cand), "greedy_share": params.greedy_share, "opponent_max": params.opponent_max,
         "states_unreached": unreached, "vi_iterations": sol.iterations,
         "vi_residual": sol.residual,
         "seconds": {"sampling": round(t1 - t0, 2), "edges": round(t2 - t1, 2),
@@ -226,7 +253,7 @@ def build_graph(lib: dict, params: BuildParams | None = None, rules: BoutRules |
     }
     return GraphTable(
         action_names=list(t.names), n_choices=len(t.choices), keys=keys,
-        features=feat.astype(np.float32), other_action=oact, other_frame=oframe,
+        features=feat, other_action=oact, other_frame=oframe,
         visits=visits, best_action=action[sol.best_edge], value=sol.value.astype(np.float32),
         edge_ptr=indptr, edge_dst=dst, edge_action=action, edge_steps=steps,
         edge_flip=flip, edge_reward=reward.astype(np.float32),

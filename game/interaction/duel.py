@@ -60,8 +60,10 @@ def duel(graph: InteractionGraph, lib: dict, opponent: str = "random", bouts: in
         raise ValueError(f"policies are {', '.join(OPPONENTS)}")
     rules, rewards = graph.table.rules, graph.table.rewards
     table = compile_table(lib, rules)
-    if table.names != graph.names:
-        raise ValueError("the graph was built from a different action library; rebuild it")
+    built_from = graph.table.build.get("library")
+    if table.names != graph.names or (built_from and built_from != table.fingerprint()):
+        raise ValueError("the graph was built from a different action library; rebuild it "
+                         "(quickjab graph build -o game/assets/graph.npz)")
     rng = np.random.default_rng(seed)
     b = Bouts(table, bouts)
     b.place(rng.uniform(1.6, 2.0, bouts), rng.normal(0, 0.05, bouts), rng.normal(0, 0.05, bouts))

@@ -52,10 +52,14 @@ class InteractionGraph:
         return self.index.nearest(s.distance, s.bearing_self, s.bearing_other, aid, frame)
 
     def best_action(self, s: Situation) -> str:
-        """One of ACTION_NAMES, or "guard" to wait."""
+        """One of ACTION_NAMES, or "guard" to wait (also for a situation with NaN or
+        infinite numbers, which a glitching body could produce: the loop must not crash)."""
         aid, frame = self.other_code(s.other_action, s.other_phase)
-        return self._best_names[self.index.nearest(s.distance, s.bearing_self, s.bearing_other,
-                                                   aid, frame)]
+        try:
+            sid = self.index.nearest(s.distance, s.bearing_self, s.bearing_other, aid, frame)
+        except (ValueError, OverflowError):
+            return IDLE
+        return self._best_names[sid]
 
     def best_action_id(self, distance: float, bearing_self: float, bearing_other: float,
                        other_id: int, other_frame: float) -> int:

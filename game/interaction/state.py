@@ -61,8 +61,8 @@ def relative_pose(self_xz, self_yaw, other_xz, other_yaw):
 class StateGrid:
     """Quantization of the continuous state parts; the cell size is the merge threshold."""
 
-    distance_step: float = 0.05      # metres
-    angle_step_deg: float = 10.0     # degrees, both bearings
+    distance_step: float = 0.025     # metres
+    angle_step_deg: float = 5.0      # degrees, both bearings
     phase_step: int = 1              # clip frames
     distance_max: float = 4.0        # beyond this, all distances share the last bin
     max_frames: int = 256            # upper bound of any action's length (sizes the key)

@@ -7,7 +7,7 @@ Arrays (S states, E edges grouped by source state, edge_ptr[s]:edge_ptr[s+1] are
 | meta | () str | JSON: format, version, grid, bout rules, rewards, build info |
 | action_names | (A,) str | the bout model's actions; ids below index this |
 | keys | (S,) int64 | grid cell of each state (state.StateGrid.key), ascending |
-| features | (S, 3) float32 | mean distance, bearing_self, bearing_other of its samples |
+| features | (S, 3) float64 | mean distance, bearing_self, bearing_other of its samples (float64: each stays inside its own cell) |
 | other_action, other_frame | (S,) int16 | what the other boxer is doing |
 | visits | (S,) int32 | samples merged into the state |
 | best_action | (S,) int16 | the solved policy |
@@ -18,7 +18,8 @@ Arrays (S states, E edges grouped by source state, edge_ptr[s]:edge_ptr[s+1] are
 | edge_steps | (E,) uint8 | 60 Hz steps until the next decision |
 | edge_flip | (E,) bool | the next decision is the other boxer's |
 | edge_reward | (E,) float32 | the chooser's reward along the edge |
-| fill_keys, fill_state | (F,) int64, int32 | nearest state of every cell next to a sampled one (lookup.py) |
+| fill_key_steps | (F,) int64 | the look-up fill's cell keys, delta-coded (cumsum gives them, ascending) |
+| fill_state | (F,) int32 | the nearest state of each of those cells (lookup.py) |
 """
 
 from __future__ import annotations
@@ -37,7 +38,7 @@ from .bout import BoutRules, Rewards
 from .state import StateGrid
 
 FORMAT = "quickjab-interaction-graph"
-VERSION = 1
+VERSION = 2
 
 
 class GraphFileError(InputError):
@@ -90,7 +91,7 @@ class GraphTable:
                 meta=np.array(json.dumps(self.meta(), sort_keys=True)),
                 action_names=np.array(self.action_names, dtype=str),
                 keys=self.keys.astype(np.int64),
-                features=self.features.astype(np.float32),
+                features=self.features.astype(np.float64),
                 other_action=self.other_action.astype(np.int16),
                 other_frame=self.other_frame.astype(np.int16),
                 visits=self.visits.astype(np.int32),
@@ -102,7 +103,7 @@ class GraphTable:
                 edge_steps=np.minimum(self.edge_steps, 255).astype(np.uint8),
                 edge_flip=self.edge_flip.astype(bool),
                 edge_reward=self.edge_reward.astype(np.float32),
-                fill_keys=self.fill_keys.astype(np.int64),
+                fill_key_steps=np.diff(self.fill_keys.astype(np.int64), prepend=0),
                 fill_state=self.fill_state.astype(np.int32),
             )
 
@@ -125,7 +126,7 @@ class GraphTable:
 
         need = ["meta", "action_names", "keys", "features", "other_action", "other_frame",
                 "visits", "best_action", "value", "edge_ptr", "edge_dst", "edge_action",
-                "edge_steps", "edge_flip", "edge_reward", "fill_keys", "fill_state"]
+                "edge_steps", "edge_flip", "edge_reward", "fill_key_steps", "fill_state"]
         missing = [k for k in need if k not in a]
         if missing:
             raise bad(f"missing {', '.join(missing)}")
@@ -152,7 +153,7 @@ class GraphTable:
             and a["edge_ptr"].shape == (S + 1,)
             and all(a[k].shape == (E,) for k in ("edge_action", "edge_steps", "edge_flip",
                                                   "edge_reward"))
-            and a["fill_keys"].ndim == 1 and a["fill_state"].shape == a["fill_keys"].shape
+            and a["fill_key_steps"].ndim == 1 and a["fill_state"].shape == a["fill_key_steps"].shape
         )
         if not shapes_ok:
             raise bad("array shapes disagree")
@@ -168,7 +169,8 @@ class GraphTable:
         if a["best_action"].min() < 0 or a["best_action"].max() >= A or \
                 (E and a["edge_action"].max() >= A):
             raise bad("an action id outside action_names")
-        if (np.diff(a["keys"]) <= 0).any() or (np.diff(a["fill_keys"]) <= 0).any():
+        steps = a["fill_key_steps"].astype(np.int64)
+        if (np.diff(a["keys"]) <= 0).any() or (steps[1:] <= 0).any() or (steps[:1] < 0).any():
             raise bad("keys not strictly ascending")
         if len(a["fill_state"]) and (a["fill_state"].min() < 0 or a["fill_state"].max() >= S):
             raise bad("the look-up fill points outside the states")
@@ -182,5 +184,5 @@ class GraphTable:
             best_action=a["best_action"].astype(np.int64), value=a["value"],
             edge_ptr=ptr, edge_dst=a["edge_dst"], edge_action=a["edge_action"],
             edge_steps=a["edge_steps"], edge_flip=a["edge_flip"], edge_reward=a["edge_reward"],
-            fill_keys=a["fill_keys"].astype(np.int64), fill_state=a["fill_state"],
+            fill_keys=np.cumsum(steps), fill_state=a["fill_state"],
             grid=grid, rules=rules, rewards=rewards, build=meta.get("build", {}))

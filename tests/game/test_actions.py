@@ -160,3 +160,16 @@ def test_bad_action_file_names_itself(tmp_path):
     path.write_text("{not json")
     with pytest.raises(ActionError, match="broken.json"):
         load_action(path)
+
+
+def test_contact_sheet_command_draws_every_action(tmp_path):
+    import pygame
+
+    from game.cli import main
+
+    out = tmp_path / "sheet.png"
+    assert main(["actions", "sheet", "-o", str(out)]) == 0
+    image = pygame.image.load(str(out))
+    w, h = image.get_size()
+    rows = (len(LIB) + 1) // 2
+    assert w > 1000 and h > rows * 200  # one strip of key frames per action, two per row

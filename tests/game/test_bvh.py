@@ -137,3 +137,14 @@ def test_bvh_commands(tmp_path, shared_data, capsys):
     from game.actions import load_action
 
     assert load_action(js).frames == 51
+
+
+def test_a_simulated_bout_exports_one_bvh_per_boxer(tmp_path):
+    out = tmp_path / "bout.bvh"
+    assert main(["bvh", "export", "--play", "straight_l,straight_r", "--opponent", "block", "-o", str(out)]) == 0
+    a, b = read_bvh(tmp_path / "bout_boxer0.bvh"), read_bvh(tmp_path / "bout_boxer1.bvh")
+    assert a.frames == b.frames > LIB["straight_l"].frames + LIB["straight_r"].frames
+    pa, pb = bvh_positions_ours(a), bvh_positions_ours(b)
+    # both in one world frame: boxer 0 at -z, boxer 1 at +z, facing each other
+    assert pa[0, 0, 2] < 0 < pb[0, 0, 2]
+    assert np.abs(bone_lengths(pa) / BONE_LENGTHS - 1).max() < 0.05  # simulated bodies keep their bones

@@ -132,7 +132,7 @@ def test_out_of_reach_misses_and_a_block_covers(lib):
     t, b = _facing_pair(lib, 0.9)
     landed = _play(b, t, "straight_r", "block", 12)
     assert landed.sum() == 0
-    assert b.hp[0, 1] == pytest.approx(100 - 0.15 * 8.0)     # chip damage only
+    assert b.hp[0, 1] == pytest.approx(100 - 0.2 * 8.0)      # chip damage only
 
 
 def test_actions_take_their_frames_and_move_the_root(lib):
@@ -280,6 +280,12 @@ def test_fill_and_scan_agree_with_brute_force(small_graph):
     many = g.index.nearest_many(d, bs, bo, act, frame)
     peer = [g.index.brute_force(d[i], bs[i], bo[i], int(act[i]), int(frame[i])) for i in range(n)]
     np.testing.assert_array_equal(many, peer)
+
+
+def test_a_broken_situation_means_wait(small_graph):
+    for bad in (math.nan, math.inf):
+        assert small_graph.best_action(Situation(bad, 0.0, 0.0, 0.0, "guard", 0, "guard", 0)) == "guard"
+        assert small_graph.best_action(Situation(1.0, bad, 0.0, 0.0, "guard", 0, "jab", bad)) == "guard"
 
 
 def test_idle_other_is_ready(small_graph):

@@ -95,3 +95,18 @@ def test_experienced_trials_are_told_apart_by_dtw():
             right += best[1] == name
             total += 1
     assert right / total >= 0.9
+
+
+def test_stream_rests_then_performs_on_demand():
+    from game.virtual_player import VirtualPlayerStream
+
+    vp = VirtualPlayerStream(LIB, "experienced", np.random.default_rng(0))
+    rest = np.array([vp.next_frame() for _ in range(30)])
+    assert vp.performing is None
+    assert np.allclose(np.linalg.norm(rest, axis=-1).mean(), 1.0, atol=0.03)
+    n = vp.perform("straight_r")
+    assert vp.performing == "straight_r"
+    sig = np.array([vp.next_frame() for _ in range(n)])
+    assert np.linalg.norm(sig[:, 0] - rest[0, 0], axis=-1).max() > 1.0  # the Wiimote hand punches
+    vp.next_frame()
+    assert vp.performing is None

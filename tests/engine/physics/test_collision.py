@@ -198,3 +198,30 @@ def test_fast_fist_that_passes_the_head_centre_in_one_step_is_turned_back():
     np.testing.assert_allclose(c.normal, (0.0, 0.0, -1.0), atol=1e-9)  # head -> fist: back along -z
     assert c.rel_speed == pytest.approx(15.0, rel=1e-6)
     assert w.x[1, 2] < w.x[0, 2] - 0.17 + 0.002  # the fist is in front of the head, not behind it
+
+
+def test_a_lasting_touch_is_new_only_on_its_first_step():
+    w = World(gravity=(0, 0, 0), ground_y=-10.0, damping=0.0)
+    _ball(w, (0.0, 1.0, 0.0), "a", mass=1e6)  # a wall
+    _ball(w, (0.6, 1.0, 0.0), "b")
+    w.step(DT)
+    flags = []
+    for i in range(40):
+        # b pressed against a for 20 steps, then pulled away, then pressed again
+        w.set_targets(1, [[0.2 if (i < 20 or i >= 30) else 0.8, 1.0, 0.0]], 6.0)
+        flags += [c.new for c in w.step(DT)]
+    assert flags.count(True) == 2 and len(flags) > 10  # two touches, each new once
+    assert flags[0] is True and flags[1] is False
+
+
+def test_fast_fist_from_close_range_is_turned_back_too():
+    """The same from 3 cm away (already within the contact margin, a jab from a clinch)."""
+    w = World(gravity=(0, 0, 0), ground_y=-10.0, damping=0.0, max_speed=20.0)
+    _ball(w, (0.0, 1.6, 0.0), "head", radius=0.11, mass=5.0)
+    _ball(w, (0.0, 1.6, -0.20), "fist_r", radius=0.06, mass=1.0)  # 3 cm outside the head
+    assert w.step(DT) == []
+    w.x_prev[1] = w.x[1] - (0.0, 0.0, 15.0 * DT)  # next at z = +0.05, past the centre
+    (c,) = w.step(DT)
+    np.testing.assert_allclose(c.normal, (0.0, 0.0, -1.0), atol=1e-9)
+    assert c.rel_speed == pytest.approx(15.0, rel=1e-6)
+    assert w.x[1, 2] < w.x[0, 2] - 0.17 + 0.002

@@ -283,3 +283,18 @@ def test_damping_is_per_second_not_per_step():
         return float(w.velocity(dt)[0, 0])
     assert speed_after_1s(1 / 60) == pytest.approx(2.0 * 0.95**60, rel=1e-9)
     assert speed_after_1s(1 / 120) == pytest.approx(speed_after_1s(1 / 60), rel=1e-9)
+
+
+def test_changing_the_gains_takes_effect():
+    """set_targets caches the gains it was last given; a change must still reach the step."""
+    def run(gains):
+        w = World(gravity=(0, 0, 0), ground_y=-100.0)
+        b = add_humanoid(w)
+        for g in gains:
+            w.set_targets(b, GUARD + 0.1, *g)
+            w.step(DT)
+        return w.x.copy()
+    per_particle = np.full(17, 8.0)
+    np.testing.assert_array_equal(run([(2.0, 1.0), (8.0, 1.0)]), run([(2.0, 1.0), (per_particle, 1.0)]))
+    assert not np.array_equal(run([(2.0, 1.0), (8.0, 1.0)]), run([(2.0, 1.0), (2.0, 1.0)]))
+    assert not np.array_equal(run([(8.0, 1.0), (8.0, 0.3)]), run([(8.0, 1.0), (8.0, 1.0)]))

@@ -1,0 +1,147 @@
+"""Source URLs and schemes, the replay source under a virtual clock, the demo source, and the
+measured sample rate."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import engine.sensors.source as source_mod
+from engine.clock import VirtualClock
+from engine.errors import InputError
+from engine.recording import Recording, RecordingError, write_recording
+from engine.sensors import (
+    Sample,
+    Source,
+    SourceError,
+    SourceState,
+    open_source,
+    parse_source_url,
+    register_scheme,
+)
+from engine.sensors.rate import RateMeter
+
+
+def test_parse_source_url():
+    assert parse_source_url("serial:///dev/ttyACM0") == ("serial", "/dev/ttyACM0", {})
+    assert parse_source_url("replay://rec.csv?speed=2&loop=1") == ("replay", "rec.csv", {"speed": "2", "loop": "1"})
+    assert parse_source_url("REPLAY://a/b.csv")[0] == "replay"
+
+
+@pytest.mark.parametrize("url", ["nosuch://x", "rec.csv", "", "replay:/x.csv"])
+def test_open_source_rejects_unknown_schemes_and_non_urls(url):
+    with pytest.raises(SourceError) as err:
+        open_source(url)
+    assert isinstance(err.value, InputError)
+    assert repr(url) in str(err.value) or url.split(":")[0] in str(err.value)
+
+
+def test_unknown_scheme_lists_the_known_ones():
+    with pytest.raises(SourceError, match="replay"):
+        open_source("nosuch://x")
+
+
+def test_builtin_scheme_whose_module_is_missing_is_a_source_error(monkeypatch):
+    monkeypatch.setitem(source_mod._builtin_modules, "ghost", "engine.sensors.ghost_that_is_not_there")
+    with pytest.raises(SourceError, match="ghost://"):
+        open_source("ghost://x")
+
+
+def test_outside_packages_register_their_own_schemes(monkeypatch):
+    class Const(Source):
+        def poll(self) -> list[Sample]:
+            return [Sample(self.clock(), np.ones((1, 3)))]
+
+    monkeypatch.setitem(source_mod._factories, "const", None)  # restored after the test
+    register_scheme("CONST", lambda url, clock: Const(url=url, sensors=1, clock=clock, state=SourceState.CONNECTED))
+    src = open_source("const://", clock=lambda: 7.0)
+    assert src.poll()[0].t == 7.0 and "const" in source_mod.registered_schemes()
+
+
+def write_rec(tmp_path, n=10, rate=100.0, sensors=2):
+    t = np.arange(n) / rate
+    accel = np.arange(n * sensors * 3, dtype=float).reshape(n, sensors, 3) / 100
+    path = tmp_path / "rec.csv"
+    write_recording(path, Recording(t, accel, [("jab" if i >= 5 else "") for i in range(n)]))
+    return path, accel
+
+
+def test_replay_under_a_virtual_clock_delivers_samples_when_due(tmp_path):
+    path, accel = write_rec(tmp_path)
+    clock = VirtualClock(start_ns=5_000_000_000)
+    src = open_source(f"replay://{path}", clock=clock.seconds)
+    assert src.state is SourceState.CONNECTED and src.sensors == 2
+    assert src.rate_hz == pytest.approx(100.0)
+    first = src.poll()
+    assert [s.t for s in first] == [5.0]  # sample 0 is due at once
+    clock.advance(25_000_000)
+    got = src.poll()
+    assert [round(s.t - 5.0, 6) for s in got] == [0.01, 0.02]
+    np.testing.assert_array_equal(got[1].accel, accel[2])
+    assert src.poll() == []  # nothing new: never waits, never repeats
+    clock.advance(1_000_000_000)
+    last = src.poll()
+    assert len(last) == 7 and all(isinstance(s.t, float) for s in last)
+    assert src.state is SourceState.ENDED  # everything delivered: a state, not an exception
+    assert src.poll() == []
+    assert src.label_at(5.06) == "jab" and src.label_at(5.02) == ""
+
+
+def test_replay_speed_and_loop(tmp_path):
+    path, _ = write_rec(tmp_path)
+    clock = VirtualClock()
+    fast = open_source(f"replay://{path}?speed=2", clock=clock.seconds)
+    looped = open_source(f"replay://{path}?loop=1", clock=clock.seconds)
+    clock.advance(45_000_000)
+    assert len(fast.poll()) == 10  # 90 ms of recording in 45 ms
+    clock.advance(200_000_000)
+    times = [s.t for s in looped.poll()]
+    assert len(times) == 25 and np.all(np.diff(times) > 0)  # 2.5 loops, time keeps increasing
+    assert looped.state is SourceState.CONNECTED
+
+
+@pytest.mark.parametrize("url,match", [("replay://{p}?speed=0", "speed"), ("replay://{p}?speed=x", "speed"), ("replay://", "no file")])
+def test_replay_bad_arguments(tmp_path, url, match):
+    path, _ = write_rec(tmp_path)
+    with pytest.raises(SourceError, match=match):
+        open_source(url.format(p=path))
+
+
+def test_replay_of_a_bad_file_names_it(tmp_path):
+    bad = tmp_path / "bad.csv"
+    bad.write_text("t,rx,ry,rz\n0,1,2,3\n0.1,x,2,3\n")
+    with pytest.raises(RecordingError, match="bad.csv:3"):
+        open_source(f"replay://{bad}")
+
+
+def test_demo_source_is_deterministic_and_two_handed():
+    runs = []
+    for _ in range(2):
+        clock = VirtualClock()
+        src = open_source("demo://?rate=200", clock=clock.seconds)
+        got = []
+        for _ in range(90):
+            clock.advance(16_666_667)
+            got += src.poll()
+        runs.append(got)
+    a, b = runs
+    assert len(a) == len(b) == 301  # samples 0..300 at 200 Hz in 1.5 s
+    assert all(x.t == y.t and np.array_equal(x.accel, y.accel) for x, y in zip(a, b, strict=True))
+    acc = np.array([s.accel for s in a])
+    assert acc.shape == (301, 2, 3)
+    assert np.abs(acc[:, :, 2].mean() - 1.0) < 0.2  # gravity on z at rest
+    assert acc[:, 0, 0].max() > 1.5 and acc[:, 1, 0].max() > 1.5  # both hands punch
+    with pytest.raises(SourceError):
+        open_source("demo://?rate=-1")
+
+
+def test_rate_meter_measures_samples_per_second():
+    m = RateMeter(window_s=1.0)
+    assert m.rate_hz() == 0.0
+    m.add([Sample(i / 430, None) for i in range(1000)])
+    assert m.rate_hz() == pytest.approx(430, rel=0.01)
+    assert m.rate_hz(now=1000 / 430 + 5) == 0.0  # gone quiet
+    jitter = np.cumsum(np.random.default_rng(0).uniform(0.02, 0.06, 200))  # ~25 Hz gloves
+    m2 = RateMeter()
+    m2.add([Sample(float(t), None) for t in jitter])
+    assert m2.rate_hz() == pytest.approx(25, rel=0.2)

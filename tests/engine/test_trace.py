@@ -1,0 +1,182 @@
+"""The Chrome trace: valid JSON in the Trace Event Format with properly nested events (every
+stage inside its frame, spans inside their stage), µs units, required keys, M and C events."""
+
+from __future__ import annotations
+
+import json
+import time
+
+import pytest
+
+from engine.budget import FrameBudget
+from engine.clock import RealClock, VirtualClock
+from engine.errors import InputError
+from engine.loop import FixedStepLoop
+from engine.trace import chrome_trace, read_chrome_trace, write_chrome_trace
+
+EPS_US = 1e-3  # ts and dur are ns / 1000 in floating point
+
+
+def traced_loop(clock=None, frames: int = 40, capacity: int = 3600) -> FixedStepLoop:
+    clock = clock or VirtualClock()
+    loop = FixedStepLoop(clock=clock, auto_freeze_gc=False, budget=FrameBudget(capacity_frames=capacity))
+
+    def sense(step: int, dt: float) -> None:
+        with loop.span("sense.decode"):
+            with loop.span("sense.decode.crc"):
+                sum(range(300))
+        if step == 20 and isinstance(clock, VirtualClock):
+            clock.stall(150_000_000)  # dropped steps for the counter
+
+    def sleepy(step: int, dt: float) -> None:
+        if step % 10 == 0:
+            time.sleep(0.002)  # a known lower bound on a duration, to check the units
+
+    loop.add_stage("sense", sense, budget_ms=1.0)
+    loop.add_stage("physics", sleepy, budget_ms=1.0)
+
+    def render(alpha: float) -> None:
+        with loop.span("render.hud"):
+            sum(range(200))
+
+    loop.set_render(render, budget_ms=8.0, name="render")
+    loop.run(frames=frames)
+    return loop
+
+
+def check_chrome_trace(doc: dict) -> None:
+    """Structural validation of a QuickJab Chrome trace; raises AssertionError."""
+    assert isinstance(doc, dict) and isinstance(doc["traceEvents"], list)
+    events = doc["traceEvents"]
+    for ev in events:
+        for key in ("ph", "name", "pid", "tid"):
+            assert key in ev, (key, ev)
+        assert ev["ph"] in ("X", "C", "M")
+        if ev["ph"] in ("X", "C"):
+            assert isinstance(ev["ts"], (int, float)) and ev["ts"] >= 0
+        if ev["ph"] == "X":
+            assert isinstance(ev["dur"], (int, float)) and ev["dur"] >= 0
+        if ev["ph"] == "C":
+            assert ev["args"] and all(isinstance(v, (int, float)) for v in ev["args"].values())
+    meta = {ev["name"] for ev in events if ev["ph"] == "M"}
+    assert {"process_name", "thread_name"} <= meta
+    counters = {ev["name"] for ev in events if ev["ph"] == "C"}
+    assert {"budget", "dropped_steps"} <= counters
+    xs = [ev for ev in events if ev["ph"] == "X"]
+    frames = [ev for ev in xs if ev["name"] == "frame"]
+    assert frames
+    # proper nesting on the one thread: any two X events are disjoint or one contains the other
+    order = sorted(xs, key=lambda e: (e["ts"], -e["dur"]))
+    stack: list[dict] = []
+    for ev in order:
+        while stack and ev["ts"] >= stack[-1]["ts"] + stack[-1]["dur"] - EPS_US:
+            stack.pop()
+        if stack:
+            parent = stack[-1]
+            assert ev["ts"] + ev["dur"] <= parent["ts"] + parent["dur"] + EPS_US, (ev, parent)
+        if ev["name"] == "frame":
+            assert not stack, "frames do not nest in anything"
+        else:
+            assert stack and stack[0]["name"] == "frame", f"{ev['name']} outside a frame"
+            depth = ev["args"]["depth"]
+            assert len(stack) == depth + 1, (ev, [s["name"] for s in stack])
+            if depth:
+                assert stack[-1]["args"]["depth"] == depth - 1
+        stack.append(ev)
+    frame_ends = sorted(f["ts"] + f["dur"] for f in frames)
+    assert all(a <= b["ts"] + EPS_US for a, b in zip(frame_ends, sorted(frames, key=lambda f: f["ts"])[1:], strict=False))
+
+
+def test_trace_file_is_valid_chrome_trace_json(tmp_path):
+    loop = traced_loop()
+    path = tmp_path / "trace.json"
+    write_chrome_trace(loop.budget, path)
+    doc = json.loads(path.read_text())
+    check_chrome_trace(doc)
+    xs = [e for e in doc["traceEvents"] if e["ph"] == "X"]
+    frames = [e for e in xs if e["name"] == "frame"]
+    assert len(frames) == 40
+    names = {e["name"] for e in xs}
+    assert {"sense", "physics", "render", "wait", "sense.decode", "sense.decode.crc", "render.hud"} <= names
+    renders = [e for e in xs if e["args"].get("depth") == 0 and e["name"] not in ("sense", "physics", "wait")]
+    assert renders and all(e["name"].startswith("render") for e in renders)
+    # one stage event per stage per step
+    steps = sum(f["args"]["steps"] for f in frames)
+    assert sum(e["name"] == "sense" for e in xs) == steps == loop.step_index
+    # the crc span sits two levels down, inside sense.decode, inside sense
+    assert all(e["args"]["depth"] == 2 for e in xs if e["name"] == "sense.decode.crc")
+    # units are microseconds: a 2 ms sleep lasts at least 2000 and far less than 2e6
+    sleeps = [e["dur"] for e in xs if e["name"] == "physics" and e["args"]["step"] % 10 == 0]
+    assert sleeps and all(2000 <= d < 1e6 for d in sleeps)
+    # the dropped-steps counter ends at the loop's count; frame args carry per-frame drops
+    dropped = [e["args"]["dropped"] for e in doc["traceEvents"] if e["ph"] == "C" and e["name"] == "dropped_steps"]
+    assert loop.dropped_steps > 0 and dropped[-1] == loop.dropped_steps
+    assert sum(f["args"]["dropped"] for f in frames) == loop.dropped_steps
+    # the parts of each frame add up to its duration
+    for f in frames:
+        inside = [e for e in xs if e["name"] != "frame" and e["args"]["depth"] == 0 and f["ts"] <= e["ts"] < f["ts"] + f["dur"]]
+        total = sum(e["dur"] for e in inside) + f["args"]["unaccounted_us"]
+        assert total == pytest.approx(f["dur"], abs=0.01)
+
+
+def test_trace_of_a_real_clock_run_is_valid(tmp_path):
+    loop = traced_loop(clock=RealClock(), frames=6)
+    check_chrome_trace(chrome_trace(loop.budget))
+
+
+def test_trace_after_the_ring_wrapped_is_valid():
+    loop = traced_loop(frames=60, capacity=16)
+    doc = chrome_trace(loop.budget)
+    check_chrome_trace(doc)
+    frames = [e for e in doc["traceEvents"] if e["ph"] == "X" and e["name"] == "frame"]
+    assert len(frames) == 16 and frames[0]["ts"] == 0
+    assert frames[0]["args"]["frame"] == 44
+
+
+def test_empty_budget_gives_a_valid_but_empty_trace():
+    doc = chrome_trace(FrameBudget())
+    assert [e["ph"] for e in doc["traceEvents"]] == ["M", "M"]
+
+
+@pytest.mark.parametrize("content", ["", "{not json", "[1, 2]", '{"traceEvents": 3}',
+                                     '{"traceEvents": [{"ph": "X", "name": "a", "ts": "x", "dur": 1}]}',
+                                     '{"traceEvents": [{"ph": "M", "name": "process_name"}]}'])
+def test_reading_a_bad_trace_names_the_file(tmp_path, content):
+    path = tmp_path / "bad.json"
+    path.write_text(content)
+    with pytest.raises(InputError, match="bad.json"):
+        read_chrome_trace(path)
+    with pytest.raises(InputError, match="missing.json"):
+        read_chrome_trace(tmp_path / "missing.json")
+
+
+def test_read_back_what_was_written(tmp_path):
+    loop = traced_loop(frames=10)
+    write_chrome_trace(loop.budget, tmp_path / "t.json")
+    doc = read_chrome_trace(tmp_path / "t.json")
+    assert doc["otherData"]["stages"]["sense"]["budget_ms"] == 1.0
+
+
+def test_span_ring_wrapping_first_drops_whole_frames_only():
+    # ~5 spans per frame but room for 2 per frame: the span ring wraps long before the frame ring
+    loop = FixedStepLoop(clock=VirtualClock(), auto_freeze_gc=False,
+                         budget=FrameBudget(capacity_frames=50, spans_per_frame=2))
+    for name in ("a", "b"):
+        loop.add_stage(name, lambda s, dt: None, budget_ms=1.0)
+    loop.set_render(lambda a: None, budget_ms=1.0)
+    loop.run(frames=80)
+    doc = chrome_trace(loop.budget)
+    check_chrome_trace(doc)
+    frames = [e for e in doc["traceEvents"] if e["ph"] == "X" and e["name"] == "frame"]
+    assert 10 <= len(frames) < 50
+    stages = [e for e in doc["traceEvents"] if e["ph"] == "X" and e["name"] == "a"]
+    assert len(stages) == sum(f["args"]["steps"] for f in frames)  # no frame reported short
+    assert loop.budget.summary()["stages"]["a"]["n"] == len(stages)
+
+
+def test_overruns_are_flagged_in_the_trace():
+    loop = FixedStepLoop(clock=VirtualClock(), auto_freeze_gc=False)
+    loop.add_stage("slow", lambda step, dt: time.sleep(0.002) if step == 4 else None, budget_ms=1.0)
+    loop.run(frames=8)
+    xs = [e for e in chrome_trace(loop.budget)["traceEvents"] if e["ph"] == "X" and e["name"] == "slow"]
+    assert [e["args"]["step"] for e in xs if e["args"].get("overrun")] == [4]

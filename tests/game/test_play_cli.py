@@ -1,0 +1,85 @@
+"""`quickjab play` and `quickjab train` as a user runs them (headless)."""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+import pygame
+
+import engine.sensors.source as source_mod
+from engine.sensors import SourceError
+from game.cli import main
+from game.hud import SWITCH_COLOR
+
+sys.path.insert(0, str(Path(__file__).parent))
+from game_graph import graph_path  # noqa: E402,F401 - the fixture
+
+
+def no_wiimote(url, clock):
+    raise SourceError("no Wiimote found")
+
+
+def test_play_without_a_wiimote_falls_back_to_the_keyboard_with_a_banner(tmp_path, monkeypatch, graph_path):  # noqa: F811
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "xdg"))
+    monkeypatch.setitem(source_mod._factories, "wiimote", no_wiimote)
+    shot, trace = tmp_path / "play.png", tmp_path / "trace.json"
+    assert main(["play", "--headless", "--frames", "30", "--graph", graph_path, "--no-sound",
+                 "--screenshot", str(shot), "--trace", str(trace)]) == 0
+    img = pygame.surfarray.array3d(pygame.image.load(str(shot))).astype(int)  # (w, h, 3)
+    assert img.shape[:2] == (1280, 720)
+    top_centre = img[400:880, 100:160]
+    assert (np.abs(top_centre - np.array(SWITCH_COLOR)).max(axis=2) <= 10).sum() > 500  # the banner
+    events = json.loads(trace.read_text())["traceEvents"]
+    names = {e["name"] for e in events if e["ph"] == "X"}
+    assert {"frame", "render", "input", "frames", "recognize", "player", "opponent", "physics", "hits", "match"} <= names
+    assert sum(1 for e in events if e.get("name") == "frame") == 30
+
+
+def test_bad_input_is_one_line_and_exit_2(tmp_path, capsys) -> None:
+    assert main(["play", "--headless", "--size", "big"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--size" in err[0]
+    assert main(["play", "--headless", "--source", "nosuch://x", "--frames", "1"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "nosuch" in err[0]
+    assert main(["play", "--headless", "--graph", str(tmp_path / "missing.npz"), "--frames", "1", "--source", "keyboard://"]) == 2
+    assert "missing.npz" in capsys.readouterr().err
+
+
+def test_training_saves_templates_that_play_then_uses(tmp_path, monkeypatch) -> None:
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "xdg"))
+    assert main(["train", "--headless", "--demo", "--source", "keyboard://?seed=3",
+                 "--actions", "straight_r,hook_l", "--size", "640x360"]) == 0
+    saved = tmp_path / "xdg" / "quickjab" / "templates.npz"
+    assert saved.exists()
+    from game.session import load_templates
+
+    templates = load_templates()
+    assert sorted(templates.action_names) == ["hook_l", "straight_r"]
+    assert templates.meta.get("source") == "quickjab train"
+    # and the recognizer built on them recognizes the virtual player's hook_l
+    from engine.recognition import DualBufferRecognizer
+    from game.actions import load_library
+    from game.virtual_player import synthesize_action
+
+    rec = DualBufferRecognizer(templates)
+    sig = synthesize_action(load_library()["hook_l"], "experienced", np.random.default_rng(9), rest_before=40, rest_after=30)
+    events = [e for f in sig.reshape(len(sig), -1) for e in rec.push(f)]
+    assert [e["action"] for e in events if e["event"] == "start"][:1] == ["hook_l"]
+
+
+def test_left_handed_play_mirrors_a_right_handed_set(tmp_path, monkeypatch) -> None:
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "xdg"))
+    from game.session import load_templates
+
+    right = load_templates()
+    left = load_templates(left_handed=True)
+    assert sorted(left.action_names) == sorted(right.action_names)
+    i = right.actions.index("straight_r")
+    j = left.actions.index("straight_l")
+    a = right.signals[i].reshape(len(right.signals[i]), 2, 3)
+    b = left.signals[j].reshape(len(left.signals[j]), 2, 3)
+    assert np.allclose(b[:, 1, 1:], a[:, 0, 1:]) and np.allclose(b[:, 1, 0], -a[:, 0, 0])

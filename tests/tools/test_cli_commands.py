@@ -1,0 +1,111 @@
+"""The `quickjab` command: --version, --help on every subcommand, record, and bad files giving
+one line naming file and line with exit code 2 and no traceback."""
+
+from __future__ import annotations
+
+import argparse
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from engine import __version__
+from engine.recording import read_recording
+from game.cli import COMMAND_MODULES, build_parser, main
+
+REPO = Path(__file__).resolve().parents[2]
+
+
+def quickjab(*args: str, cwd: Path | None = None) -> subprocess.CompletedProcess:
+    env = {**os.environ, "PYTHONPATH": str(REPO), "SDL_VIDEODRIVER": "dummy", "SDL_AUDIODRIVER": "dummy"}
+    return subprocess.run([sys.executable, "-m", "game.cli", *args], cwd=cwd or REPO, env=env,
+                          capture_output=True, text=True, timeout=120)
+
+
+def subcommand_paths(parser: argparse.ArgumentParser, prefix: tuple[str, ...] = ()) -> list[tuple[str, ...]]:
+    """Every subcommand, nested ones too (bench loop, ...)."""
+    out = []
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for name, sub in action.choices.items():
+                out.append(prefix + (name,))
+                out += subcommand_paths(sub, prefix + (name,))
+    return out
+
+
+def test_version():
+    r = quickjab("--version")
+    assert r.returncode == 0 and r.stdout.strip() == f"quickjab {__version__}"
+
+
+def test_commands_of_this_issue_are_registered():
+    paths = subcommand_paths(build_parser())
+    for cmd in [("play",), ("record",), ("scope",), ("profile",), ("bench",), ("bench", "loop")]:
+        assert cmd in paths
+    assert {"game.play", "tools.record", "tools.scope", "tools.profile", "tools.bench"} <= set(COMMAND_MODULES)
+
+
+def test_help_on_every_subcommand(capsys):
+    paths = subcommand_paths(build_parser())
+    assert paths
+    for path in [()] + paths:
+        with pytest.raises(SystemExit) as exit_:
+            main([*path, "--help"])
+        assert exit_.value.code == 0, path
+        out = capsys.readouterr().out
+        assert out.startswith("usage: quickjab") and (not path or path[-1] in out), path
+
+
+def test_no_command_prints_help(capsys):
+    assert main([]) == 0
+    assert "COMMAND" in capsys.readouterr().out
+
+
+def test_record_a_replay(tmp_path, shared_data):
+    src = shared_data / "punchbuddy" / "right-hook-50-matt-combo-lh-4.csv"
+    out = tmp_path / "out.csv"
+    r = quickjab("record", "--source", f"replay://{src}?speed=400", "-o", str(out), "--label", "hook_r")
+    assert r.returncode == 0, r.stderr
+    rec, orig = read_recording(out), read_recording(src)
+    assert len(rec) == len(orig) and rec.sensors == 2 and set(rec.labels) == {"hook_r"}
+    assert rec.accel == pytest.approx(orig.accel, abs=1e-4)
+    assert rec.t[-1] == pytest.approx((orig.t[-1] - orig.t[0]) / 400, abs=1e-4)  # replayed at 400x
+
+
+BAD = {
+    "missing_columns.csv": ("t,rx,ry\n0,1,2\n", 1),
+    "text_in_numbers.csv": ("# rate_hz: 60\nt,rx,ry,rz\n0.00,1,2,3\n0.01,1,two,3\n", 4),
+    "backwards.csv": ("t,rx,ry,rz\n0.00,1,2,3\n0.02,1,2,3\n0.01,1,2,3\n", 4),
+}
+
+
+@pytest.mark.parametrize("name", sorted(BAD))
+def test_bad_files_give_one_line_exit_2_no_traceback(tmp_path, name):
+    text, line = BAD[name]
+    (tmp_path / name).write_text(text)
+    r = quickjab("record", "--source", f"replay://{name}", "-o", "x.csv", cwd=tmp_path)
+    assert r.returncode == 2
+    assert "Traceback" not in r.stderr
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and f"{name}:{line}:" in lines[0], r.stderr
+    assert not (tmp_path / "x.csv").exists()  # nothing written for a source that never opened
+
+
+@pytest.mark.parametrize("args,words", [
+    (("record", "--source", "nosuch://x", "-o", "x.csv"), "nosuch"),
+    (("record", "--source", "replay://missing.csv", "-o", "x.csv"), "missing.csv"),
+    (("profile", "missing.json"), "missing.json"),
+    (("scope", "--headless", "--frames", "1", "--source", "replay://missing.csv"), "missing.csv"),
+])
+def test_bad_arguments_name_themselves(tmp_path, args, words):
+    r = quickjab(*args, cwd=tmp_path)
+    assert r.returncode == 2 and "Traceback" not in r.stderr
+    assert len(r.stderr.strip().splitlines()) == 1 and words in r.stderr
+
+
+def test_unwritable_output_is_one_line(tmp_path, shared_data):
+    src = shared_data / "punchbuddy" / "right-hook-50-matt-combo-lh-4.csv"
+    r = quickjab("record", "--source", f"replay://{src}?speed=100", "-o", str(tmp_path / "no" / "dir" / "x.csv"))
+    assert r.returncode == 2 and "Traceback" not in r.stderr and "x.csv" in r.stderr

@@ -1,0 +1,85 @@
+"""`quickjab profile`: the summary of a trace agrees with the loop's own budget summary, the
+table and JSON print, --plot draws a PNG, and bad traces give one line and exit code 2."""
+
+from __future__ import annotations
+
+import json
+import time
+
+import numpy as np
+import pytest
+
+from engine.clock import VirtualClock
+from engine.loop import FixedStepLoop
+from engine.trace import read_chrome_trace, write_chrome_trace
+from game.cli import main
+from tools.profile import profile_summary
+
+
+@pytest.fixture(scope="module")
+def traced(tmp_path_factory):
+    clock = VirtualClock()
+    loop = FixedStepLoop(clock=clock, auto_freeze_gc=False, render_hz=30)
+
+    def physics(step: int, dt: float) -> None:
+        with loop.span("physics.collide"):
+            sum(range(1000))
+        if step in (50, 51, 52):
+            time.sleep(0.0015)  # over its 1 ms budget: three overruns
+        if step == 100:
+            clock.stall(200_000_000)
+
+    loop.add_stage("physics", physics, budget_ms=1.0)
+    loop.add_stage("recognize", lambda s, dt: sum(range(300)), budget_ms=0.5)
+    loop.set_render(lambda a: sum(range(3000)), budget_ms=8.0)
+    loop.run(frames=120)
+    path = tmp_path_factory.mktemp("trace") / "trace.json"
+    write_chrome_trace(loop.budget, path)
+    return loop, path
+
+
+def test_summary_matches_the_loops_budget(traced):
+    loop, path = traced
+    s = profile_summary(read_chrome_trace(path))
+    b = loop.budget.summary()
+    assert s["frames"] == b["frames"] == 120
+    assert s["steps"] == b["steps"] == loop.step_index
+    assert s["dropped_steps"] == b["dropped_steps"] == loop.dropped_steps > 0
+    assert s["steps_per_frame"] == b["steps_per_frame"]
+    assert s["frame_period_ms"] == pytest.approx(1000 / 30)
+    for name in ("physics", "recognize", "render", "wait", "unaccounted", "physics.collide"):
+        for key in ("p50", "p95", "p99", "max"):
+            assert s["stages"][name][key] == pytest.approx(b["stages"][name][key], abs=1e-6), (name, key)
+    assert s["stages"]["physics"]["overruns"] == b["stages"]["physics"]["overruns"] >= 3
+    assert s["stages"]["physics.collide"]["nested"] and not s["stages"]["physics"]["nested"]
+
+
+def test_table_and_json(traced, capsys):
+    _, path = traced
+    assert main(["profile", str(path)]) == 0
+    out = capsys.readouterr().out
+    for word in ("physics", "recognize", "render", "unaccounted", "p99", "steps per frame", "dropped steps"):
+        assert word in out
+    assert main(["profile", str(path), "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["frames"] == 120 and doc["stages"]["render"]["n"] == 120
+
+
+def test_plot_draws_a_png(traced, tmp_path, capsys):
+    _, path = traced
+    png = tmp_path / "profile.png"
+    assert main(["profile", str(path), "--plot", str(png)]) == 0
+    import matplotlib.image as mpimg
+
+    img = mpimg.imread(png)
+    assert img.shape[0] > 300 and img.shape[1] > 800
+    assert np.unique(img.reshape(-1, img.shape[2]), axis=0).shape[0] > 20  # more than a blank canvas
+
+
+@pytest.mark.parametrize("content", ["{broken", '{"traceEvents": []}', "[]", '{"foo": 1}'])
+def test_bad_trace_is_one_line_and_exit_2(tmp_path, capsys, content):
+    path = tmp_path / "bad_trace.json"
+    path.write_text(content)
+    assert main(["profile", str(path)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "bad_trace.json" in err[0]

@@ -1,0 +1,76 @@
+"""`quickjab templates build`, `recognize`, `evaluate` end to end on small generated files."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from engine.recording import Recording, write_recording
+from game.cli import main
+
+G = np.array([0.0, 0.0, 1.0])
+
+
+def bump(axis: int, amp: float = 3.0, n: int = 24) -> np.ndarray:
+    x = np.tile(G, (n, 1))
+    x[:, axis] += amp * np.sin(np.linspace(0, 2 * np.pi, n))
+    return x
+
+
+def rest(n: int) -> np.ndarray:
+    return np.tile(G, (n, 1))
+
+
+def write(path, frames, label=""):
+    t = np.arange(len(frames)) / 60.0
+    labels = label if isinstance(label, list) else [label] * len(frames)
+    write_recording(path, Recording(t, frames.reshape(len(frames), 1, 3), labels))
+
+
+@pytest.fixture
+def trials_dir(tmp_path):
+    rng = np.random.default_rng(0)
+    root = tmp_path / "trials"
+    for action, axis in (("jab", 0), ("upper", 2)):
+        (root / action).mkdir(parents=True)
+        for k in range(3):
+            x = np.vstack([rest(8), bump(axis) + rng.normal(0, 0.03, (24, 3)), rest(8)])
+            write(root / action / f"{k}.csv", x, action)
+    return root
+
+
+def test_build_recognize_evaluate(tmp_path, trials_dir, capsys):
+    out = tmp_path / "t.npz"
+    assert main(["templates", "build", str(trials_dir), "-o", str(out)]) == 0
+    assert out.exists()
+    frames = np.vstack([rest(20), bump(2), rest(30), bump(0), rest(30)])
+    labels = [""] * 20 + ["upper"] * 24 + [""] * 30 + ["jab"] * 24 + [""] * 30
+    rec = tmp_path / "rec.csv"
+    write(rec, frames, labels)
+    events_file = tmp_path / "ev.jsonl"
+    assert main(["recognize", "--templates", str(out), str(rec), "-o", str(events_file)]) == 0
+    events = [json.loads(line) for line in events_file.read_text().splitlines()]
+    starts = [e for e in events if e["event"] == "start"]
+    assert [e["action"] for e in starts] == ["upper", "jab"]
+    assert all({"event", "action", "frame", "t", "score"} <= set(e) for e in starts)
+    assert starts[0]["t"] == pytest.approx(starts[0]["frame"] / 60.0, abs=1e-3)
+
+    capsys.readouterr()
+    png = tmp_path / "fig.png"
+    assert main(["evaluate", "--templates", str(out), str(trials_dir), str(rec), "--mains", "4-6", "--plot", str(png)]) == 0
+    text = capsys.readouterr().out
+    assert "unnoticeable switch" in text and png.stat().st_size > 1000
+    assert main(["templates", "build", str(trials_dir), "-o", str(tmp_path / "m.npz"), "--mirror", "--method", "dba"]) == 0
+
+
+def test_bad_files_exit_2_with_one_line(tmp_path, capsys):
+    bad = tmp_path / "bad.npz"
+    bad.write_bytes(b"junk")
+    rec = tmp_path / "rec.csv"
+    write(rec, rest(10))
+    assert main(["recognize", "--templates", str(bad), str(rec)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "bad.npz" in err[0]
+    assert main(["templates", "build", str(tmp_path / "nowhere"), "-o", str(tmp_path / "x.npz")]) == 2

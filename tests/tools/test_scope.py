@@ -1,0 +1,131 @@
+"""The scope under SDL's dummy driver: real pixels in the screenshot, state and rate shown,
+reproducible headless runs, the Wiimote -> demo fallback."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import engine.sensors.source as source_mod
+from engine.sensors import SourceError, SourceState
+from engine.sensors.demo import DemoSource
+from game.cli import main
+from tools.scope import AXIS_COLORS, STATE_COLORS, ScopeView, open_with_fallback
+
+REPO = Path(__file__).resolve().parents[2]
+VIEW = ScopeView()
+
+
+def load_rgb(path: Path) -> np.ndarray:
+    import pygame
+
+    surf = pygame.image.load(str(path))
+    return np.transpose(pygame.surfarray.array3d(surf), (1, 0, 2)).astype(int)  # (h, w, 3)
+
+
+def count_color(img: np.ndarray, color: tuple[int, int, int], box: tuple[int, int, int, int], tol: int = 30) -> int:
+    x0, y0, w, h = box
+    region = img[y0: y0 + h, x0: x0 + w]
+    return int((np.abs(region - np.array(color)).max(axis=2) <= tol).sum())
+
+
+def status_box() -> tuple[int, int, int, int]:
+    return (0, 0, VIEW.width, VIEW.status_h)
+
+
+def scope_shot(tmp_path: Path, *args: str, frames: int = 150, name: str = "shot.png") -> np.ndarray:
+    out = tmp_path / name
+    assert main(["scope", "--headless", "--frames", str(frames), "--screenshot", str(out), *args]) == 0
+    img = load_rgb(out)
+    assert img.shape == (VIEW.height, VIEW.width, 3)
+    return img
+
+
+def test_scope_draws_every_axis_of_both_hands(tmp_path):
+    img = scope_shot(tmp_path, "--source", "demo://")
+    for hand in range(2):
+        box = VIEW.panel_rect(hand)
+        for color in AXIS_COLORS:
+            assert count_color(img, color, box, tol=25) > 300, (hand, color)
+    # the status line is drawn in the "connected" colour
+    assert count_color(img, STATE_COLORS[SourceState.CONNECTED], status_box(), tol=10) > 50
+
+
+def test_scope_with_a_one_hand_recording_leaves_the_left_panel_empty(tmp_path, shared_data):
+    src = shared_data / "phone-boxing" / "train.csv"
+    img = scope_shot(tmp_path, "--source", f"replay://{src}")
+    right, left = VIEW.panel_rect(0), VIEW.panel_rect(1)
+    assert all(count_color(img, c, right, tol=25) > 150 for c in AXIS_COLORS)
+    assert all(count_color(img, c, left, tol=25) == 0 for c in AXIS_COLORS)
+
+
+def test_scope_shows_an_ended_source(tmp_path):
+    rec = tmp_path / "short.csv"
+    rec.write_text("t,rx,ry,rz\n" + "".join(f"{i / 100:.2f},0,0,1\n" for i in range(20)))
+    img = scope_shot(tmp_path, "--source", f"replay://{rec}", frames=60)
+    assert count_color(img, STATE_COLORS[SourceState.ENDED], status_box(), tol=6) > 50
+    assert count_color(img, STATE_COLORS[SourceState.CONNECTED], status_box(), tol=10) == 0
+
+
+def test_scope_scrolls(tmp_path):
+    a = scope_shot(tmp_path, frames=100, name="a.png")
+    b = scope_shot(tmp_path, frames=130, name="b.png")
+    box = VIEW.panel_rect(0)
+    assert count_color(a, AXIS_COLORS[0], box) > 0 and (a != b).any()
+
+
+def run_headless(*args: str) -> str:
+    env = {**os.environ, "PYTHONPATH": str(REPO), "SDL_VIDEODRIVER": "dummy", "SDL_AUDIODRIVER": "dummy"}
+    r = subprocess.run([sys.executable, "-m", "game.cli", "scope", "--headless", *args],
+                       cwd=REPO, env=env, capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stderr
+    line = [x for x in r.stdout.splitlines() if x.startswith("state ")]
+    assert len(line) == 1
+    return line[0]
+
+
+def test_two_headless_runs_give_the_same_state_hash():
+    a = run_headless("--frames", "90", "--source", "demo://?rate=430")
+    b = run_headless("--frames", "90", "--source", "demo://?rate=430")
+    assert a == b
+    assert run_headless("--frames", "91", "--source", "demo://?rate=430") != a
+
+
+def no_wiimote(url, clock):
+    raise SourceError("no Wiimote found")
+
+
+def test_fallback_to_the_demo_source_with_a_banner(monkeypatch):
+    monkeypatch.setitem(source_mod._factories, "wiimote", no_wiimote)
+    src, banner = open_with_fallback("wiimote://", clock=lambda: 0.0)
+    assert isinstance(src, DemoSource) and "No Wiimote" in banner
+
+
+def test_fallback_when_the_device_is_disconnected(monkeypatch):
+    closed = []
+
+    class Gone(DemoSource):
+        def close(self):
+            closed.append(True)
+
+    def factory(url, clock):
+        s = Gone(url=url, clock=clock)
+        s.state = SourceState.DISCONNECTED
+        return s
+
+    monkeypatch.setitem(source_mod._factories, "wiimote", factory)
+    src, banner = open_with_fallback("wiimote://", clock=lambda: 0.0)
+    assert src.url == "demo://" and banner and closed == [True]
+
+
+def test_an_explicit_source_does_not_fall_back(monkeypatch):
+    monkeypatch.setitem(source_mod._factories, "wiimote", no_wiimote)
+    with pytest.raises(SourceError):
+        open_with_fallback("wiimote://some/path", clock=lambda: 0.0)
+    src, banner = open_with_fallback("demo://?rate=50", clock=lambda: 0.0)
+    assert banner == "" and src.rate_hz == 50
