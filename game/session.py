@@ -32,6 +32,7 @@ from engine.frames import FrameResampler
 from engine.loop import FixedStepLoop
 from engine.sensors.source import Source, SourceState
 from engine.state_hash import state_hash
+from game.history import History
 from game.hud import Hud, HudState
 from game.match import Match
 from game.render import Renderer
@@ -138,6 +139,14 @@ def load_graph(path: str | Path | None = None):
     return InteractionGraph.load(cached)
 
 
+LOG_KEPT = 1024  # recent recognizer events / blows kept in memory (an hour makes ~7,000-12,000 events)
+
+
+def _event_key(ev: dict) -> tuple:
+    """What of a recognizer event the state hash covers: its decision, not its scores."""
+    return (ev.get("frame"), ev.get("event"), ev.get("action"), ev.get("from_frame"))
+
+
 class Session:
     """Build with a source and a surface to draw on; `loop.run(...)` plays."""
 
@@ -186,8 +195,10 @@ class Session:
         self._surface_provider = surface_provider
         self._offscreen: pygame.Surface | None = None
         self._low_power_surface: pygame.Surface | None = None
-        self.events_log: list[dict] = []  # recognizer events, in order (tests, the trace)
-        self.blows_log: list[tuple[int, int, str, bool, float]] = []  # (step, attacker, target, blocked, damage)
+        # recognizer events and blows (step, attacker, target, blocked, damage), in order: the
+        # recent ones kept (tests, HUD), all of them counted and in the state hash (game/history.py)
+        self.events_log: History = History(LOG_KEPT, key=_event_key)
+        self.blows_log: History = History(LOG_KEPT)
         self.on_toggle_fullscreen: Callable[[], None] | None = None
         self._t0: float | None = None
         self._buttons = 0
@@ -429,5 +440,5 @@ class Session:
     def state_hash(self) -> str:
         """The simulation's state: bodies, controllers, match, recognizer decisions."""
         ctrls = [(b.controller.action, round(float(b.controller.frame), 6), tuple(np.round(b.root, 9))) for b in self.boxers]
-        events = [(e.get("frame"), e.get("event"), e.get("action"), e.get("from_frame")) for e in self.events_log]
-        return state_hash(self.world.x, self.match.state(), ctrls, events, self.blows_log)
+        return state_hash(self.world.x, self.match.state(), ctrls, self.events_log.total, self.events_log.digest(),
+                          self.blows_log.total, self.blows_log.digest())

@@ -107,8 +107,17 @@ class NaiveDTW:
         self.templates = [np.ascontiguousarray(dtw.tmpl[: int(n), k]) for k, n in enumerate(dtw.lengths)]
         self.buffer = np.zeros((0, dtw.D))
 
+    _OWN = frozenset({"_distance", "inner", "templates", "buffer"})
+
     def __getattr__(self, name):
         return getattr(self.inner, name)
+
+    def __setattr__(self, name, value):
+        # the recognizer sets scoring options (min_progress) on its DTW: they must reach it
+        if name in NaiveDTW._OWN:
+            object.__setattr__(self, name, value)
+        else:
+            setattr(self.inner, name, value)
 
     def reset(self) -> None:
         self.buffer = np.zeros((0, self.inner.D))

@@ -23,6 +23,7 @@ import sys
 import time
 import traceback
 from collections import Counter
+from itertools import islice
 
 from engine.errors import InputError
 
@@ -81,16 +82,14 @@ class SoakCounters:
         from game.match import Match
 
         s = self.s
-        n = s.events_total if hasattr(s, "events_total") else len(s.events_log)
+        n = s.events_log.total  # every event appended (the log keeps only the recent ones)
         if n > self._events_seen:
-            log = list(s.events_log)
-            for ev in log[len(log) - (n - self._events_seen):]:
+            for ev in islice(reversed(s.events_log), n - self._events_seen):  # the new ones
                 self.events[str(ev.get("event"))] += 1
             self._events_seen = n
-        nb = s.blows_total if hasattr(s, "blows_total") else len(s.blows_log)
+        nb = s.blows_log.total
         if nb > self._blows_seen:
-            log = list(s.blows_log)
-            for b in log[len(log) - (nb - self._blows_seen):]:
+            for b in islice(reversed(s.blows_log), nb - self._blows_seen):
                 self.blows += 1
                 self.blocked += bool(b[3])
             self._blows_seen = nb
