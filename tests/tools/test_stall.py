@@ -73,6 +73,7 @@ def test_a_200ms_stall_drops_what_it_must_and_recovers_within_one_frame(match_gr
     assert [e["args"]["dropped"] for e in dropped_frames] == [due - MAX_STEPS_PER_FRAME]
     long_physics = [e for e in trace["traceEvents"] if e["ph"] == "X" and e["name"] == "physics" and e["dur"] > 150_000]
     assert long_physics and long_physics[0]["args"]["step"] == 120
+    assert long_physics[0]["args"].get("overrun") is True  # flagged for Perfetto / chrome://tracing
 
 
 @pytest.mark.parametrize("stall_ms", [1000.0, 5000.0])
