@@ -20,12 +20,13 @@ COMMAND_MODULES = [
     "tools.scope",
     "tools.profile",
     "tools.bench",
-    "tools.graph",
-    "tools.recognition_commands",
     "tools.synth",
     "tools.soak",
     "tools.bvh_cmd",
     "tools.actions_cmd",
+    "tools.graph",
+    "tools.bridge",
+    "tools.recognition_commands",
 ]
 
 

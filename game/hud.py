@@ -9,6 +9,7 @@ cached: the same string in the same style is rendered once.
 
 from __future__ import annotations
 
+from collections import deque
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -30,6 +31,7 @@ STAGE_COLORS = [
     (255, 217, 47), (229, 196, 148), (179, 179, 179), (120, 200, 240), (240, 120, 120),
 ]
 MARK_STEPS = 45  # how long a switch / reject mark stays lit
+HISTORY_FRAMES = 120  # the F3 overlay's chart: the last two seconds, a stacked column a frame
 
 
 @dataclass
@@ -53,6 +55,7 @@ class HudState:
     score: float | None = None
     last_event: str = ""
     switch_age: int = MARK_STEPS
+    switch_from: int = 0  # n_p: the clip frame the character continued from
     reject_age: int = MARK_STEPS
     main_fill: int = 0
     main_size: int = 6
@@ -80,6 +83,7 @@ class HudState:
             self.score = event.get("score")
         if kind == "switch":
             self.switch_age = 0
+            self.switch_from = int(event.get("from_frame", 0) or 0)
         elif kind == "reject":
             self.reject_age = 0
             self.action = event.get("action", "") or "no match"
@@ -131,6 +135,8 @@ class Hud:
         self.text = TextCache()
         self._p99: dict[str, float] = {}
         self._p99_frame = -10**9
+        self._history: deque[np.ndarray] = deque(maxlen=HISTORY_FRAMES)  # per frame, ms per stage
+        self._history_frame = -1
 
     # layout helpers (fractions of the window, so resizes keep the layout)
     @staticmethod
@@ -235,7 +241,7 @@ class Hud:
             self.blit(surf, f"score {st.score:.2f}", int(22 * u), (r.right + 10 * u, y + 24 * u), DIM)
         # marks
         if st.switch_age < MARK_STEPS:
-            self._mark(surf, "SWITCH", SWITCH_COLOR, (panel.right - 8 * u, panel.top + 8 * u), u)
+            self._mark(surf, f"SWITCH @{st.switch_from}", SWITCH_COLOR, (panel.right - 8 * u, panel.top + 8 * u), u)
         if st.reject_age < MARK_STEPS:
             self._mark(surf, "REJECT", REJECT_COLOR, (panel.right - 8 * u, panel.top + 34 * u), u)
         # main buffer: one cell per frame
@@ -285,6 +291,8 @@ class Hud:
             else:
                 title = f"{st.result} - {'YOU WIN' if st.winner == 0 else 'CPU WINS'}"
             self._banner(surf, title, big, (w // 2, h * 0.42))
+            if not st.demo:
+                self.blit(surf, "Enter: a new match", mid, (w // 2, h * 0.42 + 60 * u), DIM, "midtop")
         elif st.phase == "count" and st.down is not None:
             self._banner(surf, f"{st.count}", int(140 * u), (w // 2, h * 0.40))
             self.blit(surf, "KNOCKDOWN", mid, (w // 2, h * 0.40 + 70 * u), SWITCH_COLOR, "midtop")
@@ -318,7 +326,8 @@ class Hud:
     def _budget(self, surf: pygame.Surface, budget: FrameBudget, u: float) -> None:
         """A stacked bar per stage against the 16.7 ms line, and each stage's p99."""
         w, h = surf.get_size()
-        panel = pygame.Rect(w - int(440 * u), int(130 * u), int(424 * u), int(60 * u + 20 * u * len(budget.stages)))
+        chart_h = int(90 * u)
+        panel = pygame.Rect(w - int(440 * u), int(130 * u), int(424 * u), int(60 * u + 20 * u * len(budget.stages)) + chart_h)
         bg = pygame.Surface(panel.size, pygame.SRCALPHA)
         bg.fill((0, 0, 0, 190))
         surf.blit(bg, panel)
@@ -343,6 +352,24 @@ class Hud:
             for name in names:
                 d = budget.stage_durations(name)
                 self._p99[name] = float(np.percentile(d, 99)) / 1e6 if len(d) else 0.0
+        # history: a stacked column per frame against the same 16.7 ms line
+        if budget.frames != self._history_frame:
+            self._history_frame = budget.frames
+            self._history.append(np.array([last.get(n, 0.0) for n in names]))
+        chart = pygame.Rect(bar.left, panel.bottom - chart_h - int(4 * u), bar.width, chart_h)
+        pygame.draw.rect(surf, (30, 30, 36), chart)
+        col_w = chart.width / HISTORY_FRAMES
+        px_per_ms = chart.height / scale_ms
+        for i, ms in enumerate(self._history):
+            x0 = chart.left + i * col_w
+            y0 = float(chart.bottom)
+            for k, v in enumerate(ms):
+                hpx = min(v * px_per_ms, y0 - chart.top)
+                if hpx >= 0.5:
+                    pygame.draw.rect(surf, STAGE_COLORS[k % len(STAGE_COLORS)], (int(x0), int(y0 - hpx), max(1, int(np.ceil(col_w))), int(np.ceil(hpx))))
+                    y0 -= hpx
+        line_y = chart.bottom - budget.frame_budget_ms * px_per_ms
+        pygame.draw.line(surf, REJECT_COLOR, (chart.left, line_y), (chart.right, line_y), 1)
         for k, name in enumerate(names):
             y = bar.bottom + 8 * u + k * 20 * u
             pygame.draw.rect(surf, STAGE_COLORS[k % len(STAGE_COLORS)], (int(panel.left + 10 * u), int(y + 3 * u), int(12 * u), int(12 * u)))

@@ -102,30 +102,28 @@ def run(args: argparse.Namespace) -> int:
     if fallback:
         print(f"quickjab play: {KEYBOARD_BANNER}", file=sys.stderr)
     pygame.init()
-    flags = pygame.RESIZABLE | (pygame.FULLSCREEN if args.fullscreen and not args.headless else 0)
-    screen = pygame.display.set_mode(size, flags)
-    pygame.display.set_caption("QuickJab")
-    config = SessionConfig(seed=args.seed, size=size, low_power=args.low_power, demo=args.demo,
-                           keyboard_banner=fallback, templates=args.templates, graph=args.graph,
-                           sound=not args.no_sound and not args.headless,
-                           left_handed=args.left_handed, difficulty=args.difficulty)
-    session = Session(source, config, clock=clock, surface_provider=pygame.display.get_surface)
-    session.hud_state.show_budget = args.budget
-
-    def toggle_fullscreen() -> None:
-        pygame.display.toggle_fullscreen()
-
-    session.on_toggle_fullscreen = toggle_fullscreen
-    session.loop.freeze_gc()
     try:
-        session.loop.run(frames=args.frames)
+        flags = pygame.RESIZABLE | (pygame.FULLSCREEN if args.fullscreen and not args.headless else 0)
+        pygame.display.set_mode(size, flags)
+        pygame.display.set_caption("QuickJab")
+        config = SessionConfig(seed=args.seed, size=size, low_power=args.low_power, demo=args.demo,
+                               keyboard_banner=fallback, templates=args.templates, graph=args.graph,
+                               sound=not args.no_sound and not args.headless,
+                               left_handed=args.left_handed, difficulty=args.difficulty)
+        session = Session(source, config, clock=clock, surface_provider=pygame.display.get_surface)
+        session.hud_state.show_budget = args.budget
+        session.on_toggle_fullscreen = pygame.display.toggle_fullscreen
+        session.loop.freeze_gc()
+        try:
+            session.loop.run(frames=args.frames)
+        finally:
+            if args.screenshot:
+                pygame.image.save(pygame.display.get_surface(), args.screenshot)
+                print(f"quickjab play: wrote {args.screenshot}", file=sys.stderr)
+            if args.trace:
+                write_chrome_trace(session.loop.budget, args.trace)
+                print(f"quickjab play: wrote {args.trace}", file=sys.stderr)
     finally:
-        if args.screenshot:
-            pygame.image.save(screen if args.headless else pygame.display.get_surface(), args.screenshot)
-            print(f"quickjab play: wrote {args.screenshot}", file=sys.stderr)
-        if args.trace:
-            write_chrome_trace(session.loop.budget, args.trace)
-            print(f"quickjab play: wrote {args.trace}", file=sys.stderr)
         source.close()
         pygame.quit()
     return 0

@@ -223,6 +223,8 @@ class Renderer:
                 self._capsule(surf, *args)
             elif kind == 1:
                 self._sphere(surf, *args)
+            elif kind == 3:
+                self._eyes(surf, *args)
             else:
                 self._torso(surf, *args)
         surf.blit(self._front, (0, 0))
@@ -265,6 +267,19 @@ class Renderer:
         for name, r, part in SPHERES:
             i = J[name]
             prims.append((z[i] - r, 1, (xy[i], r * scale[i], colors[part])))
+        # the face: eyes and brows on the side of the head the boxer faces, drawn just after
+        # the head when that side is towards the camera (so a boxer's facing reads at once)
+        right = joints[J["shoulder_r"]] - joints[J["shoulder_l"]]
+        right[1] = 0.0
+        n = float(np.linalg.norm(right))
+        if n > 1e-6:
+            right /= n
+            forward = np.cross(right, (0.0, 1.0, 0.0))
+            head = joints[J["head"]]
+            eyes = np.array([head + forward * 0.11 + right * s + (0.0, 0.02, 0.0) for s in (-0.045, 0.045)])
+            exy, ez = cam.project(eyes)
+            if ez.mean() < z[J["head"]] - 0.03:
+                prims.append((z[J["head"]] - 0.125 - 1e-4, 3, (exy, float(scale[J["head"]]))))
         # torso: chest block from shoulders to hips, trunks below the navel
         torso_ids = [J["shoulder_l"], J["shoulder_r"], J["hip_r"], J["hip_l"]]
         d = float(z[torso_ids].mean()) + 0.02
@@ -302,6 +317,12 @@ class Renderer:
             pygame.draw.aaline(surf, color, (a[0] - px * ra, a[1] - py * ra), (b[0] - px * rb, b[1] - py * rb))
         pygame.draw.aacircle(surf, color, (float(a[0]), float(a[1])), max(1.0, ra))
         pygame.draw.aacircle(surf, color, (float(b[0]), float(b[1])), max(1.0, rb))
+
+    def _eyes(self, surf: pygame.Surface, xy: np.ndarray, k: float) -> None:
+        r = max(1.0, 0.014 * k)
+        for x, y in xy:
+            pygame.draw.circle(surf, (30, 24, 22), (float(x), float(y)), r)
+            pygame.draw.line(surf, (50, 36, 30), (x - 2.2 * r, y - 2.2 * r), (x + 2.2 * r, y - 2.4 * r), max(1, int(r)))
 
     def _sphere(self, surf: pygame.Surface, c: np.ndarray, r: float, color) -> None:
         pos = (float(c[0]), float(c[1]))

@@ -28,6 +28,7 @@ import numpy as np
 import pygame
 
 from engine.clock import RealClock, VirtualClock
+from engine.errors import InputError
 from engine.frames import FrameResampler
 from engine.loop import FixedStepLoop
 from engine.sensors.source import Source, SourceState
@@ -57,6 +58,7 @@ DIFFICULTY = {"easy": 0.45, "normal": 0.7, "hard": 1.0}
 CPU_REST_STEPS = {"easy": 40, "normal": 24, "hard": 8}
 HOME_BUTTON = 0x0080  # Wiimote core buttons: Home
 RUMBLE_MS = 120
+DEMO_RESTART_STEPS = 8 * HZ  # the attract mode shows the result, then boxes again
 PILOT_SETTLE_STEPS = 90  # the pilot's hands rest first: the recognizer learns gravity at rest
 PILOT_VARIETY = 0.4
 PILOT_REACH = 1.0
@@ -174,9 +176,13 @@ class Session:
         self.opponent_ai = OpponentController(graph, self.lib, controller=self.opponent.controller)
         self._pilot_wait = PILOT_SETTLE_STEPS
         self._cpu_rest = 0
+        self._over_steps = 0
         self._pilot_seen = True
         self._pilot_rng = np.random.default_rng(cfg.seed + 1)
         self.templates = load_templates(cfg.templates, cfg.left_handed)
+        if source.sensors * 3 != self.templates.dim:
+            raise InputError(f"{source.url}: the source has {source.sensors} sensor(s), the templates need "
+                             f"{self.templates.dim // 3} (a Wiimote + Nunchuk, or two IMUs)")
         self.recognizer = DualBufferRecognizer(self.templates)
         self.resampler = FrameResampler(sensors=self.templates.dim // 3)
         self.match = Match()
@@ -184,6 +190,7 @@ class Session:
                                   demo=cfg.demo, mode="LOW POWER" if cfg.low_power else "",
                                   main_size=int(self.recognizer.main) if self.recognizer.main != "auto" else 6,
                                   supp_size=self.recognizer.supplementary)
+        self.hud_state.message = "ROUND 1"
         if hasattr(source, "press_key"):
             from game.keyboard_source import key_help
 
@@ -293,6 +300,8 @@ class Session:
             elif event.key == pygame.K_F11:
                 if self.on_toggle_fullscreen is not None:
                     self.on_toggle_fullscreen()
+            elif event.key == pygame.K_RETURN and self.match.over:
+                self.new_match()
             elif hasattr(self.source, "press_key") and not self.match.paused:
                 self.source.press_key(pygame.key.name(event.key))
 
@@ -313,7 +322,8 @@ class Session:
             self.hud_state.mark(ev)
             if self.match.fighting:
                 self.player.controller.on_event(ev)
-                if ev.get("event") == "start" and self.lib[ev["action"]].kind == "attack":
+                clip = self.lib.get(ev.get("action") or "")
+                if ev.get("event") == "start" and clip is not None and clip.kind == "attack":
                     self.sounds.play("punch", 0.5)
         rec = self.recognizer
         active = rec.state == "active"
@@ -399,10 +409,15 @@ class Session:
                 self.sounds.play("bell")
                 if m.phase == "fight":
                     self.hud_state.message, self.hud_state.message_age = f"ROUND {m.round}", 0
+                    self._to_corners()
             elif kind == "knockdown":
                 self.boxers[who].controller.play("knockdown")
             elif kind == "rise":
                 self.boxers[who].controller.play("guard")
+        if m.over:
+            self._over_steps += 1
+            if self.config.demo and self._over_steps >= DEMO_RESTART_STEPS:
+                self.new_match()  # the attract mode goes on
         h = self.hud_state
         h.health = list(m.health)
         h.round, h.rounds = m.round, m.rounds
@@ -414,6 +429,25 @@ class Session:
         h.battery = self.source.battery
         h.tick()
         self._step = step
+
+    def _to_corners(self) -> None:
+        """Both boxers back to their marks, at the guard (a new round)."""
+        for boxer, z, yaw in ((self.player, -START_GAP / 2, 0.0), (self.opponent, START_GAP / 2, math.pi)):
+            boxer.controller.play("guard", blend=False)
+            boxer.controller.output = self.lib["guard"].posture(0)
+            boxer.place(0.0, z, yaw)
+        self.prev_joints = [b.joint_positions().copy() for b in self.boxers]
+        self.curr_joints = [j.copy() for j in self.prev_joints]
+
+    def new_match(self) -> None:
+        """A fresh match (Enter after the last bell; by itself in the attract mode)."""
+        self.match = Match()
+        self._over_steps = 0
+        self._to_corners()
+        self.recognizer.reset()
+        self._pilot_wait = PILOT_SETTLE_STEPS
+        self.hud_state.message, self.hud_state.message_age = "ROUND 1", 0
+        self.sounds.play("bell")
 
     # -- rendering -----------------------------------------------------------------------
     def render(self, alpha: float) -> None:

@@ -40,13 +40,6 @@ SHOW, READY, RECORD, DONE = "show", "ready", "record", "done"
 MIRROR_JOINT = {}  # joint index -> the mirrored joint's index (filled below)
 
 
-def mirror_name(action: str) -> str:
-    for a, b in (("_l", "_r"), ("_r", "_l")):
-        if action.endswith(a):
-            return action[: -len(a)] + b
-    return {"step_left": "step_right", "step_right": "step_left"}.get(action, action)
-
-
 def mirror_posture(posture: np.ndarray) -> np.ndarray:
     """A (17, 3) local posture seen in a mirror: x negated, left and right joints swapped."""
     from game.skeleton import JOINTS
@@ -312,8 +305,9 @@ def run(args: argparse.Namespace) -> int:
     loop = FixedStepLoop(clock)
 
     def perform() -> None:
+        # the virtual player behind the keyboard has no handedness: it performs the move itself
         if hasattr(source, "press"):
-            source.press(mirror_name(trainer.action) if args.left_handed else trainer.action)
+            source.press(trainer.action)
 
     def input_stage(step: int, dt: float) -> None:
         for event in pygame.event.get():

@@ -15,6 +15,7 @@ TARGETS = {
     "wiimote": "tools.bench_wiimote",
     "graph": "tools.bench_graph",
     "recognition": "tools.bench_recognition",
+    "serial": "tools.bench_serial",
     "frame": "tools.bench_frame",
 }
 

@@ -47,9 +47,9 @@ def _recognizer_args(p: argparse.ArgumentParser, main_default: str = "6") -> Non
     g.add_argument("--null-frames", type=int, default=6, help="quiet frames that end a motion (default 6)")
     g.add_argument("--discard-frames", type=int, default=20, help="frames discarded after the character finishes (default 20)")
     g.add_argument("--no-reject", action="store_true", help="never reject (ignore the learned thresholds)")
-    g.add_argument("--complete", type=float, default=0.0, metavar="F",
-                   help="also end a motion once its template is matched past this fraction (e.g. 0.9): "
-                        "splits back-to-back punches when no character calls character_finished (default off)")
+    g.add_argument("--complete", type=float, default=0.9, metavar="F",
+                   help="also end a motion once its template is matched past this fraction and the hand "
+                        "calms down: splits back-to-back punches (default 0.9; 0 = the paper's null signal only)")
 
 
 def _rec_kwargs(args: argparse.Namespace) -> dict:

@@ -29,9 +29,9 @@ import numpy as np
 # Below this many templates the scan's few whole-block calls beat the per-position loop;
 # measured with `quickjab bench recognition --sweep` (crossover between 100 and 300 templates).
 LOOP_FROM_TEMPLATES = 200
-# Above this many (T * L * D) values the local costs are computed from precomputed squared
-# norms and one matrix-vector product instead of a broadcast subtract-square-sum.
-EXPANDED_COST_FROM = 60_000
+# Local costs: |t - q|^2 = |t|^2 - 2 t.q + |q|^2 from precomputed squared norms and one
+# matrix-vector product (half the cost of a broadcast subtract-square-sum; rounding ~1e-7 g).
+# `exact_costs=True` computes them the direct way (the reference tests use it).
 
 
 def pad_templates(templates: Sequence[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
@@ -52,7 +52,13 @@ class IncrementalDTW:
 
     push(frame) -> (T,) normalized scores of the query so far (lower is closer)."""
 
-    def __init__(self, templates: Sequence[np.ndarray], method: str = "auto", min_progress: float = 0.0):
+    def __init__(
+        self,
+        templates: Sequence[np.ndarray],
+        method: str = "auto",
+        min_progress: float = 0.0,
+        exact_costs: bool = False,
+    ):
         self.tmpl, self.lengths = pad_templates([np.asarray(t, dtype=np.float64) for t in templates])
         self.L, self.T, self.D = self.tmpl.shape
         if method == "auto":
@@ -64,9 +70,12 @@ class IncrementalDTW:
         # end may only align to template positions j + 1 >= min(L, min_progress * n), so a
         # template cannot win by matching a short prefix of itself to a long query.
         self.min_progress = float(min_progress)
-        self._expanded = self.tmpl.size >= EXPANDED_COST_FROM
-        self._flat = self.tmpl.reshape(self.L * self.T, self.D)
-        self._sqnorm = np.einsum("ltd,ltd->lt", self.tmpl, self.tmpl)
+        self._expanded = not exact_costs
+        sqnorm = np.einsum("ltd,ltd->lt", self.tmpl, self.tmpl)
+        self._flat = np.concatenate(
+            [self.tmpl, sqnorm[..., None], np.ones((self.L, self.T, 1))], axis=2
+        ).reshape(self.L * self.T, self.D + 2)
+        self._q_aug = np.ones(self.D + 2)
         # Positions past a template's end never count: +inf added to their normalized score.
         pos = np.arange(self.L)[:, None]
         self._pad_inf = np.where(pos < self.lengths[None, :], 0.0, np.inf)
@@ -78,7 +87,7 @@ class IncrementalDTW:
         self._init[0] = 0.0
         self._cur = 0
         self._row = self._ext[0][1:]
-        self._suffix = np.empty(shape)
+        self._suffix = np.empty((self.T, self.L))
         self._recip: dict[int, np.ndarray] = {}
         self._take: dict[tuple[int, float], np.ndarray] = {}
         self._c = np.empty(shape)
@@ -95,10 +104,11 @@ class IncrementalDTW:
     def _local_costs(self, q: np.ndarray) -> np.ndarray:
         c = self._c
         if self._expanded:
-            # |t - q|^2 = |t|^2 - 2 t.q + |q|^2: one BLAS matvec instead of a (L, T, D) temporary.
-            np.dot(self._flat, q * -2.0, out=c.reshape(-1))
-            c += self._sqnorm
-            c += float(q @ q)
+            # |t - q|^2 = [t, |t|^2, 1] . [-2q, 1, |q|^2]: one BLAS matvec, no (L, T, D) temporary.
+            qa = self._q_aug
+            np.multiply(q, -2.0, out=qa[: self.D])
+            qa[self.D + 1] = q @ q
+            np.dot(self._flat, qa, out=c.reshape(-1))
             np.maximum(c, 0.0, out=c)
         else:
             np.subtract(self.tmpl, q, out=self._diff)
@@ -135,18 +145,22 @@ class IncrementalDTW:
         recip = self._recip.get(self.n)
         if recip is None:
             recip = self._recip.setdefault(self.n, 1.0 / (self._steps[:, :1] + self.n))
-        norm = np.multiply(row, recip, out=self._tmp)
-        norm += self._pad_inf
         if self.min_progress > 0:
-            # best over positions j >= need - 1: a suffix minimum, then one row per template
+            # best over positions need - 1 <= j < L_k of each template: one reduceat over the
+            # position-contiguous copy (T, L); every other segment is the gap, skipped.
             key = (self.n, self.min_progress)
             idx = self._take.get(key)
             if idx is None:
                 first = np.minimum(self.lengths, int(np.ceil(self.min_progress * self.n))) - 1
-                idx = self._take.setdefault(key, (self.L - 1 - first) * self.T + self._cols)
-            suffix = np.minimum.accumulate(norm[::-1], axis=0, out=self._suffix)
-            np.take(suffix.ravel(), idx, out=self.scores)
+                bounds = np.empty(2 * self.T, dtype=np.intp)
+                bounds[0::2] = self._cols * self.L + first
+                bounds[1::2] = self._cols * self.L + self.lengths
+                idx = self._take.setdefault(key, bounds[:-1] if bounds[-1] == self.T * self.L else bounds)
+            flat = np.multiply(row.T, recip.T, out=self._suffix)  # normalized, template-major
+            self.scores[:] = np.minimum.reduceat(flat.ravel(), idx)[0::2]
         else:
+            norm = np.multiply(row, recip, out=self._tmp)
+            norm += self._pad_inf
             np.min(norm, axis=0, out=self.scores)
         return self.scores
 

@@ -11,10 +11,18 @@ Per 60 Hz frame (`push`):
 - Supplementary buffer (IV-B): up to `supplementary` frames from the onset the DTW keeps
   growing and the decision is refined; a better action (by `switch_margin`) gives a `switch`
   with `from_frame` = n_p, the clip frames the character has already played.
+- Scoring: while the hand moves the motion may be partial, so a template scores by its best
+  prefix (open end, the query's end at least `min_progress` * n frames into it); once the hand
+  is quiet the motion has probably ended and the whole template must match (closed end).
 - Rejection: a decision needs the best template's score under its threshold (learned from the
-  spread of the training trials). If none is, nothing starts; the decision may still come
+  spread of the training trials) and the motion to have reached ENERGY_RATIO of the template's
+  peak activity (a wiggle is not a punch). If not, nothing starts; the decision may still come
   later in the supplementary buffer, else the motion is `reject`ed when the buffer is full.
 - Null signal (IV-C): `null_frames` quiet frames in a row `end` the motion.
+- Beyond the paper: the motion also ends (`reason: "complete"`) once the current action's
+  template has been matched past `complete_fraction` of its length and the hand has calmed
+  down, so punches thrown back to back without a rest start one action each even when no
+  character calls `character_finished()`. `complete_fraction=0` keeps the paper's rules.
 - After `character_finished()` (IV-C) frames are discarded until a null signal or until
   `discard_frames` frames have passed, so the hand's return does not launch a new action.
 
@@ -45,6 +53,7 @@ GRAVITY_FOLLOW = 0.05  # how fast g follows the signal while the gate is closed
 CLOSED_END = 1e9  # a min_progress that leaves only each template's last position
 # The consumed-template end needs the motion to have lasted this fraction of the template.
 COMPLETE_MIN_LENGTH = 0.6
+COMPLETE_CALM = 0.3  # ... and the activity to have fallen below this fraction of the motion's peak
 ENERGY_RATIO = 0.4
 
 IDLE, ACTIVE, DISCARD = "idle", "active", "discard"
@@ -67,7 +76,7 @@ class DualBufferRecognizer:
         reject: bool = True,
         dtw_method: str = "auto",
         min_progress: float = MIN_PROGRESS,
-        complete_fraction: float = 0.0,
+        complete_fraction: float = 0.9,
         complete_frames: int = 2,
         closed_after: int = 1,
     ):
@@ -299,8 +308,10 @@ class DualBufferRecognizer:
         lo = self._action_starts[self.action]
         hi = self._action_starts[self.action + 1] if self.action + 1 < len(self._action_starts) else len(scores)
         k = lo + int(np.argmin(scores[lo:hi]))
-        if self.count < COMPLETE_MIN_LENGTH * self.template_lengths[k]:
-            self._done = 0  # too early: an alignment can jump to a template's end at the start
+        if self.count < COMPLETE_MIN_LENGTH * self.template_lengths[k] or self._act > COMPLETE_CALM * self._peak_act_seen:
+            # too early (an alignment can jump to a template's end at the start), or the
+            # hand is still moving hard: not over yet
+            self._done = 0
             return False
         pos = self.dtw.position(k)
         self._done = self._done + 1 if pos + 1 >= self.complete_fraction * self.template_lengths[k] else 0

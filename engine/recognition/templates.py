@@ -316,7 +316,7 @@ class Templates:
         keys = np.array(list(self.meta.keys()), dtype=str)
         vals = np.array(list(self.meta.values()), dtype=str)
         with open(path, "wb") as f:  # np.savez would append .npz to a name without it
-            np.savez(
+            np.savez_compressed(
                 f,
                 format=np.array("quickjab-templates"),
                 version=np.array(FORMAT_VERSION),

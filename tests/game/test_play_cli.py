@@ -83,3 +83,24 @@ def test_left_handed_play_mirrors_a_right_handed_set(tmp_path, monkeypatch) -> N
     a = right.signals[i].reshape(len(right.signals[i]), 2, 3)
     b = left.signals[j].reshape(len(left.signals[j]), 2, 3)
     assert np.allclose(b[:, 1, 1:], a[:, 0, 1:]) and np.allclose(b[:, 1, 0], -a[:, 0, 0])
+
+
+def test_a_one_hand_recording_is_a_clear_error(tmp_path, monkeypatch, capsys, graph_path) -> None:  # noqa: F811
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "xdg"))
+    rec = tmp_path / "one_hand.csv"
+    rows = "\n".join(f"{k / 60:.4f},0.0,0.0,1.0" for k in range(120))
+    rec.write_text(f"# rate_hz: 60\nt,rx,ry,rz\n{rows}\n")
+    assert main(["play", "--headless", "--frames", "5", "--graph", graph_path, "--source", f"replay://{rec}"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "one_hand.csv" in err[0] and "sensor" in err[0]
+
+
+def test_mirror_posture_swaps_sides() -> None:
+    from game.actions import load_library
+    from game.skeleton import joint_index
+    from game.training import mirror_posture
+
+    p = load_library()["straight_r"].posture(10)
+    m = mirror_posture(p)
+    assert np.allclose(m[joint_index("fist_l")], p[joint_index("fist_r")] * [-1, 1, 1])
+    assert np.allclose(mirror_posture(m), p)

@@ -108,3 +108,31 @@ def test_disconnected_overlay_darkens_the_scene(lib) -> None:
         Hud().draw(surf, HudState(disconnected=off, source_state="disconnected" if off else "connected"))
     probe = (int(SIZE[0] * 0.5), int(SIZE[1] * 0.9))  # the canvas, outside the message box
     assert sum(b.get_at(probe)[:3]) < 0.5 * sum(a.get_at(probe)[:3])
+
+
+def test_recognition_panel_shows_buffers_and_marks() -> None:
+    from game.hud import OK_COLOR, REJECT_COLOR, SWITCH_COLOR
+
+    pygame.init()
+    panel = pygame.Rect(0, SIZE[1] - 180, 360, 180)
+
+    def draw(**kw) -> pygame.Surface:
+        surf = pygame.Surface(SIZE)
+        surf.fill((0, 0, 0))
+        Hud().draw(surf, HudState(**kw))
+        return surf
+
+    idle = draw()
+    assert colour_count(idle, panel, OK_COLOR, tol=5) == 0
+    assert colour_count(idle, panel, SWITCH_COLOR, tol=5) == 0
+    st = HudState()
+    st.mark({"event": "start", "action": "hook_r", "score": 0.3})
+    st.mark({"event": "switch", "action": "uppercut_r", "from_frame": 6, "score": 0.2})
+    assert st.action == "uppercut_r" and st.switch_from == 6
+    busy = draw(main_fill=6, supp_fill=30, switch_age=0, reject_age=0, action="uppercut_r", score=0.2)
+    assert colour_count(busy, panel, OK_COLOR, tol=5) > 6 * 150  # six lit main-buffer cells
+    assert colour_count(busy, panel, SWITCH_COLOR, tol=5) > 300
+    assert colour_count(busy, panel, REJECT_COLOR, tol=5) > 300
+    for _ in range(60):
+        st.tick()
+    assert st.switch_age >= 45  # the mark goes out

@@ -175,3 +175,61 @@ def test_a_replayed_recording_drives_the_player_through_the_wiimote_emulator(tmp
     # most of the performed actions were recognized, in order
     hits = Counter(starts) & Counter(labels)
     assert sum(hits.values()) >= 0.6 * len(labels)
+
+
+def test_rounds_start_from_the_corners_and_the_attract_mode_starts_over() -> None:
+    from game.match import Match
+
+    s = make_session("keyboard://?seed=9", render=False, demo=True)
+    s.match = Match(round_seconds=2)
+    s.loop.run(steps=2 * 60 + 3 * 60 + 5)  # round 1, the break, the bell of round 2
+    assert s.match.round == 2
+    assert s.player.root[:2] == pytest.approx((0.0, -0.55), abs=0.05)
+    assert s.opponent.root[:2] == pytest.approx((0.0, 0.55), abs=0.05)
+    s.loop.run(steps=2 * 60 * 2 + 3 * 60 + 60)
+    assert s.match.over
+    s.loop.run(steps=8 * 60 + 2)
+    assert not s.match.over and s.match.round == 1 and s.match.health == [100.0, 100.0]
+
+
+class HeldRemote:
+    """A test double of a Wiimote: rest readings at 60 Hz, buttons, battery, rumble calls."""
+
+    def __init__(self, clock):
+        from engine.sensors import Source
+
+        class _Remote(Source):
+            def poll(inner):
+                now = clock.seconds()
+                out = []
+                while inner.next_t <= now:
+                    out.append(Sample(inner.next_t, np.array([[0.0, 1.0, 0.0], [0.0, 1.0, 0.0]])))
+                    inner.next_t += 1 / 60
+                return out
+
+            def rumble(inner, ms):
+                inner.rumbles.append(ms)
+
+        from engine.sensors import Sample
+
+        self.source = _Remote(url="wiimote-test://", sensors=2, state=SourceState.CONNECTED, battery=0.55)
+        self.source.next_t = 0.0
+        self.source.buttons = 0
+        self.source.rumbles = []
+
+
+def test_home_button_pauses_and_the_battery_shows() -> None:
+    pygame.init()
+    clock = VirtualClock()
+    remote = HeldRemote(clock).source
+    s = Session(remote, SessionConfig(size=SIZE, sound=False, render=False, graph=GRAPH), clock=clock)
+    s.loop.run(steps=10)
+    assert s.hud_state.battery == 0.55 and s.hud_state.source_url == "wiimote-test://"
+    remote.buttons = 0x0080  # Home down: pause (once, not every step it is held)
+    s.loop.run(steps=10)
+    assert s.match.paused
+    remote.buttons = 0
+    s.loop.run(steps=2)
+    remote.buttons = 0x0080
+    s.loop.run(steps=2)
+    assert not s.match.paused

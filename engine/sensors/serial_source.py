@@ -1,0 +1,371 @@
+"""`serial://`: IMUs on a microcontroller streaming protocol v1 frames (firmware_bridge/).
+
+URLs:
+- `serial:///dev/ttyACM0?baud=115200`: a port by path (USB CDC ignores the baud rate).
+- `serial://auto`: the first port whose USB VID:PID is a known board (Pico, ESP32 bridges);
+  `serial://auto?vid=2e8a&pid=0005` names the pair.
+- `serial://<pyserial URL>`: anything after `serial://` that itself contains `://` is handed to
+  `serial.serial_for_url` unchanged, e.g. `serial://loop://` for tests.
+
+Polling never waits: each poll drains `in_waiting` (the Linux tty buffer holds only 4095 bytes,
+so a slow reader loses data), decodes frames, and maps device time to host time. A lost port
+(OSError, SerialException, termios.error) becomes SourceState.RECONNECTING, and the port is
+reopened every `retry` seconds until it comes back.
+"""
+
+from __future__ import annotations
+
+import termios
+from collections import deque
+from urllib.parse import parse_qsl
+
+import numpy as np
+import serial
+from serial.tools import list_ports
+
+from engine.sensors.source import Clock, Sample, Source, SourceError, SourceState, register_scheme
+from firmware_bridge import protocol
+
+# (VID, PID or None for any) of boards the firmware runs on
+KNOWN_BOARDS = (
+    (0x2E8A, 0x0005),  # Raspberry Pi Pico / Pico W running MicroPython
+    (0x303A, None),  # Espressif native USB (ESP32-S2/S3/C3)
+    (0x10C4, 0xEA60),  # CP210x on ESP32 DevKits
+    (0x1A86, 0x7523),  # CH340 on ESP32 boards
+    (0x1A86, 0x55D4),  # CH9102 on ESP32 boards
+)
+LOST = (OSError, serial.SerialException, termios.error)
+MAX_READS_PER_POLL = 32
+BACKLOG = 1024  # a read this big may have left more behind: read again in the same poll  # bounds one poll's work even if the device outruns us
+STALL_S = 2.0  # no byte for this long while connected counts one stall
+
+
+class DeviceClock:
+    """Device timestamps to host seconds.
+
+    Unwraps the device's `ts_bits`-bit microsecond counter, then maps it with the minimum of
+    (host arrival time - device time) over a sliding window: transport delay is never negative,
+    so the minimum is the offset plus the least delay seen, and a window (rather than all time)
+    follows the drift between the two crystals.
+    """
+
+    def __init__(self, window_s: float = 2.0):
+        self.window_s = window_s
+        self.last_t = -float("inf")  # the last host time handed out; kept across resets
+        self.reset(32)
+
+    def reset(self, ts_bits: int) -> None:
+        self.mask = (1 << ts_bits) - 1
+        self._last_raw: int | None = None
+        self._us = 0  # unwrapped device microseconds
+        self._mins: deque[tuple[float, float]] = deque()  # (host t, offset), offsets increasing
+
+    def unwrap(self, raw: int) -> float | None:
+        """Device seconds, or None for a jump backwards (a restarted device clock)."""
+        raw &= self.mask
+        if self._last_raw is None:
+            self._us = raw
+        else:
+            delta = (raw - self._last_raw) & self.mask
+            if delta > self.mask // 2:
+                return None
+            self._us += delta
+        self._last_raw = raw
+        return self._us / 1e6
+
+    def observe(self, host_t: float, device_s: float) -> None:
+        """Everything up to device time `device_s` had arrived by host time `host_t`."""
+        offset = host_t - device_s
+        q = self._mins
+        while q and q[-1][1] >= offset:
+            q.pop()
+        q.append((host_t, offset))
+        while q[0][0] < host_t - self.window_s:
+            q.popleft()
+
+    @property
+    def offset(self) -> float:
+        return self._mins[0][1]
+
+
+def find_board(vid: int | None = None, pid: int | None = None) -> str | None:
+    """The device path of the first known board (or the given VID/PID), or None."""
+    wanted = ((vid, pid),) if vid is not None else KNOWN_BOARDS
+    for port in sorted(list_ports.comports(), key=lambda p: p.device):
+        for v, p in wanted:
+            if port.vid == v and (p is None or port.pid == p):
+                return port.device
+    return None
+
+
+class SerialSource(Source):
+    """Samples of shape (sensors, 3) in g from a protocol v1 device."""
+
+    def __init__(self, url: str, clock: Clock, target: str | None, *, baud: int = 115200,
+                 retry: float = 0.5, window_s: float = 2.0, vid: int | None = None, pid: int | None = None):
+        super().__init__(url=url, sensors=2, clock=clock, description=f"serial bridge {target or 'auto'}")
+        self.target = target  # a path or pyserial URL; None: find by VID/PID
+        self.baud = baud
+        self.retry = retry
+        self.vid, self.pid = vid, pid
+        self.port: serial.SerialBase | None = None
+        self.port_name: str | None = None
+        self.decoder = protocol.Decoder()
+        self.devclock = DeviceClock(window_s)
+        self.hello: protocol.Hello | None = None
+        self.messages: deque[str] = deque(maxlen=32)  # the device's TEXT lines
+        self._last_row: np.ndarray | None = None  # the last SAMPLE's accel, (sensors, 3)
+        self._next_try = 0.0
+        self._last_byte = clock()
+        self._stalled = False
+        self._next_hello_request = 0.0
+        self._polled = False
+        self._open()
+
+    # The decoder's counters join the source's own when stats is read, not on every poll.
+    @property
+    def stats(self) -> dict[str, int]:
+        own = self.__dict__.setdefault("_own_stats", {})
+        decoder = self.__dict__.get("decoder")
+        return {**own, **decoder.counts()} if decoder is not None else own
+
+    @stats.setter
+    def stats(self, value: dict[str, int]) -> None:
+        self.__dict__["_own_stats"] = value
+
+    def count(self, key: str, n: int = 1) -> None:
+        own = self.__dict__.setdefault("_own_stats", {})
+        own[key] = own.get(key, 0) + n
+
+    # -- connection -------------------------------------------------------------------------
+    def _open(self) -> None:
+        self._next_try = self.clock() + self.retry
+        name = self.target or find_board(self.vid, self.pid)
+        if name is None:
+            return
+        try:
+            if "://" in name:
+                port = serial.serial_for_url(name, baudrate=self.baud, timeout=0)
+            else:
+                # write_timeout=0: asking for a HELLO must never block the game loop
+                port = serial.Serial(name, baudrate=self.baud, timeout=0, write_timeout=0)
+        except LOST:
+            return  # not there (yet): a state, retried every `retry` s
+        except Exception as exc:  # pyserial's own URL and setting checks (ValueError, KeyError...)
+            if self._polled:  # poll never raises: a later failure is counted and retried
+                self.count("open_errors")
+                return
+            raise SourceError(f"{self.url}: cannot open {name}: {exc!r}") from None
+        self.port, self.port_name = port, name
+        if self.state is not SourceState.CONNECTING:
+            self.count("reconnects")
+        self.state = SourceState.CONNECTED
+        self.decoder.resync()
+        self.devclock.reset(self.hello.ts_bits if self.hello else 32)
+        self._last_byte = self.clock()
+        self._stalled = False
+        self._next_hello_request = 0.0
+        self._ask_hello()
+
+    def _ask_hello(self) -> None:
+        """Ask the device for a HELLO now (protocol.HELLO_REQUEST) instead of waiting up to a
+        second for the next one: pyserial flushed any earlier HELLO when the port opened."""
+        now = self.clock()
+        if self.port is None or now < self._next_hello_request:
+            return
+        self._next_hello_request = now + 0.25
+        try:
+            self.port.write(protocol.HELLO_REQUEST)
+        except (*LOST, serial.SerialTimeoutException):
+            pass  # a read will notice a lost port; a full output buffer just means no request
+
+    def _lost(self) -> None:
+        self.count("disconnects")
+        self._drop_port()
+        self.state = SourceState.RECONNECTING
+        self._next_try = self.clock() + self.retry
+
+    def _drop_port(self) -> None:
+        if self.port is not None:
+            try:
+                self.port.close()
+            except LOST:
+                pass
+        self.port = None
+
+    def close(self) -> None:
+        self._drop_port()
+        self.state = SourceState.DISCONNECTED
+
+    # -- reading ----------------------------------------------------------------------------
+    def _read(self) -> bytes:
+        """Everything waiting, without waiting. A zero-timeout read(1) when nothing is waiting
+        makes a hung-up pty or unplugged port raise here instead of looking merely quiet."""
+        port = self.port
+        n = port.in_waiting
+        if not n:
+            return port.read(1)
+        data = port.read(n)
+        if n < BACKLOG:  # the usual case: one ioctl, one read
+            return data
+        chunks = [data]  # a backlog: keep draining while the device refills the buffer
+        for _ in range(MAX_READS_PER_POLL):
+            n = port.in_waiting
+            if not n:
+                break
+            chunks.append(port.read(n))
+        return b"".join(chunks)
+
+    def poll(self) -> list[Sample]:
+        if self.state is SourceState.DISCONNECTED:
+            return []
+        self._polled = True
+        if self.port is None:
+            if self.clock() >= self._next_try:
+                self._open()
+            if self.port is None:
+                return []
+        try:
+            data = self._read()
+        except LOST:
+            self._lost()
+            return []
+        now = self.clock()
+        if not data:
+            if not self._stalled and now - self._last_byte > STALL_S:
+                self._stalled = True
+                self.count("stalls")
+            return []
+        self._last_byte, self._stalled = now, False
+        frames = self.decoder.feed(data)
+        return self._samples(frames, now)
+
+    def _apply_hello(self, hello: protocol.Hello) -> None:
+        changed = self.hello is None or hello.boot_id != self.hello.boot_id or hello.ts_bits != self.hello.ts_bits
+        self.hello = hello
+        if hello.sensors:
+            self.sensors = hello.sensors
+        self.rate_hz = float(hello.rate_hz)
+        if changed:
+            self.devclock.reset(hello.ts_bits)
+            kind = {1: "MPU-6050", 2: "LSM6DS3", 3: "simulated"}.get(hello.imu_kind, "IMU")
+            self.description = f"serial bridge {self.port_name} ({kind} x{hello.sensors}, {hello.rate_hz} Hz)"
+
+    def _samples(self, frames: list[protocol.Frame], now: float) -> list[Sample]:
+        times: list[float] = []
+        sample_frames: list[protocol.Frame] = []
+        latest = None
+        for f in frames:
+            if f.msg_type == protocol.HELLO:
+                self._apply_hello(protocol.Hello(f))
+            elif f.jump:  # a reboot whose HELLO was lost: the device clock restarted
+                self.devclock.reset(self.devclock.mask.bit_length())
+            dev = self.devclock.unwrap(f.t_us)
+            if dev is None:  # device clock went back without a HELLO: start the mapping over
+                self.count("time_jumps")
+                self.devclock.reset(self.devclock.mask.bit_length())
+                dev = self.devclock.unwrap(f.t_us)
+            latest = dev
+            if f.msg_type == protocol.TEXT:
+                self.messages.append(f.payload.decode("utf-8", "replace"))
+                self.count("texts")
+            elif f.msg_type == protocol.SAMPLE:
+                if self.hello is None:  # scales unknown until the first HELLO: ask for one
+                    self.count("samples_before_hello")
+                    self._ask_hello()
+                    continue
+                if f.flags & protocol.FLAG_OVERRUN:
+                    self.count("device_overruns")
+                times.append(dev)
+                sample_frames.append(f)
+        if latest is not None:
+            self.devclock.observe(now, latest)
+        if not times:
+            return []
+        # a few samples per poll: plain floats beat numpy calls here
+        offset, last = self.devclock.offset, self.devclock.last_t
+        out = []
+        for dev, a in zip(times, self._accel_rows(sample_frames), strict=True):
+            last = max(dev + offset, last)  # never backwards
+            out.append(Sample(last, a))
+        self.devclock.last_t = last
+        return out
+
+    def _accel_rows(self, frames: list[protocol.Frame]) -> list[np.ndarray] | np.ndarray:
+        """(sensors, 3) in g per frame: one numpy conversion for the whole poll when every frame
+        has the layout the HELLO announced (the usual case), frame by frame otherwise."""
+        flags = frames[0].flags & ~protocol.FLAG_OVERRUN
+        want = self.hello.flags & (protocol.FLAG_SENSOR_A | protocol.FLAG_SENSOR_B)
+        if (flags & (protocol.FLAG_SENSOR_A | protocol.FLAG_SENSOR_B)) == want and self.hello.sensors == self.sensors \
+                and all((f.flags & ~protocol.FLAG_OVERRUN) == flags for f in frames):
+            per = protocol.sample_values_per_sensor(flags)
+            raw = np.frombuffer(b"".join([f.payload for f in frames]), dtype="<i2")
+            acc = raw.reshape(len(frames), self.sensors, per)[:, :, :3] * (1.0 / self.hello.accel_lsb_per_g)
+            self._last_row = acc[-1]  # for a later SAMPLE that lacks a sensor
+            return acc
+        return [self._accel(f) for f in frames]
+
+    def _last(self) -> np.ndarray:
+        """Every sensor's last accel, (sensors, 3); zeros before any."""
+        last = self._last_row
+        if last is None or last.shape[0] != self.sensors:
+            return np.zeros((self.sensors, 3))
+        return last
+
+    def _accel(self, f: protocol.Frame) -> np.ndarray:
+        """(sensors, 3) in g; a sensor the HELLO announced but this SAMPLE lacks holds its last value."""
+        per = protocol.sample_values_per_sensor(f.flags)
+        raw = np.frombuffer(f.payload, dtype="<i2").reshape(-1, per)[:, :3] / self.hello.accel_lsb_per_g
+        want = self.hello.flags & (protocol.FLAG_SENSOR_A | protocol.FLAG_SENSOR_B)
+        have = f.flags & (protocol.FLAG_SENSOR_A | protocol.FLAG_SENSOR_B)
+        if have == want or not want:
+            out = raw
+        else:
+            self.count("sensor_missing")
+            out = self._last().copy()
+            slots = [s for s in (protocol.FLAG_SENSOR_A, protocol.FLAG_SENSOR_B) if want & s]
+            k = 0
+            for i, s in enumerate(slots):
+                if have & s:
+                    out[i] = raw[k]
+                    k += 1
+        if out.shape[0] != self.sensors:
+            base = self._last().copy()
+            k = min(out.shape[0], self.sensors)
+            base[:k] = out[:k]
+            out = base
+        self._last_row = out
+        return out
+
+
+def parse_serial_url(url: str) -> tuple[str | None, dict[str, str]]:
+    """(target, params): target is a path, a pyserial URL, or None for `auto`."""
+    rest = url.split("://", 1)[1] if "://" in url else ""
+    if "://" in rest:
+        return rest, {}
+    path, _, query = rest.partition("?")
+    params = dict(parse_qsl(query))
+    if not path:
+        raise SourceError(f"{url}: no port (expected serial:///dev/ttyACM0, serial://auto or serial://loop://)")
+    return (None if path == "auto" else path), params
+
+
+def open_serial(url: str, clock: Clock) -> SerialSource:
+    target, params = parse_serial_url(url)
+    unknown = set(params) - {"baud", "retry", "window", "vid", "pid"}
+    if unknown:
+        raise SourceError(f"{url}: unknown parameter(s) {', '.join(sorted(unknown))} (known: baud, retry, window, vid, pid)")
+    try:
+        baud = int(params.get("baud", "115200"))
+        retry = float(params.get("retry", "0.5"))
+        window = float(params.get("window", "2"))
+        vid = int(params["vid"], 16) if "vid" in params else None
+        pid = int(params["pid"], 16) if "pid" in params else None
+    except ValueError:
+        raise SourceError(f"{url}: baud must be an integer, retry and window numbers, vid and pid hex") from None
+    if retry <= 0 or window <= 0:
+        raise SourceError(f"{url}: retry and window must be positive")
+    return SerialSource(url, clock, target, baud=baud, retry=retry, window_s=window, vid=vid, pid=pid)
+
+
+register_scheme("serial", open_serial)

@@ -1,0 +1,327 @@
+"""A host-side device: the firmware's own sampling loop (firmware/sampler.py) against a
+simulated IMU, writing to a pseudo-terminal, so `serial:///dev/pts/N` behaves like a board.
+
+It can inject what real links do: garbage bursts, bit flips, dropped bytes, device stalls,
+reboots, and unplug/replug (the pty vanishes and a new one appears; `link` is a symlink that
+always points at the current one, so a host can keep one path across replugs).
+"""
+
+from __future__ import annotations
+
+import os
+import random
+import threading
+import time
+import tty
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from firmware_bridge import protocol
+from firmware_bridge.firmware.sampler import Sampler
+
+TS_BITS = 30  # as MicroPython's ticks_us on rp2 and esp32
+
+
+class HostTicks:
+    """MicroPython's ticks_us/ticks_add/ticks_diff/sleep_us on the host. With `start_us`
+    None the ticks are CLOCK_MONOTONIC microseconds (shared by every process, so a benchmark
+    can tell a sample's true age); otherwise they start at `start_us` (e.g. just before the
+    wrap, to exercise the host's unwrapping)."""
+
+    def __init__(self, bits: int = TS_BITS, start_us: int | None = None):
+        self.mask = (1 << bits) - 1
+        self.half = 1 << (bits - 1)
+        now = time.monotonic_ns() // 1000
+        self.offset = 0 if start_us is None else start_us - now
+
+    def ticks_us(self) -> int:
+        return (time.monotonic_ns() // 1000 + self.offset) & self.mask
+
+    def ticks_add(self, t: int, delta: int) -> int:
+        return (t + delta) & self.mask
+
+    def ticks_diff(self, a: int, b: int) -> int:
+        return ((a - b + self.half) & self.mask) - self.half
+
+    def sleep_us(self, us: int) -> None:
+        time.sleep(us / 1e6)
+
+
+Signal = Callable[[float], np.ndarray]  # seconds -> (sensors, 3) accel in g
+
+
+def synthetic_motion(sensors: int = 2, seed: int = 0) -> Signal:
+    """Gravity plus a punch-like pulse (3 g, ~150 ms) every 1.5 s, alternating hands."""
+    rng = np.random.default_rng(seed)
+    tilt = rng.normal(0, 0.05, (sensors, 3))
+
+    def signal(t: float) -> np.ndarray:
+        a = np.zeros((sensors, 3))
+        a[:, 2] = 1.0
+        a += tilt
+        k, phase = divmod(t, 1.5)
+        pulse = 3.0 * np.exp(-(((phase - 0.3) / 0.05) ** 2)) - 1.0 * np.exp(-(((phase - 0.45) / 0.06) ** 2))
+        a[int(k) % sensors, 0] += pulse
+        return a
+
+    return signal
+
+
+def recording_motion(path: str | os.PathLike) -> tuple[Signal, int]:
+    """A recording (engine.recording) played in a loop, interpolated at any instant."""
+    from engine.recording import read_recording
+
+    rec = read_recording(path)
+    t = rec.t - rec.t[0]
+    period = float(np.median(np.diff(t))) if len(t) > 1 else 1 / 60
+    length = float(t[-1]) + period
+    flat = rec.accel.reshape(len(t), -1)
+
+    def signal(s: float) -> np.ndarray:
+        x = s % length
+        return np.array([np.interp(x, t, flat[:, d]) for d in range(flat.shape[1])]).reshape(-1, 3)
+
+    return signal, rec.sensors
+
+
+class SimIMU:
+    """The drivers' interface (read() -> raw int16 accel + gyro) over a motion signal."""
+
+    kind = protocol.IMU_SIMULATED
+    accel_lsb_per_g = 4096
+    gyro_mlsb_per_dps = 65500
+
+    def __init__(self, signal: Signal, index: int, elapsed: Callable[[], float], noise_g: float = 0.002,
+                 seed: int = 0):
+        self.signal, self.index, self.elapsed = signal, index, elapsed
+        self.noise = noise_g
+        self.rng = random.Random(seed + index)
+
+    def read(self) -> tuple[int, ...]:
+        a = self.signal(self.elapsed())[self.index]
+        g = self.accel_lsb_per_g
+        n = self.noise
+        return tuple(round((float(v) + self.rng.gauss(0, n)) * g) for v in a) + (0, 0, 0)
+
+
+class PtyPort:
+    """The device end of a pty pair. Writes never block: a full buffer is a short write."""
+
+    def __init__(self, link: str | None = None):
+        self.link = link
+        self.master = self.slave = -1
+        self.name = ""
+        self.plug()
+
+    def plug(self) -> str:
+        self.master, self.slave = os.openpty()
+        # raw at once: with the default line discipline the slave would echo our bytes back
+        # into the master and translate them before any host opened the port
+        tty.setraw(self.slave)
+        os.set_blocking(self.master, False)
+        self.name = os.ttyname(self.slave)
+        if self.link:
+            tmp = f"{self.link}.{os.getpid()}.tmp"
+            if os.path.lexists(tmp):
+                os.unlink(tmp)
+            os.symlink(self.name, tmp)
+            os.replace(tmp, self.link)
+        return self.name
+
+    def unplug(self) -> None:
+        for fd in (self.master, self.slave):
+            if fd >= 0:
+                os.close(fd)
+        self.master = self.slave = -1
+
+    def read_host(self) -> bytes:
+        """What the host wrote to the port since the last call (b'' when nothing)."""
+        if self.master < 0:
+            return b""
+        try:
+            return os.read(self.master, 256)
+        except (BlockingIOError, OSError):
+            return b""
+
+    def write(self, data: bytes) -> int:
+        if self.master < 0:
+            return 0
+        try:
+            return os.write(self.master, data)
+        except (BlockingIOError, OSError):
+            return 0
+
+    def close(self) -> None:
+        self.unplug()
+        if self.link and os.path.islink(self.link) and os.readlink(self.link) == self.name:
+            os.unlink(self.link)
+
+
+@dataclass
+class Faults:
+    """What to inject, in seconds since start. *_every: a period (0 = never)."""
+
+    garbage_every: float = 0.0
+    garbage_len: int = 32
+    flip_every: float = 0.0
+    drop_every: float = 0.0
+    stall_at: list[float] = field(default_factory=list)
+    stall_s: float = 0.5
+    reboot_at: list[float] = field(default_factory=list)
+    unplug_at: list[float] = field(default_factory=list)
+    unplug_s: float = 1.0
+
+
+@dataclass
+class EmulatorStats:
+    frames: int = 0
+    bytes: int = 0
+    short_writes: int = 0
+    garbage_bursts: int = 0
+    bit_flips: int = 0
+    dropped_bytes: int = 0
+    stalls: int = 0
+    reboots: int = 0
+    unplugs: int = 0
+
+
+class Emulator:
+    """Runs Sampler.run against SimIMUs on a PtyPort until `seconds` pass or stop() is called.
+    `on_port(path)` is told the port path at start and after every replug."""
+
+    def __init__(self, signal: Signal, sensors: int = 2, *, rate_hz: int = 200, faults: Faults | None = None,
+                 link: str | None = None, ticks_start: int | None = None, seed: int = 0,
+                 on_port: Callable[[str], None] | None = None, on_event: Callable[[str], None] | None = None):
+        self.signal, self.sensors, self.rate_hz = signal, sensors, rate_hz
+        self.faults = faults or Faults()
+        self.rng = random.Random(seed)
+        self.seed = seed
+        self.ticks_start = ticks_start
+        self.port = PtyPort(link)
+        self.stats = EmulatorStats()
+        self.on_port = on_port or (lambda p: None)
+        self.on_event = on_event or (lambda e: None)
+        self._stop = threading.Event()
+        self.seconds: float | None = None
+        self._reason = "end"
+        self._t0 = time.monotonic()
+        self._next = {"garbage": self.faults.garbage_every, "flip": self.faults.flip_every,
+                      "drop": self.faults.drop_every}
+        self._pending = {"garbage": 0, "flip": 0, "drop": 0}
+        self._stalls = sorted(self.faults.stall_at)
+        self._reboots = sorted(self.faults.reboot_at)
+        self._unplugs = sorted(self.faults.unplug_at)
+
+    @property
+    def path(self) -> str:
+        return self.port.link or self.port.name
+
+    def elapsed(self) -> float:
+        return time.monotonic() - self._t0
+
+    def stop(self) -> None:
+        self._stop.set()
+
+    def _write(self, frame: bytes) -> int:
+        """The sampler's write, through the fault injector."""
+        data = frame
+        for kind in ("garbage", "flip", "drop"):
+            if self._pending[kind]:
+                self._pending[kind] -= 1
+                if kind == "garbage":
+                    n = self.rng.randint(1, self.faults.garbage_len)
+                    data = self.rng.randbytes(n) + data
+                    self.stats.garbage_bursts += 1
+                elif kind == "flip":
+                    b = bytearray(data)
+                    i = self.rng.randrange(len(b))
+                    b[i] ^= 1 << self.rng.randrange(8)
+                    data = bytes(b)
+                    self.stats.bit_flips += 1
+                else:
+                    i = self.rng.randrange(len(data))
+                    data = data[:i] + data[i + 1 :]
+                    self.stats.dropped_bytes += 1
+        n = self.port.write(data)
+        self.stats.bytes += max(n, 0)
+        if n < len(data):
+            self.stats.short_writes += 1
+            return 0
+        self.stats.frames += 1
+        return len(frame)
+
+    def _control(self, sampler: Sampler) -> bool:
+        """Called by Sampler.run every loop: schedule faults; True ends this boot."""
+        if self._stop.is_set() or (self.seconds is not None and self.elapsed() >= self.seconds):
+            self._reason = "end"
+            return True
+        if protocol.HELLO_REQUEST in self.port.read_host():
+            sampler.request_hello()
+        t = self.elapsed()
+        for kind, every in (("garbage", self.faults.garbage_every), ("flip", self.faults.flip_every),
+                            ("drop", self.faults.drop_every)):
+            if every > 0 and t >= self._next[kind]:
+                self._next[kind] += every
+                self._pending[kind] += 1
+        if self._stalls and t >= self._stalls[0]:
+            self._stalls.pop(0)
+            self.stats.stalls += 1
+            self.on_event(f"stall {self.faults.stall_s:.2f} s")
+            self._stop.wait(self.faults.stall_s)  # the device hangs (a long GC, a busy I2C bus)
+        if self._reboots and t >= self._reboots[0]:
+            self._reboots.pop(0)
+            self._reason = "reboot"
+            return True
+        if self._unplugs and t >= self._unplugs[0]:
+            self._unplugs.pop(0)
+            self._reason = "unplug"
+            return True
+        return False
+
+    def _sampler(self, boot: int) -> Sampler:
+        start = self.ticks_start
+        ticks = HostTicks(TS_BITS, None if start is None else (start if boot == 0 else 0))
+        imus = [SimIMU(self.signal, i, self.elapsed, seed=self.seed) for i in range(self.sensors)]
+        imus += [None] * (2 - len(imus))
+        return Sampler(imus, self._write, ticks, rate_hz=self.rate_hz,
+                       boot_id=self.rng.getrandbits(32), ts_bits=TS_BITS)
+
+    def run(self, seconds: float | None = None) -> EmulatorStats:
+        self.seconds = seconds
+        self._t0 = time.monotonic()
+        self.on_port(self.port.name)
+        boot = 0
+        try:
+            while True:
+                self._reason = "end"
+                self._sampler(boot).run(self._control)
+                boot += 1
+                if self._reason == "end":
+                    break
+                if self._reason == "unplug":
+                    self.stats.unplugs += 1
+                    self.on_event(f"unplug for {self.faults.unplug_s:.2f} s")
+                    self.port.unplug()
+                    if self._stop.wait(self.faults.unplug_s):
+                        break
+                    self.port.plug()
+                    self.on_port(self.port.name)
+                # a replugged USB device powered up again: it reboots too
+                self.stats.reboots += 1
+                self.on_event("reboot")
+        finally:
+            self.port.close()
+        return self.stats
+
+
+def start_in_thread(emu: Emulator, seconds: float | None = None) -> threading.Thread:
+    th = threading.Thread(target=emu.run, args=(seconds,), daemon=True, name="bridge-emulator")
+    th.start()
+    return th
+
+
+def link_path_default() -> str:
+    return str(Path(os.environ.get("XDG_RUNTIME_DIR", "/tmp")) / "quickjab-bridge")

@@ -1,0 +1,132 @@
+# ruff: noqa: UP031  (%-formatting: the same code must run on MicroPython)
+# The firmware's sampling loop, shared by the board (main.py) and the host emulator
+# (firmware_bridge/emulator.py), which runs this same code against a simulated IMU on a pty.
+# MicroPython and CPython alike: no f-strings, no typing, time comes from an injected `ticks`
+# object (MicroPython's time module on the board, a host clock in the emulator).
+
+try:
+    from firmware_bridge import protocol  # CPython: the package
+except ImportError:
+    import protocol  # the board: protocol.py copied next to this file
+
+HELLO_EVERY_US = 1000000
+TEXT_EVERY_US = 1000000  # at most one error line per second, so a broken sensor cannot flood
+
+
+class Sampler:
+    """Reads one IMU per hand at `rate_hz` and writes one SAMPLE frame per reading, a HELLO at
+    start and every second, and TEXT lines for read errors.
+
+    imus: [imu_a, imu_b]; either may be None (absent). A driver has read() -> (ax, ay, az, gx,
+    gy, gz) raw ints, and accel_lsb_per_g, gyro_mlsb_per_dps, kind.
+    write: write(bytes) -> number written (or None); it must never block. A short write drops
+    the rest of that frame (the next frame's leading 0x00 resynchronises the host) and sets the
+    overrun flag on the next SAMPLE.
+    """
+
+    def __init__(self, imus, write, ticks, rate_hz=200, boot_id=0, ts_bits=30, gyro=False):
+        self.imus = imus
+        self.write = write
+        self.ticks = ticks
+        self.rate_hz = rate_hz
+        self.period_us = 1000000 // rate_hz
+        self.boot_id = boot_id
+        self.ts_bits = ts_bits
+        self.ts_mask = (1 << ts_bits) - 1
+        self.gyro = gyro
+        self.seq = 0
+        self.overrun = False
+        self.frames = 0  # frames fully written
+        self.dropped = 0  # frames cut short or not written at all
+        self.read_errors = 0
+        self.late = 0  # deadlines missed by more than one period
+        self._last_hello = None
+        self._last_text = None
+        ref = imus[0] if imus[0] is not None else imus[1]
+        self.accel_lsb_per_g = ref.accel_lsb_per_g if ref is not None else 4096
+        self.gyro_mlsb_per_dps = ref.gyro_mlsb_per_dps if ref is not None else 0
+        self.imu_kind = ref.kind if ref is not None else 0
+
+    def _send(self, frame):
+        self.seq = (self.seq + 1) & protocol.SEQ_MASK
+        try:
+            n = self.write(frame)
+        except OSError:
+            n = 0
+        if n is None or n >= len(frame):
+            self.frames += 1
+            return True
+        self.dropped += 1
+        self.overrun = True
+        return False
+
+    def present_flags(self):
+        f = 0
+        if self.imus[0] is not None:
+            f |= protocol.FLAG_SENSOR_A
+        if self.imus[1] is not None:
+            f |= protocol.FLAG_SENSOR_B
+        if self.gyro:
+            f |= protocol.FLAG_GYRO
+        return f
+
+    def send_hello(self, now):
+        self._last_hello = now
+        return self._send(protocol.encode_hello(
+            self.seq, now & self.ts_mask, self.boot_id, self.rate_hz, self.accel_lsb_per_g,
+            self.gyro_mlsb_per_dps, self.ts_bits, self.imu_kind, self.present_flags()))
+
+    def request_hello(self):
+        """The host asked (protocol.HELLO_REQUEST): send a HELLO before the next SAMPLE."""
+        self._last_hello = None
+
+    def send_text(self, now, text):
+        t = self.ticks
+        if self._last_text is not None and t.ticks_diff(now, self._last_text) < TEXT_EVERY_US:
+            return False
+        self._last_text = now
+        return self._send(protocol.encode_text(self.seq, now & self.ts_mask, text))
+
+    def step(self, now):
+        """One reading of every IMU and its frame; a HELLO first when one is due."""
+        t = self.ticks
+        if self._last_hello is None or t.ticks_diff(now, self._last_hello) >= HELLO_EVERY_US:
+            self.send_hello(now)
+        readings = [None, None]
+        for i in (0, 1):
+            imu = self.imus[i]
+            if imu is None:
+                continue
+            try:
+                readings[i] = imu.read()
+            except OSError:  # an I2C error: this sensor is left out of this sample
+                self.read_errors += 1
+                self.send_text(now, "read error on sensor %s" % "AB"[i])
+        a, b = readings
+        if a is None and b is None:
+            return False
+        g = self.gyro
+        frame = protocol.encode_sample(
+            self.seq, now & self.ts_mask,
+            None if a is None else a[:3], None if b is None else b[:3],
+            a[3:6] if g and a is not None else None, b[3:6] if g and b is not None else None,
+            self.overrun)
+        self.overrun = False
+        return self._send(frame)
+
+    def run(self, stop=None):
+        """Sample at rate_hz on deadlines computed from ticks_add (no drift) until stop(self)
+        returns true. A deadline missed by more than a period is skipped, not caught up."""
+        t = self.ticks
+        deadline = t.ticks_us()
+        while stop is None or not stop(self):
+            now = t.ticks_us()
+            wait = t.ticks_diff(deadline, now)
+            if wait > 0:
+                t.sleep_us(wait)
+                now = t.ticks_us()
+            self.step(now)
+            deadline = t.ticks_add(deadline, self.period_us)
+            if t.ticks_diff(t.ticks_us(), deadline) > self.period_us:
+                self.late += 1
+                deadline = t.ticks_us()

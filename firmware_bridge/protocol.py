@@ -1,0 +1,350 @@
+# ruff: noqa: UP031  (%-formatting: the same code must run on MicroPython)
+# The serial bridge wire protocol, v1 (PROTOCOL.md). This ONE file runs unchanged on CPython
+# and on MicroPython (copied to the board as protocol.py), so it keeps to what both have:
+# struct, binascii.crc32, %-formatting, plain classes; no f-strings, typing, dataclasses,
+# int.to_bytes or micropython.const. Type hints live in comments only.
+#
+# Frame on the wire:  0x00, COBS(body), 0x00      (a delimiter on both sides)
+# body (little endian): ver_type:u8 seq:u16 t_us:u32 flags:u8 payload crc32:u32
+# crc32 = binascii.crc32(body_without_crc + bytes([CRC_EXTRA[type]]))
+
+import binascii
+import struct
+
+VERSION = 1
+
+SAMPLE = 1
+HELLO = 2
+TEXT = 3
+TYPE_NAMES = {SAMPLE: "sample", HELLO: "hello", TEXT: "text"}
+
+# One fixed byte per message type, appended to the CRC input only (MAVLink's CRC_EXTRA): a
+# sender and receiver that disagree on a type's layout fail every CRC instead of misreading.
+CRC_EXTRA = {SAMPLE: 0x3C, HELLO: 0xA7, TEXT: 0x51}
+
+# flags (header byte 7); any other bit set makes the frame malformed
+FLAG_SENSOR_A = 0x01  # right hand (rx,ry,rz)
+FLAG_SENSOR_B = 0x02  # left hand (lx,ly,lz)
+FLAG_GYRO = 0x04  # SAMPLE carries gyro after each sensor's accel
+FLAG_OVERRUN = 0x08  # the device dropped output since the last frame (host not reading)
+FLAGS_KNOWN = 0x0F
+
+IMU_UNKNOWN = 0
+IMU_MPU6050 = 1
+IMU_LSM6DS3 = 2
+IMU_SIMULATED = 3
+
+HEADER = "<BHIB"  # ver_type, seq, t_us, flags
+HEADER_SIZE = 8
+CRC_SIZE = 4
+HELLO_FMT = "<HIHIBB"  # accel_lsb_per_g, gyro_mlsb_per_dps, rate_hz, boot_id, ts_bits, imu_kind
+HELLO_SIZE = 14
+MAX_TEXT = 200
+MAX_BODY = HEADER_SIZE + MAX_TEXT + CRC_SIZE  # 212: the largest valid body
+MAX_ENCODED = MAX_BODY + 2  # COBS adds one byte per 254, plus the first code byte
+
+# Host to device: this one byte asks for a HELLO now (a host that just opened the port need not
+# wait for the next one-a-second HELLO). Devices ignore any other byte.
+HELLO_REQUEST = b"?"
+
+SEQ_MASK = 0xFFFF
+T_MASK = 0xFFFFFFFF
+
+
+def cobs_encode(data):
+    # type: (bytes) -> bytes
+    """Consistent Overhead Byte Stuffing: the result contains no 0x00 byte."""
+    data = bytes(data)
+    out = bytearray()
+    parts = data.split(b"\x00")
+    last = len(parts) - 1
+    for i in range(len(parts)):
+        part = parts[i]
+        while len(part) >= 254:
+            out.append(255)
+            out.extend(part[:254])
+            part = part[254:]
+            if not part and i == last:
+                return bytes(out)  # canonical: no empty block after a full one at the end
+        out.append(len(part) + 1)
+        out.extend(part)
+    return bytes(out)
+
+
+def cobs_decode(enc):
+    # type: (bytes) -> bytes | None
+    """The inverse of cobs_encode; None when `enc` is not a valid encoding."""
+    blocks = []
+    i = 0
+    n = len(enc)
+    while i < n:
+        code = enc[i]
+        if code == 0 or i + code > n:
+            return None
+        if code == 255:
+            return _cobs_decode_long(enc)
+        blocks.append(enc[i + 1 : i + code])
+        i += code
+    # without a full 254-byte block every block but the last is followed by a zero
+    return b"\x00".join(blocks)
+
+
+def _cobs_decode_long(enc):
+    out = bytearray()
+    i = 0
+    n = len(enc)
+    while i < n:
+        code = enc[i]
+        if code == 0 or i + code > n:
+            return None
+        out.extend(enc[i + 1 : i + code])
+        i += code
+        if code != 255 and i < n:
+            out.append(0)
+    return bytes(out)
+
+
+def _crc(msg_type, body):
+    return binascii.crc32(bytes((CRC_EXTRA[msg_type],)), binascii.crc32(body)) & 0xFFFFFFFF
+
+
+def encode_frame(msg_type, seq, t_us, flags, payload):
+    # type: (int, int, int, int, bytes) -> bytes
+    """A whole frame for the wire, delimiters included."""
+    body = struct.pack(HEADER, (VERSION << 4) | msg_type, seq & SEQ_MASK, t_us & T_MASK, flags) + payload
+    body += struct.pack("<I", _crc(msg_type, body))
+    return b"\x00" + cobs_encode(body) + b"\x00"
+
+
+def _clamp16(v):
+    v = int(v)
+    if v > 32767:
+        return 32767
+    if v < -32768:
+        return -32768
+    return v
+
+
+def sample_flags(accel_a, accel_b, gyro):
+    f = 0
+    if accel_a is not None:
+        f |= FLAG_SENSOR_A
+    if accel_b is not None:
+        f |= FLAG_SENSOR_B
+    if gyro:
+        f |= FLAG_GYRO
+    return f
+
+
+def encode_sample(seq, t_us, accel_a, accel_b=None, gyro_a=None, gyro_b=None, overrun=False):
+    # type: (int, int, tuple | None, tuple | None, tuple | None, tuple | None, bool) -> bytes
+    """SAMPLE: raw int16 accel x,y,z per present sensor, each followed by gyro x,y,z when given
+    (gyro is all or nothing: give gyro_a and gyro_b for every present sensor, or neither)."""
+    gyro = gyro_a is not None or gyro_b is not None
+    flags = sample_flags(accel_a, accel_b, gyro)
+    if overrun:
+        flags |= FLAG_OVERRUN
+    vals = []
+    for acc, gyr in ((accel_a, gyro_a), (accel_b, gyro_b)):
+        if acc is None:
+            continue
+        vals.extend(acc)
+        if gyro:
+            vals.extend(gyr if gyr is not None else (0, 0, 0))
+    payload = struct.pack("<%dh" % len(vals), *[_clamp16(v) for v in vals])
+    return encode_frame(SAMPLE, seq, t_us, flags, payload)
+
+
+def encode_hello(seq, t_us, boot_id, rate_hz, accel_lsb_per_g, gyro_mlsb_per_dps, ts_bits, imu_kind, flags):
+    # type: (int, int, int, int, int, int, int, int, int) -> bytes
+    """HELLO, at boot and every second: scales, rate, boot_id, timestamp width; flags say which
+    sensors are present and whether SAMPLEs carry gyro."""
+    payload = struct.pack(
+        HELLO_FMT, accel_lsb_per_g, gyro_mlsb_per_dps, rate_hz, boot_id & 0xFFFFFFFF, ts_bits, imu_kind
+    )
+    return encode_frame(HELLO, seq, t_us, flags & FLAGS_KNOWN & ~FLAG_OVERRUN, payload)
+
+
+def encode_text(seq, t_us, text):
+    # type: (int, int, str | bytes) -> bytes
+    """TEXT: a UTF-8 log line from the device (at most MAX_TEXT bytes; longer is cut)."""
+    if isinstance(text, str):
+        text = text.encode()
+    return encode_frame(TEXT, seq, t_us, 0, bytes(text[:MAX_TEXT]))
+
+
+def sample_values_per_sensor(flags):
+    # type: (int) -> int
+    return 6 if flags & FLAG_GYRO else 3
+
+
+def sample_payload_size(flags):
+    # type: (int) -> int
+    n = (1 if flags & FLAG_SENSOR_A else 0) + (1 if flags & FLAG_SENSOR_B else 0)
+    return 2 * n * sample_values_per_sensor(flags)
+
+
+class Frame:
+    """One decoded, CRC-checked frame."""
+
+    def __init__(self, msg_type, seq, t_us, flags, payload):
+        self.msg_type = msg_type
+        self.seq = seq
+        self.t_us = t_us
+        self.flags = flags
+        self.payload = payload
+        self.jump = False  # set by Decoder: the sequence jumped back (a reboot without HELLO)
+
+    def values(self):
+        # type: () -> tuple
+        """SAMPLE: the raw int16 values in wire order."""
+        return struct.unpack("<%dh" % (len(self.payload) // 2), self.payload)
+
+    def key(self):
+        return (self.msg_type, self.seq, self.t_us, self.flags, self.payload)
+
+    def __eq__(self, other):
+        return isinstance(other, Frame) and self.key() == other.key()
+
+    def __hash__(self):
+        return hash(self.key())
+
+    def __repr__(self):
+        return "Frame(%s seq=%d t_us=%d flags=0x%02x %d bytes)" % (
+            TYPE_NAMES.get(self.msg_type, "?"), self.seq, self.t_us, self.flags, len(self.payload))
+
+
+class Hello:
+    """The fields of a HELLO frame."""
+
+    def __init__(self, frame):
+        (self.accel_lsb_per_g, self.gyro_mlsb_per_dps, self.rate_hz, self.boot_id,
+         self.ts_bits, self.imu_kind) = struct.unpack(HELLO_FMT, frame.payload)
+        self.flags = frame.flags
+        self.sensors = (1 if frame.flags & FLAG_SENSOR_A else 0) + (1 if frame.flags & FLAG_SENSOR_B else 0)
+
+
+def parse_body(body):
+    # type: (bytes) -> tuple
+    """(Frame, None) for a valid body, or (None, counter_name) saying why it was rejected."""
+    if len(body) < HEADER_SIZE + CRC_SIZE:
+        return None, "runts"
+    ver_type = body[0]
+    msg_type = ver_type & 0x0F
+    if ver_type >> 4 != VERSION or msg_type not in CRC_EXTRA:
+        return None, "unknown_type"
+    n = len(body) - CRC_SIZE
+    if struct.unpack("<I", body[n:])[0] != _crc(msg_type, body[:n]):
+        return None, "crc_errors"
+    _, seq, t_us, flags = struct.unpack(HEADER, body[:HEADER_SIZE])
+    payload = body[HEADER_SIZE:n]
+    if flags & ~FLAGS_KNOWN:
+        return None, "malformed"
+    if msg_type == SAMPLE:
+        if not flags & (FLAG_SENSOR_A | FLAG_SENSOR_B) or len(payload) != sample_payload_size(flags):
+            return None, "malformed"
+    elif msg_type == HELLO:
+        if len(payload) != HELLO_SIZE or not 8 <= payload[12] <= 32:
+            return None, "malformed"
+    elif len(payload) > MAX_TEXT:
+        return None, "malformed"
+    return Frame(msg_type, seq, t_us, flags, payload), None
+
+
+COUNTERS = ("frames_ok", "crc_errors", "cobs_errors", "oversize", "runts", "unknown_type",
+            "malformed", "lost", "reboots", "seq_jumps", "bytes_in")
+
+
+class Decoder:
+    """Streaming decoder: feed bytes in any chunking, get whole frames back. Never raises.
+
+    Counts (attributes, see COUNTERS): frames_ok, crc_errors, cobs_errors, oversize (a run of
+    bytes without a delimiter longer than any frame), runts (too short for a header and CRC),
+    unknown_type, malformed (CRC ok but a layout v1 does not allow), lost (frames missing by
+    sequence number), reboots (HELLO with a new boot_id), seq_jumps (a backwards sequence jump
+    not explained by a HELLO: a reboot whose HELLO was lost), bytes_in.
+    """
+
+    def __init__(self):
+        for name in COUNTERS:
+            setattr(self, name, 0)
+        self._buf = b""
+        self._skipping = False  # inside an oversize run: drop until the next delimiter
+        self.last_seq = None
+        self.boot_id = None
+        self.hello = None  # the last Hello seen
+
+    def resync(self):
+        """Forget the unfinished frame and the sequence position (after a reconnect), keeping
+        the counters and the boot_id."""
+        self._buf = b""
+        self._skipping = False
+        self.last_seq = None
+
+    def counts(self):
+        # type: () -> dict
+        d = {}
+        for name in COUNTERS:
+            d[name] = getattr(self, name)
+        return d
+
+    def feed(self, data):
+        # type: (bytes) -> list
+        """Decode what `data` completes; keeps any unfinished frame for the next call."""
+        out = []
+        try:
+            self._feed(bytes(data), out)
+        except Exception:  # never raises: a bug here must not stop the game loop
+            self.malformed += 1
+            self._buf = b""
+            self._skipping = False
+        return out
+
+    def _feed(self, data, out):
+        self.bytes_in += len(data)
+        start = 0
+        n = len(data)
+        while start < n:
+            z = data.find(b"\x00", start)
+            end = n if z < 0 else z
+            if not self._skipping and end > start:
+                if len(self._buf) + end - start > MAX_ENCODED:
+                    self.oversize += 1
+                    self._skipping = True
+                    self._buf = b""
+                else:
+                    self._buf += data[start:end]
+            if z < 0:
+                return
+            if self._buf:
+                self._segment(self._buf, out)
+            self._buf = b""
+            self._skipping = False
+            start = z + 1
+
+    def _segment(self, enc, out):
+        body = cobs_decode(enc)
+        if body is None:
+            self.cobs_errors += 1
+            return
+        frame, why = parse_body(body)
+        if frame is None:
+            setattr(self, why, getattr(self, why) + 1)
+            return
+        if frame.msg_type == HELLO:
+            hello = Hello(frame)
+            if self.boot_id is not None and hello.boot_id != self.boot_id:
+                self.reboots += 1
+                self.last_seq = None  # the new boot counts its sequence from its first HELLO
+            self.boot_id = hello.boot_id
+            self.hello = hello
+        if self.last_seq is not None:
+            gap = (frame.seq - self.last_seq - 1) & SEQ_MASK
+            if gap >= 0x8000:
+                self.seq_jumps += 1
+                frame.jump = True
+            else:
+                self.lost += gap
+        self.last_seq = frame.seq
+        self.frames_ok += 1
+        out.append(frame)

@@ -1,0 +1,246 @@
+"""The serial:// source through pyserial's loop://, a real serial.Serial on a pty pair, and the
+device emulator (unplug and replug)."""
+
+from __future__ import annotations
+
+import os
+import time
+import tty
+
+import numpy as np
+import pytest
+
+from engine.sensors import SourceError, SourceState, open_source
+from engine.sensors.serial_source import DeviceClock, SerialSource, parse_serial_url
+from firmware_bridge import protocol
+from firmware_bridge.emulator import Emulator, Faults, start_in_thread, synthetic_motion
+
+HELLO2 = protocol.encode_hello(0, 0, 77, 200, 4096, 65500, 30, protocol.IMU_MPU6050, 3)
+
+
+def samples(n, start_seq=1, t0=0):
+    return b"".join(protocol.encode_sample(start_seq + i, t0 + 5000 * i, (0, 0, 4096), (2048, -4096, 0))
+                    for i in range(n))
+
+
+def test_loop_url_gives_samples_in_g():
+    src = open_source("serial://loop://")
+    assert isinstance(src, SerialSource) and src.state is SourceState.CONNECTED
+    src.port.write(samples(3))  # before any HELLO: scales unknown, dropped and counted
+    assert src.poll() == []
+    assert src.stats["samples_before_hello"] == 3
+    src.port.write(HELLO2 + samples(10, start_seq=1, t0=5000))
+    before = time.perf_counter()
+    got = src.poll()
+    assert len(got) == 10
+    assert got[0].accel.shape == (2, 3)
+    np.testing.assert_allclose(got[0].accel, [[0, 0, 1], [0.5, -1, 0]])
+    t = np.array([s.t for s in got])
+    assert np.all(np.diff(t) > 0) and t[-1] <= time.perf_counter()
+    np.testing.assert_allclose(np.diff(t), 0.005, atol=1e-9)  # device spacing kept
+    assert t[-1] >= before - 1.0
+    assert src.sensors == 2 and src.rate_hz == 200
+    assert "MPU-6050" in src.description
+    src.close()
+    assert src.state is SourceState.DISCONNECTED and src.poll() == []
+
+
+def test_one_sensor_hello_gives_one_row_and_text_is_kept():
+    src = open_source("serial://loop://")
+    src.port.write(protocol.encode_hello(0, 0, 1, 100, 4096, 0, 30, 1, protocol.FLAG_SENSOR_A)
+                   + protocol.encode_text(1, 10, "hello from the board")
+                   + protocol.encode_sample(2, 20, (4096, 0, 0)))
+    got = src.poll()
+    assert len(got) == 1 and got[0].accel.shape == (1, 3)
+    assert list(src.messages) == ["hello from the board"]
+
+
+def test_missing_sensor_holds_its_last_value():
+    src = open_source("serial://loop://")
+    src.port.write(HELLO2 + samples(1) + protocol.encode_sample(2, 10000, None, (0, 4096, 0)))
+    got = src.poll()
+    np.testing.assert_allclose(got[1].accel, [[0, 0, 1], [0, 1, 0]])
+    assert src.stats["sensor_missing"] == 1
+
+
+def test_device_clock_unwraps_and_follows_drift():
+    dc = DeviceClock(window_s=1.0)
+    dc.reset(30)
+    mask = (1 << 30) - 1
+    raw = mask - 10_000
+    prev = dc.unwrap(raw)
+    for _ in range(10):
+        raw = (raw + 5000) & mask
+        d = dc.unwrap(raw)
+        assert d - prev == pytest.approx(0.005)
+        prev = d
+    assert dc.unwrap((raw - 100_000) & mask) is None  # backwards: a restarted clock
+    # host runs 100 ppm fast and delays vary 1..10 ms: the mapped offset tracks the true one
+    dc.reset(32)
+    rng = np.random.default_rng(0)
+    for k in range(2000):
+        dev = k * 0.005
+        host = 100.0 + dev * 1.0001 + 0.001 + rng.uniform(0, 0.009)
+        dc.observe(host, dc.unwrap(int(dev * 1e6)))
+    true_offset_now = 100.0 + dev * 0.0001 + 0.001
+    assert abs(dc.offset - true_offset_now) < 0.0006
+
+
+def test_pty_real_serial_and_hangup():
+    master, slave = os.openpty()
+    tty.setraw(slave)
+    name = os.ttyname(slave)
+    src = open_source(f"serial://{name}?retry=0.05")
+    try:
+        assert src.state is SourceState.CONNECTED
+        assert os.read(master, 16) == protocol.HELLO_REQUEST  # asked for a HELLO on open
+        os.write(master, b"\x00garbage" + HELLO2 + samples(50))
+        got = []
+        for _ in range(50):
+            got += src.poll()
+            if len(got) == 50:
+                break
+            time.sleep(0.01)
+        assert len(got) == 50 and src.stats["lost"] == 0
+        os.close(master)
+        os.close(slave)
+        for _ in range(20):
+            src.poll()
+            if src.state is SourceState.RECONNECTING:
+                break
+            time.sleep(0.01)
+        assert src.state is SourceState.RECONNECTING
+        assert src.stats["disconnects"] == 1
+        assert src.poll() == []  # still gone: no exception, just a state
+    finally:
+        src.close()
+
+
+def test_big_burst_is_drained_in_one_poll():
+    master, slave = os.openpty()
+    tty.setraw(slave)
+    os.set_blocking(master, False)
+    src = open_source(f"serial://{os.ttyname(slave)}")
+    try:
+        data = HELLO2 + samples(100)  # > 3 KB, near the 4095-byte tty buffer
+        os.write(master, data)
+        time.sleep(0.05)
+        assert len(src.poll()) == 100
+    finally:
+        src.close()
+        os.close(master)
+        os.close(slave)
+
+
+def test_emulator_unplug_replug_and_wrap_are_survived(tmp_path):
+    link = str(tmp_path / "bridge")
+    emu = Emulator(synthetic_motion(), rate_hz=200, link=link, ticks_start=(1 << 30) - 700_000,
+                   faults=Faults(unplug_at=[0.8], unplug_s=0.4, garbage_every=0.1, stall_at=[2.6], stall_s=0.3,
+                                 reboot_at=[3.2]))
+    th = start_in_thread(emu, 4.6)
+    for _ in range(100):
+        if os.path.exists(link):
+            break
+        time.sleep(0.01)
+    src = open_source(f"serial://{link}?retry=0.1")
+    states, got = [src.state], []
+    try:
+        while th.is_alive():
+            got += [(s, src.state) for s in src.poll()]
+            if src.state is not states[-1]:
+                states.append(src.state)
+            time.sleep(1 / 60)
+    finally:
+        src.close()
+        th.join(2)
+    assert states[:3] == [SourceState.CONNECTED, SourceState.RECONNECTING, SourceState.CONNECTED]
+    assert src.stats["disconnects"] == 1 and src.stats["reconnects"] == 1
+    # the source asks for a HELLO on (re)open and the emulated firmware answers at once, so few
+    # samples wait for scales (the one-a-second HELLO alone would cost up to 200 per open)
+    assert src.stats.get("samples_before_hello", 0) < 60
+    assert src.stats["reboots"] == 2  # a replugged board powers up again; then --reboot-at
+    assert emu.stats.garbage_bursts > 10 and emu.stats.stalls == 1
+    t = np.array([s.t for s, _ in got])
+    assert np.all(np.diff(t) >= 0)
+    # the unplug and the stall each show as a gap in device time, not as bunched samples
+    assert (np.diff(t) >= 0.25).sum() >= 2
+    # samples before the unplug, across the 30-bit wrap (at ~0.7 s), and after the replug
+    assert len(got) > 200
+    assert t[-1] > t[0] + 2.0
+    acc = np.array([s.accel for s, _ in got])
+    assert acc.shape[1:] == (2, 3) and np.abs(np.linalg.norm(acc[:, 1], axis=1) - 1).min() < 0.1
+
+
+def test_auto_without_a_board_waits_quietly(monkeypatch):
+    monkeypatch.setattr("engine.sensors.serial_source.list_ports.comports", lambda: [])
+    src = open_source("serial://auto?retry=0.01")
+    assert src.state is SourceState.CONNECTING and src.poll() == []
+    src.close()
+
+
+def test_missing_port_is_a_state_not_an_error():
+    src = open_source("serial:///dev/quickjab-no-such-port")
+    assert src.state is SourceState.CONNECTING and src.poll() == []
+
+
+@pytest.mark.parametrize("url", ["serial://", "serial:///dev/x?speed=3", "serial:///dev/x?baud=fast",
+                                 "serial:///dev/x?retry=0", "serial://loop://?retry=1", "serial://nosuch://x"])
+def test_bad_urls_name_themselves(url):
+    with pytest.raises(SourceError, match="serial://"):
+        open_source(url)
+
+
+def test_url_syntax():
+    assert parse_serial_url("serial:///dev/ttyACM0?baud=9600") == ("/dev/ttyACM0", {"baud": "9600"})
+    assert parse_serial_url("serial://auto") == (None, {})
+    assert parse_serial_url("serial://loop://") == ("loop://", {})
+    assert parse_serial_url("serial://socket://localhost:7777") == ("socket://localhost:7777", {})
+
+
+def test_auto_finds_a_known_board_by_vid_pid(monkeypatch):
+    from types import SimpleNamespace
+
+    from engine.sensors.serial_source import find_board
+
+    ports = [SimpleNamespace(device="/dev/ttyUSB0", vid=0x0403, pid=0x6001),
+             SimpleNamespace(device="/dev/ttyACM1", vid=0x2E8A, pid=0x0005),
+             SimpleNamespace(device="/dev/ttyS0", vid=None, pid=None)]
+    monkeypatch.setattr("engine.sensors.serial_source.list_ports.comports", lambda: ports)
+    assert find_board() == "/dev/ttyACM1"
+    assert find_board(0x0403, 0x6001) == "/dev/ttyUSB0"
+    assert find_board(0x1234, None) is None
+
+
+@pytest.mark.parametrize("error", ["oserror", "termios", "serial"])
+def test_every_kind_of_unplug_becomes_a_state(error):
+    import termios
+
+    import serial
+
+    exc = {"oserror": OSError(5, "Input/output error"), "termios": termios.error(5, "EIO"),
+           "serial": serial.SerialException("device disconnected")}[error]
+
+    class Unplugged:
+        @property
+        def in_waiting(self):
+            raise exc
+
+        def close(self):
+            raise exc
+
+    src = open_source("serial://loop://")
+    src.port = Unplugged()
+    assert src.poll() == []
+    assert src.state is SourceState.RECONNECTING and src.port is None
+    assert src.stats["disconnects"] == 1
+
+
+def test_times_never_go_back_across_a_reboot():
+    src = open_source("serial://loop://")
+    src.port.write(HELLO2 + samples(20, start_seq=1, t0=10_000_000))
+    first = src.poll()
+    # a rebooted board: new boot_id, its clock restarts near zero
+    src.port.write(protocol.encode_hello(0, 100, 78, 200, 4096, 65500, 30, 1, 3) + samples(5, start_seq=1, t0=200))
+    second = src.poll()
+    assert len(first) == 20 and len(second) == 5 and src.stats["reboots"] == 1
+    assert second[0].t >= first[-1].t

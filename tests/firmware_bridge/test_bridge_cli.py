@@ -1,0 +1,109 @@
+"""`quickjab bridge faults|emulate` and `quickjab bench serial` through the real CLI."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from engine.recording import Recording, read_recording, write_recording
+from game.cli import main
+
+REPO = Path(__file__).resolve().parents[2]
+
+
+def test_faults_command_prints_figures(capsys):
+    rc = main(["bridge", "faults", "--random-mb", "0.2", "--corrupted", "3000", "--frames", "3000", "--events", "200"])
+    out = capsys.readouterr().out
+    assert rc == 0
+    assert "false accepts: 0 over 209715 random bytes and 3000 corrupted frames" in out
+    assert "dropped frames: 200 dropped, decoder counted 200 lost (equal)" in out
+    for name in ("garbage burst between frames", "bit flip", "dropped byte"):
+        assert name in out
+
+
+def test_faults_bad_arguments_exit_2(capsys):
+    assert main(["bridge", "faults", "--frames", "30", "--events", "20"]) == 2
+    assert "--events 20" in capsys.readouterr().err
+
+
+def test_emulate_bad_replay_file_exits_2(tmp_path, capsys):
+    bad = tmp_path / "bad.csv"
+    bad.write_text("t,rx,ry,rz\n0,1,2,x\n")
+    assert main(["bridge", "emulate", "--replay", str(bad), "--seconds", "0.1"]) == 2
+    err = capsys.readouterr().err
+    assert str(bad) in err and len(err.strip().splitlines()) == 1
+
+
+def test_emulate_replay_then_record_end_to_end(tmp_path):
+    """emulate --replay rec.csv in one process, quickjab record --source serial://... in another:
+    the recording comes back through firmware loop, protocol, pty and source."""
+    t = np.arange(0, 3, 1 / 100)
+    accel = np.zeros((len(t), 2, 3))
+    accel[:, 0, 0] = np.sin(2 * np.pi * 0.5 * t)  # a slow sine on the right hand's x
+    accel[:, :, 2] = 1.0
+    rec_in = tmp_path / "in.csv"
+    write_recording(rec_in, Recording(t, accel))
+    link = tmp_path / "port"
+    emu = subprocess.Popen([sys.executable, "-m", "game.cli", "bridge", "emulate", "--replay", str(rec_in), "--seconds", "5",
+                            "--link", str(link), "--quiet"], cwd=REPO, stdout=subprocess.PIPE, text=True)
+    try:
+        assert emu.stdout.readline().startswith("port: /dev/pts/")
+        out = tmp_path / "out.csv"
+        rec = subprocess.run([sys.executable, "-m", "game.cli", "record", "--source", f"serial://{link}", "-o", str(out),
+                              "--seconds", "3"], cwd=REPO, capture_output=True, text=True, timeout=30)
+        assert rec.returncode == 0, rec.stderr
+    finally:
+        emu.terminate()
+        emu.wait(5)
+    got = read_recording(out)
+    assert got.sensors == 2 and len(got) > 250  # 200 Hz for ~2 s after the first HELLO
+    assert np.allclose(got.accel[:, :, 2], 1.0, atol=0.02)  # gravity on z, in g
+    assert got.accel[:, 0, 0].max() > 0.5 and got.accel[:, 0, 0].min() < -0.5  # the sine came through
+    assert np.all(np.diff(got.t) >= 0)
+    dt = np.median(np.diff(got.t))
+    assert abs(dt - 0.005) < 0.001
+
+
+def test_emulate_prints_a_port_that_opens(tmp_path):
+    import serial
+
+    proc = subprocess.Popen([sys.executable, "-m", "game.cli", "bridge", "emulate", "--seconds", "2", "--quiet"],
+                            cwd=REPO, stdout=subprocess.PIPE, text=True)
+    try:
+        path = proc.stdout.readline().split()[1]
+        assert os.path.exists(path)
+        port = serial.Serial(path, timeout=0)
+        time.sleep(0.3)
+        assert port.in_waiting > 0
+        port.close()
+    finally:
+        proc.terminate()
+        proc.wait(5)
+
+
+def test_help_for_every_new_command(capsys):
+    for argv in (["bridge", "--help"], ["bridge", "emulate", "--help"], ["bridge", "faults", "--help"],
+                 ["bench", "serial", "--help"]):
+        try:
+            main(argv)
+        except SystemExit as exc:
+            assert exc.code == 0
+    assert "--replay" in capsys.readouterr().out
+
+
+def test_bench_serial_runs_and_reports_both_readers(capsys):
+    import json
+
+    assert main(["bench", "serial", "--seconds", "1", "--json"]) == 0
+    fig = json.loads(capsys.readouterr().out)
+    names = [r["reader"] for r in fig["readers"]]
+    assert names == ["serial:// source", "peer: naive bytewise"]
+    for r in fig["readers"]:
+        assert r["samples"] > 100  # 200 Hz for 1 s
+        assert r["poll_cost_us_per_frame"]["median"] > 0 and r["sample_age_ms"]["median"] > 0
+    assert fig["decode_only_us_per_frame"]["decoder"] > 0

@@ -1,0 +1,177 @@
+"""The wire protocol: COBS, frame layout, the streaming decoder's counters, and the
+properties the issue asks for (hypothesis)."""
+
+from __future__ import annotations
+
+import random
+import struct
+
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from firmware_bridge import faults, protocol
+
+FRAMES = faults.make_frames(60, seed=3, hello_every=20)
+SENT = faults.sent_keys(FRAMES)
+STREAM = b"".join(FRAMES)
+
+
+def cobs_reference(data: bytes) -> bytes:
+    """The byte-at-a-time encoder of Cheshire & Baker (as in the Wikipedia C code)."""
+    out = bytearray([0])
+    code_i, code = 0, 1
+    for i, byte in enumerate(data):
+        if byte:
+            out.append(byte)
+            code += 1
+        if not byte or code == 0xFF:
+            out[code_i] = code
+            code = 1
+            code_i = len(out)
+            if not byte or i < len(data) - 1:
+                out.append(0)
+    if code_i < len(out):  # C writes this code past the returned length after a full block
+        out[code_i] = code
+    return bytes(out)
+
+
+@given(st.binary(max_size=700))
+def test_cobs_matches_the_reference_and_round_trips(data):
+    enc = protocol.cobs_encode(data)
+    assert enc == cobs_reference(data)
+    assert 0 not in enc
+    assert protocol.cobs_decode(enc) == data
+
+
+def test_cobs_long_runs_without_zero():
+    for n in (253, 254, 255, 508, 509):
+        data = bytes(range(1, 256)) * 3
+        data = data[:n]
+        assert protocol.cobs_encode(data) == cobs_reference(data)
+        assert protocol.cobs_decode(protocol.cobs_encode(data)) == data
+
+
+def test_body_layout_is_the_spec():
+    fr = protocol.encode_sample(0x1234, 0x89ABCDEF, (1, -2, 4096), None, overrun=True)
+    assert fr[0] == 0 and fr[-1] == 0 and 0 not in fr[1:-1]
+    body = protocol.cobs_decode(fr[1:-1])
+    assert body[0] == 0x11  # version 1, SAMPLE
+    assert struct.unpack("<HIB", body[1:8]) == (0x1234, 0x89ABCDEF, 0x09)  # sensor A + overrun
+    assert struct.unpack("<3h", body[8:14]) == (1, -2, 4096)
+    import binascii
+
+    assert struct.unpack("<I", body[14:])[0] == binascii.crc32(body[:14] + bytes([0x3C]))
+
+
+def test_crc_extra_makes_a_type_mismatch_fail():
+    fr = protocol.encode_text(5, 6, "hi")
+    body = bytearray(protocol.cobs_decode(fr[1:-1]))
+    body[0] = 0x11  # claim SAMPLE with TEXT's CRC
+    dec = protocol.Decoder()
+    assert dec.feed(b"\x00" + protocol.cobs_encode(bytes(body)) + b"\x00") == []
+    assert dec.crc_errors == 1
+
+
+def test_unknown_flag_bits_and_wrong_lengths_are_malformed():
+    def raw(msg_type, flags, payload):
+        body = struct.pack("<BHIB", 0x10 | msg_type, 1, 2, flags) + payload
+        body += struct.pack("<I", protocol._crc(msg_type, body))
+        return b"\x00" + protocol.cobs_encode(body) + b"\x00"
+
+    dec = protocol.Decoder()
+    assert dec.feed(raw(protocol.SAMPLE, 0x11, b"\x00" * 6)) == []  # unknown bit 4
+    assert dec.feed(raw(protocol.SAMPLE, 0x03, b"\x00" * 6)) == []  # two sensors, one's data
+    assert dec.feed(raw(protocol.HELLO, 0x03, b"\x00" * 13)) == []
+    assert dec.malformed == 3
+    assert len(dec.feed(raw(protocol.SAMPLE, 0x03, b"\x00" * 12))) == 1
+
+
+def test_values_hello_and_text_decode():
+    dec = protocol.Decoder()
+    got = dec.feed(protocol.encode_hello(0, 1, 0xCAFEBABE, 200, 4096, 65500, 30, 1, 3)
+                   + protocol.encode_sample(1, 2, (1, 2, 3), (4, 5, 6), (7, 8, 9), (10, 11, 12))
+                   + protocol.encode_text(2, 3, "héllo"))
+    hello = protocol.Hello(got[0])
+    assert (hello.boot_id, hello.rate_hz, hello.accel_lsb_per_g, hello.ts_bits, hello.sensors) == (0xCAFEBABE, 200, 4096, 30, 2)
+    assert got[1].values() == (1, 2, 3, 7, 8, 9, 4, 5, 6, 10, 11, 12)
+    assert got[2].payload.decode() == "héllo"
+    assert dec.frames_ok == 3 and dec.lost == 0
+
+
+def test_lost_reboots_and_oversize_are_counted():
+    dec = protocol.Decoder()
+    dec.feed(protocol.encode_hello(0, 0, 1, 200, 4096, 0, 30, 1, 1))
+    dec.feed(protocol.encode_sample(1, 0, (0, 0, 1)))
+    dec.feed(protocol.encode_sample(5, 0, (0, 0, 1)))  # 2, 3, 4 lost
+    assert dec.lost == 3
+    dec.feed(protocol.encode_hello(0, 0, 2, 200, 4096, 0, 30, 1, 1))  # new boot: seq restarts
+    assert dec.reboots == 1 and dec.lost == 3 and dec.seq_jumps == 0
+    dec.feed(b"\x01" * 1000 + protocol.encode_sample(1, 0, (0, 0, 1)))
+    assert dec.oversize == 1 and dec.frames_ok == 5
+
+
+@settings(max_examples=200)
+@given(st.binary(max_size=3000), st.lists(st.integers(1, 64), max_size=50))
+def test_decoder_never_raises(data, cuts):
+    dec = protocol.Decoder()
+    i = 0
+    for c in cuts + [len(data)]:
+        dec.feed(data[i : i + c])
+        i += c
+    dec.feed(bytearray(b"\x00\x05\x00"))
+    dec.feed(memoryview(b"\x03\xff\x00"))
+    assert sum(dec.counts()[k] for k in ("frames_ok", "crc_errors", "cobs_errors", "runts", "unknown_type", "malformed")) >= 0
+
+
+@given(st.lists(st.integers(1, 40), min_size=1, max_size=200))
+def test_any_chunking_gives_the_same_frames(sizes):
+    dec = protocol.Decoder()
+    got, i, k = [], 0, 0
+    while i < len(STREAM):
+        n = sizes[k % len(sizes)]
+        got += dec.feed(STREAM[i : i + n])
+        i, k = i + n, k + 1
+    assert [f.key() for f in got] == SENT
+
+
+@given(st.lists(st.tuples(st.integers(0, len(FRAMES)), st.binary(min_size=1, max_size=80)), max_size=20))
+def test_garbage_between_frames_loses_none(inserts):
+    parts = list(FRAMES)
+    for pos, junk in sorted(inserts, reverse=True):
+        parts.insert(pos, junk)
+    got = protocol.Decoder().feed(b"".join(parts))
+    assert [f.key() for f in got] == SENT
+
+
+@given(st.integers(0, len(STREAM) - 1), st.integers(0, 255))
+def test_one_corrupted_byte_costs_at_most_two_frames(pos, value):
+    stream = bytearray(STREAM)
+    if stream[pos] == value:
+        value ^= 0xFF
+    stream[pos] = value
+    dec = protocol.Decoder()
+    got = [f.key() for f in dec.feed(bytes(stream))]
+    assert set(got) <= set(SENT)  # nothing false
+    assert len(got) >= len(SENT) - 2
+
+
+def test_fault_experiments_small():
+    assert faults.random_bytes(200_000, seed=1).false_accepts == 0
+    assert faults.corrupted_frames(5000, seed=1).false_accepts == 0
+    d = faults.dropped_frames(3000, 100, seed=1)
+    assert d.lost == 100 and d.decoder_lost == 100 and d.false_accepts == 0
+    g = faults.garbage_bursts(3000, 100, between=True, seed=1)
+    assert g.lost == 0 and g.false_accepts == 0
+    for o in (faults.bit_flips(3000, 200, seed=1), faults.dropped_bytes(3000, 200, seed=1),
+              faults.garbage_bursts(3000, 100, between=False, seed=1)):
+        assert o.false_accepts == 0 and 0 < o.lost <= 2 * o.events
+
+
+def test_resync_forgets_partial_frame():
+    dec = protocol.Decoder()
+    fr = FRAMES[1]
+    dec.feed(fr[:-5])
+    dec.resync()
+    assert dec.feed(fr[-5:]) == []
+    rng = random.Random(0)
+    assert len(dec.feed(rng.choice(FRAMES))) == 1

@@ -1,0 +1,132 @@
+"""The firmware's sampling loop on the host, with fake ticks, IMUs and a writer."""
+
+from __future__ import annotations
+
+from firmware_bridge import protocol
+from firmware_bridge.emulator import HostTicks
+from firmware_bridge.firmware.sampler import Sampler
+
+
+class FakeTicks:
+    """MicroPython's ticks API over a counter the test moves; 30 bits like rp2."""
+
+    def __init__(self, start=0, bits=30):
+        self.now = start
+        self.mask = (1 << bits) - 1
+        self.half = 1 << (bits - 1)
+
+    def ticks_us(self):
+        return self.now & self.mask
+
+    def ticks_add(self, t, d):
+        return (t + d) & self.mask
+
+    def ticks_diff(self, a, b):
+        return ((a - b + self.half) & self.mask) - self.half
+
+    def sleep_us(self, us):
+        self.now += us
+
+
+class FakeIMU:
+    kind = protocol.IMU_MPU6050
+    accel_lsb_per_g = 4096
+    gyro_mlsb_per_dps = 65500
+
+    def __init__(self, value, fail_at=()):
+        self.value, self.fail_at, self.calls = value, set(fail_at), 0
+
+    def read(self):
+        self.calls += 1
+        if self.calls in self.fail_at:
+            raise OSError("i2c")
+        return self.value + (1, 2, 3)
+
+
+class Wire:
+    def __init__(self, short_at=()):
+        self.data, self.short_at, self.calls = bytearray(), set(short_at), 0
+
+    def write(self, b):
+        self.calls += 1
+        if self.calls in self.short_at:
+            self.data += b[:3]
+            return 3
+        self.data += b
+        return len(b)
+
+
+def run(sampler, steps):
+    n = [0]
+
+    def stop(_s):
+        n[0] += 1
+        return n[0] > steps
+
+    sampler.run(stop)
+
+
+def test_stream_decodes_with_hello_every_second_across_the_wrap():
+    ticks = FakeTicks(start=(1 << 30) - 1_500_000)
+    wire = Wire()
+    s = Sampler([FakeIMU((0, 0, 4096)), FakeIMU((4096, 0, 0))], wire.write, ticks, rate_hz=200, boot_id=9)
+    run(s, 800)  # 4 s at 200 Hz
+    dec = protocol.Decoder()
+    frames = dec.feed(bytes(wire.data))
+    kinds = [f.msg_type for f in frames]
+    assert kinds.count(protocol.SAMPLE) == 800 and kinds.count(protocol.HELLO) == 4
+    assert dec.lost == 0 and dec.crc_errors == 0
+    hello = protocol.Hello(frames[0])
+    assert (hello.boot_id, hello.ts_bits, hello.rate_hz, hello.sensors) == (9, 30, 200, 2)
+    samples = [f for f in frames if f.msg_type == protocol.SAMPLE]
+    assert samples[0].values() == (0, 0, 4096, 4096, 0, 0)
+    dt = [(b.t_us - a.t_us) & ((1 << 30) - 1) for a, b in zip(samples, samples[1:], strict=False)]
+    assert set(dt) == {5000}  # no drift, wrap included
+
+
+def test_short_write_drops_one_frame_and_flags_overrun():
+    wire = Wire(short_at={5})
+    s = Sampler([FakeIMU((1, 1, 1)), None], wire.write, FakeTicks(), rate_hz=100)
+    run(s, 10)
+    dec = protocol.Decoder()
+    frames = dec.feed(bytes(wire.data))
+    assert s.dropped == 1 and dec.lost == 1
+    overrun = [f.seq for f in frames if f.flags & protocol.FLAG_OVERRUN]
+    assert overrun == [5]  # the frame after the cut one (seq 4) says so
+
+
+def test_read_error_leaves_the_sensor_out_and_says_so():
+    wire = Wire()
+    s = Sampler([FakeIMU((1, 1, 1)), FakeIMU((2, 2, 2), fail_at={3})], wire.write, FakeTicks())
+    run(s, 5)
+    frames = protocol.Decoder().feed(bytes(wire.data))
+    texts = [f.payload for f in frames if f.msg_type == protocol.TEXT]
+    assert texts == [b"read error on sensor B"]
+    flags = [f.flags for f in frames if f.msg_type == protocol.SAMPLE]
+    assert flags.count(protocol.FLAG_SENSOR_A) == 1 and s.read_errors == 1
+
+
+def test_hello_request_sends_a_hello_before_the_next_sample():
+    wire = Wire()
+    s = Sampler([FakeIMU((1, 1, 1)), None], wire.write, FakeTicks())
+    run(s, 3)
+    s.request_hello()
+    s.step(s.ticks.ticks_us())
+    kinds = [f.msg_type for f in protocol.Decoder().feed(bytes(wire.data))]
+    assert kinds == [protocol.HELLO] + [protocol.SAMPLE] * 3 + [protocol.HELLO, protocol.SAMPLE]
+
+
+def test_gyro_flag_carries_gyro():
+    wire = Wire()
+    s = Sampler([FakeIMU((1, 2, 3)), None], wire.write, FakeTicks(), gyro=True)
+    run(s, 1)
+    f = [f for f in protocol.Decoder().feed(bytes(wire.data)) if f.msg_type == protocol.SAMPLE][0]
+    assert f.flags & protocol.FLAG_GYRO and f.values() == (1, 2, 3, 1, 2, 3)
+
+
+def test_host_ticks_wrap_like_micropython():
+    # start 10 s before the wrap: a loaded machine cannot let the clock pass it between lines
+    t = HostTicks(bits=30, start_us=(1 << 30) - 10_000_000)
+    a = t.ticks_us()
+    b = t.ticks_add(a, 20_000_000)
+    assert b < a and t.ticks_diff(b, a) == 20_000_000 and t.ticks_diff(a, b) == -20_000_000
