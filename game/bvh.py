@@ -379,7 +379,10 @@ def _export_hierarchy(rest: np.ndarray) -> list[tuple[str, int, np.ndarray, int 
 
     def add(j: int, parent: int) -> None:
         name = JOINTS[j]
-        off = rest[j] - rest[PARENTS[j]] if PARENTS[j] >= 0 else rest[j].copy()
+        # the root's OFFSET is zero and its position channels absolute: readers that add the
+        # channels to the offset (the spec) and readers that take them as absolute (Blender)
+        # then agree
+        off = rest[j] - rest[PARENTS[j]] if PARENTS[j] >= 0 else np.zeros(3)
         if PARENTS[j] >= 0 and JOINTS[PARENTS[j]] in _HELPERS:
             out.append((f"{JOINTS[PARENTS[j]]}_to_{name}", parent, np.zeros(3), None))
             parent = len(out) - 1
@@ -498,7 +501,7 @@ def write_bvh(path: str | os.PathLike, positions: np.ndarray, fps: float = FPS, 
         lines.append(f"{pad}}}")
 
     emit(0, 0)
-    cols = [pos[:, 0] - hier[0][2]]
+    cols = [pos[:, 0]]
     for i in range(len(hier)):
         cols.append(_euler_zxy(local[i]))
     data = np.concatenate(cols, axis=1)

@@ -180,22 +180,20 @@ def replay_stream(rec: DualBufferRecognizer, frames: np.ndarray, clip_frames: in
 def score_stream(
     events: Sequence[dict], ivs: Sequence[tuple[str, int, int]], n_frames: int, main: int | str, tolerance: int = EARLY_TOLERANCE
 ) -> Summary:
-    """Match starts to intervals: a start inside [first - tolerance, end) starts the interval,
-    the early margin not reaching back past the previous interval's end (hand-labelled
-    intervals begin after the wind-up the sensor already sees)."""
+    """Match starts to intervals, in order: each interval takes the first start not yet taken
+    inside [first - tolerance, end) (hand-labelled intervals begin after the wind-up the sensor
+    already sees, and a start in the last frames of an interval that already has one is the
+    next punch's). Starts outside every (widened) interval are false starts."""
     s = Summary(main)
     starts = [e for e in events if e["event"] == "start"]
-    used = set()
-    prev_end = 0
+    used: set[int] = set()
     for action, a, b in ivs:
-        early = max(a - tolerance, prev_end)
-        prev_end = b
-        mine = [k for k, e in enumerate(starts) if early <= e["frame"] < b and k not in used]
+        mine = [k for k, e in enumerate(starts) if a - tolerance <= e["frame"] < b and k not in used]
         if not mine:
             s.outcomes.append(Outcome(action, None, None, -1, None))
             continue
         k = mine[0]
-        used.update(mine)
+        used.add(k)
         e = starts[k]
         after = [x for x in events if x["frame"] >= e["frame"]]
         first, final, last_np, at = _decisions(after)

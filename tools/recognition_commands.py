@@ -103,6 +103,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     e.add_argument("--folds", type=int, default=2, help="labelled CSV without templates: K contiguous folds (default 2)")
     e.add_argument("--mains", type=_mains, default=_mains("1-12"), help="main-buffer sizes (default 1-12; e.g. 6 or 1-12,auto)")
     e.add_argument("--method", choices=METHODS, default=None, help="template method when building")
+    e.add_argument("--feature", choices=FEATURES, default=None, help="template feature when building (default log)")
     e.add_argument("--plot", default=None, metavar="PNG", help="draw Figs. 8-9 style bars")
     e.add_argument("--clip-frames", type=int, default=ev.CLIP_FRAMES,
                    help=f"streams: the simulated character's clip length, then character_finished() (default {ev.CLIP_FRAMES}; 0 = never)")
@@ -147,7 +148,7 @@ def cmd_recognize(args: argparse.Namespace) -> int:
 
 def cmd_evaluate(args: argparse.Namespace) -> int:
     kw = _rec_kwargs(args)
-    tk = {"method": args.method} if args.method else {}
+    tk = {k: v for k, v in (("method", args.method), ("feature", args.feature)) if v}
     results: dict[str, list[dict]] = {}
     if args.uwave:
         users = [int(u) for u in _mains(args.users)]

@@ -91,20 +91,27 @@ def synth_session(
     return np.concatenate(parts), labels
 
 
-DEFAULT_TEMPLATE_SEED = 2011  # the paper's year: the shipped templates are rebuilt bit for bit
+DEFAULT_TEMPLATE_SEED = 0  # the shipped game/assets/templates.npz is rebuilt from this seed
 
 
 def build_default_templates(path: str | Path, seed: int = DEFAULT_TEMPLATE_SEED, trials: int = 3,
                             profile: str = "experienced") -> Path:
     """Build recognition templates from synthesized trials (the paper's 3 per action, Eq. 1)
     with engine.recognition and save them to `path` (npz, no pickles)."""  # fmt: skip
+    import tempfile
+
     try:
         from engine.recognition import Templates
+        from tools.trial_files import load_trials_dir
     except ImportError:
         raise InputError("engine.recognition.Templates is not available in this tree") from None
     lib = load_library()
     trial_sets = synth_trials(lib, profile, trials, np.random.default_rng(seed))
-    templates = Templates.from_trials(trial_sets)
+    # through the trial files, exactly as `quickjab synth --trials 3 --seed 0 -o DIR` followed by
+    # `quickjab templates build DIR` (the CSV keeps 4 decimals), so both routes give one file
+    with tempfile.TemporaryDirectory() as tmp:
+        write_trials(tmp, trial_sets, profile, seed)
+        templates = Templates.from_trials(load_trials_dir(tmp))
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     templates.save(str(path))

@@ -86,6 +86,8 @@ def test_export_import_round_trip(tmp_path):
     assert back.frames == len(positions)
     assert np.abs(bvh_positions_ours(back) - positions).max() < 1e-4
     assert back.joints[0].channels[:3] == ["xposition", "yposition", "zposition"]
+    # root OFFSET zero, positions absolute: Blender (absolute) and the spec (added) agree
+    assert np.all(back.joints[0].offset == 0.0)
 
 
 def test_any_channel_order_is_honoured():

@@ -110,3 +110,24 @@ def test_stream_rests_then_performs_on_demand():
     assert np.linalg.norm(sig[:, 0] - rest[0, 0], axis=-1).max() > 1.0  # the Wiimote hand punches
     vp.next_frame()
     assert vp.performing is None
+
+
+def test_shipped_templates_are_rebuilt_by_the_synth_command(tmp_path):
+    """game/assets/templates.npz comes from `quickjab synth --templates` (seed 0, 3 experienced
+    trials per action): rebuilding gives the same templates, so a change to the actions or the
+    virtual player that would leave the shipped file stale fails here."""
+    pytest.importorskip("engine.recognition")
+    from pathlib import Path
+
+    shipped = Path(__file__).resolve().parents[2] / "game" / "assets" / "templates.npz"
+    if not shipped.exists():
+        pytest.skip("no shipped templates in this tree")
+    out = tmp_path / "t.npz"
+    assert main(["synth", "--templates", "-o", str(out)]) == 0
+    with np.load(out, allow_pickle=False) as a, np.load(shipped, allow_pickle=False) as b:
+        assert sorted(a.files) == sorted(b.files)
+        for k in a.files:
+            if a[k].dtype.kind == "f":
+                assert np.allclose(a[k], b[k], rtol=0, atol=1e-9), k
+            else:
+                assert np.array_equal(a[k], b[k]), k

@@ -74,3 +74,21 @@ def test_bad_files_exit_2_with_one_line(tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "bad.npz" in err[0]
     assert main(["templates", "build", str(tmp_path / "nowhere"), "-o", str(tmp_path / "x.npz")]) == 2
+
+
+def test_stream_scoring_matches_starts_to_intervals_in_order():
+    from tools.evaluate_recognition import intervals, score_stream
+
+    labels = [""] * 30 + ["jab"] * 20 + ["hook"] * 20 + [""] * 3600 + ["jab"] * 10 + [""] * 10
+    ivs = intervals(labels)
+    assert ivs == [("jab", 30, 50), ("hook", 50, 70), ("jab", 3670, 3680)]
+    ev = [
+        {"event": "start", "action": "jab", "frame": 25},  # wind-up before the label: counts
+        {"event": "start", "action": "hook", "frame": 47},  # last frames of the jab: the hook's
+        {"event": "end", "action": "hook", "frame": 60},
+        {"event": "start", "action": "jab", "frame": 1000},  # idle: a false start
+    ]
+    s = score_stream(ev, ivs, len(labels), 6)
+    assert [o.first for o in s.outcomes] == ["jab", "hook", None]
+    assert s.false_starts == 1 and s.idle_minutes > 0.9
+    assert s.row()["started"] == round(2 / 3, 4)

@@ -7,7 +7,9 @@ from engine.recognition import Templates
 from tools.evaluate_recognition import evaluate_trials
 from tools.trial_files import load_trials_dir
 
-TARGET = 0.85  # subset figure; the full run is in docs/recognition.md
+# The figure. This subset measures 93.3 %; the full protocol (users 1-6, every test
+# trial) measures 88.5 % and does NOT reach it: see docs/recognition.md.
+TARGET = 0.92
 
 
 def test_uwave_final_decision_accuracy(shared_data):
