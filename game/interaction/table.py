@@ -1,25 +1,37 @@
 """The Interaction Graph file: one compressed .npz of plain arrays (never pickles).
 
-Arrays (S states, E edges grouped by source state, edge_ptr[s]:edge_ptr[s+1] are state s's):
+In memory (GraphTable), S states and E edges grouped by source state (edge_ptr[s]:edge_ptr[s+1]
+are state s's): keys (S,) int64 grid cells ascending; features (S, 3) mean distance,
+bearing_self, bearing_other of the state's samples; other_action, other_frame (S,) what the
+other boxer is doing; visits (S,) samples merged; best_action (S,) the solved policy; value
+(S,) its value; edge_ptr (S+1,) CSR offsets; edge_dst, edge_action, edge_steps (60 Hz steps
+until the next decision), edge_flip (the next decision is the other's), edge_reward (the
+chooser's); fill_keys / fill_state the look-up fill (lookup.py).
+
+On disk (version 3) the arrays are stored in forms that deflate well; every one decodes
+exactly, except features (below). The tables the look-up needs are all stored: rebuilding
+the fill from the keys (lookup.neighbour_fill) takes about 2 s, four times the load budget.
 
 | name | shape, dtype | meaning |
 | --- | --- | --- |
 | meta | () str | JSON: format, version, grid, bout rules, rewards, build info |
 | action_names | (A,) str | the bout model's actions; ids below index this |
-| keys | (S,) int64 | grid cell of each state (state.StateGrid.key), ascending |
-| features | (S, 3) float64 | mean distance, bearing_self, bearing_other of its samples (float64: each stays inside its own cell) |
+| key_steps | (S,) narrowest int (uint32 today) | keys delta-coded (cumsum gives them; ascending, so steps > 0) |
+| feature_pos | (S, 3) uint16 | each feature's position inside its own grid cell, in 1/65536 of a cell (decodes to the sub-cell's centre: within 2e-7 m / 7e-7 rad of the mean, and always inside the state's cell; a mean distance beyond the grid's distance_max is stored as the last cell's far edge) |
 | other_action, other_frame | (S,) int16 | what the other boxer is doing |
 | visits | (S,) int32 | samples merged into the state |
 | best_action | (S,) int16 | the solved policy |
 | value | (S,) float32 | its value |
-| edge_ptr | (S+1,) int32 | CSR offsets |
-| edge_dst | (E,) int32 | state the edge ends in |
+| edge_count | (S,) narrowest int | edges of each state (diff of edge_ptr) |
+| edge_dst_steps, edge_dst_steps_big | (E,) int8, (n,) narrowest int | edge_dst taken in action-major order (edges stably sorted by action, so one action's edges run over the states in order and land on nearby states), delta-coded; a step outside int8 is ESCAPE (-128) in the first and, in order, its value in the second (under 1 % of them) |
 | edge_action | (E,) uint8 | the chooser's action |
 | edge_steps | (E,) uint8 | 60 Hz steps until the next decision |
 | edge_flip | (E,) bool | the next decision is the other boxer's |
 | edge_reward | (E,) float32 | the chooser's reward along the edge |
-| fill_key_steps | (F,) int64 | the look-up fill's cell keys, delta-coded (cumsum gives them, ascending) |
-| fill_state | (F,) int32 | the nearest state of each of those cells (lookup.py) |
+| fill_key_steps | (F,) narrowest int (version 2: int64) | the look-up fill's cell keys, delta-coded (cumsum gives them, ascending) |
+| fill_state_offset, fill_state_offset_big | (F,) int8, (n,) narrowest int | fill_state minus the insertion point of its key among the state keys (the nearest state is usually a neighbour in key order, so offsets are small); escaped like edge_dst_steps |
+
+Version 2 files (plain keys, float64 features, edge_ptr, edge_dst, fill_state) still load.
 """
 
 from __future__ import annotations
@@ -38,7 +50,71 @@ from .bout import BoutRules, Rewards
 from .state import StateGrid
 
 FORMAT = "quickjab-interaction-graph"
-VERSION = 2
+VERSION = 3
+READS = (2, 3)
+FEATURE_SCALE = 65536      # feature_pos units per grid cell
+
+
+def action_major(edge_action: np.ndarray) -> np.ndarray:
+    """Edge order grouped by action, states ascending within an action (a stable sort)."""
+    return np.argsort(np.asarray(edge_action), kind="stable")
+
+
+def _angle_axes_wrap(x: np.ndarray, n_angle: int) -> np.ndarray:
+    """Offsets (S, 3) in grid units with the two angle axes wrapped to [-n/2, n/2)."""
+    x = x.copy()
+    x[:, 1:] = (x[:, 1:] + n_angle / 2) % n_angle - n_angle / 2
+    return x
+
+
+def encode_features(grid: StateGrid, keys: np.ndarray, features: np.ndarray) -> np.ndarray:
+    """(S, 3) uint16: where each feature lies inside its state's cell, in 1/FEATURE_SCALE of
+    a cell (clipped into the cell: a mean beyond distance_max shares the last cell)."""
+    _, db, sb, ob = grid.split_key(keys)
+    f = np.asarray(features, dtype=np.float64).reshape(-1, 3)
+    pos = grid.normalized(f[:, 0], f[:, 1], f[:, 2])
+    off = _angle_axes_wrap(pos - np.stack([db, sb, ob], axis=-1), grid.n_angle)
+    return np.clip(np.floor(off * FEATURE_SCALE), 0, FEATURE_SCALE - 1).astype(np.uint16)
+
+
+def decode_features(grid: StateGrid, keys: np.ndarray, pos: np.ndarray) -> np.ndarray:
+    """(S, 3) float64 features back from `encode_features`: the centre of the sub-cell."""
+    _, db, sb, ob = grid.split_key(keys)
+    g = np.stack([db, sb, ob], axis=-1) + (pos.astype(np.float64) + 0.5) / FEATURE_SCALE
+    out = np.empty_like(g)
+    out[:, 0] = g[:, 0] * grid.distance_step
+    out[:, 1:] = g[:, 1:] * grid.angle_step - np.pi
+    return out
+
+
+def narrow(x: np.ndarray) -> np.ndarray:
+    """Integers in the narrowest standard dtype that holds them exactly (deflates better)."""
+    x = np.asarray(x, dtype=np.int64)
+    if len(x) == 0:
+        return x.astype(np.int8)
+    return x.astype(np.result_type(np.min_scalar_type(int(x.min())),
+                                   np.min_scalar_type(int(x.max()))))
+
+
+ESCAPE = -128              # an int8 step that stands for the next value of the "_big" array
+
+
+def split_small(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(int8 with ESCAPE where a value does not fit, those values in order): nearly all the
+    delta-coded steps fit a byte, and a byte deflates far better than the wide few."""
+    x = np.asarray(x, dtype=np.int64)
+    fits = (x > ESCAPE) & (x <= 127)
+    return np.where(fits, x, ESCAPE).astype(np.int8), narrow(x[~fits])
+
+
+def join_small(small: np.ndarray, big: np.ndarray) -> np.ndarray | None:
+    """Inverse of `split_small`; None when the escapes and the big values disagree."""
+    out = small.astype(np.int64)
+    esc = out == ESCAPE
+    if big.ndim != 1 or int(esc.sum()) != len(big):
+        return None
+    out[esc] = big
+    return out
 
 
 class GraphFileError(InputError):
@@ -86,26 +162,35 @@ class GraphTable:
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
         with open(path, "wb") as fh:   # a file object: savez would otherwise append ".npz"
-            np.savez_compressed(
-                fh,
-                meta=np.array(json.dumps(self.meta(), sort_keys=True)),
-                action_names=np.array(self.action_names, dtype=str),
-                keys=self.keys.astype(np.int64),
-                features=self.features.astype(np.float64),
-                other_action=self.other_action.astype(np.int16),
-                other_frame=self.other_frame.astype(np.int16),
-                visits=self.visits.astype(np.int32),
-                best_action=self.best_action.astype(np.int16),
-                value=self.value.astype(np.float32),
-                edge_ptr=self.edge_ptr.astype(np.int32),
-                edge_dst=self.edge_dst.astype(np.int32),
-                edge_action=self.edge_action.astype(np.uint8),
-                edge_steps=np.minimum(self.edge_steps, 255).astype(np.uint8),
-                edge_flip=self.edge_flip.astype(bool),
-                edge_reward=self.edge_reward.astype(np.float32),
-                fill_key_steps=np.diff(self.fill_keys.astype(np.int64), prepend=0),
-                fill_state=self.fill_state.astype(np.int32),
-            )
+            np.savez_compressed(fh, **self.to_arrays())
+
+    def to_arrays(self) -> dict[str, np.ndarray]:
+        """The version-3 arrays of the file (see the module docstring)."""
+        keys = self.keys.astype(np.int64)
+        fill_keys = self.fill_keys.astype(np.int64)
+        dst = self.edge_dst.astype(np.int64)
+        offset = self.fill_state.astype(np.int64) - np.searchsorted(keys, fill_keys)
+        dst_steps, dst_big = split_small(np.diff(dst[action_major(self.edge_action)], prepend=0))
+        fill_offset, fill_big = split_small(offset)
+        return dict(
+            meta=np.array(json.dumps(self.meta(), sort_keys=True)),
+            action_names=np.array(self.action_names, dtype=str),
+            key_steps=narrow(np.diff(keys, prepend=0)),
+            feature_pos=encode_features(self.grid, keys, self.features),
+            other_action=self.other_action.astype(np.int16),
+            other_frame=self.other_frame.astype(np.int16),
+            visits=self.visits.astype(np.int32),
+            best_action=self.best_action.astype(np.int16),
+            value=self.value.astype(np.float32),
+            edge_count=narrow(np.diff(self.edge_ptr)),
+            edge_dst_steps=dst_steps, edge_dst_steps_big=dst_big,
+            edge_action=self.edge_action.astype(np.uint8),
+            edge_steps=np.minimum(self.edge_steps, 255).astype(np.uint8),
+            edge_flip=self.edge_flip.astype(bool),
+            edge_reward=self.edge_reward.astype(np.float32),
+            fill_key_steps=narrow(np.diff(fill_keys, prepend=0)),
+            fill_state_offset=fill_offset, fill_state_offset_big=fill_big,
+        )
 
     @classmethod
     def load(cls, path: str | Path) -> GraphTable:
@@ -119,30 +204,63 @@ class GraphTable:
             raise GraphFileError(f"{path}: not a readable Interaction Graph file ({exc})") from None
         return cls._from_arrays(path, arrays)
 
+    @staticmethod
+    def _decode_v3(a: dict, grid: StateGrid, bad) -> dict:
+        """The version-2 arrays (plain keys, features, edge_ptr, edge_dst, fill_state) from
+        the version-3 ones; shapes checked here where decoding needs them, ranges later."""
+        keys = np.cumsum(a["key_steps"].astype(np.int64))
+        S = len(keys)
+        E = len(a["edge_action"])
+        if a["feature_pos"].shape != (S, 3) or a["edge_count"].shape != (S,) or \
+                a["edge_dst_steps"].shape != (E,) or a["edge_action"].ndim != 1 or \
+                a["fill_state_offset"].shape != a["fill_key_steps"].shape:
+            raise bad("array shapes disagree")
+        dst_steps = join_small(a["edge_dst_steps"], a["edge_dst_steps_big"])
+        fill_offset = join_small(a["fill_state_offset"], a["fill_state_offset_big"])
+        if dst_steps is None or fill_offset is None:
+            raise bad("escaped steps disagree with their wide values")
+        edge_ptr = np.concatenate([[0], np.cumsum(a["edge_count"].astype(np.int64))])
+        edge_dst = np.empty(E, dtype=np.int64)
+        edge_dst[action_major(a["edge_action"])] = np.cumsum(dst_steps)
+        fill_keys = np.cumsum(a["fill_key_steps"].astype(np.int64))
+        fill_state = fill_offset + np.searchsorted(keys, fill_keys)
+        out = dict(a, keys=keys, features=decode_features(grid, keys, a["feature_pos"]),
+                   edge_ptr=edge_ptr, edge_dst=edge_dst.astype(np.int32),
+                   fill_state=fill_state.astype(np.int32))
+        return out
+
     @classmethod
     def _from_arrays(cls, path: Path, a: dict) -> GraphTable:
         def bad(why: str) -> GraphFileError:
             return GraphFileError(f"{path}: corrupt Interaction Graph file: {why}")
 
-        need = ["meta", "action_names", "keys", "features", "other_action", "other_frame",
-                "visits", "best_action", "value", "edge_ptr", "edge_dst", "edge_action",
-                "edge_steps", "edge_flip", "edge_reward", "fill_key_steps", "fill_state"]
-        missing = [k for k in need if k not in a]
-        if missing:
-            raise bad(f"missing {', '.join(missing)}")
+        if "meta" not in a:
+            raise bad("missing meta")
         try:
             meta = json.loads(str(a["meta"]))
             if meta.get("format") != FORMAT:
                 raise bad(f"format is {meta.get('format')!r}, expected {FORMAT!r}")
-            if meta.get("version") != VERSION:
-                raise bad(f"version {meta.get('version')}, this program reads {VERSION}")
+            version = meta.get("version")
+            if version not in READS:
+                raise bad(f"version {version}, this program reads {', '.join(map(str, READS))}")
             grid = StateGrid(**meta["grid"])
             rules = BoutRules(**meta["rules"])
             rewards = Rewards(**meta["rewards"])
         except GraphFileError:
             raise
-        except (ValueError, TypeError, KeyError) as exc:
+        except (ValueError, TypeError, KeyError, AttributeError) as exc:
             raise bad(f"bad meta ({exc})") from None
+        common = ["action_names", "other_action", "other_frame", "visits", "best_action",
+                  "value", "edge_action", "edge_steps", "edge_flip", "edge_reward",
+                  "fill_key_steps"]
+        own = (["keys", "features", "edge_ptr", "edge_dst", "fill_state"] if version == 2 else
+               ["key_steps", "feature_pos", "edge_count", "edge_dst_steps", "edge_dst_steps_big",
+                "fill_state_offset", "fill_state_offset_big"])
+        missing = [k for k in common + own if k not in a]
+        if missing:
+            raise bad(f"missing {', '.join(missing)}")
+        if version == 3:
+            a = cls._decode_v3(a, grid, bad)
         S = len(a["keys"])
         E = len(a["edge_dst"])
         A = len(a["action_names"])

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import math
 import subprocess
 import sys
@@ -22,6 +23,7 @@ from game.interaction.build import BuildParams, build_graph, compile_table
 from game.interaction.duel import duel
 from game.interaction.solve import solve
 from game.interaction.state import grid_distance2, relative_pose
+from game.interaction.table import ESCAPE, join_small, split_small
 
 sys.path.insert(0, str(Path(__file__).parent))
 from hand_actions import hand_library  # noqa: E402
@@ -173,12 +175,49 @@ def test_file_round_trips(small_table, tmp_path):
     back = GraphTable.load(path)
     assert back.action_names == small_table.action_names
     assert back.meta() == small_table.meta()
-    for name in ("keys", "features", "other_action", "other_frame", "visits", "best_action",
+    for name in ("keys", "other_action", "other_frame", "visits", "best_action",
                  "value", "edge_ptr", "edge_dst", "edge_action", "edge_steps", "edge_flip",
-                 "edge_reward"):
+                 "edge_reward", "fill_keys", "fill_state"):
         np.testing.assert_array_equal(np.asarray(getattr(back, name)),
                                       np.asarray(getattr(small_table, name)).astype(
                                           np.asarray(getattr(back, name)).dtype))
+    # features are stored to 1/65536 of a cell, and each stays inside its own cell
+    g = small_table.grid
+    tol = np.array([g.distance_step, g.angle_step, g.angle_step]) / 65536
+    assert (np.abs(back.features - small_table.features) <= tol).all()
+    again = g.key(*back.features.T, back.other_action, back.other_frame)
+    np.testing.assert_array_equal(again, small_table.keys)
+
+
+def test_a_version_2_file_still_loads(small_table, tmp_path):
+    t = small_table
+    v2 = dict(meta=np.array(json.dumps({**t.meta(), "version": 2})),
+              action_names=np.array(t.action_names), keys=t.keys, features=t.features,
+              other_action=t.other_action.astype(np.int16),
+              other_frame=t.other_frame.astype(np.int16), visits=t.visits,
+              best_action=t.best_action.astype(np.int16), value=t.value,
+              edge_ptr=t.edge_ptr.astype(np.int32), edge_dst=t.edge_dst.astype(np.int32),
+              edge_action=t.edge_action, edge_steps=t.edge_steps, edge_flip=t.edge_flip,
+              edge_reward=t.edge_reward, fill_key_steps=np.diff(t.fill_keys, prepend=0),
+              fill_state=t.fill_state)
+    np.savez_compressed(tmp_path / "v2.npz", **v2)
+    back = GraphTable.load(tmp_path / "v2.npz")
+    for name in ("keys", "features", "best_action", "edge_ptr", "edge_dst", "fill_keys",
+                 "fill_state"):
+        np.testing.assert_array_equal(np.asarray(getattr(back, name)),
+                                      np.asarray(getattr(t, name)))
+    np.savez_compressed(tmp_path / "v9.npz", **dict(v2, meta=np.array(
+        json.dumps({**t.meta(), "version": 9}))))
+    with pytest.raises(GraphFileError, match="version 9, this program reads 2, 3"):
+        GraphTable.load(tmp_path / "v9.npz")
+
+
+def test_escaped_steps_round_trip():
+    x = np.array([0, 1, -1, 127, -127, 128, -128, 70000, -5, 2 ** 40], dtype=np.int64)
+    small, big = split_small(x)
+    assert small.dtype == np.int8 and len(big) == 4
+    np.testing.assert_array_equal(join_small(small, big), x)
+    assert join_small(small, big[:-1]) is None
 
 
 def _corrupt_variants(small_table, tmp_path):
@@ -189,11 +228,18 @@ def _corrupt_variants(small_table, tmp_path):
     (tmp_path / "truncated.npz").write_bytes(raw[: len(raw) // 2])
     with np.load(good) as z:
         arrays = {k: z[k] for k in z.files}
-    np.savez(tmp_path / "missing.npz", **{k: v for k, v in arrays.items() if k != "edge_dst"})
-    bad_dst = dict(arrays, edge_dst=arrays["edge_dst"] + len(arrays["keys"]))
-    np.savez(tmp_path / "bad_dst.npz", **bad_dst)
+    np.savez(tmp_path / "missing.npz",
+             **{k: v for k, v in arrays.items() if k != "edge_dst_steps"})
+    # the first destination (so, delta-coded, every one) moved past the last state
+    steps, big = arrays["edge_dst_steps"].copy(), [int(x) for x in arrays["edge_dst_steps_big"]]
+    first = big.pop(0) if steps[0] == ESCAPE else int(steps[0])
+    steps[0] = ESCAPE
+    big = np.array([first + len(arrays["key_steps"])] + big, dtype=np.int64)
+    np.savez(tmp_path / "bad_dst.npz", **dict(arrays, edge_dst_steps=steps, edge_dst_steps_big=big))
+    np.savez(tmp_path / "bad_escape.npz",
+             **dict(arrays, edge_dst_steps_big=np.append(arrays["edge_dst_steps_big"], 1)))
     np.savez(tmp_path / "bad_meta.npz", **dict(arrays, meta=np.array("{")))
-    return ["garbage", "truncated", "missing", "bad_dst", "bad_meta"]
+    return ["garbage", "truncated", "missing", "bad_dst", "bad_escape", "bad_meta"]
 
 
 def test_a_corrupt_file_is_a_clear_error(small_table, tmp_path):
@@ -221,7 +267,6 @@ def test_cli_info_json(small_table, tmp_path):
     r = subprocess.run([sys.executable, "-m", "game.cli", "graph", "info", str(path), "--json"],
                        cwd=REPO, capture_output=True, text=True)
     assert r.returncode == 0, r.stderr
-    import json
     info = json.loads(r.stdout)
     assert info["states"] == small_table.n_states and info["edges"] == small_table.n_edges
     assert info["file_bytes"] == path.stat().st_size and info["build"]["seed"] == SMALL.seed
