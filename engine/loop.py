@@ -82,6 +82,15 @@ class FixedStepLoop:
             raise ValueError("the render stage's name starts with 'render' (FORMATS.md)")
         self._render = (self.budget.register(name, budget_ms), fn)
 
+    def wrap_stages(self, wrap: Callable[[str, Callable], Callable]) -> None:
+        """Replace each stage's fn (and the render's) by wrap(name, fn): for benchmarks that
+        add their own timers around the stages; the loop's budget keeps timing the wrapped."""
+        names = {sid: s.name for sid, s in enumerate(self.budget.stages)}
+        self._stages = [(sid, wrap(names[sid], fn)) for sid, fn in self._stages]
+        if self._render is not None:
+            sid, fn = self._render
+            self._render = (sid, wrap(names[sid], fn))
+
     def step_time(self, step: int) -> float:
         """The simulation instant of a step in seconds, k / hz exactly (never k * dt summed)."""
         return step / self.hz

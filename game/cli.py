@@ -21,6 +21,7 @@ COMMAND_MODULES = [
     "tools.profile",
     "tools.bench",
     "tools.synth",
+    "tools.soak",
     "tools.bvh_cmd",
     "tools.actions_cmd",
     "tools.graph",

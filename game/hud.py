@@ -31,6 +31,8 @@ STAGE_COLORS = [
     (255, 217, 47), (229, 196, 148), (179, 179, 179), (120, 200, 240), (240, 120, 120),
 ]
 MARK_STEPS = 45  # how long a switch / reject mark stays lit
+CHART_BG = (30, 30, 36)
+TEXT_EVERY = 10  # frames between refreshes of the F3 overlay's numbers
 HISTORY_FRAMES = 120  # the F3 overlay's chart: the last two seconds, a stacked column a frame
 
 
@@ -137,6 +139,10 @@ class Hud:
         self._p99_frame = -10**9
         self._history: deque[np.ndarray] = deque(maxlen=HISTORY_FRAMES)  # per frame, ms per stage
         self._history_frame = -1
+        self._chart: pygame.Surface | None = None  # the F3 chart, scrolled a column per frame
+        self._panel_bg: pygame.Surface | None = None
+        self._rows_text: list[str] = []
+        self._text_frame = -10**9
 
     # layout helpers (fractions of the window, so resizes keep the layout)
     @staticmethod
@@ -323,14 +329,24 @@ class Hud:
         self.blit(surf, f"{st.source_url}: {st.source_state} - the match resumes when it is back",
                   int(24 * u), (w // 2, box.top + 88 * u), TEXT, "midtop")
 
+    def _chart_column(self, x0: int, col_w: int, ms: np.ndarray, px_per_ms: float) -> None:
+        """One frame's stacked column on the chart surface, at x0."""
+        y0 = float(self._chart.get_height())
+        for k, v in enumerate(ms):
+            hpx = min(v * px_per_ms, y0)
+            if hpx >= 0.5:
+                pygame.draw.rect(self._chart, STAGE_COLORS[k % len(STAGE_COLORS)], (x0, int(y0 - hpx), col_w, int(np.ceil(hpx))))
+                y0 -= hpx
+
     def _budget(self, surf: pygame.Surface, budget: FrameBudget, u: float) -> None:
         """A stacked bar per stage against the 16.7 ms line, and each stage's p99."""
         w, h = surf.get_size()
         chart_h = int(90 * u)
         panel = pygame.Rect(w - int(440 * u), int(130 * u), int(424 * u), int(60 * u + 20 * u * len(budget.stages)) + chart_h)
-        bg = pygame.Surface(panel.size, pygame.SRCALPHA)
-        bg.fill((0, 0, 0, 190))
-        surf.blit(bg, panel)
+        if self._panel_bg is None or self._panel_bg.get_size() != panel.size:
+            self._panel_bg = pygame.Surface(panel.size, pygame.SRCALPHA)
+            self._panel_bg.fill((0, 0, 0, 190))
+        surf.blit(self._panel_bg, panel)
         last = budget.last_frame_ms()
         names = [s.name for s in budget.stages if s.name not in (WAIT, UNACCOUNTED)] + [UNACCOUNTED]
         scale_ms = 2.0 * budget.frame_budget_ms  # the bar spans two frame budgets
@@ -349,32 +365,44 @@ class Hud:
         stages = {s.name: s for s in budget.stages}
         if budget.frames - self._p99_frame >= 30:  # percentiles over the ring: twice a second
             self._p99_frame = budget.frames
+            rows = budget.span_rows()  # once for all stages: each span_rows walks the whole ring
+            ids, durs = budget.s_stage[rows], budget.s_dur[rows]
             for name in names:
-                d = budget.stage_durations(name)
+                d = durs[(ids == budget.stage_id(name)) & (budget.s_depth[rows] == 0)]
                 self._p99[name] = float(np.percentile(d, 99)) / 1e6 if len(d) else 0.0
-        # history: a stacked column per frame against the same 16.7 ms line
-        if budget.frames != self._history_frame:
+        # history: a stacked column per frame against the same 16.7 ms line, newest on the right.
+        # The chart keeps its own surface and scrolls it one column per frame, so a frame draws
+        # one column, not 120 (drawing them all cost ~2 ms a frame: the overlay ate its budget)
+        new = budget.frames != self._history_frame
+        if new:
             self._history_frame = budget.frames
             self._history.append(np.array([last.get(n, 0.0) for n in names]))
         chart = pygame.Rect(bar.left, panel.bottom - chart_h - int(4 * u), bar.width, chart_h)
-        pygame.draw.rect(surf, (30, 30, 36), chart)
-        col_w = chart.width / HISTORY_FRAMES
+        col_w = max(1, chart.width // HISTORY_FRAMES)
         px_per_ms = chart.height / scale_ms
-        for i, ms in enumerate(self._history):
-            x0 = chart.left + i * col_w
-            y0 = float(chart.bottom)
-            for k, v in enumerate(ms):
-                hpx = min(v * px_per_ms, y0 - chart.top)
-                if hpx >= 0.5:
-                    pygame.draw.rect(surf, STAGE_COLORS[k % len(STAGE_COLORS)], (int(x0), int(y0 - hpx), max(1, int(np.ceil(col_w))), int(np.ceil(hpx))))
-                    y0 -= hpx
+        if self._chart is None or self._chart.get_size() != chart.size:
+            self._chart = pygame.Surface(chart.size)
+            self._chart.fill(CHART_BG)
+            for i, ms in enumerate(self._history):  # after a resize: redraw what is kept
+                self._chart_column(chart.width - (len(self._history) - i) * col_w, col_w, ms, px_per_ms)
+        elif new:
+            self._chart.scroll(-col_w, 0)
+            self._chart.fill(CHART_BG, (chart.width - col_w, 0, col_w, chart.height))
+            self._chart_column(chart.width - col_w, col_w, self._history[-1], px_per_ms)
+        surf.blit(self._chart, chart)
         line_y = chart.bottom - budget.frame_budget_ms * px_per_ms
         pygame.draw.line(surf, REJECT_COLOR, (chart.left, line_y), (chart.right, line_y), 1)
-        for k, name in enumerate(names):
+        if budget.frames - self._text_frame >= TEXT_EVERY or len(self._rows_text) != len(names):
+            # the numbers change every frame; re-rendered 6 times a second they stay readable
+            # and the text cache is not flooded with 60 new strings a second
+            self._text_frame = budget.frames
+            self._rows_text = []
+            for name in names:
+                st = stages[name]
+                over = f"  over {st.overruns}" if st.overruns else ""
+                budget_txt = f"/{st.budget_ms:.1f}" if st.budget_ms else ""
+                self._rows_text.append(f"{name:<12} {last.get(name, 0.0):5.2f} ms  p99 {self._p99.get(name, 0.0):5.2f}{budget_txt}{over}")
+        for k, text in enumerate(self._rows_text):
             y = bar.bottom + 8 * u + k * 20 * u
             pygame.draw.rect(surf, STAGE_COLORS[k % len(STAGE_COLORS)], (int(panel.left + 10 * u), int(y + 3 * u), int(12 * u), int(12 * u)))
-            p99 = self._p99.get(name, 0.0)
-            st = stages[name]
-            over = f"  over {st.overruns}" if st.overruns else ""
-            budget_txt = f"/{st.budget_ms:.1f}" if st.budget_ms else ""
-            self.blit(surf, f"{name:<12} {last.get(name, 0.0):5.2f} ms  p99 {p99:5.2f}{budget_txt}{over}", int(18 * u), (panel.left + 28 * u, y), TEXT)
+            self.blit(surf, text, int(18 * u), (panel.left + 28 * u, y), TEXT)

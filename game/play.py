@@ -47,7 +47,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--seed", type=int, default=0, help="seed for the virtual player and anything random (default 0)")
     p.add_argument("--size", default="1280x720", help="window size WxH (default 1280x720)")
     p.add_argument("--fullscreen", action="store_true", help="start fullscreen (F11 toggles)")
-    p.add_argument("--low-power", action="store_true", help="render at 30 Hz on a half-size surface, fewer solver iterations")
+    p.add_argument("--low-power", action="store_true", help="render at 30 Hz on a half-size surface, flat shading, no antialiasing, fewer solver iterations (docs/performance.md)")
     p.add_argument("--templates", metavar="NPZ", help="recognition templates (default: yours from `quickjab train`, else the shipped set)")
     p.add_argument("--graph", metavar="NPZ", help="Interaction Graph table (default: the shipped one)")
     p.add_argument("--difficulty", choices=("easy", "normal", "hard"), default="normal", help="how much the CPU's blows hurt (default normal)")

@@ -87,6 +87,7 @@ class Renderer:
         self.camera = Camera(size)
         # low-power mode: one flat colour per limb (no highlight pass), half the draw calls
         self.detailed = detailed
+        self.antialias = detailed  # the full look smooths the silhouettes; low power does not
         self._static: pygame.Surface | None = None
         self._front: pygame.Surface | None = None
         self.flashes: list[Flash] = []
@@ -288,6 +289,8 @@ class Renderer:
     def _capsule(self, surf: pygame.Surface, a: np.ndarray, b: np.ndarray, ra: float, rb: float, color) -> None:
         outline = shade(color, 0.45)
         self._capsule_fill(surf, a, b, ra + 1.5, rb + 1.5, outline)
+        if self.antialias:  # smooth the silhouette: the outline's edges and end caps
+            self._capsule_edges(surf, a, b, ra + 1.5, rb + 1.5, outline)
         self._capsule_fill(surf, a, b, ra, rb, color)
         if not self.detailed:
             return
@@ -305,6 +308,16 @@ class Renderer:
         pygame.draw.circle(surf, color, (float(a[0]), float(a[1])), max(1.0, ra))
         pygame.draw.circle(surf, color, (float(b[0]), float(b[1])), max(1.0, rb))
 
+    def _capsule_edges(self, surf: pygame.Surface, a: np.ndarray, b: np.ndarray, ra: float, rb: float, color) -> None:
+        d = b - a
+        n = float(np.hypot(d[0], d[1]))
+        if n > 1e-6:
+            px, py = -d[1] / n, d[0] / n
+            pygame.draw.aaline(surf, color, (a[0] + px * ra, a[1] + py * ra), (b[0] + px * rb, b[1] + py * rb))
+            pygame.draw.aaline(surf, color, (a[0] - px * ra, a[1] - py * ra), (b[0] - px * rb, b[1] - py * rb))
+        pygame.draw.aacircle(surf, color, (float(a[0]), float(a[1])), max(1.0, ra))
+        pygame.draw.aacircle(surf, color, (float(b[0]), float(b[1])), max(1.0, rb))
+
     def _eyes(self, surf: pygame.Surface, xy: np.ndarray, k: float) -> None:
         r = max(1.0, 0.014 * k)
         for x, y in xy:
@@ -314,6 +327,8 @@ class Renderer:
     def _sphere(self, surf: pygame.Surface, c: np.ndarray, r: float, color) -> None:
         pos = (float(c[0]), float(c[1]))
         pygame.draw.circle(surf, shade(color, 0.45), pos, r + 1.5)
+        if self.antialias:
+            pygame.draw.aacircle(surf, shade(color, 0.45), pos, r + 1.5)
         pygame.draw.circle(surf, shade(color, 0.8), pos, r)
         if not self.detailed:
             return

@@ -33,9 +33,11 @@ from engine.frames import FrameResampler
 from engine.loop import FixedStepLoop
 from engine.sensors.source import Source, SourceState
 from engine.state_hash import state_hash
+from game.history import History
 from game.hud import Hud, HudState
 from game.match import Match
 from game.render import Renderer
+from game.render_low_power import LowPowerRenderer
 
 HZ = 60
 STAGE_BUDGETS_MS = {
@@ -139,6 +141,14 @@ def load_graph(path: str | Path | None = None):
     return InteractionGraph.load(cached)
 
 
+LOG_KEPT = 1024  # recent recognizer events / blows kept in memory (an hour makes ~7,000-12,000 events)
+
+
+def _event_key(ev: dict) -> tuple:
+    """What of a recognizer event the state hash covers: its decision, not its scores."""
+    return (ev.get("frame"), ev.get("event"), ev.get("action"), ev.get("from_frame"))
+
+
 class Session:
     """Build with a source and a surface to draw on; `loop.run(...)` plays."""
 
@@ -187,11 +197,15 @@ class Session:
             self.hud_state.keys = key_help()
         self.hud = Hud()
         self.sounds = Sounds(enabled=cfg.sound, seed=cfg.seed)
-        self.renderer = Renderer(cfg.size, detailed=not cfg.low_power)
+        # low power: flat shading (game/render_low_power.py: half the render time of detailed=False)
+        self.renderer = LowPowerRenderer(cfg.size) if cfg.low_power else Renderer(cfg.size)
         self._surface_provider = surface_provider
         self._offscreen: pygame.Surface | None = None
-        self.events_log: list[dict] = []  # recognizer events, in order (tests, the trace)
-        self.blows_log: list[tuple[int, int, str, bool, float]] = []  # (step, attacker, target, blocked, damage)
+        self._low_power_surface: pygame.Surface | None = None
+        # recognizer events and blows (step, attacker, target, blocked, damage), in order: the
+        # recent ones kept (tests, HUD), all of them counted and in the state hash (game/history.py)
+        self.events_log: History = History(LOG_KEPT, key=_event_key)
+        self.blows_log: History = History(LOG_KEPT)
         self.on_toggle_fullscreen: Callable[[], None] | None = None
         self._t0: float | None = None
         self._buttons = 0
@@ -441,9 +455,10 @@ class Session:
         if self.config.low_power:
             w, h = target.get_size()
             size = (max(1, int(w * LOW_POWER_SCALE)), max(1, int(h * LOW_POWER_SCALE)))
-            if self._offscreen is None or self._offscreen.get_size() != size or self._offscreen is target:
-                self._offscreen = pygame.Surface(size)
-            surf = self._offscreen
+            # its own surface: the headless target is self._offscreen, which must keep its size
+            if self._low_power_surface is None or self._low_power_surface.get_size() != size:
+                self._low_power_surface = pygame.Surface(size)
+            surf = self._low_power_surface
         else:
             surf = target
         bodies = [self.prev_joints[i] + (self.curr_joints[i] - self.prev_joints[i]) * alpha for i in (0, 1)]
@@ -459,5 +474,5 @@ class Session:
     def state_hash(self) -> str:
         """The simulation's state: bodies, controllers, match, recognizer decisions."""
         ctrls = [(b.controller.action, round(float(b.controller.frame), 6), tuple(np.round(b.root, 9))) for b in self.boxers]
-        events = [(e.get("frame"), e.get("event"), e.get("action"), e.get("from_frame")) for e in self.events_log]
-        return state_hash(self.world.x, self.match.state(), ctrls, events, self.blows_log)
+        return state_hash(self.world.x, self.match.state(), ctrls, self.events_log.total, self.events_log.digest(),
+                          self.blows_log.total, self.blows_log.digest())

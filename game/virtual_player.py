@@ -85,10 +85,31 @@ def _smooth(x: np.ndarray, sigma: float) -> np.ndarray:
     return out
 
 
+# hand_motion depends on (action, n) only; the keyboard source synthesizes on a key press,
+# inside the 60 Hz input stage, so the clip sampling (half a synthesis) is done once per
+# (action, n). Entries hold the action itself so an id is never reused while cached.
+_HAND_MOTION_CACHE: dict[tuple[int, int], tuple[Action, np.ndarray, np.ndarray]] = {}
+_HAND_MOTION_CACHE_MAX = 1024
+
+
 def hand_motion(action: Action, n: int | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Fists (n, 2, 3) and forearm directions (n, 2, 3), hands ordered (right, left), in the
-    clip's starting frame (root motion applied), resampled to n frames (default: the clip's)."""
+    clip's starting frame (root motion applied), resampled to n frames (default: the clip's).
+    The arrays are cached and read-only."""
     n = action.frames if n is None else max(int(n), 2)
+    hit = _HAND_MOTION_CACHE.get((id(action), n))
+    if hit is not None and hit[0] is action:
+        return hit[1], hit[2]
+    fists, elbows = _hand_motion(action, n)
+    fists.flags.writeable = False
+    elbows.flags.writeable = False
+    if len(_HAND_MOTION_CACHE) >= _HAND_MOTION_CACHE_MAX:
+        _HAND_MOTION_CACHE.clear()
+    _HAND_MOTION_CACHE[(id(action), n)] = (action, fists, elbows)
+    return fists, elbows
+
+
+def _hand_motion(action: Action, n: int) -> tuple[np.ndarray, np.ndarray]:
     fs = np.linspace(0.0, action.frames - 1.0, n)
     postures, root = action.sample(fs)
     c, s = np.cos(root[:, 2]), np.sin(root[:, 2])

@@ -16,6 +16,7 @@ TARGETS = {
     "graph": "tools.bench_graph",
     "recognition": "tools.bench_recognition",
     "serial": "tools.bench_serial",
+    "frame": "tools.bench_frame",
 }
 
 

@@ -1,0 +1,68 @@
+"""`quickjab bench frame` smoke test: a tiny scripted match in every configuration, the JSON
+keys the docs quote, the naive peer really swapped in, bad arguments rejected in one line."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from tools.bench_frame import NaiveDTW, make_naive
+from tools.scripted_match import build_session
+
+REPO = Path(__file__).resolve().parents[2]
+
+
+def run_cli(args: list[str], tmp_path) -> subprocess.CompletedProcess:
+    env = {"XDG_DATA_HOME": str(tmp_path), "PATH": "/usr/bin:/bin", "SDL_VIDEODRIVER": "dummy", "SDL_AUDIODRIVER": "dummy"}
+    return subprocess.run([sys.executable, "-m", "game.cli", "bench", "frame", *args], cwd=REPO,
+                          capture_output=True, text=True, env=env, timeout=300)
+
+
+def test_bench_frame_json(tmp_path) -> None:
+    r = run_cli(["--steps", "120", "--all-modes", "--repeats", "2", "--realtime-seconds", "0.5", "--size", "320x180", "--json"], tmp_path)
+    assert r.returncode == 0, r.stderr
+    out = json.loads(r.stdout)
+    assert set(out["configs"]) == {"full", "low_power", "naive"}
+    full, low = out["configs"]["full"], out["configs"]["low_power"]
+    assert full["steps"] == 120 and full["dropped_steps"] == 0 and full["same_state_every_run"]
+    assert full["render_hz"] == 60 and low["render_hz"] == 30 and low["frames"] <= 61  # 2 steps a frame
+    assert low["physics_iterations"] < full["physics_iterations"] and low["antialias"] is False
+    for name in ("input", "frames", "recognize", "player", "opponent", "physics", "hits", "match", "render"):
+        st = full["stages"][name]
+        assert st["budget_ms"] > 0
+        for kind in ("least", "wall", "cpu"):
+            assert set(st[kind]) >= {"p50", "p95", "p99", "max", "share_p99", "mean"}
+            assert 0 <= st[kind]["p50"] <= st[kind]["p99"] <= st[kind]["max"]
+    assert full["stages"]["render"]["least"]["n"] == 120 and low["stages"]["render"]["least"]["n"] == low["frames"]
+    assert "render" not in out["configs"]["naive"]["stages"]
+    assert set(out["naive_over_game"]) == {"recognize", "physics", "sim_per_step"}
+    assert out["realtime"]["steps"] == 30
+    assert any(k.startswith("full_sim_p99") for k in out["targets"])
+
+
+def test_naive_peer_swaps_in_and_keeps_the_decisions() -> None:
+    s = build_session(seed=4, render=False)
+    t = build_session(seed=4, render=False)
+    make_naive(t)
+    assert isinstance(t.recognizer.dtw, NaiveDTW)
+    x = t.world.x + 0.01
+    before = np.abs(t.world.constraints.errors(x)).max()
+    t.world.constraints.relax(x)  # the pure-Python per-stick relaxation, in place on the array
+    assert np.abs(t.world.constraints.errors(x)).max() < before
+    # with the incremental physics on both, the naive DTW makes the same decisions: the peer
+    # adds the cost of recomputing, not different behaviour
+    u = build_session(seed=4, render=False)
+    u.recognizer.dtw = NaiveDTW(u.recognizer.dtw)
+    s.loop.run(steps=900)
+    u.loop.run(steps=900)
+    assert [e["action"] for e in s.events_log] == [e["action"] for e in u.events_log]
+    assert s.events_log.total > 5
+
+
+def test_bench_frame_rejects_bad_arguments(tmp_path) -> None:
+    r = run_cli(["--steps", "0"], tmp_path)
+    assert r.returncode == 2 and "--steps" in r.stderr and r.stderr.count("\n") == 1
