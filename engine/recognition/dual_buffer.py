@@ -47,6 +47,15 @@ STILL_DELTA_G = 0.03  # a sensor is still when it changes less than this per fra
 STILL_FRAMES = 3  # ... for this many frames in a row, reading about 1 g
 STILL_NORM_TOL = 0.2
 GRAVITY_FOLLOW = 0.05  # how fast g follows the signal while the gate is closed
+# Recovery from a wrong gravity (e.g. learnt from a first frame taken mid-motion, when the noise
+# is too strong for the STILL_DELTA_G test): a sensor whose every reading stays within
+# STEADY_G of its running mean (EMA, STEADY_ALPHA) for RECOVER_FRAMES frames in a row is not
+# moving, whatever the gate says, so its gravity becomes that mean. Only once the motion's
+# buffers are full (its decision is made; a slow, gentle gesture must not be cut short while it
+# is being recognized) or outside a motion.
+STEADY_ALPHA = 0.125
+STEADY_G = 0.2
+RECOVER_FRAMES = 30
 # A template is only accepted once the motion has been at least this strong relative to the
 # template's own peak activity (a weak wiggle must not launch a punch just because its shape
 # resembles the punch's gentle first frames; a real punch gets there within a few frames).
@@ -156,6 +165,8 @@ class DualBufferRecognizer:
         self.gravity: np.ndarray | None = None
         self._last: np.ndarray | None = None
         self._still = 0
+        self._mean: list[float] = []
+        self._steady = 0
         self._queued: list[dict] = []
         self._begin_motion_state()
 
@@ -220,24 +231,40 @@ class DualBufferRecognizer:
 
     def _gate(self, x: np.ndarray) -> bool:
         """Update the gravity estimate and say whether this frame is valid (above the gate).
-        Plain floats: with 1-4 sensors that is cheaper than a dozen tiny numpy calls."""
+        Plain floats: with 1-4 sensors that is cheaper than a dozen tiny numpy calls.
+
+        Gravity: the first frame is only a guess (it may be mid-motion); it snaps to the reading after
+        STILL_FRAMES still frames, follows slowly while the gate is closed, and is re-estimated
+        from the running mean after RECOVER_FRAMES steady frames (a wrong guess cannot hold the
+        gate open forever)."""
         xs = x.tolist()
         if self.gravity is None:
             self.gravity = x.copy()
             self._last = list(xs)
-        g, last = self.gravity.tolist(), self._last
-        still_now, act = True, 0.0
+            self._mean = list(xs)
+        g, last, mean = self.gravity.tolist(), self._last, self._mean
+        still_now, steady_now, act = True, True, 0.0
+        a = STEADY_ALPHA
         for k in range(0, len(xs), 3):
             ax, ay, az = xs[k], xs[k + 1], xs[k + 2]
             dx, dy, dz = ax - last[k], ay - last[k + 1], az - last[k + 2]
             if dx * dx + dy * dy + dz * dz >= STILL_DELTA_G**2 or abs(math.sqrt(ax * ax + ay * ay + az * az) - 1.0) >= STILL_NORM_TOL:
                 still_now = False
+            mx, my, mz = mean[k] + a * (ax - mean[k]), mean[k + 1] + a * (ay - mean[k + 1]), mean[k + 2] + a * (az - mean[k + 2])
+            mean[k], mean[k + 1], mean[k + 2] = mx, my, mz
+            ex, ey, ez = ax - mx, ay - my, az - mz
+            if ex * ex + ey * ey + ez * ez >= STEADY_G**2:
+                steady_now = False
             gx, gy, gz = ax - g[k], ay - g[k + 1], az - g[k + 2]
             act += math.sqrt(gx * gx + gy * gy + gz * gz)
         self._last = self._xs = xs
         self._still = self._still + 1 if still_now else 0
+        self._steady = self._steady + 1 if steady_now else 0
         if self._still >= STILL_FRAMES:
             self.gravity[:] = x
+            act = 0.0
+        elif self._steady >= RECOVER_FRAMES and act >= self.noise_g and (self.state != ACTIVE or self.count >= self.window):
+            self.gravity[:] = mean
             act = 0.0
         valid = act >= self.noise_g
         self._act = act
