@@ -64,6 +64,10 @@ CLOSED_END = 1e9  # a min_progress that leaves only each template's last positio
 COMPLETE_MIN_LENGTH = 0.6
 COMPLETE_CALM = 0.3  # ... and the activity to have fallen below this fraction of the motion's peak
 ENERGY_RATIO = 0.4
+# A hand whose reading has stopped changing (STILL_DELTA_G per frame) for this many frames has
+# finished its motion even when it rests in a new orientation (the gate, measured against the
+# gravity before the onset, stays open): score whole templates (closed end) from then on.
+UNCHANGED_FRAMES = 2
 
 IDLE, ACTIVE, DISCARD = "idle", "active", "discard"
 
@@ -168,6 +172,7 @@ class DualBufferRecognizer:
         self._still = 0
         self._mean: list[float] = []
         self._steady = 0
+        self._unchanged = 0
         self._queued: list[dict] = []
         self._begin_motion_state()
 
@@ -244,12 +249,14 @@ class DualBufferRecognizer:
             self._last = list(xs)
             self._mean = list(xs)
         g, last, mean = self.gravity.tolist(), self._last, self._mean
-        still_now, steady_now, act = True, True, 0.0
+        still_now, unchanged_now, steady_now, act = True, True, True, 0.0
         a = STEADY_ALPHA
         for k in range(0, len(xs), 3):
             ax, ay, az = xs[k], xs[k + 1], xs[k + 2]
             dx, dy, dz = ax - last[k], ay - last[k + 1], az - last[k + 2]
-            if dx * dx + dy * dy + dz * dz >= STILL_DELTA_G**2 or abs(math.sqrt(ax * ax + ay * ay + az * az) - 1.0) >= STILL_NORM_TOL:
+            if dx * dx + dy * dy + dz * dz >= STILL_DELTA_G**2:
+                still_now = unchanged_now = False
+            elif abs(math.sqrt(ax * ax + ay * ay + az * az) - 1.0) >= STILL_NORM_TOL:
                 still_now = False
             mx, my, mz = mean[k] + a * (ax - mean[k]), mean[k + 1] + a * (ay - mean[k + 1]), mean[k + 2] + a * (az - mean[k + 2])
             mean[k], mean[k + 1], mean[k + 2] = mx, my, mz
@@ -260,6 +267,7 @@ class DualBufferRecognizer:
             act += math.sqrt(gx * gx + gy * gy + gz * gz)
         self._last = self._xs = xs
         self._still = self._still + 1 if still_now else 0
+        self._unchanged = self._unchanged + 1 if unchanged_now else 0
         self._steady = self._steady + 1 if steady_now else 0
         if self._still >= STILL_FRAMES:
             self.gravity[:] = x
@@ -282,8 +290,10 @@ class DualBufferRecognizer:
         if self.count <= self.window:
             # While the hand moves, the motion may be partial: open end (the query's end may sit
             # anywhere past min_progress * n in a template). Once it is quiet the motion has
-            # probably ended, and the whole template must be matched (closed end).
-            self.dtw.min_progress = self.min_progress if (valid or self.quiet < self.closed_after) else CLOSED_END
+            # probably ended, and the whole template must be matched (closed end); so too once
+            # the reading has stopped changing.
+            closed = self._unchanged >= UNCHANGED_FRAMES or (not valid and self.quiet >= self.closed_after)
+            self.dtw.min_progress = CLOSED_END if closed else self.min_progress
             scores = self.dtw.push(self._features(x))
             self._decide(scores, events)
             complete = self._complete(scores)
