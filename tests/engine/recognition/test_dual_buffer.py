@@ -206,3 +206,26 @@ def test_wrong_first_gravity_guess_recovers_at_rest(templates):
     # (what the wrong guess made of the rest is not specified); what follows is recognized
     events = run(rec, np.vstack([bump(0, 3.0), rest(30)]))
     assert [(e["event"], e["action"]) for e in events if e["event"] != "end"] == [("start", "jab")]
+
+
+@pytest.mark.parametrize("current_fits", [True, False])
+def test_switch_to_a_template_over_its_threshold_only_when_the_current_misfits(current_fits):
+    # As in test_switch_carries_n_p the first decision is forced to "a" while the motion is "b".
+    # Then "b" is put over its rejection threshold: it may take over only when "a" no longer
+    # fits under its own threshold either.
+    rng = np.random.default_rng(3)
+    shared = bump(0, 2.5, 16)
+    tm = Templates.from_trials(
+        {"a": trials_of(np.vstack([shared, bump(2, 3.0)]), rng), "b": trials_of(np.vstack([shared, bump(1, 3.0)]), rng)}
+    )
+    rec = DualBufferRecognizer(tm, main=6, switch_margin=0.05)
+    a_rows = np.array([rec.action_names[i] == "a" for i in rec._tmpl_action])
+    evs: list[dict] = []
+    for f in np.vstack([rest(10), bump(0, 2.6, 16), bump(1, 3.0), rest(20)]):
+        new = rec.push(f)
+        evs += new
+        if any(e["event"] == "start" for e in new):
+            rec.action = rec.action_names.index("a")
+            rec.thresholds = np.where(a_rows, np.inf if current_fits else 1e-9, 1e-9)
+    switched = [e["action"] for e in evs if e["event"] == "switch"]
+    assert switched == ([] if current_fits else ["b"])
