@@ -3,17 +3,20 @@
 Per 60 Hz frame (`push`):
 - Noise gate (IV-A): a frame is valid when the sum over sensors of |a - g| reaches `noise_g`,
   g being each sensor's gravity, estimated while the sensor is still (and followed slowly
-  while the gate is closed). The first valid frame is the onset; from then on every frame
-  counts, valid or not.
+  while the gate is closed; re-estimated from steady readings when a wrong guess, e.g. from
+  a first frame taken mid-motion, would otherwise hold the gate open forever). The first
+  valid frame is the onset; from then on every frame counts, valid or not.
 - Main buffer: when it holds `main` frames, the best template gives the first decision: a
   `start` event. `main="auto"` decides as early as 3 frames when the best action leads the
   runner-up clearly, and waits up to 12 frames when it does not.
 - Supplementary buffer (IV-B): up to `supplementary` frames from the onset the DTW keeps
   growing and the decision is refined; a better action (by `switch_margin`) gives a `switch`
-  with `from_frame` = n_p, the clip frames the character has already played.
+  with `from_frame` = n_p, the clip frames the character has already played. The new action
+  must be under its rejection threshold unless the current one no longer fits under its own.
 - Scoring: while the hand moves the motion may be partial, so a template scores by its best
   prefix (open end, the query's end at least `min_progress` * n frames into it); once the hand
-  is quiet the motion has probably ended and the whole template must match (closed end).
+  is quiet, or its reading has stopped changing, the motion has probably ended and the whole
+  template must match (closed end).
 - Rejection: a decision needs the best template's score under its threshold (learned from the
   spread of the training trials) and the motion to have reached ENERGY_RATIO of the template's
   peak activity (a wiggle is not a punch). If not, nothing starts; the decision may still come
