@@ -87,13 +87,20 @@ class IncrementalDTW:
         self._init[0] = 0.0
         self._cur = 0
         self._row = self._ext[0][1:]
+        # Views made once (each slice or transpose made per frame costs as much as a small ufunc):
+        # per row buffer (previous rows' left/up neighbours, the new row, its transpose).
+        self._views = [(e[:-1], e[1:], e[1:].T) for e in (*self._ext, self._init)]
         self._suffix = np.empty((self.T, self.L))
-        self._recip: dict[int, np.ndarray] = {}
+        self._suffix_flat = self._suffix.reshape(-1)
+        self._reduced = np.empty(2 * self.T)
+        self._recip: dict[int, tuple[np.ndarray, np.ndarray]] = {}
         self._take: dict[tuple[int, float], np.ndarray] = {}
         self._c = np.empty(shape)
         self._a = np.empty(shape)
         self._tmp = np.empty(shape)
         self._diff = np.empty(self.tmpl.shape) if not self._expanded else None
+        self._c_flat = self._c.reshape(-1)
+        self._q_head = self._q_aug[: self.D]
         self.scores = np.empty(self.T)
         self.reset()
 
@@ -106,9 +113,9 @@ class IncrementalDTW:
         if self._expanded:
             # |t - q|^2 = [t, |t|^2, 1] . [-2q, 1, |q|^2]: one BLAS matvec, no (L, T, D) temporary.
             qa = self._q_aug
-            np.multiply(q, -2.0, out=qa[: self.D])
-            qa[self.D + 1] = q @ q
-            np.dot(self._flat, qa, out=c.reshape(-1))
+            np.multiply(q, -2.0, out=self._q_head)
+            qa[self.D + 1] = q.dot(q)
+            np.dot(self._flat, qa, out=self._c_flat)
             np.maximum(c, 0.0, out=c)
         else:
             np.subtract(self.tmpl, q, out=self._diff)
@@ -121,17 +128,16 @@ class IncrementalDTW:
         c = self._local_costs(q)
         # Rows are stored with one sentinel position in front (index 0): +inf for real rows, 0
         # in the virtual row before the first frame, so D[0, 0] = 2 c_0 needs no special case.
-        prev_ext = self._init if self.n == 0 else self._ext[self._cur]
+        prev_left, prev_up, _ = self._views[2 if self.n == 0 else self._cur]
         self._cur ^= 1
-        new_ext = self._ext[self._cur]
-        row = new_ext[1:]
+        _, row, row_t = self._views[self._cur]
         # a_j = min(D[i-1, j] + c_j, D[i-1, j-1] + 2 c_j) = c_j + min(D[i-1, j], D[i-1, j-1] + c_j)
         a = self._a
-        np.add(prev_ext[:-1], c, out=a)
-        np.minimum(prev_ext[1:], a, out=a)
+        np.add(prev_left, c, out=a)
+        np.minimum(prev_up, a, out=a)
         a += c
         if self.method == "scan":
-            cum = np.cumsum(c, axis=0, out=self._tmp)
+            cum = np.add.accumulate(c, axis=0, out=self._tmp)  # = cumsum, with less call overhead
             np.subtract(a, cum, out=row)
             np.minimum.accumulate(row, axis=0, out=row)
             row += cum
@@ -144,7 +150,8 @@ class IncrementalDTW:
         self.n += 1
         recip = self._recip.get(self.n)
         if recip is None:
-            recip = self._recip.setdefault(self.n, 1.0 / (self._steps[:, :1] + self.n))
+            col = 1.0 / (self._steps[:, :1] + self.n)
+            recip = self._recip.setdefault(self.n, (col, col.T))
         if self.min_progress > 0:
             # best over positions need - 1 <= j < L_k of each template: one reduceat over the
             # position-contiguous copy (T, L); every other segment is the gap, skipped.
@@ -156,10 +163,12 @@ class IncrementalDTW:
                 bounds[0::2] = self._cols * self.L + first
                 bounds[1::2] = self._cols * self.L + self.lengths
                 idx = self._take.setdefault(key, bounds[:-1] if bounds[-1] == self.T * self.L else bounds)
-            flat = np.multiply(row.T, recip.T, out=self._suffix)  # normalized, template-major
-            self.scores[:] = np.minimum.reduceat(flat.ravel(), idx)[0::2]
+            np.multiply(row_t, recip[1], out=self._suffix)  # normalized, template-major
+            red = self._reduced[: len(idx)]
+            np.minimum.reduceat(self._suffix_flat, idx, out=red)
+            self.scores[:] = red[0::2]
         else:
-            norm = np.multiply(row, recip, out=self._tmp)
+            norm = np.multiply(row, recip[0], out=self._tmp)
             norm += self._pad_inf
             np.min(norm, axis=0, out=self.scores)
         return self.scores

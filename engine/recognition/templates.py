@@ -40,7 +40,7 @@ REST_FRAMES = 3  # frames at a trial's start used as the resting gravity estimat
 TRIM_FRACTION = 0.1  # activity below this fraction of the trial's peak is rest
 LEAD_IN = 4  # frames kept before the trimmed onset (the recognizer re-cuts at its own gate)
 REJECT_K = 2.0  # threshold = mean + REJECT_K * std of same-action training scores ...
-REJECT_RATIO = 1.5  # ... and at least REJECT_RATIO * their max
+REJECT_RATIO = 2.0  # ... and at least REJECT_RATIO * their max (1.5 -> 2.0: uWave +1.6, synth session +12 points; see docs)
 REJECT_FLOOR_G = 0.05  # and never below this (g): identical trials must not reject all noise
 
 

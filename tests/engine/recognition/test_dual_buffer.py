@@ -172,3 +172,60 @@ def test_two_hands_and_bad_frames(templates):
         rec.push(np.zeros(3))
     events = run(rec, two(np.vstack([rest(10), bump(0, 3.0), rest(20)])))
     assert [e["event"] for e in events] == ["start", "end"]
+
+
+@pytest.mark.parametrize("noise_sd", [0.0, 0.03, 0.05])
+def test_motion_on_the_first_frames_does_not_lock_the_gate(templates, noise_sd):
+    # The recognizer's first frames are mid-punch (its first gravity guess is a 3 g reading),
+    # then the hand rests with sensor noise too strong for the frame-to-frame still test, then
+    # a clear jab: the wrong gravity must not hold the gate open, and the jab must start.
+    rng = np.random.default_rng(7)
+    frames = np.vstack([bump(0, 3.0)[6:], rest(60), bump(0, 3.0), rest(30)])
+    frames = frames + rng.normal(0, noise_sd, frames.shape)
+    rec = DualBufferRecognizer(templates)
+    events = run(rec, frames)
+    jab_onset = 18 + 60
+    later = [e for e in events if e["frame"] >= jab_onset]
+    assert [e["event"] for e in later if e["event"] in ("start", "switch")] == ["start"]
+    assert [e["action"] for e in later if e["event"] == "start"] == ["jab"]
+    assert any(e["event"] == "end" for e in later)
+    assert rec.state == "idle"
+    assert np.linalg.norm(rec.gravity - G) < 0.1
+
+
+
+def test_wrong_first_gravity_guess_recovers_at_rest(templates):
+    # A wrong first guess with the hand then resting still (noisy): once the steady frames
+    # re-estimate gravity the gate closes, the motion ends, and gravity is the resting reading.
+    rng = np.random.default_rng(2)
+    frames = np.vstack([[G + [0.0, 2.0, 0.0]], rest(150)]) + rng.normal(0, 0.04, (151, 3))
+    rec = DualBufferRecognizer(templates)
+    events = run(rec, frames)
+    assert rec.state == "idle"
+    assert np.linalg.norm(rec.gravity - G) < 0.1
+    # (what the wrong guess made of the rest is not specified); what follows is recognized
+    events = run(rec, np.vstack([bump(0, 3.0), rest(30)]))
+    assert [(e["event"], e["action"]) for e in events if e["event"] != "end"] == [("start", "jab")]
+
+
+@pytest.mark.parametrize("current_fits", [True, False])
+def test_switch_to_a_template_over_its_threshold_only_when_the_current_misfits(current_fits):
+    # As in test_switch_carries_n_p the first decision is forced to "a" while the motion is "b".
+    # Then "b" is put over its rejection threshold: it may take over only when "a" no longer
+    # fits under its own threshold either.
+    rng = np.random.default_rng(3)
+    shared = bump(0, 2.5, 16)
+    tm = Templates.from_trials(
+        {"a": trials_of(np.vstack([shared, bump(2, 3.0)]), rng), "b": trials_of(np.vstack([shared, bump(1, 3.0)]), rng)}
+    )
+    rec = DualBufferRecognizer(tm, main=6, switch_margin=0.05)
+    a_rows = np.array([rec.action_names[i] == "a" for i in rec._tmpl_action])
+    evs: list[dict] = []
+    for f in np.vstack([rest(10), bump(0, 2.6, 16), bump(1, 3.0), rest(20)]):
+        new = rec.push(f)
+        evs += new
+        if any(e["event"] == "start" for e in new):
+            rec.action = rec.action_names.index("a")
+            rec.thresholds = np.where(a_rows, np.inf if current_fits else 1e-9, 1e-9)
+    switched = [e["action"] for e in evs if e["event"] == "switch"]
+    assert switched == ([] if current_fits else ["b"])
