@@ -173,6 +173,11 @@ class IncrementalDTW:
             np.min(norm, axis=0, out=self.scores)
         return self.scores
 
+    def closed_scores(self) -> np.ndarray:
+        """(T,) closed-end normalized scores of the query so far: the whole query against each
+        whole template (a new array; not on the per-frame path)."""
+        return self._row[self.lengths - 1, self._cols] / (self.lengths + self.n)
+
     def position(self, k: int) -> int:
         """Template k's position aligned to the query's newest frame (unconstrained open end)."""
         n_k = int(self.lengths[k])

@@ -229,3 +229,46 @@ def test_switch_to_a_template_over_its_threshold_only_when_the_current_misfits(c
             rec.thresholds = np.where(a_rows, np.inf if current_fits else 1e-9, 1e-9)
     switched = [e["action"] for e in evs if e["event"] == "switch"]
     assert switched == ([] if current_fits else ["b"])
+
+
+@pytest.mark.parametrize("extend", [True, False])
+def test_a_motion_longer_than_the_supplementary_buffer_is_decided_over_its_whole(extend):
+    # "a" and "b" share their first 70 frames (longer than the 60-frame supplementary buffer)
+    # and differ afterwards: inside the buffer the decision ends on "a" (the noise tips it).
+    # The DTW keeps growing past the buffer, and at the end a late switch (flagged
+    # `whole_motion`) makes the final decision the action the whole motion matches, "b".
+    # Without the extension the decision stays "a".
+    rng = np.random.default_rng(5)
+    shared = np.vstack([bump(0, 6.0, 35), bump(1, 6.0, 35)])
+    a = np.vstack([shared, bump(2, 6.0, 30)])
+    b = np.vstack([shared, bump(0, -6.0, 30)])
+    tm = Templates.from_trials({"a": trials_of(a, rng), "b": trials_of(b, rng)})
+    rec = DualBufferRecognizer(tm, extend=extend)
+    evs = run(rec, np.vstack([rest(10), b + rng.normal(0, 0.02, b.shape), rest(30)]))
+    decided = [e for e in evs if e["event"] in ("start", "switch")]
+    start, ends = decided[0], [e for e in evs if e["event"] == "end"]
+    assert start["event"] == "start" and len(ends) == 1 and [e["event"] for e in evs].count("start") == 1
+    in_buffer = [e for e in decided if not e.get("whole_motion")]
+    assert in_buffer[-1]["action"] == "a"
+    # what the game sees inside the buffer keeps the paper's rule: within `supplementary` frames
+    assert all(e["frame"] - start["onset_frame"] < 60 for e in in_buffer)
+    late = [e for e in decided if e.get("whole_motion")]
+    if extend:
+        assert [e["action"] for e in late] == ["b"] and ends[0]["action"] == "b"
+        assert late[0]["frame"] == ends[0]["frame"] and late[0]["from_frame"] == late[0]["frame"] - start["frame"]
+    else:
+        assert late == [] and ends[0]["action"] == "a"
+
+
+def test_the_extended_dtw_is_bounded_when_the_hand_never_rests(templates):
+    # A decided motion followed by endless strong movement: the DTW grows past the buffer up to
+    # its bound and no further (no unbounded per-frame work or caches).
+    rec = DualBufferRecognizer(templates, complete_fraction=0)
+    rng = np.random.default_rng(6)
+    frames = np.vstack([rest(10), bump(0, 3.0), rest(1000) + rng.normal(0, 2.0, (1000, 3))])
+    longest = 0
+    for f in frames:
+        rec.push(f)
+        longest = max(longest, rec.dtw.n)
+    assert longest == rec._extend_to > rec.supplementary
+    assert len(rec.dtw._recip) <= rec._extend_to
