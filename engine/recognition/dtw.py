@@ -72,8 +72,9 @@ class IncrementalDTW:
         self.min_progress = float(min_progress)
         self._expanded = not exact_costs
         sqnorm = np.einsum("ltd,ltd->lt", self.tmpl, self.tmpl)
+        # [-2t, |t|^2, 1] . [q, 1, |q|^2]: the -2 is folded in here, so a frame is one copy.
         self._flat = np.concatenate(
-            [self.tmpl, sqnorm[..., None], np.ones((self.L, self.T, 1))], axis=2
+            [-2.0 * self.tmpl, sqnorm[..., None], np.ones((self.L, self.T, 1))], axis=2
         ).reshape(self.L * self.T, self.D + 2)
         self._q_aug = np.ones(self.D + 2)
         # Positions past a template's end never count: +inf added to their normalized score.
@@ -96,8 +97,12 @@ class IncrementalDTW:
         self._recip: dict[int, tuple[np.ndarray, np.ndarray]] = {}
         self._take: dict[tuple[int, float], np.ndarray] = {}
         self._c = np.empty(shape)
-        self._a = np.empty(shape)
         self._tmp = np.empty(shape)
+        self._zeros = np.zeros(shape)  # np.maximum against an array: no scalar conversion per call
+        # Running sums of the row's local costs with a 0 in front: [1:] is the inclusive cumsum,
+        # [:-1] the exclusive one, both from one accumulate.
+        self._cumsums = np.zeros((self.L + 1, self.T))
+        self._cum, self._cum_excl = self._cumsums[1:], self._cumsums[:-1]
         self._diff = np.empty(self.tmpl.shape) if not self._expanded else None
         self._c_flat = self._c.reshape(-1)
         self._q_head = self._q_aug[: self.D]
@@ -113,10 +118,10 @@ class IncrementalDTW:
         if self._expanded:
             # |t - q|^2 = [t, |t|^2, 1] . [-2q, 1, |q|^2]: one BLAS matvec, no (L, T, D) temporary.
             qa = self._q_aug
-            np.multiply(q, -2.0, out=self._q_head)
+            self._q_head[:] = q
             qa[self.D + 1] = q.dot(q)
             np.dot(self._flat, qa, out=self._c_flat)
-            np.maximum(c, 0.0, out=c)
+            np.maximum(c, self._zeros, out=c)
         else:
             np.subtract(self.tmpl, q, out=self._diff)
             np.einsum("ltd,ltd->lt", self._diff, self._diff, out=c)
@@ -132,16 +137,20 @@ class IncrementalDTW:
         self._cur ^= 1
         _, row, row_t = self._views[self._cur]
         # a_j = min(D[i-1, j] + c_j, D[i-1, j-1] + 2 c_j) = c_j + min(D[i-1, j], D[i-1, j-1] + c_j)
-        a = self._a
-        np.add(prev_left, c, out=a)
-        np.minimum(prev_up, a, out=a)
-        a += c
         if self.method == "scan":
-            cum = np.add.accumulate(c, axis=0, out=self._tmp)  # = cumsum, with less call overhead
-            np.subtract(a, cum, out=row)
+            # row_j = C_j + min_{k<=j}(a_k - C_k), C = cumsum(c); a_k - C_k is
+            # min(D[i-1, k], D[i-1, k-1] + c_k) - C_{k-1}, built in the row buffer itself.
+            np.add.accumulate(c, axis=0, out=self._cum)  # = cumsum, with less call overhead
+            np.add(prev_left, c, out=row)
+            np.minimum(prev_up, row, out=row)
+            row -= self._cum_excl
             np.minimum.accumulate(row, axis=0, out=row)
-            row += cum
+            row += self._cum
         else:
+            a = self._tmp
+            np.add(prev_left, c, out=a)
+            np.minimum(prev_up, a, out=a)
+            a += c
             row[0] = a[0]
             for j in range(1, self.L):
                 np.add(row[j - 1], c[j], out=row[j])
@@ -170,7 +179,7 @@ class IncrementalDTW:
         else:
             norm = np.multiply(row, recip[0], out=self._tmp)
             norm += self._pad_inf
-            np.min(norm, axis=0, out=self.scores)
+            np.minimum.reduce(norm, axis=0, out=self.scores)  # = np.min, less call overhead
         return self.scores
 
     def closed_scores(self) -> np.ndarray:
