@@ -320,7 +320,9 @@ class Session:
             self.events_log.append(ev)
             self._pilot_seen |= ev.get("event") == "start"
             self.hud_state.mark(ev)
-            if self.match.fighting:
+            # a whole-motion switch is the recognizer's final word on a motion already over:
+            # a label for the record, too late for the character to act on
+            if self.match.fighting and not ev.get("whole_motion"):
                 self.player.controller.on_event(ev)
                 clip = self.lib.get(ev.get("action") or "")
                 if ev.get("event") == "start" and clip is not None and clip.kind == "attack":
