@@ -15,8 +15,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from engine.clock import NS_PER_S
-
 FRAME_BUDGET_MS = 1000.0 / 60.0
 WAIT = "wait"
 UNACCOUNTED = "unaccounted"
@@ -182,7 +180,3 @@ class FrameBudget:
             "steps_per_frame": {str(k): v for k, v in sorted(self.steps_per_frame.items())},
             "stages": stages,
         }
-
-
-def ns_to_ms(ns: int) -> float:
-    return ns / (NS_PER_S / 1000)

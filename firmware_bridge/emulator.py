@@ -15,7 +15,6 @@ import time
 import tty
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 
@@ -321,7 +320,3 @@ def start_in_thread(emu: Emulator, seconds: float | None = None) -> threading.Th
     th = threading.Thread(target=emu.run, args=(seconds,), daemon=True, name="bridge-emulator")
     th.start()
     return th
-
-
-def link_path_default() -> str:
-    return str(Path(os.environ.get("XDG_RUNTIME_DIR", "/tmp")) / "quickjab-bridge")

@@ -9,7 +9,6 @@ accept* is a decoded frame that was not sent, *lost* is a sent frame not decoded
 from __future__ import annotations
 
 import random
-from collections.abc import Iterable
 from dataclasses import asdict, dataclass
 
 from firmware_bridge import protocol
@@ -46,10 +45,6 @@ def decode_all(stream: bytes, seed: int = 0, max_chunk: int = 97) -> tuple[list[
         out += dec.feed(stream[i : i + k])
         i += k
     return out, dec
-
-
-def _keys(frames: Iterable[protocol.Frame]) -> set:
-    return {f.key() for f in frames}
 
 
 def sent_keys(frames: list[bytes]) -> list[tuple]:
