@@ -24,7 +24,7 @@ def make_frames(n: int, seed: int = 0, hello_every: int = 200) -> list[bytes]:
         t = (seq * 5000) & 0x3FFFFFFF
         if seq % hello_every == 0:
             frames.append(protocol.encode_hello(seq, t, boot, 200, 4096, 65500, 30, protocol.IMU_MPU6050,
-                                                protocol.FLAG_SENSOR_A | protocol.FLAG_SENSOR_B))
+                                                protocol.FLAGS_SENSORS))
         elif seq % 997 == 1:
             frames.append(protocol.encode_text(seq, t, f"note {seq}"))
         else:

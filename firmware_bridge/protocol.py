@@ -28,6 +28,7 @@ FLAG_SENSOR_B = 0x02  # left hand (lx,ly,lz)
 FLAG_GYRO = 0x04  # SAMPLE carries gyro after each sensor's accel
 FLAG_OVERRUN = 0x08  # the device dropped output since the last frame (host not reading)
 FLAGS_KNOWN = 0x0F
+FLAGS_SENSORS = FLAG_SENSOR_A | FLAG_SENSOR_B  # the bits that say which sensors a frame carries
 
 IMU_UNKNOWN = 0
 IMU_MPU6050 = 1
@@ -178,10 +179,15 @@ def sample_values_per_sensor(flags):
     return 6 if flags & FLAG_GYRO else 3
 
 
+def sensor_count(flags):
+    # type: (int) -> int
+    """How many sensors the flags announce (0, 1 or 2)."""
+    return (1 if flags & FLAG_SENSOR_A else 0) + (1 if flags & FLAG_SENSOR_B else 0)
+
+
 def sample_payload_size(flags):
     # type: (int) -> int
-    n = (1 if flags & FLAG_SENSOR_A else 0) + (1 if flags & FLAG_SENSOR_B else 0)
-    return 2 * n * sample_values_per_sensor(flags)
+    return 2 * sensor_count(flags) * sample_values_per_sensor(flags)
 
 
 class Frame:
@@ -221,7 +227,7 @@ class Hello:
         (self.accel_lsb_per_g, self.gyro_mlsb_per_dps, self.rate_hz, self.boot_id,
          self.ts_bits, self.imu_kind) = struct.unpack(HELLO_FMT, frame.payload)
         self.flags = frame.flags
-        self.sensors = (1 if frame.flags & FLAG_SENSOR_A else 0) + (1 if frame.flags & FLAG_SENSOR_B else 0)
+        self.sensors = sensor_count(frame.flags)
 
 
 def parse_body(body):
@@ -241,7 +247,7 @@ def parse_body(body):
     if flags & ~FLAGS_KNOWN:
         return None, "malformed"
     if msg_type == SAMPLE:
-        if not flags & (FLAG_SENSOR_A | FLAG_SENSOR_B) or len(payload) != sample_payload_size(flags):
+        if not flags & FLAGS_SENSORS or len(payload) != sample_payload_size(flags):
             return None, "malformed"
     elif msg_type == HELLO:
         if len(payload) != HELLO_SIZE or not 8 <= payload[12] <= 32:

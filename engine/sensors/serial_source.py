@@ -295,8 +295,8 @@ class SerialSource(Source):
         """(sensors, 3) in g per frame: one numpy conversion for the whole poll when every frame
         has the layout the HELLO announced (the usual case), frame by frame otherwise."""
         flags = frames[0].flags & ~protocol.FLAG_OVERRUN
-        want = self.hello.flags & (protocol.FLAG_SENSOR_A | protocol.FLAG_SENSOR_B)
-        if (flags & (protocol.FLAG_SENSOR_A | protocol.FLAG_SENSOR_B)) == want and self.hello.sensors == self.sensors \
+        want = self.hello.flags & protocol.FLAGS_SENSORS
+        if (flags & protocol.FLAGS_SENSORS) == want and self.hello.sensors == self.sensors \
                 and all((f.flags & ~protocol.FLAG_OVERRUN) == flags for f in frames):
             per = protocol.sample_values_per_sensor(flags)
             raw = np.frombuffer(b"".join([f.payload for f in frames]), dtype="<i2")
@@ -316,8 +316,8 @@ class SerialSource(Source):
         """(sensors, 3) in g; a sensor the HELLO announced but this SAMPLE lacks holds its last value."""
         per = protocol.sample_values_per_sensor(f.flags)
         raw = np.frombuffer(f.payload, dtype="<i2").reshape(-1, per)[:, :3] / self.hello.accel_lsb_per_g
-        want = self.hello.flags & (protocol.FLAG_SENSOR_A | protocol.FLAG_SENSOR_B)
-        have = f.flags & (protocol.FLAG_SENSOR_A | protocol.FLAG_SENSOR_B)
+        want = self.hello.flags & protocol.FLAGS_SENSORS
+        have = f.flags & protocol.FLAGS_SENSORS
         if have == want or not want:
             out = raw
         else:
