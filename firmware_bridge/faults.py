@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import random
 from dataclasses import asdict, dataclass
+from itertools import accumulate
 
 from firmware_bridge import protocol
 
@@ -146,10 +147,7 @@ def garbage_bursts(n: int, bursts: int, max_len: int = 64, between: bool = True,
     frames = make_frames(n, seed)
     stream = bytearray(b"".join(frames))
     if between:
-        bounds = [0]
-        for fr in frames:
-            bounds.append(bounds[-1] + len(fr))
-        where = sorted(rng.sample(bounds, bursts), reverse=True)
+        where = sorted(rng.sample(_frame_starts(frames), bursts), reverse=True)
     else:
         where = sorted(rng.sample(range(len(stream)), bursts), reverse=True)
     for pos in where:
@@ -159,12 +157,15 @@ def garbage_bursts(n: int, bursts: int, max_len: int = 64, between: bool = True,
     return _outcome(name, bursts, sent_keys(frames), got, dec)
 
 
+def _frame_starts(frames: list[bytes]) -> list[int]:
+    """The byte offset of each frame in their concatenation, and the stream's end."""
+    return [0, *accumulate(len(fr) for fr in frames)]
+
+
 def _spaced_positions(frames: list[bytes], events: int, rng: random.Random) -> list[int]:
     """One random byte offset inside each of `events` distinct frames (delimiters included),
     frames at least 3 apart so each event's cost can be told apart."""
-    starts = [0]
-    for fr in frames:
-        starts.append(starts[-1] + len(fr))
+    starts = _frame_starts(frames)
     picks = sorted(rng.sample(range(0, len(frames) // 3), events))
     return [starts[3 * p] + rng.randrange(len(frames[3 * p])) for p in picks]
 
