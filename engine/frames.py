@@ -98,12 +98,15 @@ class FrameResampler:
         """The frame for instant t, or None before the first sample. The returned array is
         reused by the next call: copy it to keep it."""
         pending = self._pending
+        n = len(pending)
         i = 0
-        while i < len(pending) and pending[i].t <= t:
-            self._prev_t, self._prev = pending[i].t, np.asarray(pending[i].accel, dtype=np.float64).ravel()
-            self._have = True
+        while i < n and pending[i].t <= t:
             i += 1
-        del pending[:i]
+        if i:  # only the last sample passed matters: convert that one alone
+            last = pending[i - 1]
+            self._prev_t, self._prev = last.t, np.asarray(last.accel, dtype=np.float64).ravel()
+            self._have = True
+            del pending[:i]
         if not self._have:
             return None
         if self.mode == "linear" and pending and pending[0].t > self._prev_t:
