@@ -35,8 +35,8 @@ KNOWN_BOARDS = (
     (0x1A86, 0x55D4),  # CH9102 on ESP32 boards
 )
 LOST = (OSError, serial.SerialException, termios.error)
-MAX_READS_PER_POLL = 32
-BACKLOG = 1024  # a read this big may have left more behind: read again in the same poll  # bounds one poll's work even if the device outruns us
+MAX_READS_PER_POLL = 32  # bounds one poll's work even if the device outruns us
+BACKLOG = 1024  # a read this big may have left more behind: read again in the same poll
 STALL_S = 2.0  # no byte for this long while connected counts one stall
 
 
