@@ -207,9 +207,11 @@ class Emulator:
         self.seconds: float | None = None
         self._reason = "end"
         self._t0 = time.monotonic()
-        self._next = {"garbage": self.faults.garbage_every, "flip": self.faults.flip_every,
-                      "drop": self.faults.drop_every}
-        self._pending = {"garbage": 0, "flip": 0, "drop": 0}
+        # periodic faults: kind -> period in s (0 = never), next due time, bursts still to inject
+        self._every = {"garbage": self.faults.garbage_every, "flip": self.faults.flip_every,
+                       "drop": self.faults.drop_every}
+        self._next = dict(self._every)
+        self._pending = dict.fromkeys(self._every, 0)
         self._stalls = sorted(self.faults.stall_at)
         self._reboots = sorted(self.faults.reboot_at)
         self._unplugs = sorted(self.faults.unplug_at)
@@ -260,8 +262,7 @@ class Emulator:
         if protocol.HELLO_REQUEST in self.port.read_host():
             sampler.request_hello()
         t = self.elapsed()
-        for kind, every in (("garbage", self.faults.garbage_every), ("flip", self.faults.flip_every),
-                            ("drop", self.faults.drop_every)):
+        for kind, every in self._every.items():
             if every > 0 and t >= self._next[kind]:
                 self._next[kind] += every
                 self._pending[kind] += 1
