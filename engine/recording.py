@@ -148,11 +148,15 @@ def _metadata_lines(meta: dict[str, str]) -> str:
     return "".join(f"# {one_line(k)}: {one_line(v)}\n" for k, v in meta.items())
 
 
+def _file_head(sensors: int, meta: dict[str, str]) -> str:
+    """Metadata lines (rate_hz and units first, overridable) and the header with a label column."""
+    return _metadata_lines({"rate_hz": "60", "units": "g", **meta}) + ",".join(_header_columns(sensors) + ["label"]) + "\n"
+
+
 def write_recording(path: str | os.PathLike, rec: Recording) -> None:
     """Write a whole recording (FORMATS.md layout, label column always present)."""
     buf = io.StringIO()
-    buf.write(_metadata_lines({"rate_hz": "60", "units": "g", **rec.meta}))
-    buf.write(",".join(_header_columns(rec.sensors) + ["label"]) + "\n")
+    buf.write(_file_head(rec.sensors, rec.meta))
     for t, a, lab in zip(rec.t, rec.accel, rec.labels, strict=True):
         buf.write(_format_row(float(t), a, lab))
     Path(path).write_text(buf.getvalue(), encoding="utf-8")
@@ -181,8 +185,7 @@ class RecordingWriter:
             self._file = open(self.path, "w", encoding="utf-8", newline="", buffering=1)
         except OSError as exc:
             raise RecordingError(self.path, None, f"cannot write: {exc.strerror}") from None
-        self._file.write(_metadata_lines({"rate_hz": "60", "units": "g", **(meta or {})}))
-        self._file.write(",".join(_header_columns(sensors) + ["label"]) + "\n")
+        self._file.write(_file_head(sensors, meta or {}))
         self._last_flush = time.monotonic()
         self.rows = 0
         self._dirty = False
