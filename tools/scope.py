@@ -59,10 +59,14 @@ class SampleRing:
             self.x[i, : min(len(a), self.x.shape[1])] = a[: self.x.shape[1]]
             self.count += 1
 
+    def rows(self) -> np.ndarray:
+        """Ring indices of the samples held, oldest first."""
+        n = min(self.count, self.capacity)
+        return np.arange(self.count - n, self.count) % self.capacity
+
     def since(self, t_from: float) -> tuple[np.ndarray, np.ndarray]:
         """(times, values) of the samples at or after t_from, oldest first."""
-        n = min(self.count, self.capacity)
-        idx = np.arange(self.count - n, self.count) % self.capacity
+        idx = self.rows()
         keep = idx[self.t[idx] >= t_from]
         return self.t[keep], self.x[keep]
 
@@ -190,8 +194,7 @@ class Scope:
 
     def state_hash(self) -> str:
         """Hash of what the scope holds: two headless runs of the same source must agree."""
-        n = min(self.ring.count, self.ring.capacity)
-        idx = np.arange(self.ring.count - n, self.ring.count) % self.ring.capacity
+        idx = self.ring.rows()
         loop = self.loop
         return state_hash(self.ring.t[idx], self.ring.x[idx], self.samples,
                           loop.step_index if loop else 0, loop.dropped_steps if loop else 0)
