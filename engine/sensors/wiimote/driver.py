@@ -311,12 +311,7 @@ class WiimoteSource(Source):
             return
         try:
             wait = script.throw(error) if error is not None else script.send(value)
-        except StopIteration:
-            if self._script is script:
-                self._script = None
-                self._wait = None
-            return
-        except DeviceGone:  # the connection is already marked lost (or closed)
+        except (StopIteration, DeviceGone):  # done, or the connection is already marked lost (or closed)
             if self._script is script:
                 self._script = None
                 self._wait = None
