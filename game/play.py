@@ -113,7 +113,6 @@ def run(args: argparse.Namespace) -> int:
         session = Session(source, config, clock=clock, surface_provider=pygame.display.get_surface)
         session.hud_state.show_budget = args.budget
         session.on_toggle_fullscreen = pygame.display.toggle_fullscreen
-        session.loop.freeze_gc()
         try:
             session.loop.run(frames=args.frames)
         finally:
