@@ -33,7 +33,6 @@ SHOW_STEPS = 90  # the animation alone before the first trial of an action
 READY_STEPS = 60  # "get ready": the hands held still
 LEAD_IN = 30  # frames of the ready phase kept at the start of a trial (the rest before)
 RECORD_STEPS = 96  # the recording window after GO
-SAVED_STEPS = 10**9
 
 SHOW, READY, RECORD, DONE = "show", "ready", "record", "done"
 
