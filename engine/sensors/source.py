@@ -110,6 +110,11 @@ def parse_source_url(url: str) -> tuple[str, str, dict[str, str]]:
     return parts.scheme.lower(), path, dict(parse_qsl(parts.query))
 
 
+def url_flag(params: dict[str, str], key: str, default: str = "0") -> bool:
+    """A yes/no URL parameter: 1, true, yes or on (any case) is yes."""
+    return params.get(key, default).lower() in ("1", "true", "yes", "on")
+
+
 def open_source(url: str, *, clock: Clock | None = None) -> Source:
     """Open a source by URL. Raises SourceError for a URL that can never work."""
     scheme, _, _ = parse_source_url(url)

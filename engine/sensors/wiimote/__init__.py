@@ -15,7 +15,7 @@ URLs:
 
 from __future__ import annotations
 
-from engine.sensors.source import Clock, SourceError, parse_source_url, register_scheme
+from engine.sensors.source import Clock, SourceError, parse_source_url, register_scheme, url_flag
 from engine.sensors.wiimote.driver import WiimoteSource
 from engine.sensors.wiimote.protocol import (
     Calibration,
@@ -57,10 +57,6 @@ class WiimoteNotFound(SourceError):
     """`wiimote://` opened with no Wiimote attached (and no ?wait=1)."""
 
 
-def _flag(params: dict[str, str], key: str, default: str = "0") -> bool:
-    return params.get(key, default).lower() in ("1", "true", "yes", "on")
-
-
 def open_wiimote(url: str, clock: Clock) -> WiimoteSource:
     _, path, params = parse_source_url(url)
     try:
@@ -79,7 +75,7 @@ def open_wiimote(url: str, clock: Clock) -> WiimoteSource:
         player=player,
         write_length=HidTransport.default_write_length(),
     )
-    if source.info is None and not _flag(params, "wait"):
+    if source.info is None and not url_flag(params, "wait"):
         source.close()
         where = f" at {path}" if path else ""
         if source.last_error and source.last_error != "no Wiimote found":

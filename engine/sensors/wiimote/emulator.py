@@ -49,7 +49,7 @@ from typing import Any
 import numpy as np
 
 from engine.recording import Recording, read_recording
-from engine.sensors.source import SourceError, parse_source_url
+from engine.sensors.source import SourceError, parse_source_url, url_flag
 from engine.sensors.wiimote import protocol as p
 from engine.sensors.wiimote.driver import WiimoteSource
 
@@ -608,7 +608,6 @@ def emulator_from_url(url: str, clock: Callable[[], float]) -> tuple[EmulatedBus
         ("unplug_at", "unplug"), ("replug_at", "replug"), ("nunchuk_out_at", "nunchuk_out"),
         ("nunchuk_in_at", "nunchuk_in"), ("foreign_mode_at", "foreign_mode"),
     ) for t in _times(params, key, url)]  # fmt: skip
-    flag = lambda k, d="0": params.get(k, d).lower() in ("1", "true", "yes", "on")  # noqa: E731
     clone = params.get("clone", "0").lower()
     clone = "" if clone in ("0", "false", "no", "off", "") else ("zeros" if clone == "zeros" else "garbage")
     loss = params.get("loss", "error")
@@ -619,9 +618,9 @@ def emulator_from_url(url: str, clock: Callable[[], float]) -> tuple[EmulatedBus
             rec, clock,
             jitter_ms=float(params.get("jitter_ms", "2")), latency_ms=float(params.get("latency_ms", "4")),
             pad=int(params.get("pad", "0")), drop=float(params.get("drop", "0")), clone=clone,
-            nunchuk=flag("nunchuk", "1"), seed=int(params.get("seed", "0")), loop=flag("loop", "1"),
-            loss=loss, kernel_driver=flag("kernel_driver"), start=float(params.get("start", "0")),
-            status_stops=flag("status_stops"), events=events,
+            nunchuk=url_flag(params, "nunchuk", "1"), seed=int(params.get("seed", "0")),
+            loop=url_flag(params, "loop", "1"), loss=loss, kernel_driver=url_flag(params, "kernel_driver"),
+            start=float(params.get("start", "0")), status_stops=url_flag(params, "status_stops"), events=events,
         )  # fmt: skip
     except ValueError as exc:
         raise SourceError(f"{url}: bad option ({exc})") from None
