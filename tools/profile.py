@@ -69,7 +69,8 @@ def profile_summary(trace: dict) -> dict:
         "frame_overruns": int(np.sum(work_us > period_ms * 1000.0)),
         "steps_per_frame": {str(k): v for k, v in sorted(Counter(steps).items())},
         "stages": stages,
-        "_frame_ts": f_ts,  # for the plot; dropped before printing
+        "_frame_ts": f_ts,  # for the plot, with the frame events in time order; dropped before printing
+        "_frames": frames,
     }
 
 
@@ -111,8 +112,7 @@ def plot_profile(trace: dict, summary: dict, out: str, max_bars: int = 600) -> N
     import matplotlib.pyplot as plt
 
     budget = summary["frame_budget_ms"]
-    f_ts = summary["_frame_ts"]
-    frames = sorted((e for e in trace["traceEvents"] if e["ph"] == "X" and e["name"] == "frame"), key=lambda e: e["ts"])
+    f_ts, frames = summary["_frame_ts"], summary["_frames"]
     work = np.array([(e["dur"] - (e.get("args") or {}).get("wait_us", 0.0)) / 1000 for e in frames])
     names = [n for n in summary["stages"] if n != WAIT and not summary["stages"][n]["nested"]]
     per_frame = {n: np.zeros(len(frames)) for n in names}
