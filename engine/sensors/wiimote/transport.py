@@ -39,6 +39,11 @@ def hid_backend() -> Any:
     raise BackendMissing("hidapi is not usable (" + "; ".join(errors) + "); pip install hidapi")
 
 
+def path_text(path: bytes | str) -> str:
+    """A device path as text (hidapi gives bytes)."""
+    return path.decode(errors="replace") if isinstance(path, bytes) else str(path)
+
+
 @dataclass(frozen=True)
 class WiimoteInfo:
     path: bytes
@@ -50,13 +55,13 @@ class WiimoteInfo:
 
     @property
     def path_str(self) -> str:
-        return self.path.decode(errors="replace") if isinstance(self.path, bytes) else str(self.path)
+        return path_text(self.path)
 
 
 def kernel_driver(path: bytes | str) -> str | None:
     """The Linux kernel HID driver bound to a /dev/hidrawN node ('wiimote', 'hid-generic'), or
     None when unknown (other OSes, other paths)."""
-    p = path.decode(errors="replace") if isinstance(path, bytes) else str(path)
+    p = path_text(path)
     if not p.startswith("/dev/hidraw"):
         return None
     link = f"/sys/class/hidraw/{os.path.basename(p)}/device/driver"
