@@ -120,8 +120,9 @@ class FixedStepLoop:
         # rounded up, so that k frames always hold at least k * hz / render_hz whole steps
         return -((-k * NS_PER_S) // self.render_hz)
 
-    def run_frame(self) -> int:
-        """One rendered frame: due steps, render, wait. Returns the number of steps run."""
+    def run_frame(self, limit: int | None = None) -> int:
+        """One rendered frame: due steps (at most `limit`), render, wait. Returns the number
+        of steps run. Steps held back by `limit` stay owed; they are not dropped."""
         now = self.clock.now_ns()
         perf = time.perf_counter_ns
         frame_start = perf()
@@ -138,10 +139,11 @@ class FixedStepLoop:
         clamped = min(raw, MAX_FRAME_NS)
         self._acc += clamped * self.hz
         due = self._acc // NS_PER_S
-        run = min(due, self.max_steps)
-        self._acc -= due * NS_PER_S
+        allowed = min(due, self.max_steps)
+        run = allowed if limit is None else min(allowed, limit)
+        self._acc -= (due - (allowed - run)) * NS_PER_S
         # what could not run, plus whatever the clamp cut off, is dropped, never carried
-        dropped = (due - run) + ((raw - clamped) * self.hz) // NS_PER_S
+        dropped = (due - allowed) + ((raw - clamped) * self.hz) // NS_PER_S
         self.dropped_steps += dropped
         for _ in range(run):
             step, dt = self.step_index, self.dt
@@ -150,7 +152,7 @@ class FixedStepLoop:
                 fn(step, dt)
                 budget.add_span(sid, step, t0, perf() - t0)
             self.step_index += 1
-        self.alpha = self._acc / NS_PER_S
+        self.alpha = min(self._acc, NS_PER_S) / NS_PER_S
         if self._render is not None:
             sid, fn = self._render
             t0 = perf()
@@ -182,7 +184,8 @@ class FixedStepLoop:
         frames: int | None = None,
         until: Callable[[], bool] | None = None,
     ) -> None:
-        """Run until `steps` steps or `frames` frames have run, `until()` is true, or stop()."""
+        """Run until `steps` steps (exactly: the last frame runs no more than are left) or
+        `frames` frames have run, `until()` is true, or stop()."""
         if self.auto_freeze_gc and not self.gc_frozen:
             self.freeze_gc()
             self.gc_frozen = True
@@ -195,7 +198,7 @@ class FixedStepLoop:
                 break
             if until is not None and until():
                 break
-            self.run_frame()
+            self.run_frame(None if steps is None else steps - (self.step_index - start_steps))
         self.running = False
 
     def stop(self) -> None:

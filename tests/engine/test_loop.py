@@ -235,3 +235,19 @@ def test_resync_after_a_pause_drops_nothing():
     assert loop.dropped_steps == 0
     loop.run(frames=5)
     assert loop.step_index == 15 and loop.dropped_steps == 0
+
+
+def test_run_steps_is_exact_even_when_a_frame_owes_catch_up_steps():
+    clock = VirtualClock()
+    loop = FixedStepLoop(clock=clock)
+    seen = []
+
+    def stage(step: int, dt: float) -> None:
+        seen.append(step)
+        if step == 8:
+            clock.stall(70_000_000)  # the next frame owes 5 steps; only 2 are left to run
+
+    loop.add_stage("s", stage, 1.0)
+    loop.run(steps=10)
+    assert loop.step_index == 10 and seen == list(range(10))
+    assert loop.dropped_steps == 0 and 0.0 <= loop.alpha <= 1.0
