@@ -169,14 +169,11 @@ class DualBufferRecognizer:
         return on
 
     def _template_peaks(self, templates: Templates, order: np.ndarray) -> np.ndarray:
-        """(window, T) running maximum of each template's activity from its gate onset."""
-        out = np.zeros((self.window, len(order)))
-        for col, k in enumerate(order):
-            act = activity(templates.signals[k], templates.gravity[k])[self._gate_start(templates, k) :]
-            run = np.maximum.accumulate(act)[: self.window]
-            out[: len(run), col] = run
-            out[len(run) :, col] = run[-1]
-        return out
+        """(T,) each template's peak activity within `window` frames of its gate onset."""
+        return np.array([
+            activity(templates.signals[k], templates.gravity[k])[self._gate_start(templates, k) :][: self.window].max()
+            for k in order
+        ])
 
     def _cut_at_gate(self, templates: Templates, k: int) -> np.ndarray:
         """Template k from its gate onset, in the recognizer's feature space."""
@@ -345,7 +342,7 @@ class DualBufferRecognizer:
         best = int(np.argmin(scores))
         best_action = int(self._tmpl_action[best])
         best_score = float(scores[best])
-        strong = not self.reject or self._peak_act_seen >= ENERGY_RATIO * self._peak_act[-1, best]
+        strong = not self.reject or self._peak_act_seen >= ENERGY_RATIO * self._peak_act[best]
         ok = strong and best_score <= self.thresholds[best]
         if self.action is None:
             if not self.pending and not self._first_decision_due(scores):
@@ -369,8 +366,7 @@ class DualBufferRecognizer:
         # is the better answer (uWave 85.3 -> 88.7 %); while it fits, no flicker to a misfit.
         if best_action == self.action or not strong:
             return
-        lo, hi = self._action_starts[self.action], self._action_ends[self.action]
-        k = lo + int(np.argmin(scores[lo:hi]))
+        k = self._current_best(scores)
         current = float(scores[k])
         if not ok and current <= self.thresholds[k]:
             return
@@ -391,8 +387,7 @@ class DualBufferRecognizer:
         if best_action == self.action:
             return
         best_score = float(scores[best])
-        lo, hi = self._action_starts[self.action], self._action_ends[self.action]
-        k = lo + int(np.argmin(scores[lo:hi]))
+        k = self._current_best(scores)
         current = float(scores[k])
         ok = best_score <= self.thresholds[best]
         if not ok and current <= self.thresholds[k]:
@@ -411,8 +406,7 @@ class DualBufferRecognizer:
         (punches thrown back to back), so the next rise is a new onset."""
         if self.complete_fraction <= 0 or self.action is None:
             return False
-        lo, hi = self._action_starts[self.action], self._action_ends[self.action]
-        k = lo + int(np.argmin(scores[lo:hi]))
+        k = self._current_best(scores)
         if self.count < COMPLETE_MIN_LENGTH * self.template_lengths[k] or self._act > COMPLETE_CALM * self._peak_act_seen:
             # too early (an alignment can jump to a template's end at the start), or the
             # hand is still moving hard: not over yet
@@ -428,6 +422,11 @@ class DualBufferRecognizer:
         # phone recall unchanged; requiring a margin here costs phone recall).
         closed = self.dtw.closed_scores()
         return bool(closed[k] <= np.min(np.where(self._tmpl_action == self.action, np.inf, closed)))
+
+    def _current_best(self, scores: np.ndarray) -> int:
+        """The current action's best-scoring template (templates are sorted by action)."""
+        lo, hi = self._action_starts[self.action], self._action_ends[self.action]
+        return int(lo + np.argmin(scores[lo:hi]))
 
     def _first_decision_due(self, scores: np.ndarray) -> bool:
         if self.main != "auto":
