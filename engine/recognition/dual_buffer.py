@@ -187,7 +187,7 @@ class DualBufferRecognizer:
         self.frame = -1
         self._t: float | None = None
         self.gravity: np.ndarray | None = None
-        self._last: np.ndarray | None = None
+        self._last: list[float] | None = None  # the previous frame, plain floats (see _gate)
         self._still = 0
         self._mean: list[float] = []
         self._steady = 0
@@ -366,11 +366,7 @@ class DualBufferRecognizer:
         # is the better answer (uWave 85.3 -> 88.7 %); while it fits, no flicker to a misfit.
         if best_action == self.action or not strong:
             return
-        k = self._current_best(scores)
-        current = float(scores[k])
-        if not ok and current <= self.thresholds[k]:
-            return
-        if best_score < current * (1.0 - self.switch_margin):
+        if self._beats_current(scores, best_score, ok, self.switch_margin):
             self.action = best_action
             events.append(
                 self._event("switch", self.action_names[best_action], best_score, from_frame=self.frame - self.start_frame)
@@ -387,18 +383,23 @@ class DualBufferRecognizer:
         if best_action == self.action:
             return
         best_score = float(scores[best])
-        k = self._current_best(scores)
-        current = float(scores[k])
-        ok = best_score <= self.thresholds[best]
-        if not ok and current <= self.thresholds[k]:
-            return
-        if best_score < current * (1.0 - LATE_SWITCH_MARGIN):
+        if self._beats_current(scores, best_score, best_score <= self.thresholds[best], LATE_SWITCH_MARGIN):
             self.action = best_action
             events.append(
                 self._event(
                     "switch", self.action_names[best_action], best_score, from_frame=self.frame - self.start_frame, whole_motion=True
                 )
             )
+
+    def _beats_current(self, scores: np.ndarray, best_score: float, ok: bool, margin: float) -> bool:
+        """A switch's test (in the buffer and at the end): the best template, `ok` if under its
+        threshold, beats the current action's best template by `margin`; a best template over
+        its threshold only counts once the current action no longer fits under its own."""
+        k = self._current_best(scores)
+        current = float(scores[k])
+        if not ok and current <= self.thresholds[k]:
+            return False
+        return best_score < current * (1.0 - margin)
 
     def _complete(self, scores: np.ndarray) -> bool:
         """True when the current action's best template has been matched to its end for
