@@ -140,7 +140,7 @@ class Hud:
         self._history: deque[np.ndarray] = deque(maxlen=HISTORY_FRAMES)  # per frame, ms per stage
         self._history_frame = -1
         self._chart: pygame.Surface | None = None  # the F3 chart, scrolled a column per frame
-        self._panel_bg: pygame.Surface | None = None
+        self._fills: dict[tuple, pygame.Surface] = {}  # translucent backgrounds, by size and colour
         self._rows_text: list[str] = []
         self._text_frame = -10**9
 
@@ -158,6 +158,17 @@ class Hud:
         rect = img.get_rect(**{anchor: (int(pos[0]), int(pos[1]))})
         surf.blit(img, rect)
         return rect
+
+    def _translucent(self, size: tuple[int, int], rgba: tuple[int, int, int, int]) -> pygame.Surface:
+        """A translucent background of this size and colour, made once (not once a frame)."""
+        key = (tuple(size), rgba)
+        bg = self._fills.get(key)
+        if bg is None:
+            if len(self._fills) > 64:  # window resizes leave old sizes behind
+                self._fills.clear()
+            bg = self._fills[key] = pygame.Surface(size, pygame.SRCALPHA)
+            bg.fill(rgba)
+        return bg
 
     def draw(self, surf: pygame.Surface, st: HudState, budget: FrameBudget | None = None) -> None:
         w, h = surf.get_size()
@@ -236,9 +247,7 @@ class Hud:
     def _recognition(self, surf: pygame.Surface, st: HudState, u: float) -> None:
         _, h = surf.get_size()
         panel = pygame.Rect(int(16 * u), h - int(170 * u), int(330 * u), int(118 * u))
-        bg = pygame.Surface(panel.size, pygame.SRCALPHA)
-        bg.fill((10, 10, 16, 170))
-        surf.blit(bg, panel)
+        surf.blit(self._translucent(panel.size, (10, 10, 16, 170)), panel)
         x, y = panel.left + 12 * u, panel.top + 8 * u
         self.blit(surf, "RECOGNIZED", int(18 * u), (x, y), DIM)
         name = st.action.replace("_", " ") if st.action else "-"
@@ -311,16 +320,12 @@ class Hud:
     def _banner(self, surf: pygame.Surface, text: str, size: int, center) -> None:
         img = self.text.render(text, size, TEXT)
         box = img.get_rect(center=(int(center[0]), int(center[1]))).inflate(40, 16)
-        bg = pygame.Surface(box.size, pygame.SRCALPHA)
-        bg.fill((0, 0, 0, 150))
-        surf.blit(bg, box)
+        surf.blit(self._translucent(box.size, (0, 0, 0, 150)), box)
         surf.blit(img, img.get_rect(center=box.center))
 
     def _disconnected(self, surf: pygame.Surface, st: HudState, u: float) -> None:
         w, h = surf.get_size()
-        veil = pygame.Surface((w, h), pygame.SRCALPHA)
-        veil.fill((10, 0, 0, 170))
-        surf.blit(veil, (0, 0))
+        surf.blit(self._translucent((w, h), (10, 0, 0, 170)), (0, 0))
         box = pygame.Rect(0, 0, int(w * 0.6), int(150 * u))
         box.center = (w // 2, h // 2)
         pygame.draw.rect(surf, (120, 20, 24), box, border_radius=int(10 * u))
@@ -343,10 +348,7 @@ class Hud:
         w, h = surf.get_size()
         chart_h = int(90 * u)
         panel = pygame.Rect(w - int(440 * u), int(130 * u), int(424 * u), int(60 * u + 20 * u * len(budget.stages)) + chart_h)
-        if self._panel_bg is None or self._panel_bg.get_size() != panel.size:
-            self._panel_bg = pygame.Surface(panel.size, pygame.SRCALPHA)
-            self._panel_bg.fill((0, 0, 0, 190))
-        surf.blit(self._panel_bg, panel)
+        surf.blit(self._translucent(panel.size, (0, 0, 0, 190)), panel)
         last = budget.last_frame_ms()
         names = [s.name for s in budget.stages if s.name not in (WAIT, UNACCOUNTED)] + [UNACCOUNTED]
         scale_ms = 2.0 * budget.frame_budget_ms  # the bar spans two frame budgets

@@ -43,6 +43,7 @@ KEY_LABELS = {"space": "Space", "up": "Up", "down": "Down", "left": "Left", "rig
 AUTO_ACTIONS = ("straight_l", "straight_r", "hook_l", "hook_r", "uppercut_l", "uppercut_r",
                 "block", "parry_l", "parry_r", "step_forward", "step_back", "step_left", "step_right")
 AUTO_WEIGHTS = np.array([4, 4, 3, 3, 2, 2, 1, 1, 1, 3, 1, 1, 1], dtype=np.float64)
+AUTO_P = AUTO_WEIGHTS / AUTO_WEIGHTS.sum()
 
 
 def key_help() -> list[tuple[str, str]]:
@@ -111,7 +112,7 @@ class KeyboardSource(Source):
         if self._auto_wait > 0:
             self._auto_wait -= 1
             return
-        action = AUTO_ACTIONS[int(self.rng.choice(len(AUTO_ACTIONS), p=AUTO_WEIGHTS / AUTO_WEIGHTS.sum()))]
+        action = AUTO_ACTIONS[int(self.rng.choice(len(AUTO_ACTIONS), p=AUTO_P))]
         self.press(action)
         self._auto_wait = int(self.rng.integers(20, 70))  # rest between motions, in samples
 

@@ -34,7 +34,9 @@ from engine.loop import FixedStepLoop
 from engine.sensors.source import Source, SourceState
 from engine.state_hash import state_hash
 from game.history import History
+from game.hits import hits_from_contacts
 from game.hud import Hud, HudState
+from game.interaction import OpponentController, Situation
 from game.match import Match
 from game.render import Renderer
 from game.render_low_power import LowPowerRenderer
@@ -159,7 +161,6 @@ class Session:
         from engine.recognition import DualBufferRecognizer
         from game.actions import load_library
         from game.boxer import Boxer
-        from game.interaction import OpponentController
         from game.sound import Sounds
 
         self.config = cfg = config or SessionConfig()
@@ -262,8 +263,6 @@ class Session:
         """The attract mode's player: the Interaction Graph picks the player's move from the
         player's side, the virtual player performs it on the keyboard source, and the REAL
         recognizer has to recognize it before the boxer moves."""
-        from game.interaction import Situation
-
         if not hasattr(self.source, "press") or self.source.busy or not self.match.fighting:
             return
         if self.player.controller.action != "guard":
@@ -342,8 +341,6 @@ class Session:
             self.recognizer.character_finished()
 
     def _opponent(self, step: int, dt: float) -> None:
-        from game.interaction import Situation
-
         self._hold_knockdown(1)
         if self._cpu_rest > 0:
             self._cpu_rest -= 1
@@ -374,8 +371,6 @@ class Session:
         self.renderer.step_effects()
 
     def _hits(self, step: int, dt: float) -> None:
-        from game.hits import hits_from_contacts
-
         for hit in hits_from_contacts(self.contacts, list(self.boxers)):
             self.apply_hit(step, hit)
 

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 import time
+from collections.abc import Callable
 
 import numpy as np
 
@@ -36,16 +37,22 @@ def _signals(rng: np.random.Generator, n: int, dim: int, lo: int = 30, hi: int =
     return out
 
 
-def _time_incremental(templates: list[np.ndarray], query: np.ndarray, method: str, repeat: int) -> float:
-    dtw = IncrementalDTW(templates, method=method)
+def _time_frames(reset: Callable[[], object], push: Callable[[np.ndarray], object], query: np.ndarray,
+                 repeat: int) -> float:
+    """Best of `repeat` buffers: mean microseconds per `push` of a query frame after `reset`."""
     best = np.inf
     for _ in range(repeat):
-        dtw.reset()
+        reset()
         t0 = time.perf_counter()
         for f in query:
-            dtw.push(f)
+            push(f)
         best = min(best, (time.perf_counter() - t0) / len(query))
     return best * 1e6
+
+
+def _time_incremental(templates: list[np.ndarray], query: np.ndarray, method: str, repeat: int) -> float:
+    dtw = IncrementalDTW(templates, method=method)
+    return _time_frames(dtw.reset, dtw.push, query, repeat)
 
 
 def _time_push(templates: list[np.ndarray], query: np.ndarray, repeat: int) -> float:
@@ -53,14 +60,7 @@ def _time_push(templates: list[np.ndarray], query: np.ndarray, repeat: int) -> f
     tm = Templates(list(trials), templates, np.zeros((len(templates), templates[0].shape[1])),
                    np.zeros(len(templates), dtype=int), np.full(len(templates), np.inf), feature="raw")
     rec = DualBufferRecognizer(tm, noise_g=0.0, null_frames=10_000)
-    best = np.inf
-    for _ in range(repeat):
-        rec.reset()
-        t0 = time.perf_counter()
-        for f in query:
-            rec.push(f)
-        best = min(best, (time.perf_counter() - t0) / len(query))
-    return best * 1e6
+    return _time_frames(rec.reset, rec.push, query, repeat)
 
 
 def _time_peer(templates: list[np.ndarray], query: np.ndarray, repeat: int) -> tuple[float, str]:

@@ -80,7 +80,7 @@ class IncrementalDTW:
         # Positions past a template's end never count: +inf added to their normalized score.
         pos = np.arange(self.L)[:, None]
         self._pad_inf = np.where(pos < self.lengths[None, :], 0.0, np.inf)
-        self._steps = (pos + 1.0) * np.ones((1, self.T))  # j + 1, reused for normalization
+        self._steps = pos + 1.0  # (L, 1): j + 1, the path-length term of the normalization
         self._cols = np.arange(self.T)
         shape = (self.L, self.T)
         self._ext = [np.full((self.L + 1, self.T), np.inf) for _ in range(2)]
@@ -159,7 +159,7 @@ class IncrementalDTW:
         self.n += 1
         recip = self._recip.get(self.n)
         if recip is None:
-            col = 1.0 / (self._steps[:, :1] + self.n)
+            col = 1.0 / (self._steps + self.n)
             recip = self._recip.setdefault(self.n, (col, col.T))
         if self.min_progress > 0:
             # best over positions need - 1 <= j < L_k of each template: one reduceat over the

@@ -169,14 +169,11 @@ class DualBufferRecognizer:
         return on
 
     def _template_peaks(self, templates: Templates, order: np.ndarray) -> np.ndarray:
-        """(window, T) running maximum of each template's activity from its gate onset."""
-        out = np.zeros((self.window, len(order)))
-        for col, k in enumerate(order):
-            act = activity(templates.signals[k], templates.gravity[k])[self._gate_start(templates, k) :]
-            run = np.maximum.accumulate(act)[: self.window]
-            out[: len(run), col] = run
-            out[len(run) :, col] = run[-1]
-        return out
+        """(T,) each template's peak activity within `window` frames of its gate onset."""
+        return np.array([
+            activity(templates.signals[k], templates.gravity[k])[self._gate_start(templates, k) :][: self.window].max()
+            for k in order
+        ])
 
     def _cut_at_gate(self, templates: Templates, k: int) -> np.ndarray:
         """Template k from its gate onset, in the recognizer's feature space."""
@@ -190,7 +187,7 @@ class DualBufferRecognizer:
         self.frame = -1
         self._t: float | None = None
         self.gravity: np.ndarray | None = None
-        self._last: np.ndarray | None = None
+        self._last: list[float] | None = None  # the previous frame, plain floats (see _gate)
         self._still = 0
         self._mean: list[float] = []
         self._steady = 0
@@ -345,7 +342,7 @@ class DualBufferRecognizer:
         best = int(np.argmin(scores))
         best_action = int(self._tmpl_action[best])
         best_score = float(scores[best])
-        strong = not self.reject or self._peak_act_seen >= ENERGY_RATIO * self._peak_act[-1, best]
+        strong = not self.reject or self._peak_act_seen >= ENERGY_RATIO * self._peak_act[best]
         ok = strong and best_score <= self.thresholds[best]
         if self.action is None:
             if not self.pending and not self._first_decision_due(scores):
@@ -369,12 +366,7 @@ class DualBufferRecognizer:
         # is the better answer (uWave 85.3 -> 88.7 %); while it fits, no flicker to a misfit.
         if best_action == self.action or not strong:
             return
-        lo, hi = self._action_starts[self.action], self._action_ends[self.action]
-        k = lo + int(np.argmin(scores[lo:hi]))
-        current = float(scores[k])
-        if not ok and current <= self.thresholds[k]:
-            return
-        if best_score < current * (1.0 - self.switch_margin):
+        if self._beats_current(scores, best_score, ok, self.switch_margin):
             self.action = best_action
             events.append(
                 self._event("switch", self.action_names[best_action], best_score, from_frame=self.frame - self.start_frame)
@@ -391,13 +383,7 @@ class DualBufferRecognizer:
         if best_action == self.action:
             return
         best_score = float(scores[best])
-        lo, hi = self._action_starts[self.action], self._action_ends[self.action]
-        k = lo + int(np.argmin(scores[lo:hi]))
-        current = float(scores[k])
-        ok = best_score <= self.thresholds[best]
-        if not ok and current <= self.thresholds[k]:
-            return
-        if best_score < current * (1.0 - LATE_SWITCH_MARGIN):
+        if self._beats_current(scores, best_score, best_score <= self.thresholds[best], LATE_SWITCH_MARGIN):
             self.action = best_action
             events.append(
                 self._event(
@@ -405,14 +391,23 @@ class DualBufferRecognizer:
                 )
             )
 
+    def _beats_current(self, scores: np.ndarray, best_score: float, ok: bool, margin: float) -> bool:
+        """A switch's test (in the buffer and at the end): the best template, `ok` if under its
+        threshold, beats the current action's best template by `margin`; a best template over
+        its threshold only counts once the current action no longer fits under its own."""
+        k = self._current_best(scores)
+        current = float(scores[k])
+        if not ok and current <= self.thresholds[k]:
+            return False
+        return best_score < current * (1.0 - margin)
+
     def _complete(self, scores: np.ndarray) -> bool:
         """True when the current action's best template has been matched to its end for
         `complete_frames` frames in a row: the motion is over even if the hand never rests
         (punches thrown back to back), so the next rise is a new onset."""
         if self.complete_fraction <= 0 or self.action is None:
             return False
-        lo, hi = self._action_starts[self.action], self._action_ends[self.action]
-        k = lo + int(np.argmin(scores[lo:hi]))
+        k = self._current_best(scores)
         if self.count < COMPLETE_MIN_LENGTH * self.template_lengths[k] or self._act > COMPLETE_CALM * self._peak_act_seen:
             # too early (an alignment can jump to a template's end at the start), or the
             # hand is still moving hard: not over yet
@@ -428,6 +423,11 @@ class DualBufferRecognizer:
         # phone recall unchanged; requiring a margin here costs phone recall).
         closed = self.dtw.closed_scores()
         return bool(closed[k] <= np.min(np.where(self._tmpl_action == self.action, np.inf, closed)))
+
+    def _current_best(self, scores: np.ndarray) -> int:
+        """The current action's best-scoring template (templates are sorted by action)."""
+        lo, hi = self._action_starts[self.action], self._action_ends[self.action]
+        return int(lo + np.argmin(scores[lo:hi]))
 
     def _first_decision_due(self, scores: np.ndarray) -> bool:
         if self.main != "auto":
