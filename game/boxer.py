@@ -113,7 +113,3 @@ class Boxer:
         """Keep the root within `limit` metres of the ring's centre lines (inside the ropes)."""
         rx, rz, yaw = self._root
         self._root = (float(np.clip(rx, -limit, limit)), float(np.clip(rz, -limit, limit)), yaw)
-
-    def facing(self) -> np.ndarray:
-        """Unit world vector the boxer faces."""
-        return np.array([np.sin(self._root[2]), 0.0, np.cos(self._root[2])])
