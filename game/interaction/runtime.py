@@ -54,9 +54,8 @@ class InteractionGraph:
     def best_action(self, s: Situation) -> str:
         """One of ACTION_NAMES, or "guard" to wait (also for a situation with NaN or
         infinite numbers, which a glitching body could produce: the loop must not crash)."""
-        aid, frame = self.other_code(s.other_action, s.other_phase)
         try:
-            sid = self.index.nearest(s.distance, s.bearing_self, s.bearing_other, aid, frame)
+            sid = self.state_of(s)
         except (ValueError, OverflowError):
             return IDLE
         return self._best_names[sid]
