@@ -15,13 +15,9 @@ import numpy as np
 import pygame
 
 from game.camera import Camera
+from game.skeleton import JOINTS
 
-# The 17 joints in the contract's order (game.skeleton.JOINTS; tests check they agree).
-JOINT_NAMES = (
-    "pelvis", "spine", "chest", "neck", "head",
-    "shoulder_l", "elbow_l", "fist_l", "shoulder_r", "elbow_r", "fist_r",
-    "hip_l", "knee_l", "ankle_l", "hip_r", "knee_r", "ankle_r",
-)
+JOINT_NAMES = JOINTS  # the bodies' (17, 3) rows are in the skeleton's joint order
 J = {name: i for i, name in enumerate(JOINT_NAMES)}
 
 RING_HALF = 3.0  # inside the ropes
