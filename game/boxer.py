@@ -21,14 +21,14 @@ from game.actions import Action, reaction_for
 from game.body import add_boxer_body
 from game.hits import hits_from_contacts
 from game.motion import PlayerController
-from game.skeleton import compose_root, local_to_world, world_to_local
+from game.skeleton import compose_root, joint_index, local_to_world, world_to_local
 
 __all__ = ["Boxer", "hits_from_contacts"]
 
 STIFFNESS_HZ = 7.0  # body and legs
 ARM_STIFFNESS_HZ = 12.0  # elbows and fists follow punches closely
 ROOT_SLACK = 0.06  # metres the simulated pelvis may trail the reference before the root gives
-_ARM = np.array([6, 7, 9, 10])
+_ARM = np.array([joint_index(j) for j in ("elbow_l", "fist_l", "elbow_r", "fist_r")])
 
 
 class Boxer:

@@ -16,8 +16,11 @@ from __future__ import annotations
 
 import numpy as np
 
+from game.skeleton import joint_index
+
 TARGET_TAGS = {"head": "head", "torso": "body"}
 GUARD_TAGS = ("fist_l", "fist_r", "forearm_l", "forearm_r")
+_HEAD = joint_index("head")
 
 
 def hits_from_contacts(contacts: list, boxers: list) -> list[dict]:
@@ -48,7 +51,7 @@ def hits_from_contacts(contacts: list, boxers: list) -> list[dict]:
                 if target not in window.targets:
                     continue
             elif on_guard:
-                head_y = defender.joint_positions()[4, 1]
+                head_y = defender.joint_positions()[_HEAD, 1]
                 target = "head" if float(c.point[1]) > head_y - 0.2 else "body"
             else:
                 continue
