@@ -105,7 +105,8 @@ class PlayerController:
                     f1 -= clip.frames - 1
             elif f1 >= clip.frames - 1:
                 f1 = clip.frames - 1.0
-            self.root_delta = _root_delta(clip, f0, f1) if f1 > f0 else np.zeros(3)
+            if f1 > f0:  # no root motion across a loop's wrap or past a clip's last frame
+                self.root_delta = _root_delta(clip, f0, f1)
             self.frame = f1
         posture = clip.posture(self.frame)
         if not clip.loop and self.frame >= clip.frames - 1:
