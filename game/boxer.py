@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from game.actions import Action, reaction_for
+from game.actions import HEAVY_HIT_SPEED, Action, reaction_for
 from game.body import add_boxer_body
 from game.hits import hits_from_contacts
 from game.motion import PlayerController
@@ -95,8 +95,10 @@ class Boxer:
     def react(self, hit: dict, heavy_speed: float | None = None) -> str:
         """Play the reaction to `hit` (an event where this boxer was struck); returns its name."""
         direction = world_to_local(np.asarray(hit["direction"], dtype=float), (0.0, 0.0, self._root[2]))
-        name = reaction_for(hit["target"], direction, hit["speed"]) if heavy_speed is None else \
-            reaction_for(hit["target"], direction, hit["speed"] * 5.0 / heavy_speed)  # fmt: skip
+        speed = hit["speed"]
+        if heavy_speed is not None:  # the caller's own heavy threshold, rescaled to the library's
+            speed = speed * HEAVY_HIT_SPEED / heavy_speed
+        name = reaction_for(hit["target"], direction, speed)
         if name in self.lib:
             self.controller.play(name)
         return name
