@@ -91,13 +91,8 @@ class Action:
     source: str = ""
 
     def __post_init__(self) -> None:
-        at = np.arange(self.frames, dtype=np.float64)
-        self.table = impose_bone_lengths(_hermite(self.key_frames, self.key_poses, at))
-        root = self.root_keys
-        if len(root) == 0:
-            self.root_table = np.zeros((self.frames, 3))
-        else:
-            self.root_table = _hermite(root[:, 0], root[:, 1:], at)
+        # the curves sampled at every integer frame, once: playback interpolates these tables
+        self.table, self.root_table = self.sample(np.arange(self.frames, dtype=np.float64))
 
     def _lerp(self, table: np.ndarray, f: float) -> np.ndarray:
         f = min(max(float(f), 0.0), self.frames - 1.0)

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from game.skeleton import BONE_LENGTHS, BONES, JOINTS, joint_index
+from game.skeleton import BONE_LENGTHS, BONES, JOINTS, PARENTS, joint_index
 
 J = joint_index
 
@@ -47,11 +47,10 @@ LIMIT_PAIRS = np.array([(J("shoulder_l"), J("fist_l")), (J("shoulder_r"), J("fis
 
 def limit_ranges() -> np.ndarray:
     """min/max shoulder-fist and hip-ankle distance: 12 % .. 100 % of the two bones."""
+    length_to = dict(zip(BONES[:, 1].tolist(), BONE_LENGTHS.tolist(), strict=True))  # by child joint
     out = []
-    for _a, c in LIMIT_PAIRS:
-        mid = {J("fist_l"): J("elbow_l"), J("fist_r"): J("elbow_r"), J("ankle_l"): J("knee_l"),
-               J("ankle_r"): J("knee_r")}[int(c)]  # fmt: skip
-        full = sum(BONE_LENGTHS[int(np.nonzero(BONES[:, 1] == k)[0][0])] for k in (mid, int(c)))
+    for _a, c in LIMIT_PAIRS.tolist():
+        full = length_to[PARENTS[c]] + length_to[c]  # the two bones: to the elbow/knee, then on
         out.append((0.12 * full, full))
     return np.array(out)
 

@@ -17,18 +17,18 @@ from __future__ import annotations
 
 import numpy as np
 
-from game.actions import Action, reaction_for
+from game.actions import HEAVY_HIT_SPEED, Action, reaction_for
 from game.body import add_boxer_body
 from game.hits import hits_from_contacts
 from game.motion import PlayerController
-from game.skeleton import compose_root, local_to_world, world_to_local
+from game.skeleton import compose_root, joint_index, local_to_world, world_to_local
 
 __all__ = ["Boxer", "hits_from_contacts"]
 
 STIFFNESS_HZ = 7.0  # body and legs
 ARM_STIFFNESS_HZ = 12.0  # elbows and fists follow punches closely
 ROOT_SLACK = 0.06  # metres the simulated pelvis may trail the reference before the root gives
-_ARM = np.array([6, 7, 9, 10])
+_ARM = np.array([joint_index(j) for j in ("elbow_l", "fist_l", "elbow_r", "fist_r")])
 
 
 class Boxer:
@@ -95,8 +95,10 @@ class Boxer:
     def react(self, hit: dict, heavy_speed: float | None = None) -> str:
         """Play the reaction to `hit` (an event where this boxer was struck); returns its name."""
         direction = world_to_local(np.asarray(hit["direction"], dtype=float), (0.0, 0.0, self._root[2]))
-        name = reaction_for(hit["target"], direction, hit["speed"]) if heavy_speed is None else \
-            reaction_for(hit["target"], direction, hit["speed"] * 5.0 / heavy_speed)  # fmt: skip
+        speed = hit["speed"]
+        if heavy_speed is not None:  # the caller's own heavy threshold, rescaled to the library's
+            speed = speed * HEAVY_HIT_SPEED / heavy_speed
+        name = reaction_for(hit["target"], direction, speed)
         if name in self.lib:
             self.controller.play(name)
         return name
@@ -113,7 +115,3 @@ class Boxer:
         """Keep the root within `limit` metres of the ring's centre lines (inside the ropes)."""
         rx, rz, yaw = self._root
         self._root = (float(np.clip(rx, -limit, limit)), float(np.clip(rz, -limit, limit)), yaw)
-
-    def facing(self) -> np.ndarray:
-        """Unit world vector the boxer faces."""
-        return np.array([np.sin(self._root[2]), 0.0, np.cos(self._root[2])])

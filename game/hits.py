@@ -16,13 +16,16 @@ from __future__ import annotations
 
 import numpy as np
 
+from game.skeleton import joint_index
+
 TARGET_TAGS = {"head": "head", "torso": "body"}
 GUARD_TAGS = ("fist_l", "fist_r", "forearm_l", "forearm_r")
+_HEAD = joint_index("head")
 
 
 def hits_from_contacts(contacts: list, boxers: list) -> list[dict]:
     """Hit events of this step. `boxers` is the list of Boxer (index = "attacker" number);
-    each has .body (world body id), .controller and .swing_state()."""
+    each has .body (world body id), .controller, .joint_positions() and .hand_spent()/.spend_hand()."""
     by_body = {b.body: i for i, b in enumerate(boxers)}
     events: list[dict] = []
     for c in contacts:
@@ -42,21 +45,20 @@ def hits_from_contacts(contacts: list, boxers: list) -> list[dict]:
             window = pc.clip.attack_at(pc.frame, hand)
             if window is None or attacker.hand_spent(hand):
                 continue
+            on_guard = tag_t in GUARD_TAGS
             if tag_t in TARGET_TAGS:
                 target = TARGET_TAGS[tag_t]
                 if target not in window.targets:
                     continue
-            elif tag_t in GUARD_TAGS:
-                # glove on glove: a hit only if the defender is guarding, and then blocked
-                head_y = defender.joint_positions()[4, 1]
+            elif on_guard:
+                head_y = defender.joint_positions()[_HEAD, 1]
                 target = "head" if float(c.point[1]) > head_y - 0.2 else "body"
-                dpc = defender.controller
-                if dpc.clip.guard_at(dpc.frame, target) is None:
-                    continue
             else:
                 continue
             dpc = defender.controller
             blocked = dpc.clip.guard_at(dpc.frame, target) is not None
+            if on_guard and not blocked:
+                continue  # glove on glove: a hit only if the defender is guarding, and then blocked
             attacker.spend_hand(hand)
             events.append({
                 "attacker": ai, "target": target, "hand": hand, "speed": float(max(c.rel_speed, 0.0)),

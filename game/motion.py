@@ -18,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from game.actions import Action
-from game.skeleton import impose_bone_lengths
+from game.skeleton import impose_bone_lengths, world_to_local
 
 BLEND_FRAMES = 6
 REJECT_ABORT_FRACTION = 0.35  # a rejected motion aborts the clip only while it is this young
@@ -105,7 +105,8 @@ class PlayerController:
                     f1 -= clip.frames - 1
             elif f1 >= clip.frames - 1:
                 f1 = clip.frames - 1.0
-            self.root_delta = _root_delta(clip, f0, f1) if f1 > f0 else np.zeros(3)
+            if f1 > f0:  # no root motion across a loop's wrap or past a clip's last frame
+                self.root_delta = _root_delta(clip, f0, f1)
             self.frame = f1
         posture = clip.posture(self.frame)
         if not clip.loop and self.frame >= clip.frames - 1:
@@ -131,6 +132,7 @@ def _root_delta(clip: Action, f0: float, f1: float) -> np.ndarray:
     """Root motion between clip frames f0 and f1, in the boxer's local frame at f0."""
     a, b = clip.root_offset(f0), clip.root_offset(f1)
     d = b - a
-    c, s = np.cos(a[2]), np.sin(a[2])
-    # clip-start frame -> local frame at f0 (inverse yaw rotation)
-    return np.array([c * d[0] - s * d[1], s * d[0] + c * d[1], d[2]])
+    # clip-start frame -> local frame at f0: undo the yaw turned so far (the inverse of
+    # compose_root's rotation, which places this delta back in the world)
+    local = world_to_local(np.array([d[0], 0.0, d[1]]), (0.0, 0.0, a[2]))
+    return np.array([local[0], local[2], d[2]])

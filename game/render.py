@@ -15,13 +15,9 @@ import numpy as np
 import pygame
 
 from game.camera import Camera
+from game.skeleton import JOINTS
 
-# The 17 joints in the contract's order (game.skeleton.JOINTS; tests check they agree).
-JOINT_NAMES = (
-    "pelvis", "spine", "chest", "neck", "head",
-    "shoulder_l", "elbow_l", "fist_l", "shoulder_r", "elbow_r", "fist_r",
-    "hip_l", "knee_l", "ankle_l", "hip_r", "knee_r", "ankle_r",
-)
+JOINT_NAMES = JOINTS  # the bodies' (17, 3) rows are in the skeleton's joint order
 J = {name: i for i, name in enumerate(JOINT_NAMES)}
 
 RING_HALF = 3.0  # inside the ropes
@@ -55,6 +51,15 @@ LIMBS = (
 )
 SPHERES = (("head", 0.125, "skin"), ("fist_l", 0.1, "gloves"), ("fist_r", 0.1, "gloves"),
            ("ankle_l", 0.07, "shoes"), ("ankle_r", 0.07, "shoes"))
+
+# constant shapes, built once: a shadow ellipse round a boxer's feet (offsets on the canvas)
+# and a hit flash's star (angles and the alternating tip/notch radius factors)
+_SHADOW_ANG = np.linspace(0, 2 * np.pi, 20, endpoint=False)
+SHADOW_RING = np.stack([0.45 * np.cos(_SHADOW_ANG), np.full_like(_SHADOW_ANG, 0.004),
+                        0.32 * np.sin(_SHADOW_ANG)], axis=1)
+_STAR_POINTS = 10
+STAR_ANG = np.arange(2 * _STAR_POINTS) * np.pi / _STAR_POINTS
+STAR_RADII = np.where(np.arange(2 * _STAR_POINTS) % 2 == 0, 1.0, 0.45)
 
 
 def lerp_joints(prev: np.ndarray, curr: np.ndarray, alpha: float) -> np.ndarray:
@@ -234,10 +239,7 @@ class Renderer:
         cam = self.camera
         for joints in bodies:
             feet = joints[[J["ankle_l"], J["ankle_r"], J["pelvis"]]] * [1, 0, 1]
-            centre = feet.mean(axis=0)
-            ang = np.linspace(0, 2 * np.pi, 20, endpoint=False)
-            ring = centre + np.stack([0.45 * np.cos(ang), np.full_like(ang, 0.004), 0.32 * np.sin(ang)], axis=1)
-            xy = cam.project(ring)[0]
+            xy = cam.project(feet.mean(axis=0) + SHADOW_RING)[0]
             lo, hi = xy.min(axis=0), xy.max(axis=0)
             size = (int(hi[0] - lo[0]) + 2, int(hi[1] - lo[1]) + 2)
             if size[0] <= 2 or size[1] <= 2 or size[0] > 4000 or size[1] > 4000:
@@ -377,9 +379,8 @@ class Renderer:
             c = xy[0]
             life = 1.0 - f.age / Flash.LIFE
             r = float(cam.scale_at(z[0])) * (0.18 + 0.25 * (1 - life)) * (1.3 if f.strong else 0.8)
-            n = 10
-            ang = np.arange(2 * n) * np.pi / n + f.age * 0.15
-            radii = np.where(np.arange(2 * n) % 2 == 0, r, r * 0.45)
+            ang = STAR_ANG + f.age * 0.15
+            radii = STAR_RADII * r
             star = c + np.stack([np.cos(ang) * radii, np.sin(ang) * radii], axis=1)
             col = (150, 200, 255) if f.blocked else (255, 236, 120)
             self._poly(surf, col, star)

@@ -58,6 +58,7 @@ for (_p, _c), _length in zip(BONES, BONE_LENGTHS, strict=True):
     _CHILD_LENGTH[_c] = _length
 _PARENT_ARR = np.array(PARENTS, dtype=np.int64)
 _LEVEL_PARENTS = [_PARENT_ARR[level] for level in LEVELS]
+_LEVEL_LENGTHS = [_CHILD_LENGTH[level][:, None] for level in LEVELS]  # the skeleton's, per level
 
 
 def joint_index(name: str) -> int:
@@ -80,14 +81,15 @@ def impose_bone_lengths(posture: np.ndarray, lengths: np.ndarray | None = None) 
     shortens bones on arcs; this puts them back. Works on (17, 3) or (n, 17, 3)."""
     src = np.asarray(posture, dtype=np.float64)
     out = src.copy()
-    child_len = _CHILD_LENGTH
+    level_lengths = _LEVEL_LENGTHS
     if lengths is not None:
         child_len = np.zeros(len(JOINTS))
         child_len[BONES[:, 1]] = lengths
-    for level, parents in zip(LEVELS, _LEVEL_PARENTS, strict=True):
+        level_lengths = [child_len[level][:, None] for level in LEVELS]
+    for level, parents, length in zip(LEVELS, _LEVEL_PARENTS, level_lengths, strict=True):
         d = src[..., level, :] - src[..., parents, :]
         norm = np.sqrt((d * d).sum(-1))[..., None]
-        d *= (child_len[level][:, None] / np.maximum(norm, 1e-9))
+        d *= (length / np.maximum(norm, 1e-9))
         out[..., level, :] = out[..., parents, :] + d
     return out
 

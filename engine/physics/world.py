@@ -104,6 +104,7 @@ class World:
         self._has_target_vel = False
         self._v = np.zeros((n, 3))  # per-step scratch buffers
         self._dv = np.zeros((n, 3))
+        self._tmp = np.zeros((n, 3))
 
     def _grow(self, n_new: int) -> None:
         old = {k: getattr(self, k) for k in ("x", "x_prev", "mass", "inv_mass", "targets", "target_vel", "_w2", "_c")}
@@ -237,7 +238,7 @@ class World:
     def _integrate(self, dt: float) -> np.ndarray:
         """Verlet in velocity form: v = (x - x_prev) / dt_prev, damped, gravity, the implicit PD
         pull (clamped), then x_prev <- x, x <- x + v dt. Returns v (a scratch buffer)."""
-        x, v, dv = self.x, self._v, self._dv
+        x, v, dv, tmp = self.x, self._v, self._dv, self._tmp
         dt_prev = self._dt_prev or dt
         np.subtract(x, self.x_prev, out=v)
         # the same damping per second whatever dt: (1 - d) per 60 Hz step
@@ -258,8 +259,8 @@ class World:
         np.subtract(self.targets, x, out=dv)
         dv *= self._pd_k
         if self._has_target_vel:
-            dv += self._pd_kv * self.target_vel
-        dv -= self._pd_kd * v
+            dv += np.multiply(self._pd_kv, self.target_vel, out=tmp)
+        dv -= np.multiply(self._pd_kd, v, out=tmp)
         # max acceleration clamp: a discontinuous target moves the body smoothly
         amax = self.max_accel * dt
         n2 = (dv * dv).sum(1)
@@ -270,7 +271,7 @@ class World:
         if n2.max(initial=0.0) > self.max_speed * self.max_speed:
             v *= np.minimum(1.0, self.max_speed / np.sqrt(np.maximum(n2, 1e-30)))[:, None]
         self.x_prev[:] = x
-        x += v * dt
+        x += np.multiply(v, dt, out=tmp)
         return v
 
     def step(self, dt: float) -> list[Contact]:
@@ -303,10 +304,9 @@ class World:
         if self.ground_friction > 0.0:
             on = x[:, 1] <= self.ground_y + 1e-9
             if on.any():
-                keep = 1.0 - self.ground_friction
-                for k in (0, 2):
-                    xk, pk = x[on, k], self.x_prev[on, k]
-                    x[on, k] = pk + (xk - pk) * keep
+                # the horizontal columns x and z (::2) at once; y is the ground's business
+                pk = self.x_prev[on, ::2]
+                x[on, ::2] = pk + (x[on, ::2] - pk) * (1.0 - self.ground_friction)
         self.steps += 1
         return contacts
 

@@ -89,6 +89,7 @@ class StateIndex:
         self._ds = 1.0 / grid.distance_step
         self._as = 1.0 / grid.angle_step
         self._nd, self._na, self._np = grid.n_distance, grid.n_angle, grid.n_phase
+        self._ps = grid.phase_step
         self._search = self.fill_keys.searchsorted
 
     def _candidates(self, bucket: int) -> np.ndarray:
@@ -113,7 +114,7 @@ class StateIndex:
             db = 0
         sb = int(((bearing_self + pi) % two_pi) * self._as) % na
         ob = int(((bearing_other + pi) % two_pi) * self._as) % na
-        pb = int(other_frame) // self.grid.phase_step
+        pb = int(other_frame) // self._ps
         if pb >= npb:
             pb = npb - 1
         elif pb < 0:

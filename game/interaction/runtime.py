@@ -7,6 +7,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from game.motion import PlayerController
+
 from .lookup import StateIndex
 from .state import Situation
 from .table import GraphTable
@@ -54,9 +56,8 @@ class InteractionGraph:
     def best_action(self, s: Situation) -> str:
         """One of ACTION_NAMES, or "guard" to wait (also for a situation with NaN or
         infinite numbers, which a glitching body could produce: the loop must not crash)."""
-        aid, frame = self.other_code(s.other_action, s.other_phase)
         try:
-            sid = self.index.nearest(s.distance, s.bearing_self, s.bearing_other, aid, frame)
+            sid = self.state_of(s)
         except (ValueError, OverflowError):
             return IDLE
         return self._best_names[sid]
@@ -86,12 +87,9 @@ class OpponentController:
     action chosen this step ("guard" for a wait), or None when it did not choose.
     """
 
-    def __init__(self, graph: InteractionGraph, lib: dict, controller=None):
+    def __init__(self, graph: InteractionGraph, lib: dict, controller: PlayerController | None = None):
         self.graph = graph
-        if controller is None:
-            from game.motion import PlayerController  # the motion helper's module
-            controller = PlayerController(lib)
-        self.controller = controller
+        self.controller = controller if controller is not None else PlayerController(lib)
         self._wait = 0
 
     def at_guard(self) -> bool:
