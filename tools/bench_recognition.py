@@ -19,7 +19,7 @@ from collections.abc import Callable
 import numpy as np
 
 from engine.recognition import DualBufferRecognizer, Templates
-from engine.recognition.dtw import JIT_AVAILABLE, IncrementalDTW
+from engine.recognition.dtw import IncrementalDTW, jit_available
 
 # Issue 3's speed targets: templates -> (max us per frame, min x faster than the peer).
 TARGETS = {13: (30.0, 10.0), 1000: (600.0, 30.0)}
@@ -100,15 +100,16 @@ def run(args: argparse.Namespace) -> int:
     rng = np.random.default_rng(0)
     sizes = [int(s) for s in args.sizes.split(",")]
     query = np.cumsum(rng.normal(0, 0.3, (args.buffer, args.dim)), axis=0)
+    jit = jit_available()
     print(f"per-frame cost, {args.dim}-D frames, {args.buffer}-frame buffer, templates of 30-60 frames")
-    if not JIT_AVAILABLE:
+    if not jit:
         print("jit: numba not importable (or QUICKJAB_NO_JIT=1): auto uses scan/loop")
     print(f"{'templates':>9} | {'scan us':>8} | {'loop us':>8} | {'jit us':>8} | {'auto':>4} | {'push us':>8} | {'dtaidistance us':>15} | {'x faster':>8} | peer")
     verdicts = []
     for n in sizes:
         tm = _signals(rng, n, args.dim)
         times = {m: _time_incremental(tm, query, m, args.repeat) for m in ("scan", "loop")}
-        times["jit"] = _time_incremental(tm, query, "jit", args.repeat) if JIT_AVAILABLE else float("nan")
+        times["jit"] = _time_incremental(tm, query, "jit", args.repeat) if jit else float("nan")
         auto = IncrementalDTW(tm).method
         push = _time_push(tm, query, args.repeat)
         try:
@@ -127,7 +128,7 @@ def run(args: argparse.Namespace) -> int:
     if verdicts:
         print("targets: " + "; ".join(verdicts))
     if args.sweep:
-        methods = ("scan", "loop", "jit") if JIT_AVAILABLE else ("scan", "loop")
+        methods = ("scan", "loop", "jit") if jit else ("scan", "loop")
         print("\n" + " vs ".join(methods) + " (us per frame)")
         for n in (25, 50, 100, 200, 300, 500, 1000):
             tm = _signals(rng, n, args.dim)

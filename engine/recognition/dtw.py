@@ -30,13 +30,17 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from engine.recognition.dtw_kernel import push_row as _jit_push_row
+from engine.recognition.dtw_kernel import push_row_kernel
 
 # Below this many templates the scan's few whole-block calls beat the per-position loop;
 # measured with `quickjab bench recognition --sweep` (crossover between 100 and 300 templates).
 LOOP_FROM_TEMPLATES = 200
 METHODS = ("scan", "loop", "jit")
-JIT_AVAILABLE = _jit_push_row is not None
+
+
+def jit_available() -> bool:
+    """True when the "jit" method can run (numba importable and QUICKJAB_NO_JIT not set)."""
+    return push_row_kernel() is not None
 # Local costs: |t - q|^2 = |t|^2 - 2 t.q + |q|^2 from precomputed squared norms and one
 # matrix-vector product (half the cost of a broadcast subtract-square-sum; rounding ~1e-7 g).
 # `exact_costs=True` computes them the direct way (the reference tests use it).
@@ -70,10 +74,10 @@ class IncrementalDTW:
         self.tmpl, self.lengths = pad_templates([np.asarray(t, dtype=np.float64) for t in templates])
         self.L, self.T, self.D = self.tmpl.shape
         if method == "auto":
-            method = "jit" if JIT_AVAILABLE else "loop" if self.T >= LOOP_FROM_TEMPLATES else "scan"
+            method = "jit" if jit_available() else "loop" if self.T >= LOOP_FROM_TEMPLATES else "scan"
         if method not in METHODS:
             raise ValueError(f"method must be 'auto', 'scan', 'loop' or 'jit', not {method!r}")
-        if method == "jit" and not JIT_AVAILABLE:
+        if method == "jit" and not jit_available():
             raise ValueError("method 'jit' needs numba (not importable here, or QUICKJAB_NO_JIT=1 is set)")
         self.method = method
         # Scoring only (the accumulated costs are plain DTW): after n query frames the query's
@@ -120,6 +124,7 @@ class IncrementalDTW:
         if method == "jit":
             # The kernel's template layout: (L, D, T), a position's values contiguous across
             # templates (its innermost loop); always the direct |t - q| (exact costs).
+            self._kernel = push_row_kernel()
             self._tmpl_ldt = np.ascontiguousarray(self.tmpl.transpose(0, 2, 1))
             self._q = np.empty(self.D)  # frames are copied here: float64, contiguous, right length
             self._jit_cost = np.empty(self.T)
@@ -156,7 +161,7 @@ class IncrementalDTW:
             q[:] = frame
             prev = self._init if self.n == 0 else self._ext[self._cur]
             self._cur ^= 1
-            _jit_push_row(self._tmpl_ldt, self.lengths, q, prev, self._ext[self._cur], self._jit_cost,
+            self._kernel(self._tmpl_ldt, self.lengths, q, prev, self._ext[self._cur], self._jit_cost,
                           self._jit_left, self._jit_first, self.n, float(self.min_progress), self.scores)
             self._row = self._rows[self._cur]
             self.n += 1

@@ -5,7 +5,7 @@ overhead (~13 calls of ~1 us on 60 x 13 blocks); one compiled loop nest does the
 the row recurrence, the normalization and the per-template minimum in a single call, and at
 hundreds of templates its inner loop over templates is vectorized (SIMD) by LLVM.
 
-`push_row` is None when numba cannot be imported (no wheels, e.g. 32-bit ARM boards) or when
+`push_row_kernel()` is None when numba cannot be imported (no wheels, e.g. 32-bit ARM boards) or when
 QUICKJAB_NO_JIT=1 is set; IncrementalDTW then uses its numpy methods.
 
 Compiled code is cached on disk (cache=True) so later processes skip the ~1 s compile. When no
@@ -75,15 +75,27 @@ def _push_row_py(tmpl, lengths, q, prev, cur, cost, left, first, n, min_progress
                 scores[k] = s
 
 
-push_row: Callable | None = None
-if not _jit_disabled():
+_compiled: list[Callable | None] = []  # filled on the first call of push_row_kernel()
+
+
+def push_row_kernel() -> Callable | None:
+    """The compiled kernel, or None without numba. numba is imported on first use only (it
+    adds ~0.3 s to a process's start, which CLI commands that never recognize need not pay)."""
+    if not _compiled:
+        _compiled.append(_compile())
+    return _compiled[0]
+
+
+def _compile() -> Callable | None:
+    if _jit_disabled():
+        return None
     try:
         import numba
     except (ImportError, OSError):  # no wheels (or no llvmlite library) here: numpy serves
-        numba = None
-    if numba is not None:
-        try:
-            push_row = numba.njit(cache=True, nogil=True)(_push_row_py)
-        except RuntimeError:
-            # "cannot cache function ...: no locator available": nowhere writable to cache.
-            push_row = numba.njit(cache=False, nogil=True)(_push_row_py)
+        return None
+    try:
+        return numba.njit(cache=True, nogil=True)(_push_row_py)
+    except RuntimeError:
+        # "cannot cache function ...: no locator available": neither the source's __pycache__
+        # nor a user cache directory is writable (e.g. installed read-only): compile per process.
+        return numba.njit(cache=False, nogil=True)(_push_row_py)
