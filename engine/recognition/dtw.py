@@ -17,7 +17,7 @@ scan. Two ways to run it, identical results:
   fastest for a few dozen templates.
 - "loop": a Python loop over template positions j, each step one vectorized operation across
   all T templates. Per call cost grows with T slowly, so it wins for hundreds of templates.
-- "jit": one compiled numba call per frame (dtw_kernel.push_row) doing the local costs, the
+- "jit": one compiled numba call per frame (dtw_kernel.push_row_kernel()) doing the local costs, the
   row, the normalization and the per-template minimum; no numpy call overhead, and its loop over
   templates vectorizes. Needs numba (not installed, or QUICKJAB_NO_JIT=1: unavailable).
 `method="auto"` picks "jit" when numba is available, else scan or loop by the number of
@@ -35,15 +35,15 @@ from engine.recognition.dtw_kernel import push_row_kernel
 # Below this many templates the scan's few whole-block calls beat the per-position loop;
 # measured with `quickjab bench recognition --sweep` (crossover between 100 and 300 templates).
 LOOP_FROM_TEMPLATES = 200
+# Local costs: |t - q|^2 = |t|^2 - 2 t.q + |q|^2 from precomputed squared norms and one
+# matrix-vector product (half the cost of a broadcast subtract-square-sum; rounding ~1e-7 g).
+# `exact_costs=True` computes them the direct way (the reference tests use it; "jit" always does).
 METHODS = ("scan", "loop", "jit")
 
 
 def jit_available() -> bool:
     """True when the "jit" method can run (numba importable and QUICKJAB_NO_JIT not set)."""
     return push_row_kernel() is not None
-# Local costs: |t - q|^2 = |t|^2 - 2 t.q + |q|^2 from precomputed squared norms and one
-# matrix-vector product (half the cost of a broadcast subtract-square-sum; rounding ~1e-7 g).
-# `exact_costs=True` computes them the direct way (the reference tests use it).
 
 
 def pad_templates(templates: Sequence[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:

@@ -5,10 +5,10 @@ overhead (~13 calls of ~1 us on 60 x 13 blocks); one compiled loop nest does the
 the row recurrence, the normalization and the per-template minimum in a single call, and at
 hundreds of templates its inner loop over templates is vectorized (SIMD) by LLVM.
 
-`push_row_kernel()` is None when numba cannot be imported (no wheels, e.g. 32-bit ARM boards) or when
-QUICKJAB_NO_JIT=1 is set; IncrementalDTW then uses its numpy methods.
+`push_row_kernel()` is None when numba cannot be imported (no wheels, e.g. 32-bit ARM boards)
+or when QUICKJAB_NO_JIT=1 is set; IncrementalDTW then uses its numpy methods.
 
-Compiled code is cached on disk (cache=True) so later processes skip the ~1 s compile. When no
+Compiled code is cached on disk (cache=True) so later processes skip the ~0.5 s compile. When no
 cache directory is writable (an installed, read-only tree and no writable user cache) numba
 refuses cache=True when the function is decorated; we then compile without caching instead.
 """
