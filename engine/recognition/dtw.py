@@ -17,7 +17,11 @@ scan. Two ways to run it, identical results:
   fastest for a few dozen templates.
 - "loop": a Python loop over template positions j, each step one vectorized operation across
   all T templates. Per call cost grows with T slowly, so it wins for hundreds of templates.
-`method="auto"` picks by the number of templates (measured by `quickjab bench recognition`).
+- "jit": one compiled numba call per frame (dtw_kernel.push_row_kernel()) doing the local costs, the
+  row, the normalization and the per-template minimum; no numpy call overhead, and its loop over
+  templates vectorizes. Needs numba (not installed, or QUICKJAB_NO_JIT=1: unavailable).
+`method="auto"` picks "jit" when numba is available, else scan or loop by the number of
+templates (measured by `quickjab bench recognition`).
 """
 
 from __future__ import annotations
@@ -26,12 +30,20 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from engine.recognition.dtw_kernel import push_row_kernel
+
 # Below this many templates the scan's few whole-block calls beat the per-position loop;
 # measured with `quickjab bench recognition --sweep` (crossover between 100 and 300 templates).
 LOOP_FROM_TEMPLATES = 200
 # Local costs: |t - q|^2 = |t|^2 - 2 t.q + |q|^2 from precomputed squared norms and one
 # matrix-vector product (half the cost of a broadcast subtract-square-sum; rounding ~1e-7 g).
-# `exact_costs=True` computes them the direct way (the reference tests use it).
+# `exact_costs=True` computes them the direct way (the reference tests use it; "jit" always does).
+METHODS = ("scan", "loop", "jit")
+
+
+def jit_available() -> bool:
+    """True when the "jit" method can run (numba importable and QUICKJAB_NO_JIT not set)."""
+    return push_row_kernel() is not None
 
 
 def pad_templates(templates: Sequence[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
@@ -62,9 +74,11 @@ class IncrementalDTW:
         self.tmpl, self.lengths = pad_templates([np.asarray(t, dtype=np.float64) for t in templates])
         self.L, self.T, self.D = self.tmpl.shape
         if method == "auto":
-            method = "loop" if self.T >= LOOP_FROM_TEMPLATES else "scan"
-        if method not in ("scan", "loop"):
-            raise ValueError(f"method must be 'auto', 'scan' or 'loop', not {method!r}")
+            method = "jit" if jit_available() else "loop" if self.T >= LOOP_FROM_TEMPLATES else "scan"
+        if method not in METHODS:
+            raise ValueError(f"method must be 'auto', 'scan', 'loop' or 'jit', not {method!r}")
+        if method == "jit" and not jit_available():
+            raise ValueError("method 'jit' needs numba (not importable here, or QUICKJAB_NO_JIT=1 is set)")
         self.method = method
         # Scoring only (the accumulated costs are plain DTW): after n query frames the query's
         # end may only align to template positions j + 1 >= min(L, min_progress * n), so a
@@ -107,6 +121,19 @@ class IncrementalDTW:
         self._c_flat = self._c.reshape(-1)
         self._q_head = self._q_aug[: self.D]
         self.scores = np.empty(self.T)
+        if method == "jit":
+            # The kernel's template layout: (L, D, T), a position's values contiguous across
+            # templates (its innermost loop); always the direct |t - q| (exact costs).
+            self._kernel = push_row_kernel()
+            self._tmpl_ldt = np.ascontiguousarray(self.tmpl.transpose(0, 2, 1))
+            self._q = np.empty(self.D)  # frames are copied here: float64, contiguous, right length
+            self._jit_cost = np.empty(self.T)
+            self._jit_left = np.empty(self.T)
+            self._jit_first = np.empty(self.T, dtype=np.int64)
+            self._rows = [e[1:] for e in self._ext]
+            # Compile (or load from numba's cache) now, not on the first game frame.
+            self.n = 0
+            self.push(np.zeros(self.D))
         self.reset()
 
     def reset(self) -> None:
@@ -129,6 +156,16 @@ class IncrementalDTW:
         return c
 
     def push(self, frame: np.ndarray) -> np.ndarray:
+        if self.method == "jit":
+            q = self._q
+            q[:] = frame
+            prev = self._init if self.n == 0 else self._ext[self._cur]
+            self._cur ^= 1
+            self._kernel(self._tmpl_ldt, self.lengths, q, prev, self._ext[self._cur], self._jit_cost,
+                          self._jit_left, self._jit_first, self.n, float(self.min_progress), self.scores)
+            self._row = self._rows[self._cur]
+            self.n += 1
+            return self.scores
         q = np.asarray(frame, dtype=np.float64)
         c = self._local_costs(q)
         # Rows are stored with one sentinel position in front (index 0): +inf for real rows, 0

@@ -1,4 +1,5 @@
-"""The incremental DTW equals the plain full DTW for every prefix, for both row methods."""
+"""The incremental DTW equals the plain full DTW for every prefix, for both numpy row methods
+(the numba "jit" method: test_dtw_jit.py)."""
 
 from __future__ import annotations
 
@@ -8,6 +9,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
+from engine.recognition import dtw
 from engine.recognition.dtw import IncrementalDTW, dtw_distance, dtw_rows, open_end_score
 
 finite = st.floats(-4.0, 4.0, allow_nan=False, width=64)
@@ -61,7 +63,8 @@ def test_identical_sequences_score_zero_and_distance_is_symmetric():
     assert dtw_distance(a, b) > 0
 
 
-def test_auto_method_picks_loop_for_many_templates():
+def test_auto_method_picks_loop_for_many_templates_without_jit(monkeypatch):
+    monkeypatch.setattr(dtw, "jit_available", lambda: False)  # with numba, auto is "jit" (test_dtw_jit)
     few = [np.zeros((5, 3))] * 13
     assert IncrementalDTW(few).method == "scan"
     assert IncrementalDTW(few * 40).method == "loop"

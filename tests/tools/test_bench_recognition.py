@@ -1,0 +1,28 @@
+"""`quickjab bench recognition` runs end to end and prints its columns and the targets line
+(no timing asserted)."""
+
+from __future__ import annotations
+
+import re
+
+from engine.recognition import dtw
+from game.cli import main
+
+
+def test_bench_recognition_table_and_targets(capsys):
+    assert main(["bench", "recognition", "--sizes", "13", "--repeat", "1", "--buffer", "8"]) == 0
+    out = capsys.readouterr().out
+    header = next(line for line in out.splitlines() if line.lstrip().startswith("templates"))
+    assert [c.strip() for c in header.split("|")][:6] == ["templates", "scan us", "loop us", "jit us", "auto", "push us"]
+    row = next(line for line in out.splitlines() if line.lstrip().startswith("13 |"))
+    assert row.split("|")[4].strip() == ("jit" if dtw.jit_available() else "scan")
+    # every target of issue 3 at 13 templates gets a yes/NO verdict
+    assert re.search(r"targets: 13 templates: \w+ <= 30 us (yes|NO), >= 10x (yes|NO), push <= 30 us (yes|NO)", out)
+
+
+def test_bench_recognition_sweep_lists_every_method(capsys):
+    assert main(["bench", "recognition", "--sizes", "3", "--repeat", "1", "--buffer", "4", "--sweep"]) == 0
+    out = capsys.readouterr().out
+    sweep = out.split("us per frame)")[1].strip().splitlines()
+    assert len(sweep) == 7 and all("scan" in line and "loop" in line for line in sweep)
+    assert all(("jit" in line) == dtw.jit_available() for line in sweep)
