@@ -117,6 +117,16 @@ def replay_trial(rec: DualBufferRecognizer, trial: np.ndarray) -> tuple[list[dic
     return events, PAD_BEFORE
 
 
+def session_order(tests: Mapping[str, Sequence[np.ndarray]]) -> list[tuple[str, np.ndarray]]:
+    """The trials as one player's session would bring them: round robin over the actions, each
+    action's trials in their order (file names sort by day and repetition), so a recognizer that
+    adapts to the player sees them in time order rather than one action at a time."""
+    out = []
+    for i in range(max((len(t) for t in tests.values()), default=0)):
+        out += [(action, trials[i]) for action, trials in tests.items() if i < len(trials)]
+    return out
+
+
 def evaluate_trials(
     templates: Templates,
     tests: Mapping[str, Sequence[np.ndarray]],
@@ -127,12 +137,11 @@ def evaluate_trials(
     for main in mains:
         rec = DualBufferRecognizer(templates, main=main, **rec_kwargs)
         s = Summary(main)
-        for action, trials in tests.items():
-            for trial in trials:
-                events, offset = replay_trial(rec, trial)
-                first, final, last_np, at = _decisions(events)
-                lag = None if at is None else at - (offset + true_onset(trial))
-                s.outcomes.append(Outcome(action, first, final, last_np, lag))
+        for action, trial in session_order(tests):
+            events, offset = replay_trial(rec, trial)
+            first, final, last_np, at = _decisions(events)
+            lag = None if at is None else at - (offset + true_onset(trial))
+            s.outcomes.append(Outcome(action, first, final, last_np, lag))
         out.append(s)
     return out
 

@@ -31,6 +31,11 @@ Per 60 Hz frame (`push`):
   clearly better action becomes the final decision: a `switch` flagged `whole_motion` just
   before `end` (the game has usually finished the clip by then; what it sees within
   `supplementary` frames follows the paper). `extend=False` turns this off.
+- Beyond the paper: adaptation to the player. A motion whose whole fits its final action's
+  templates better by ADAPT_MARGIN than any other action's (and under the threshold) joins that
+  action's templates; the `adapt` (3) most recent per action are kept beside the trained ones,
+  across `reset()`, until `forget_adaptation()`. `adapt=0` turns it off. uWave (day-1
+  templates, days 2-7): final 89.9 -> 94.1 %.
 - After `character_finished()` (IV-C) frames are discarded until a null signal or until
   `discard_frames` frames have passed, so the hand's return does not launch a new action.
 
@@ -84,6 +89,10 @@ UNCHANGED_FRAMES = 2
 # 89.0 -> 89.9 % (the long gestures the 60-frame buffer cannot see to their end).
 EXTEND_FACTOR = 2.0
 LATE_SWITCH_MARGIN = 0.1
+# Template adaptation (`_adapt`): a whole motion that fits its action better than any other
+# action's template by this margin joins that action's templates; this many are kept per action.
+ADAPT_MARGIN = 0.4
+ADAPT_PER_ACTION = 3
 
 IDLE, ACTIVE, DISCARD = "idle", "active", "discard"
 
@@ -109,6 +118,7 @@ class DualBufferRecognizer:
         complete_frames: int = 2,
         closed_after: int = 1,
         extend: bool = True,
+        adapt: int = ADAPT_PER_ACTION,
     ):
         if not isinstance(templates, Templates):
             raise TypeError("templates must be a Templates")
@@ -152,6 +162,13 @@ class DualBufferRecognizer:
         # row a frame, as before) up to this many frames, for a final decision over the whole
         # motion at its end (`_late_switch`); bounded so a hand that never rests costs nothing.
         self._extend_to = int(EXTEND_FACTOR * max(self.window, int(self.template_lengths.max()))) if extend else 0
+        # Adaptation to the player (see `_adapt`): the trained templates stay; up to `adapt`
+        # recent, confidently recognized whole motions per action join them.
+        self.adapt = max(0, int(adapt))
+        self._dtw_method = dtw_method
+        self._base = (cut, self._tmpl_action.copy(), self.thresholds.copy(), self._peak_act.copy())
+        self._adapted: dict[int, list[tuple[np.ndarray, float]]] = {}
+        self._motion = np.empty((max(self.window, self._extend_to), self.dim))  # features since the onset
         self.reset()
 
     def _gate_start(self, templates: Templates, k: int) -> int:
@@ -213,6 +230,7 @@ class DualBufferRecognizer:
         self._extended = False  # the DTW ran past the supplementary buffer (a long motion)
         self._was_closed = False
         self._stopped = False
+        self._stop_n = 0
 
     @property
     def current_action(self) -> str | None:
@@ -317,10 +335,13 @@ class DualBufferRecognizer:
             # the reading has stopped changing.
             closed = self._unchanged >= UNCHANGED_FRAMES or (not valid and self.quiet >= self.closed_after)
             self.dtw.min_progress = CLOSED_END if closed else self.min_progress
-            scores = self.dtw.push(self._features(x))
+            f = self._features(x)
+            self._motion[self.dtw.n] = f
+            scores = self.dtw.push(f)
             if closed and not self._was_closed:
                 # the hand has just stopped: the whole motion so far against whole templates
                 self._stop_scores[:] = scores
+                self._stop_n = self.dtw.n
                 self._stopped = True
             self._was_closed = closed
             if in_window:
@@ -332,11 +353,61 @@ class DualBufferRecognizer:
             if self.action is not None:
                 if self._extended:
                     self._late_switch(self._stop_scores if self._stopped else self.dtw.scores, events)
+                if self.adapt and self.count <= max(self.window, self._extend_to):
+                    self._adapt()
                 events.append(self._event("end", self.action_names[self.action], None, reason="complete" if complete else None))
             elif self.pending:
                 events.append(self._event("reject", None, None))
             self._begin_motion_state()
             self.state = IDLE
+
+    def _adapt(self) -> None:
+        """A player drifts from the trials the templates came from (uWave: day-1 templates, days
+        2-7 tested). When a motion ends whose whole, up to where the hand stopped, fits its final
+        action's template better by ADAPT_MARGIN than any other action's, it becomes one of that
+        action's templates; the `adapt` most recent ones per action are kept beside the trained
+        ones (the uWave paper's template adaptation, driven by confident decisions instead of
+        the user's feedback). Motions ended by `character_finished()` are partial: never used."""
+        n = self._stop_n if self._stopped else self.dtw.n
+        if n < 2:
+            return
+        scores = self._stop_scores if self._stopped else self.dtw.closed_scores()
+        mine = self._tmpl_action == self.action
+        best, other = float(scores[mine].min()), float(scores[~mine].min(initial=np.inf))
+        k = int(np.flatnonzero(mine)[np.argmin(scores[mine])])
+        if not best < (1.0 - ADAPT_MARGIN) * other or best > self.thresholds[k]:
+            return
+        kept = self._adapted.setdefault(self.action, [])
+        kept.append((self._motion[:n].copy(), self._peak_act_seen))
+        del kept[: -self.adapt]
+        self._set_templates()
+
+    def _set_templates(self) -> None:
+        """The DTW over the trained templates plus the adapted ones, sorted by action."""
+        cut, acts, thr, peaks = self._base
+        cut, acts, thr, peaks = list(cut), list(acts), list(thr), list(peaks)
+        for a, kept in self._adapted.items():
+            for motion, peak in kept:
+                cut.append(motion)
+                acts.append(a)
+                thr.append(float(self._base[2][self._base[1] == a].max()))
+                peaks.append(peak)
+        order = np.argsort(acts, kind="stable")
+        self._tmpl_action = np.asarray(acts)[order]
+        self._action_starts = np.flatnonzero(np.r_[True, np.diff(self._tmpl_action) != 0])
+        self._action_ends = np.r_[self._action_starts[1:], len(order)]
+        self.thresholds = np.asarray(thr)[order]
+        self._peak_act = np.asarray(peaks)[order]
+        cut = [cut[k] for k in order]
+        self.template_lengths = np.array([len(c) for c in cut])
+        self.dtw = IncrementalDTW(cut, method=self._dtw_method, min_progress=self.min_progress)
+        self._stop_scores = np.empty(len(cut))
+
+    def forget_adaptation(self) -> None:
+        """Back to the trained templates only (a new player)."""
+        if self._adapted:
+            self._adapted = {}
+            self._set_templates()
 
     def _decide(self, scores: np.ndarray, events: list[dict]) -> None:
         best = int(np.argmin(scores))

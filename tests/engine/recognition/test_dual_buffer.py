@@ -272,3 +272,51 @@ def test_the_extended_dtw_is_bounded_when_the_hand_never_rests(templates):
         longest = max(longest, rec.dtw.n)
     assert longest == rec._extend_to > rec.supplementary
     assert len(rec.dtw._recip) <= rec._extend_to
+
+
+def tilted_bump(deg: float, amp: float = 3.0, n: int = 24) -> np.ndarray:
+    """bump() along a direction tilted `deg` degrees from x towards z (a player's drifting jab)."""
+    x = rest(n)
+    s = amp * np.sin(np.linspace(0, 2 * np.pi, n))
+    x[:, 0] += np.cos(np.radians(deg)) * s
+    x[:, 2] += np.sin(np.radians(deg)) * s
+    return x
+
+
+def final_actions(rec: DualBufferRecognizer, motions: list[np.ndarray]) -> list[str | None]:
+    out = []
+    for m in motions:
+        events = run(rec, np.vstack([rest(10), m, rest(20)]))
+        decided = [e["action"] for e in events if e["event"] in ("start", "switch")]
+        out.append(decided[-1] if decided else None)
+    return out
+
+
+def test_adaptation_follows_a_player_drifting_away_from_the_trials(templates):
+    # the player's jab turns from x towards z a little more every time; from 30 degrees on it
+    # fits no trained template well enough and is rejected, unless the templates follow
+    drift = [tilted_bump(d) for d in range(0, 61, 10)]
+    fixed = DualBufferRecognizer(templates, adapt=0)
+    assert final_actions(fixed, drift) == ["jab"] * 3 + [None] * 4
+    rec = DualBufferRecognizer(templates)
+    assert final_actions(rec, drift) == ["jab"] * len(drift)
+    # the trained templates stay; at most `adapt` recent motions are kept per action
+    assert rec.dtw.T == len(templates.actions) + 3 and rec.dtw.T == len(rec._tmpl_action)
+    assert sorted(rec.action_names[a] for a in rec._tmpl_action).count("jab") == 3 + 3
+    rec.forget_adaptation()
+    assert rec.dtw.T == len(templates.actions)
+    assert final_actions(rec, drift[-1:]) == [None]
+
+
+def test_only_confident_complete_motions_adapt(templates):
+    rec = DualBufferRecognizer(templates)
+    # a rejected motion never adapts
+    assert final_actions(rec, [tilted_bump(45)]) == [None]
+    assert rec.dtw.T == len(templates.actions)
+    # a motion cut short by the character is partial: never a template
+    run(rec, np.vstack([rest(10), bump(0, 3.0)[:12]]))
+    rec.character_finished()
+    run(rec, rest(30))
+    assert rec.dtw.T == len(templates.actions)
+    final_actions(rec, [bump(0, 3.0)])
+    assert rec.dtw.T == len(templates.actions) + 1
