@@ -148,6 +148,9 @@ def python_relax(world):
 
 
 def make_naive(session) -> None:
+    # no template adaptation in the peer: adopting a motion rebuilds the recognizer's DTW, which
+    # would replace the naive one (the peer keeps fewer templates: a conservative ratio)
+    session.recognizer.adapt = 0
     session.recognizer.dtw = NaiveDTW(session.recognizer.dtw)
     session.world.constraints.relax = python_relax(session.world)
 
