@@ -84,42 +84,16 @@ class IncrementalDTW:
         # end may only align to template positions j + 1 >= min(L, min_progress * n), so a
         # template cannot win by matching a short prefix of itself to a long query.
         self.min_progress = float(min_progress)
-        self._expanded = not exact_costs
-        sqnorm = np.einsum("ltd,ltd->lt", self.tmpl, self.tmpl)
-        # [-2t, |t|^2, 1] . [q, 1, |q|^2]: the -2 is folded in here, so a frame is one copy.
-        self._flat = np.concatenate(
-            [-2.0 * self.tmpl, sqnorm[..., None], np.ones((self.L, self.T, 1))], axis=2
-        ).reshape(self.L * self.T, self.D + 2)
-        self._q_aug = np.ones(self.D + 2)
-        # Positions past a template's end never count: +inf added to their normalized score.
         pos = np.arange(self.L)[:, None]
-        self._pad_inf = np.where(pos < self.lengths[None, :], 0.0, np.inf)
         self._steps = pos + 1.0  # (L, 1): j + 1, the path-length term of the normalization
         self._cols = np.arange(self.T)
-        shape = (self.L, self.T)
         self._ext = [np.full((self.L + 1, self.T), np.inf) for _ in range(2)]
         self._init = np.full((self.L + 1, self.T), np.inf)
         self._init[0] = 0.0
         self._cur = 0
         self._row = self._ext[0][1:]
-        # Views made once (each slice or transpose made per frame costs as much as a small ufunc):
-        # per row buffer (previous rows' left/up neighbours, the new row, its transpose).
-        self._views = [(e[:-1], e[1:], e[1:].T) for e in (*self._ext, self._init)]
-        self._suffix = np.empty((self.T, self.L))
-        self._suffix_flat = self._suffix.reshape(-1)
-        self._reduced = np.empty(2 * self.T)
         self._recip: dict[int, tuple[np.ndarray, np.ndarray]] = {}
         self._take: dict[tuple[int, float], np.ndarray] = {}
-        self._c = np.empty(shape)
-        self._tmp = np.empty(shape)
-        self._zeros = np.zeros(shape)  # np.maximum against an array: no scalar conversion per call
-        # Running sums of the row's local costs with a 0 in front: [1:] is the inclusive cumsum,
-        # [:-1] the exclusive one, both from one accumulate.
-        self._cumsums = np.zeros((self.L + 1, self.T))
-        self._cum, self._cum_excl = self._cumsums[1:], self._cumsums[:-1]
-        self._diff = np.empty(self.tmpl.shape) if not self._expanded else None
-        self._c_flat = self._c.reshape(-1)
-        self._q_head = self._q_aug[: self.D]
         self.scores = np.empty(self.T)
         if method == "jit":
             # The kernel's template layout: (L, D, T), a position's values contiguous across
@@ -134,7 +108,39 @@ class IncrementalDTW:
             # Compile (or load from numba's cache) now, not on the first game frame.
             self.n = 0
             self.push(np.zeros(self.D))
+        else:
+            self._init_numpy_buffers(exact_costs)
         self.reset()
+
+    def _init_numpy_buffers(self, exact_costs: bool) -> None:
+        """What the numpy methods ("scan", "loop") reuse every frame; "jit" needs none of it."""
+        self._expanded = not exact_costs
+        sqnorm = np.einsum("ltd,ltd->lt", self.tmpl, self.tmpl)
+        # [-2t, |t|^2, 1] . [q, 1, |q|^2]: the -2 is folded in here, so a frame is one copy.
+        self._flat = np.concatenate(
+            [-2.0 * self.tmpl, sqnorm[..., None], np.ones((self.L, self.T, 1))], axis=2
+        ).reshape(self.L * self.T, self.D + 2)
+        self._q_aug = np.ones(self.D + 2)
+        # Positions past a template's end never count: +inf added to their normalized score.
+        pos = np.arange(self.L)[:, None]
+        self._pad_inf = np.where(pos < self.lengths[None, :], 0.0, np.inf)
+        shape = (self.L, self.T)
+        # Views made once (each slice or transpose made per frame costs as much as a small ufunc):
+        # per row buffer (previous rows' left/up neighbours, the new row, its transpose).
+        self._views = [(e[:-1], e[1:], e[1:].T) for e in (*self._ext, self._init)]
+        self._suffix = np.empty((self.T, self.L))
+        self._suffix_flat = self._suffix.reshape(-1)
+        self._reduced = np.empty(2 * self.T)
+        self._c = np.empty(shape)
+        self._tmp = np.empty(shape)
+        self._zeros = np.zeros(shape)  # np.maximum against an array: no scalar conversion per call
+        # Running sums of the row's local costs with a 0 in front: [1:] is the inclusive cumsum,
+        # [:-1] the exclusive one, both from one accumulate.
+        self._cumsums = np.zeros((self.L + 1, self.T))
+        self._cum, self._cum_excl = self._cumsums[1:], self._cumsums[:-1]
+        self._diff = np.empty(self.tmpl.shape) if not self._expanded else None
+        self._c_flat = self._c.reshape(-1)
+        self._q_head = self._q_aug[: self.D]
 
     def reset(self) -> None:
         """Forget the query (a new onset)."""

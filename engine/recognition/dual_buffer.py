@@ -167,6 +167,7 @@ class DualBufferRecognizer:
         self.adapt = max(0, int(adapt))
         self._dtw_method = dtw_method
         self._base = (cut, self._tmpl_action.copy(), self.thresholds.copy(), self._peak_act.copy())
+        self._base_starts = self._action_starts.copy()
         self._adapted: dict[int, list[tuple[np.ndarray, float]]] = {}
         self._motion = np.empty((max(self.window, self._extend_to), self.dim))  # features since the onset
         self.reset()
@@ -383,21 +384,22 @@ class DualBufferRecognizer:
         self._set_templates()
 
     def _set_templates(self) -> None:
-        """The DTW over the trained templates plus the adapted ones, sorted by action."""
+        """The DTW over the trained templates plus the adapted ones, sorted by action. An adapted
+        template takes its action's loosest trained threshold."""
         cut, acts, thr, peaks = self._base
-        cut, acts, thr, peaks = list(cut), list(acts), list(thr), list(peaks)
-        for a, kept in self._adapted.items():
-            for motion, peak in kept:
-                cut.append(motion)
-                acts.append(a)
-                thr.append(float(self._base[2][self._base[1] == a].max()))
-                peaks.append(peak)
+        extra = [(motion, a, peak) for a, kept in self._adapted.items() for motion, peak in kept]
+        new_acts = np.array([a for _, a, _ in extra], dtype=acts.dtype)
+        loosest = np.maximum.reduceat(thr, self._base_starts)  # per action (trained sorted by action)
+        acts = np.concatenate([acts, new_acts])
+        thr = np.concatenate([thr, loosest[new_acts]])
+        peaks = np.concatenate([peaks, [peak for _, _, peak in extra]])
+        cut = [*cut, *(motion for motion, _, _ in extra)]
         order = np.argsort(acts, kind="stable")
-        self._tmpl_action = np.asarray(acts)[order]
+        self._tmpl_action = acts[order]
         self._action_starts = np.flatnonzero(np.r_[True, np.diff(self._tmpl_action) != 0])
         self._action_ends = np.r_[self._action_starts[1:], len(order)]
-        self.thresholds = np.asarray(thr)[order]
-        self._peak_act = np.asarray(peaks)[order]
+        self.thresholds = thr[order]
+        self._peak_act = peaks[order]
         cut = [cut[k] for k in order]
         self.template_lengths = np.array([len(c) for c in cut])
         self.dtw = IncrementalDTW(cut, method=self._dtw_method, min_progress=self.min_progress)
