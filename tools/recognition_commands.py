@@ -90,8 +90,10 @@ def register(sub: argparse._SubParsersAction) -> None:
             "Replay trials or labelled recordings and print, per main-buffer size, the four "
             "outcome groups, first-decision accuracy and lag from the true onset. Inputs: "
             "--templates T.npz with trial dirs or labelled CSVs; or --train TRIALS_DIR; or "
-            "--uwave DIR (per user: templates from day 1 reps 1-3, test days 2-7); or a labelled "
-            "CSV alone with --folds K (templates from the other folds' intervals)."
+            "--uwave DIR (per user: templates from day 1 reps 1-3, test days 2-7); or "
+            "--phone-punches DIR (cross-session, per hand fast -> slow and slow -> fast); or a labelled "
+            "CSV alone with --folds K (templates from the other folds' intervals). The lag is counted "
+            "from the true onset: the first frame 0.3 g away from the rest before the motion."
         ),
     )
     e.add_argument("inputs", nargs="*", metavar="INPUT", help="trial dirs (<root>/<action>/*.csv) or labelled recording CSVs")
@@ -99,6 +101,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     e.add_argument("--train", default=None, metavar="TRIALS_DIR", help="build templates from these trials")
     e.add_argument("--uwave", default=None, metavar="DIR", help="the uWave protocol on DIR/U<n>/gesture<k>/d<day>-r<rep>.csv")
     e.add_argument("--users", default="1-6", help="uWave users (default 1-6)")
+    e.add_argument("--fresh", action="store_true",
+                   help="trials: a fresh recognizer for every trial (forget the adaptation); default: one player's session")
+    e.add_argument("--phone-punches", default=None, metavar="DIR",
+                   help="cross-session: DIR/<hand>_<punch>_<fast|slow>.csv; per hand, templates from the first "
+                        "--trials punches of each kind in one set, tested on every punch of the other set")
+    e.add_argument("--trials", type=int, default=3, help="--phone-punches: training trials per punch (default 3)")
     e.add_argument("--every", type=int, default=1, help="use every k-th test trial (quicker sweeps)")
     e.add_argument("--folds", type=int, default=2, help="labelled CSV without templates: K contiguous folds (default 2)")
     e.add_argument("--mains", type=_mains, default=_mains("1-12"), help="main-buffer sizes (default 1-12; e.g. 6 or 1-12,auto)")
@@ -157,13 +165,21 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
             root = Path(args.uwave) / f"U{u}"
             templates = Templates.from_trials(load_trials_dir(root, "d1-r0[1-3].csv"), **tk)
             tests = {a: ts[:: args.every] for a, ts in load_trials_dir(root, "d[2-7]-*.csv").items()}
-            res = ev.evaluate_trials(templates, tests, args.mains, **kw)
+            res = ev.evaluate_trials(templates, tests, args.mains, fresh=args.fresh, **kw)
             if pooled is None:
                 pooled = res
             else:
                 for p, r in zip(pooled, res, strict=True):
                     p.outcomes += r.outcomes
-        results[f"uWave users {args.users}, noise_g {args.noise_g}"] = [s.row() for s in pooled]
+        order = "fresh recognizer per trial" if args.fresh else "session order"
+        results[f"uWave users {args.users}, noise_g {args.noise_g}, {order}"] = [s.row() for s in pooled]
+    if args.phone_punches:
+        res = ev.evaluate_phone_punches(
+            args.phone_punches, args.mains, trials=args.trials, template_kwargs=tk, clip_frames=args.clip_frames, **kw
+        )
+        if not res:
+            raise InputError(f"{args.phone_punches}: no <hand>_<punch>_<fast|slow>.csv recordings")
+        results.update({title: [s.row() for s in summaries] for title, summaries in res.items()})
     templates = Templates.load(args.templates) if args.templates else None
     if args.train:
         templates = Templates.from_trials(load_trials_dir(args.train), **tk)
@@ -173,7 +189,7 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
             if templates is None:
                 raise InputError(f"{inp}: trial directories need --templates or --train")
             tests = {a: ts[:: args.every] for a, ts in load_trials_dir(path).items()}
-            res = ev.evaluate_trials(templates, tests, args.mains, **kw)
+            res = ev.evaluate_trials(templates, tests, args.mains, fresh=args.fresh, **kw)
         else:
             _, frames, labels = recording_frames(read_recording(path))
             if not any(labels):
