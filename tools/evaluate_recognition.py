@@ -135,6 +135,9 @@ def _decisions(events: Iterable[dict]) -> tuple[str | None, str | None, int, int
             last_np = e["from_frame"]
         elif kind == "end" and first is not None:
             break
+        elif kind == "reject" and first is not None:
+            final = None  # the start was called off (FORMATS.md): no action in the end
+            break
     return first, final, last_np, at
 
 

@@ -29,6 +29,18 @@ def _main_arg(text: str) -> int | str:
     return v
 
 
+def _noise_arg(text: str) -> float | str:
+    if text == "auto":
+        return text
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number of g or 'auto', not {text!r}") from None
+    if not v >= 0:
+        raise argparse.ArgumentTypeError("the noise gate must be >= 0 g")
+    return v
+
+
 def _mains(text: str) -> list[int | str]:
     out: list[int | str] = []
     for part in text.split(","):
@@ -42,7 +54,8 @@ def _mains(text: str) -> list[int | str]:
 
 def _recognizer_args(p: argparse.ArgumentParser, main_default: str = "6") -> None:
     g = p.add_argument_group("recognizer")
-    g.add_argument("--noise-g", type=float, default=1.0, help="noise gate in g (default 1.0; 0.3 for gentle gestures)")
+    g.add_argument("--noise-g", type=_noise_arg, default="auto",
+                   help="noise gate in g, or 'auto' (default): learned from the sensor's resting noise")
     g.add_argument("--supplementary", type=int, default=60, help="supplementary buffer in frames (default 60)")
     g.add_argument("--null-frames", type=int, default=6, help="quiet frames that end a motion (default 6)")
     g.add_argument("--discard-frames", type=int, default=20, help="frames discarded after the character finishes (default 20)")

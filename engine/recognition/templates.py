@@ -20,7 +20,7 @@ Files are plain .npz (no pickles); a corrupt or foreign file raises TemplateFile
 from __future__ import annotations
 
 import os
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -41,7 +41,9 @@ TRIM_FRACTION = 0.1  # activity below this fraction of the trial's peak is rest
 LEAD_IN = 4  # frames kept before the trimmed onset (the recognizer re-cuts at its own gate)
 REJECT_K = 2.0  # threshold = mean + REJECT_K * std of same-action training scores ...
 REJECT_RATIO = 2.0  # ... and at least REJECT_RATIO * their max (1.5 -> 2.0: uWave +1.6, synth session +12 points; see docs)
-REJECT_FLOOR_G = 0.05  # and never below this (g): identical trials must not reject all noise
+REJECT_FLOOR_G = 0.05
+REST_NOISE_QUANTILE = 90  # resting_noise(): this percentile of the resting activity ...
+REST_NOISE_MIN_FRAMES = 6  # ... over at least this many resting frames  # and never below this (g): identical trials must not reject all noise
 
 
 class TemplateFileError(InputError):
@@ -76,6 +78,22 @@ def features(frames: np.ndarray, gravity: np.ndarray, kind: str) -> np.ndarray:
     if kind == "dynamic":
         return np.asarray(frames, dtype=np.float64) - gravity
     raise ValueError(f"feature must be one of {FEATURES}, not {kind!r}")
+
+
+def resting_noise(trials: Iterable[Sequence[np.ndarray]], quantile: float = REST_NOISE_QUANTILE) -> float:
+    """The sensor's resting noise as the gate sees it (g): the `quantile` (%) of the activity
+    against each trial's resting gravity over the frames before its trimmed onset, pooled over
+    all trials; nan when the trials hold fewer than REST_NOISE_MIN_FRAMES such frames."""
+    pre = []
+    for items in trials:
+        for t in items:
+            t = np.asarray(t, dtype=np.float64)
+            act = activity(t, rest_gravity(t))
+            peak = float(act.max())
+            first = int(np.flatnonzero(act >= TRIM_FRACTION * peak)[0]) if peak > 0 else len(t)
+            pre.append(act[REST_FRAMES:first])
+    pre = np.concatenate(pre) if pre else np.array([])
+    return float(np.percentile(pre, quantile)) if len(pre) >= REST_NOISE_MIN_FRAMES else float("nan")
 
 
 def trim_rest(trial: np.ndarray, fraction: float = TRIM_FRACTION, lead_in: int = LEAD_IN) -> tuple[np.ndarray, int]:
@@ -208,6 +226,7 @@ class Templates:
     method: str = DEFAULT_METHOD
     feature: str = DEFAULT_FEATURE
     meta: dict[str, str] = field(default_factory=dict)
+    rest_noise: float = float("nan")  # g: the gate's activity at rest before the trials' motions (nan: unknown)
 
     def __post_init__(self) -> None:
         n = len(self.actions)
@@ -278,7 +297,8 @@ class Templates:
                 signals.append(sig)
                 onsets.append(on)
                 gravity.append(g)
-        return cls(actions, signals, np.array(gravity), np.array(onsets), np.array(thresholds), method, feature)
+        noise = resting_noise(trials.values())
+        return cls(actions, signals, np.array(gravity), np.array(onsets), np.array(thresholds), method, feature, rest_noise=noise)
 
     # -- transforms --------------------------------------------------------------------------
     def mirrored(self) -> Templates:
@@ -308,6 +328,7 @@ class Templates:
             self.method,
             self.feature,
             {**self.meta, "mirrored": "1" if self.meta.get("mirrored") != "1" else "0"},
+            self.rest_noise,
         )
 
     # -- files -------------------------------------------------------------------------------
@@ -330,6 +351,7 @@ class Templates:
                 feature=np.array(self.feature),
                 meta_keys=keys,
                 meta_values=vals,
+                rest_noise=np.array(self.rest_noise),
             )
 
     @classmethod
@@ -367,6 +389,7 @@ class Templates:
                 str(data["method"]),
                 str(data["feature"]),
                 meta,
+                float(data["rest_noise"]) if "rest_noise" in data else float("nan"),  # absent in older files
             )
             if t.feature not in FEATURES:
                 raise ValueError(f"unknown feature {t.feature!r}")

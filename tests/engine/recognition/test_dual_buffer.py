@@ -39,7 +39,7 @@ def run(rec: DualBufferRecognizer, frames: np.ndarray) -> list[dict]:
 
 
 def test_gate_ignores_noise_below_noise_g(templates):
-    rec = DualBufferRecognizer(templates)
+    rec = DualBufferRecognizer(templates, noise_g=1.0)
     rng = np.random.default_rng(1)
     noise = rest(200) + rng.uniform(-0.25, 0.25, (200, 3))  # |a - g| < 0.45 g < 1.0 g
     assert run(rec, noise) == []
@@ -50,12 +50,18 @@ def test_gate_ignores_noise_below_noise_g(templates):
 
 @pytest.mark.parametrize("main", [1, 4, 6, 9])
 def test_start_at_exactly_the_main_buffer_size(templates, main):
-    rec = DualBufferRecognizer(templates, main=main)
+    rec = DualBufferRecognizer(templates, main=main, noise_g=1.0)
     events = run(rec, np.vstack([rest(10), bump(0, 3.0), rest(20)]))
     starts = [e for e in events if e["event"] == "start"]
     assert len(starts) == 1
-    onset = rec_onset = 10 + int(np.flatnonzero(np.abs(bump(0, 3.0)[:, 0]) >= 1.0)[0])
-    assert starts[0]["frame"] == rec_onset + main - 1 == onset + main - 1
+    # The gate opens at 1.0 g; the onset is back-dated to where the motion left the rest
+    # (ONSET_FRACTION of the gate), so the main buffer counts from there.
+    x = np.abs(bump(0, 3.0)[:, 0])
+    gate = int(np.flatnonzero(x >= 1.0)[0])
+    onset = 10 + int(np.flatnonzero(x >= 0.3)[0])
+    assert 10 + gate - onset > 0
+    assert starts[0]["onset_frame"] == onset
+    assert starts[0]["frame"] == max(onset + main - 1, 10 + gate)
     assert starts[0]["action"] == "jab"
     assert set(starts[0]) >= {"event", "action", "frame", "score"}
 
@@ -89,7 +95,7 @@ def test_switch_carries_n_p():
 
 
 def test_end_after_null_signal(templates):
-    rec = DualBufferRecognizer(templates, null_frames=6, complete_fraction=0)  # the null rule alone
+    rec = DualBufferRecognizer(templates, null_frames=6, complete_fraction=0, noise_g=1.0)  # the null rule alone
     motion = bump(0, 3.0)
     frames = np.vstack([rest(10), motion, rest(30)])
     events = run(rec, frames)
