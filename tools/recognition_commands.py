@@ -120,6 +120,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="cross-session: DIR/<hand>_<punch>_<fast|slow>.csv; per hand, templates from the first "
                         "--trials punches of each kind in one set, tested on every punch of the other set")
     e.add_argument("--trials", type=int, default=3, help="--phone-punches: training trials per punch (default 3)")
+    e.add_argument("--keep", type=int, default=None,
+                   help="templates: keep each action's KEEP most representative trials (e.g. --trials 5 --keep 3)")
     e.add_argument("--every", type=int, default=1, help="use every k-th test trial (quicker sweeps)")
     e.add_argument("--folds", type=int, default=2, help="labelled CSV without templates: K contiguous folds (default 2)")
     e.add_argument("--mains", type=_mains, default=_mains("1-12"), help="main-buffer sizes (default 1-12; e.g. 6 or 1-12,auto)")
@@ -169,7 +171,7 @@ def cmd_recognize(args: argparse.Namespace) -> int:
 
 def cmd_evaluate(args: argparse.Namespace) -> int:
     kw = _rec_kwargs(args)
-    tk = {k: v for k, v in (("method", args.method), ("feature", args.feature)) if v}
+    tk = {k: v for k, v in (("method", args.method), ("feature", args.feature), ("keep", args.keep)) if v}
     results: dict[str, list[dict]] = {}
     if args.uwave:
         users = [int(u) for u in _mains(args.users)]

@@ -51,7 +51,14 @@ import math
 import numpy as np
 
 from engine.recognition.dtw import IncrementalDTW
-from engine.recognition.templates import LOG_SCALE_G, MIN_PROGRESS, Templates, activity, features
+from engine.recognition.templates import (
+    LOG_SCALE_G,
+    MIN_PROGRESS,
+    Templates,
+    activity,
+    features,
+    grip_features,
+)
 
 G = 9.81
 AUTO_MIN_MAIN = 3
@@ -208,7 +215,7 @@ class DualBufferRecognizer:
         self._recent = np.empty((BACKDATE_MAX, self.dim))  # the last idle frames (ring), for back-dating
         self._idle_acts = np.empty(AUTO_FRAMES)  # the gate's activity on the last idle frames (ring), for "auto"
         self._n_idle = 0
-        self._moved = False  # a motion has begun since the recognizer was built
+        self._moved = False  # a motion has started (a `start`) since the recognizer was built
         self.reset()
 
     def _gate_start(self, templates: Templates, k: int) -> int:
@@ -232,9 +239,9 @@ class DualBufferRecognizer:
     def _auto_gate(noise: float) -> float:
         return float(min(max(AUTO_K * noise, AUTO_MIN_G), AUTO_MAX_G))
 
-    def _learn_gate(self) -> None:
-        """noise_g="auto": one more idle frame's activity; now and then the gate from them."""
-        self._idle_acts[self._n_idle % AUTO_FRAMES] = self._act
+    def _learn_gate(self, act: float) -> None:
+        """noise_g="auto": one more resting frame's activity; now and then the gate from them."""
+        self._idle_acts[self._n_idle % AUTO_FRAMES] = act
         self._n_idle += 1
         if self._n_idle >= AUTO_MIN_FRAMES and self._n_idle % AUTO_EVERY == 0:
             self.noise_g = self._auto_gate(float(np.percentile(self._idle_acts[: min(self._n_idle, AUTO_FRAMES)], AUTO_QUANTILE)))
@@ -334,20 +341,21 @@ class DualBufferRecognizer:
             return events
         if self.state == IDLE:
             if not valid:
-                self._recent[self._n_recent % len(self._recent)] = x
+                self._recent[self._n_recent % BACKDATE_MAX] = x
                 self._n_recent += 1
                 if self.auto_gate and not self._moved:
-                    self._learn_gate()
+                    self._learn_gate(self._act)
                 return events
             self.state = ACTIVE
-            self._moved = True
+            self.dtw.reset()
             self._g0 = self.gravity.copy()
             self._g0_list = self._g0.tolist()
-            self.dtw.reset()
             # The frames just before the gate opened that were already on their way (see
-            # ONSET_FRACTION) start the motion: replayed now, oldest first.
+            # ONSET_FRACTION) start the motion: replayed now, oldest first. (Measured against the
+            # gravity from before them instead of the current one, which follows a slow rise a
+            # little: phone-punches finals 1-5 points lower, so not kept.)
             m = min(self._n_recent, BACKDATE_MAX)
-            recent = self._recent[(self._n_recent - m + np.arange(m)) % len(self._recent)]
+            recent = self._recent[(self._n_recent - m + np.arange(m)) % BACKDATE_MAX]
             back = self._backdate(activity(recent, self._g0)) if m else 0
             self.onset_frame = self.frame - back
             xs, act = self._xs, self._act
@@ -407,6 +415,11 @@ class DualBufferRecognizer:
         return valid
 
     def _step_active(self, x: np.ndarray, valid: bool, events: list[dict], backdated: bool = False) -> None:
+        if self.auto_gate and not self._moved and self.action is None and self.count >= self.window:
+            # Nothing has ever started and this motion was rejected (or outlasted the buffer
+            # undecided): the sensor's noise crossing a gate set too low (e.g. from quieter
+            # training trials) holds the gate open, so these frames count as rest too.
+            self._learn_gate(self._act)
         self.count += 1
         self.quiet = 0 if valid else self.quiet + 1
         self._peak_act_seen = max(self._peak_act_seen, self._act)
@@ -446,6 +459,9 @@ class DualBufferRecognizer:
                 events.append(self._event("end", self.action_names[self.action], None, reason="complete" if complete else None))
             elif self.pending:
                 events.append(self._event("reject", None, None))
+            if self.action is None and self.auto_gate and not self._moved:
+                for a in self._acts[: min(self.dtw.n, self.window)]:  # as above: it was rest
+                    self._learn_gate(float(a))
             self._begin_motion_state()
             self.state = IDLE
 
@@ -516,6 +532,7 @@ class DualBufferRecognizer:
             if not self.pending and not self._first_decision_due(scores):
                 return
             if ok:
+                self._moved = True
                 self.action = best_action
                 self.start_frame = self.frame
                 events.append(self._event("start", self.action_names[best_action], best_score, late=self.pending))
@@ -634,6 +651,8 @@ class DualBufferRecognizer:
             np.copysign(out, x, out=out)
         elif self.feature == "dynamic":
             np.subtract(x, self._g0, out=out)
+        elif self.feature == "grip":
+            out[:] = grip_features(x[None], self._g0)[0]
         else:
             out[:] = x
         return out
