@@ -4,6 +4,8 @@ onset, across sessions)."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -50,10 +52,18 @@ def test_templates_measure_the_rest_before_the_trials(templates, tmp_path):
     assert Templates.load(path).rest_noise == pytest.approx(templates.rest_noise)
 
 
-def test_an_older_template_file_without_rest_noise_still_loads():
-    shipped = Templates.load("game/assets/templates.npz")  # written before rest_noise existed
-    assert np.isnan(shipped.rest_noise)
-    assert DualBufferRecognizer(shipped).noise_g == db.AUTO_START_G  # the paper's gate until it has seen rest
+def test_an_older_template_file_without_rest_noise_still_loads(templates, tmp_path):
+    path, old = tmp_path / "new.npz", tmp_path / "old.npz"
+    templates.save(path)
+    with np.load(path, allow_pickle=False) as z:
+        keys = {k: z[k] for k in z.files if k != "rest_noise"}
+    with open(old, "wb") as f:
+        np.savez_compressed(f, **keys)
+    loaded = Templates.load(old)
+    assert np.isnan(loaded.rest_noise) and len(loaded) == len(templates)
+    assert DualBufferRecognizer(loaded).noise_g == db.AUTO_START_G  # the paper's gate until it has seen rest
+    shipped = Templates.load(Path(__file__).resolve().parents[3] / "game" / "assets" / "templates.npz")
+    assert np.isnan(shipped.rest_noise)  # synthesized trials hold no rest before the motion
 
 
 @pytest.mark.parametrize("sigma", [0.01, 0.3])
