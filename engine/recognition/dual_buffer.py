@@ -4,8 +4,13 @@ Per 60 Hz frame (`push`):
 - Noise gate (IV-A): a frame is valid when the sum over sensors of |a - g| reaches `noise_g`,
   g being each sensor's gravity, estimated while the sensor is still (and followed slowly
   while the gate is closed; re-estimated from steady readings when a wrong guess, e.g. from
-  a first frame taken mid-motion, would otherwise hold the gate open forever). The first
-  valid frame is the onset; from then on every frame counts, valid or not.
+  a first frame taken mid-motion, would otherwise hold the gate open forever).
+  `noise_g="auto"` (the default; the paper's 1.0 g is `noise_g=1.0`) learns the gate from the
+  sensor's resting noise before the first motion (AUTO_*), a quiet sensor opening at a few
+  tenths of a g, a noisy one higher.
+- Onset: the first valid frame, back-dated to where the motion left the rest (the frames just
+  before it at ONSET_FRACTION of the gate, at most BACKDATE_MAX); from then on every frame
+  counts, valid or not, so the main buffer fills `main` frames after the hand started moving.
 - Main buffer: when it holds `main` frames, the best template gives the first decision: a
   `start` event. `main="auto"` decides as early as 3 frames when the best action leads the
   runner-up clearly, and waits up to 12 frames when it does not.
@@ -19,8 +24,10 @@ Per 60 Hz frame (`push`):
   template must match (closed end).
 - Rejection: a decision needs the best template's score under its threshold (learned from the
   spread of the training trials) and the motion to have reached ENERGY_RATIO of the template's
-  peak activity (a wiggle is not a punch). If not, nothing starts; the decision may still come
-  later in the supplementary buffer, else the motion is `reject`ed when the buffer is full.
+  peak activity over its first ENERGY_FRAMES frames (a wiggle is not a punch). If not, nothing
+  starts; the decision may still come later in the supplementary buffer, else the motion is
+  `reject`ed when the buffer is full. A started motion that ends without ever reaching
+  CALL_OFF_RATIO of its action's peak is called off: `reject` with `called_off`, no `end`.
 - Null signal (IV-C): `null_frames` quiet frames in a row `end` the motion.
 - Beyond the paper: the motion also ends (`reason: "complete"`) once the current action's
   template has been matched past `complete_fraction` of its length and the hand has calmed
