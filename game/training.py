@@ -1,10 +1,13 @@
 """Train your moves: `quickjab train`.
 
 Walks the player through the 13 actions. For each: the boxer shows the action (looping
-animation), then three trials: "get ready" (the hands still, so the trial starts at rest),
+animation), then five trials: "get ready" (the hands still, so the trial starts at rest),
 "GO!" and a recording window of the active source's 60 Hz frames. Then the trials build the
-player's templates (engine.recognition.Templates.from_trials, paper section III), saved in the
-user's data directory where `quickjab play` finds them from then on.
+player's templates (engine.recognition.Templates.from_trials, paper section III) from the 3
+most representative trials of each action (a player's first trials are often warm-ups, and a
+trial can be cut off), saved in the user's data directory where `quickjab play` finds them from
+then on. The "get ready" rest before each trial also tells the recognizer the sensor's resting
+noise (its automatic gate, Templates.rest_noise).
 
 With the keyboard source a key press (any action key, Space or Enter) performs the action being
 trained with the virtual player; `keyboard://?auto=1` (and `--demo`) performs it by itself.
@@ -28,7 +31,8 @@ if TYPE_CHECKING:  # pygame loads only when the screen opens (the CLI imports th
     import pygame
 
 HZ = 60
-TRIALS = 3
+TRIALS = 5
+KEEP = 3  # the most representative trials of each action build its templates
 SHOW_STEPS = 90  # the animation alone before the first trial of an action
 READY_STEPS = 60  # "get ready": the hands held still
 LEAD_IN = 30  # frames of the ready phase kept at the start of a trial (the rest before)
@@ -117,7 +121,7 @@ class Trainer:
         """The player's templates from the recorded trials."""
         from engine.recognition import Templates
 
-        templates = Templates.from_trials(self.recorded)
+        templates = Templates.from_trials(self.recorded, keep=KEEP)
         templates.meta["source"] = "quickjab train"
         templates.meta["left_handed"] = "1" if left_handed else "0"
         return templates
@@ -248,7 +252,7 @@ class TrainingScreen:
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("train", help="Train your moves: record 3 trials of each action, build your templates",
+    p = sub.add_parser("train", help="Train your moves: record 5 trials of each action, build your templates from the 3 most representative",
                        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--source", default=None, help="source URL (default: the first Wiimote, else the keyboard)")
     p.add_argument("--demo", action="store_true", help="the virtual player performs every move by itself")

@@ -6,8 +6,13 @@ are put in the paper's four outcome groups:
   2 unnoticeable switch    -- right in the end, the last switch within 6 frames of the start,
   3 noticeable switch      -- right in the end, switched later than that,
   4 wrong or missed        -- wrong in the end, rejected, or never started.
-plus the first-decision accuracy and the lag of the first decision from the TRUE motion onset
-(the trimmed onset of a trial, the first labelled frame of a stream interval), not the gate.
+plus the first-decision accuracy and the lag of the first decision from the TRUE motion onset,
+not the frame the gate opens: the first frame whose acceleration is ONSET_G (0.3 g) away from
+the rest before the motion (any sensor, |a - rest| per sensor). The rest is the mean of the
+REST_FRAMES frames just before the motion: a trial's first frames (the player starts from the
+guard), the frames before a stream interval's first labelled frame. The search starts at the
+trial's first frame or the interval's first labelled frame; a motion that never gets 0.3 g away
+falls back to its 10 %-of-peak onset (trials) or its first labelled frame (streams).
 
 Two kinds of input: isolated trials (rest padded before and after, as a player starts from
 the guard) and labelled streams (every labelled interval is one motion; starts outside any
@@ -19,15 +24,20 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
+from engine.frames import recording_frames
 from engine.recognition import DualBufferRecognizer, Templates
 from engine.recognition.templates import activity, rest_gravity
+from engine.recording import read_recording
 
 UNNOTICEABLE_FRAMES = 6
 PAD_BEFORE, PAD_AFTER = 20, 40
 CLIP_FRAMES = 24  # the simulated character's punch clip: 0.4 s (0 = never finishes)
+ONSET_G = 0.3  # the true onset: this far (g) from the rest before the motion
+REST_FRAMES = 5  # the rest: the mean of this many frames just before the motion
 EARLY_TOLERANCE = 20  # frames a stream start may precede its labelled interval (1/3 s)
 GROUPS = ("correct", "unnoticeable switch", "noticeable switch", "wrong or missed")
 
@@ -66,6 +76,7 @@ class Summary:
         n = max(len(self.outcomes), 1)
         c = self.counts() / n
         lags = [o.lag for o in self.outcomes if o.lag is not None]
+        started = sum(o.first is not None for o in self.outcomes)
         out = {
             "main": self.main,
             "n": len(self.outcomes),
@@ -73,8 +84,10 @@ class Summary:
             "acceptable": round(float(c[0] + c[1]), 4),
             "final_correct": round(float(c[0] + c[1] + c[2]), 4),
             "first_correct": round(sum(o.first == o.truth for o in self.outcomes) / n, 4),
-            "started": round(sum(o.first is not None for o in self.outcomes) / n, 4),
+            "started": round(started / n, 4),
+            "type": round(sum(o.final == o.truth for o in self.outcomes) / max(started, 1), 4),
             "lag_ms": round(float(np.median(lags)) * 1000 / 60, 1) if lags else None,
+            "lag_p90_ms": round(float(np.percentile(lags, 90)) * 1000 / 60, 1) if lags else None,
         }
         if self.idle_minutes > 0:
             out["false_starts"] = self.false_starts
@@ -82,10 +95,28 @@ class Summary:
         return out
 
 
+def _away_from_rest(frames: np.ndarray, rest: np.ndarray, threshold_g: float = ONSET_G) -> np.ndarray:
+    """Indices of the frames at least `threshold_g` away from `rest` on any sensor."""
+    dev = np.linalg.norm((np.asarray(frames, dtype=np.float64) - rest).reshape(len(frames), -1, 3), axis=2)
+    return np.flatnonzero(dev.max(axis=1) >= threshold_g)
+
+
 def true_onset(trial: np.ndarray, fraction: float = 0.1) -> int:
-    """A trial's motion onset: the first frame whose activity reaches `fraction` of its peak."""
+    """A trial's true onset: the first frame ONSET_G away from the rest (the mean of its first
+    REST_FRAMES frames); else the first frame whose activity reaches `fraction` of its peak."""
+    away = _away_from_rest(trial, rest_gravity(trial, REST_FRAMES))
+    if len(away):
+        return int(away[0])
     act = activity(trial, rest_gravity(trial))
     return int(np.flatnonzero(act >= fraction * max(float(act.max()), 1e-12))[0])
+
+
+def stream_onset(frames: np.ndarray, first: int, end: int) -> int:
+    """A labelled interval's true onset: the first frame in [first, end) ONSET_G away from the
+    mean of the REST_FRAMES frames before `first`; `first` when none is."""
+    rest = np.asarray(frames[max(0, first - REST_FRAMES) : max(first, 1)], dtype=np.float64).mean(axis=0)
+    away = _away_from_rest(frames[first:end], rest)
+    return first + int(away[0]) if len(away) else first
 
 
 def _decisions(events: Iterable[dict]) -> tuple[str | None, str | None, int, int | None]:
@@ -103,6 +134,9 @@ def _decisions(events: Iterable[dict]) -> tuple[str | None, str | None, int, int
             final = e["action"]
             last_np = e["from_frame"]
         elif kind == "end" and first is not None:
+            break
+        elif kind == "reject" and first is not None:
+            final = None  # the start was called off (FORMATS.md): no action in the end
             break
     return first, final, last_np, at
 
@@ -131,13 +165,18 @@ def evaluate_trials(
     templates: Templates,
     tests: Mapping[str, Sequence[np.ndarray]],
     mains: Sequence[int | str],
+    fresh: bool = False,
     **rec_kwargs,
 ) -> list[Summary]:
+    """Trials in session order through one recognizer (which may adapt to the player), or with
+    `fresh` through a recognizer that forgets its adaptation before every trial."""
     out = []
     for main in mains:
         rec = DualBufferRecognizer(templates, main=main, **rec_kwargs)
         s = Summary(main)
         for action, trial in session_order(tests):
+            if fresh:
+                rec.forget_adaptation()
             events, offset = replay_trial(rec, trial)
             first, final, last_np, at = _decisions(events)
             lag = None if at is None else at - (offset + true_onset(trial))
@@ -187,12 +226,19 @@ def replay_stream(rec: DualBufferRecognizer, frames: np.ndarray, clip_frames: in
 
 
 def score_stream(
-    events: Sequence[dict], ivs: Sequence[tuple[str, int, int]], n_frames: int, main: int | str, tolerance: int = EARLY_TOLERANCE
+    events: Sequence[dict],
+    ivs: Sequence[tuple[str, int, int]],
+    n_frames: int,
+    main: int | str,
+    tolerance: int = EARLY_TOLERANCE,
+    frames: np.ndarray | None = None,
 ) -> Summary:
     """Match starts to intervals, in order: each interval takes the first start not yet taken
     inside [first - tolerance, end) (hand-labelled intervals begin after the wind-up the sensor
     already sees, and a start in the last frames of an interval that already has one is the
-    next punch's). Starts outside every (widened) interval are false starts."""
+    next punch's). Starts outside every (widened) interval are false starts. The lag is counted
+    from each interval's true onset (`stream_onset`) when the `frames` are given, else from its
+    first labelled frame."""
     s = Summary(main)
     starts = [e for e in events if e["event"] == "start"]
     used: set[int] = set()
@@ -206,7 +252,8 @@ def score_stream(
         e = starts[k]
         after = [x for x in events if x["frame"] >= e["frame"]]
         first, final, last_np, at = _decisions(after)
-        s.outcomes.append(Outcome(action, first, final, last_np, at - a))
+        onset = a if frames is None else stream_onset(frames, a, b)
+        s.outcomes.append(Outcome(action, first, final, last_np, at - onset))
     labelled = np.zeros(n_frames, dtype=bool)
     for _, a, b in ivs:
         labelled[max(0, a - tolerance) : b] = True
@@ -238,7 +285,7 @@ def evaluate_stream_folds(
         for m, pool in zip(mains, pooled, strict=True):
             rec = DualBufferRecognizer(templates, main=m, **rec_kwargs)
             events = replay_stream(rec, frames[lo:hi], clip_frames)
-            s = score_stream(events, test, hi - lo, m)
+            s = score_stream(events, test, hi - lo, m, frames=frames[lo:hi])
             pool.outcomes += s.outcomes
             pool.false_starts += s.false_starts
             pool.idle_minutes += s.idle_minutes
@@ -258,14 +305,14 @@ def evaluate_stream(
     out = []
     for m in mains:
         rec = DualBufferRecognizer(templates, main=m, **rec_kwargs)
-        out.append(score_stream(replay_stream(rec, frames, clip_frames), ivs, len(frames), m))
+        out.append(score_stream(replay_stream(rec, frames, clip_frames), ivs, len(frames), m, frames=frames))
     return out
 
 
 def format_table(rows: Sequence[dict]) -> str:
-    cols = ["main", "n", *GROUPS, "acceptable", "final_correct", "first_correct", "lag_ms"]
+    cols = ["main", "n", *GROUPS, "acceptable", "final_correct", "first_correct", "lag_ms", "lag_p90_ms"]
     if any("false_starts" in r for r in rows):
-        cols += ["started", "false_starts", "false_starts_per_idle_min"]
+        cols += ["started", "type", "false_starts", "false_starts_per_idle_min"]
     head = " | ".join(cols)
     lines = [head, "-" * len(head)]
     for r in rows:
@@ -299,3 +346,70 @@ def plot(rows_by_title: Mapping[str, Sequence[dict]], path: str) -> None:
     fig.tight_layout()
     fig.savefig(path, dpi=80)
     plt.close(fig)
+
+
+# -- cross-session: phone-punches -----------------------------------------------------------------
+PUNCH_SETS = ("fast", "slow")
+
+
+def punch_files(root: str | Path) -> dict[tuple[str, str], dict[str, Path]]:
+    """{(hand, set): {punch: file}} of `<root>/<hand>_<punch>_<fast|slow>.csv`."""
+    out: dict[tuple[str, str], dict[str, Path]] = {}
+    for f in sorted(Path(root).glob("*_*_*.csv")):
+        hand, punch, kind = f.stem.split("_", 2)
+        if kind in PUNCH_SETS:
+            out.setdefault((hand, kind), {})[punch] = f
+    return out
+
+
+def evaluate_cross_session(
+    train: Mapping[str, tuple[np.ndarray, Sequence[str]]],
+    test: Sequence[tuple[np.ndarray, Sequence[str]]],
+    mains: Sequence[int | str],
+    trials: int = 3,
+    template_kwargs: Mapping | None = None,
+    clip_frames: int = CLIP_FRAMES,
+    **rec_kwargs,
+) -> list[Summary]:
+    """Templates from the first `trials` labelled intervals of each action's training recording
+    (`{action: (frames, labels)}`, each interval cut with its lead-in as `stream_trials` does),
+    then every test recording replayed whole as a stream (a fresh recognizer per recording) and
+    scored with `score_stream`. Pooled over the test recordings."""
+    cut = {}
+    for action, (frames, labels) in train.items():
+        ivs = [iv for iv in intervals(labels) if iv[0] == action][:trials]
+        cut[action] = stream_trials(frames, ivs)[action]
+    templates = Templates.from_trials(cut, **(template_kwargs or {}))
+    pooled = [Summary(m) for m in mains]
+    for frames, labels in test:
+        ivs = intervals(labels)
+        for m, pool in zip(mains, pooled, strict=True):
+            rec = DualBufferRecognizer(templates, main=m, **rec_kwargs)
+            s = score_stream(replay_stream(rec, frames, clip_frames), ivs, len(frames), m, frames=frames)
+            pool.outcomes += s.outcomes
+            pool.false_starts += s.false_starts
+            pool.idle_minutes += s.idle_minutes
+    return pooled
+
+
+def evaluate_phone_punches(root: str | Path, mains: Sequence[int | str], **kwargs) -> dict[str, list[Summary]]:
+    """Per hand, fast -> slow and slow -> fast: templates from the first trials of each punch in
+    one set's files, tested on every punch of the other set's files (see evaluate_cross_session)."""
+    files = punch_files(root)
+    loaded: dict[Path, tuple[np.ndarray, list[str]]] = {}
+
+    def load(f: Path) -> tuple[np.ndarray, list[str]]:
+        if f not in loaded:
+            _, frames, labels = recording_frames(read_recording(f))
+            loaded[f] = (frames, labels)
+        return loaded[f]
+
+    out = {}
+    for hand in sorted({h for h, _ in files}):
+        for src, dst in (("fast", "slow"), ("slow", "fast")):
+            if (hand, src) not in files or (hand, dst) not in files:
+                continue
+            train = {p: load(f) for p, f in files[(hand, src)].items()}
+            test = [load(f) for f in files[(hand, dst)].values()]
+            out[f"phone-punches {hand} {src} -> {dst}"] = evaluate_cross_session(train, test, mains, **kwargs)
+    return out

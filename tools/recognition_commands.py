@@ -29,6 +29,18 @@ def _main_arg(text: str) -> int | str:
     return v
 
 
+def _noise_arg(text: str) -> float | str:
+    if text == "auto":
+        return text
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number of g or 'auto', not {text!r}") from None
+    if not v >= 0:
+        raise argparse.ArgumentTypeError("the noise gate must be >= 0 g")
+    return v
+
+
 def _mains(text: str) -> list[int | str]:
     out: list[int | str] = []
     for part in text.split(","):
@@ -42,7 +54,8 @@ def _mains(text: str) -> list[int | str]:
 
 def _recognizer_args(p: argparse.ArgumentParser, main_default: str = "6") -> None:
     g = p.add_argument_group("recognizer")
-    g.add_argument("--noise-g", type=float, default=1.0, help="noise gate in g (default 1.0; 0.3 for gentle gestures)")
+    g.add_argument("--noise-g", type=_noise_arg, default="auto",
+                   help="noise gate in g, or 'auto' (default): learned from the sensor's resting noise")
     g.add_argument("--supplementary", type=int, default=60, help="supplementary buffer in frames (default 60)")
     g.add_argument("--null-frames", type=int, default=6, help="quiet frames that end a motion (default 6)")
     g.add_argument("--discard-frames", type=int, default=20, help="frames discarded after the character finishes (default 20)")
@@ -90,8 +103,10 @@ def register(sub: argparse._SubParsersAction) -> None:
             "Replay trials or labelled recordings and print, per main-buffer size, the four "
             "outcome groups, first-decision accuracy and lag from the true onset. Inputs: "
             "--templates T.npz with trial dirs or labelled CSVs; or --train TRIALS_DIR; or "
-            "--uwave DIR (per user: templates from day 1 reps 1-3, test days 2-7); or a labelled "
-            "CSV alone with --folds K (templates from the other folds' intervals)."
+            "--uwave DIR (per user: templates from day 1 reps 1-3, test days 2-7); or "
+            "--phone-punches DIR (cross-session, per hand fast -> slow and slow -> fast); or a labelled "
+            "CSV alone with --folds K (templates from the other folds' intervals). The lag is counted "
+            "from the true onset: the first frame 0.3 g away from the rest before the motion."
         ),
     )
     e.add_argument("inputs", nargs="*", metavar="INPUT", help="trial dirs (<root>/<action>/*.csv) or labelled recording CSVs")
@@ -99,6 +114,14 @@ def register(sub: argparse._SubParsersAction) -> None:
     e.add_argument("--train", default=None, metavar="TRIALS_DIR", help="build templates from these trials")
     e.add_argument("--uwave", default=None, metavar="DIR", help="the uWave protocol on DIR/U<n>/gesture<k>/d<day>-r<rep>.csv")
     e.add_argument("--users", default="1-6", help="uWave users (default 1-6)")
+    e.add_argument("--fresh", action="store_true",
+                   help="trials: a fresh recognizer for every trial (forget the adaptation); default: one player's session")
+    e.add_argument("--phone-punches", default=None, metavar="DIR",
+                   help="cross-session: DIR/<hand>_<punch>_<fast|slow>.csv; per hand, templates from the first "
+                        "--trials punches of each kind in one set, tested on every punch of the other set")
+    e.add_argument("--trials", type=int, default=3, help="--phone-punches: training trials per punch (default 3)")
+    e.add_argument("--keep", type=int, default=None,
+                   help="templates: keep each action's KEEP most representative trials (e.g. --trials 5 --keep 3)")
     e.add_argument("--every", type=int, default=1, help="use every k-th test trial (quicker sweeps)")
     e.add_argument("--folds", type=int, default=2, help="labelled CSV without templates: K contiguous folds (default 2)")
     e.add_argument("--mains", type=_mains, default=_mains("1-12"), help="main-buffer sizes (default 1-12; e.g. 6 or 1-12,auto)")
@@ -148,7 +171,7 @@ def cmd_recognize(args: argparse.Namespace) -> int:
 
 def cmd_evaluate(args: argparse.Namespace) -> int:
     kw = _rec_kwargs(args)
-    tk = {k: v for k, v in (("method", args.method), ("feature", args.feature)) if v}
+    tk = {k: v for k, v in (("method", args.method), ("feature", args.feature), ("keep", args.keep)) if v}
     results: dict[str, list[dict]] = {}
     if args.uwave:
         users = [int(u) for u in _mains(args.users)]
@@ -157,13 +180,21 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
             root = Path(args.uwave) / f"U{u}"
             templates = Templates.from_trials(load_trials_dir(root, "d1-r0[1-3].csv"), **tk)
             tests = {a: ts[:: args.every] for a, ts in load_trials_dir(root, "d[2-7]-*.csv").items()}
-            res = ev.evaluate_trials(templates, tests, args.mains, **kw)
+            res = ev.evaluate_trials(templates, tests, args.mains, fresh=args.fresh, **kw)
             if pooled is None:
                 pooled = res
             else:
                 for p, r in zip(pooled, res, strict=True):
                     p.outcomes += r.outcomes
-        results[f"uWave users {args.users}, noise_g {args.noise_g}"] = [s.row() for s in pooled]
+        order = "fresh recognizer per trial" if args.fresh else "session order"
+        results[f"uWave users {args.users}, noise_g {args.noise_g}, {order}"] = [s.row() for s in pooled]
+    if args.phone_punches:
+        res = ev.evaluate_phone_punches(
+            args.phone_punches, args.mains, trials=args.trials, template_kwargs=tk, clip_frames=args.clip_frames, **kw
+        )
+        if not res:
+            raise InputError(f"{args.phone_punches}: no <hand>_<punch>_<fast|slow>.csv recordings")
+        results.update({title: [s.row() for s in summaries] for title, summaries in res.items()})
     templates = Templates.load(args.templates) if args.templates else None
     if args.train:
         templates = Templates.from_trials(load_trials_dir(args.train), **tk)
@@ -173,7 +204,7 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
             if templates is None:
                 raise InputError(f"{inp}: trial directories need --templates or --train")
             tests = {a: ts[:: args.every] for a, ts in load_trials_dir(path).items()}
-            res = ev.evaluate_trials(templates, tests, args.mains, **kw)
+            res = ev.evaluate_trials(templates, tests, args.mains, fresh=args.fresh, **kw)
         else:
             _, frames, labels = recording_frames(read_recording(path))
             if not any(labels):

@@ -4,8 +4,13 @@ Per 60 Hz frame (`push`):
 - Noise gate (IV-A): a frame is valid when the sum over sensors of |a - g| reaches `noise_g`,
   g being each sensor's gravity, estimated while the sensor is still (and followed slowly
   while the gate is closed; re-estimated from steady readings when a wrong guess, e.g. from
-  a first frame taken mid-motion, would otherwise hold the gate open forever). The first
-  valid frame is the onset; from then on every frame counts, valid or not.
+  a first frame taken mid-motion, would otherwise hold the gate open forever).
+  `noise_g="auto"` (the default; the paper's 1.0 g is `noise_g=1.0`) learns the gate from the
+  sensor's resting noise before the first motion (AUTO_*), a quiet sensor opening at a few
+  tenths of a g, a noisy one higher.
+- Onset: the first valid frame, back-dated to where the motion left the rest (the frames just
+  before it at ONSET_FRACTION of the gate, at most BACKDATE_MAX); from then on every frame
+  counts, valid or not, so the main buffer fills `main` frames after the hand started moving.
 - Main buffer: when it holds `main` frames, the best template gives the first decision: a
   `start` event. `main="auto"` decides as early as 3 frames when the best action leads the
   runner-up clearly, and waits up to 12 frames when it does not.
@@ -19,8 +24,10 @@ Per 60 Hz frame (`push`):
   template must match (closed end).
 - Rejection: a decision needs the best template's score under its threshold (learned from the
   spread of the training trials) and the motion to have reached ENERGY_RATIO of the template's
-  peak activity (a wiggle is not a punch). If not, nothing starts; the decision may still come
-  later in the supplementary buffer, else the motion is `reject`ed when the buffer is full.
+  peak activity over its first ENERGY_FRAMES frames (a wiggle is not a punch). If not, nothing
+  starts; the decision may still come later in the supplementary buffer, else the motion is
+  `reject`ed when the buffer is full. A started motion that ends without ever reaching
+  CALL_OFF_RATIO of its action's peak is called off: `reject` with `called_off`, no `end`.
 - Null signal (IV-C): `null_frames` quiet frames in a row `end` the motion.
 - Beyond the paper: the motion also ends (`reason: "complete"`) once the current action's
   template has been matched past `complete_fraction` of its length and the hand has calmed
@@ -51,7 +58,13 @@ import math
 import numpy as np
 
 from engine.recognition.dtw import IncrementalDTW
-from engine.recognition.templates import LOG_SCALE_G, MIN_PROGRESS, Templates, activity, features
+from engine.recognition.templates import (
+    LOG_SCALE_G,
+    Templates,
+    activity,
+    features,
+    grip_features,
+)
 
 G = 9.81
 AUTO_MIN_MAIN = 3
@@ -77,6 +90,47 @@ CLOSED_END = 1e9  # a min_progress that leaves only each template's last positio
 COMPLETE_MIN_LENGTH = 0.6
 COMPLETE_CALM = 0.3  # ... and the activity to have fallen below this fraction of the motion's peak
 ENERGY_RATIO = 0.4
+# ... of the template's peak over its first ENERGY_FRAMES frames from its onset (a third of a
+# second: a punch's first phase). Against the template's whole peak, a full blow's slow wind-up
+# held the start back by 6-12 frames (phone-punches fast -> slow, median lag 233 -> 83 ms).
+# A motion that ends without ever reaching CALL_OFF_RATIO of the whole peak of its action's
+# templates is called off: its start ends as `reject` (FORMATS.md), not `end`.
+ENERGY_FRAMES = 20
+# The open end's constraint while the hand moves: the motion's n frames must reach at least
+# PROGRESS * n frames into a template. 1.25 (templates.MIN_PROGRESS, which the rejection
+# thresholds are still learned with) held a full blow's slow start against a quick punch's
+# template; 0.75 lets it sit earlier. phone-punches finals 93.1 / 93.9 / 94.7 / 91.7 ->
+# 100 / 95.5 / 98.2 / 91.7 %, uWave and the synthesized players unchanged (recog2 measured
+# 1.0 / 1.5 against 1.25 on uWave with the 1.0 g gate; both lost).
+PROGRESS = 0.75
+CALL_OFF_RATIO = 0.25
+# No first decision while the hand has been under the gate for this many frames in a row: the
+# motion is dying down (a twitch, the tail of a move the `complete` end split off); it waits, and
+# is rejected if it ends. Synthesized session 6 -> 0 false starts, phone-punches right slow ->
+# fast final 91.7 -> 93.3 %, the rest unchanged.
+QUIET_DEFER = 2
+# The onset is back-dated from the frame the gate opens to where the motion left the rest: the
+# run of frames just before it whose activity reaches ONSET_FRACTION of the gate, at most
+# BACKDATE_MAX frames (templates are cut by the same rule). The gate decides THAT a motion
+# happens (a noisy sensor needs a high one); the back-dated onset says WHEN it began, so the main
+# buffer fills `main` frames after the hand started moving, not after it got strong.
+ONSET_FRACTION = 0.3
+BACKDATE_MAX = 8
+# noise_g="auto" (the default): the gate is AUTO_K x the resting noise, the AUTO_QUANTILE
+# percentile of the gate's activity at rest, within [AUTO_MIN_G, AUTO_MAX_G]. The rest: the
+# idle frames before the recognizer's first motion (at least AUTO_MIN_FRAMES of them, the last
+# AUTO_FRAMES kept, refreshed every AUTO_EVERY frames); until then the rest before the training
+# trials' motions (Templates.rest_noise), else AUTO_START_G (the paper's gate). Frozen from the
+# first motion on: the idle between punches holds the hand's returns, and learning from them
+# ratcheted the gate up to its cap (phone-punches recall 100 -> 36 %). Kept across reset().
+AUTO_K = 2.0
+AUTO_QUANTILE = 90
+AUTO_MIN_G = 0.3
+AUTO_MAX_G = 2.0
+AUTO_START_G = 1.0
+AUTO_FRAMES = 120
+AUTO_MIN_FRAMES = 30
+AUTO_EVERY = 10
 # A hand whose reading has stopped changing (STILL_DELTA_G per frame) for this many frames has
 # finished its motion even when it rests in a new orientation (the gate, measured against the
 # gravity before the onset, stays open): score whole templates (closed end) from then on.
@@ -105,7 +159,7 @@ class DualBufferRecognizer:
         templates: Templates,
         main: int | str = 6,
         supplementary: int = 60,
-        noise_g: float = 1.0,
+        noise_g: float | str = "auto",
         null_frames: int = 6,
         discard_frames: int = 20,
         *,
@@ -113,7 +167,7 @@ class DualBufferRecognizer:
         auto_lead: float = 0.25,
         reject: bool = True,
         dtw_method: str = "auto",
-        min_progress: float = MIN_PROGRESS,
+        min_progress: float = PROGRESS,
         complete_fraction: float = 0.9,
         complete_frames: int = 2,
         closed_after: int = 1,
@@ -124,6 +178,11 @@ class DualBufferRecognizer:
             raise TypeError("templates must be a Templates")
         if main != "auto" and (not isinstance(main, (int, np.integer)) or main < 1):
             raise ValueError(f"main must be a positive int or 'auto', not {main!r}")
+        self.auto_gate = noise_g == "auto"
+        if self.auto_gate:
+            noise_g = self._auto_gate(templates.rest_noise) if np.isfinite(templates.rest_noise) else AUTO_START_G
+        elif not isinstance(noise_g, (int, float, np.integer, np.floating)):
+            raise ValueError(f"noise_g must be a number of g or 'auto', not {noise_g!r}")
         if supplementary < 1 or null_frames < 1 or discard_frames < 0 or noise_g < 0:
             raise ValueError("supplementary and null_frames must be >= 1, discard_frames and noise_g >= 0")
         self.templates = templates
@@ -154,7 +213,7 @@ class DualBufferRecognizer:
         self.thresholds = templates.thresholds[order] if reject else np.full(len(order), np.inf)
         self.window = max(self.supplementary, AUTO_MAX_MAIN if main == "auto" else int(main))
         cut = [self._cut_at_gate(templates, k) for k in order]
-        self._peak_act = self._template_peaks(templates, order)
+        self._peak_act = self._template_peaks(templates, order)  # (T, 2): early and window peaks
         self.template_lengths = np.array([len(c) for c in cut])
         self.min_progress = float(min_progress)
         self.dtw = IncrementalDTW(cut, method=dtw_method, min_progress=min_progress)
@@ -170,28 +229,60 @@ class DualBufferRecognizer:
         self._base_starts = self._action_starts.copy()
         self._adapted: dict[int, list[tuple[np.ndarray, float]]] = {}
         self._motion = np.empty((max(self.window, self._extend_to), self.dim))  # features since the onset
+        self._acts = np.empty(len(self._motion))  # the gate's activity since the onset
+        self._recent = np.empty((BACKDATE_MAX, self.dim))  # the last idle frames (ring), for back-dating
+        self._idle_acts = np.empty(AUTO_FRAMES)  # the gate's activity on the last idle frames (ring), for "auto"
+        self._n_idle = 0
+        self._moved = False  # a motion has started (a `start`) since the recognizer was built
         self.reset()
 
     def _gate_start(self, templates: Templates, k: int) -> int:
-        """Where this recognizer's gate would open on template k: the start of the run of
+        """Where this recognizer's onset would be on template k: the start of the run of
         above-gate frames that holds the template's trimmed onset (earlier wiggles separated by
         quiet frames are not the motion); the first above-gate frame after the onset when the
-        onset itself is gentler than the gate; the onset when the gate never opens."""
+        onset itself is gentler than the gate; the onset when the gate never opens. Then
+        back-dated as `push` does (`_backdate`)."""
         act = activity(templates.signals[k], templates.gravity[k])
         on = int(templates.onsets[k])
         if act[on] < self.noise_g:
             later = np.flatnonzero(act[on:] >= self.noise_g)
-            return on + int(later[0]) if len(later) else on
+            if not len(later):
+                return on
+            on += int(later[0])
         while on > 0 and act[on - 1] >= self.noise_g:
             on -= 1
-        return on
+        return on - self._backdate(act[max(0, on - BACKDATE_MAX) : on])
+
+    @staticmethod
+    def _auto_gate(noise: float) -> float:
+        return float(min(max(AUTO_K * noise, AUTO_MIN_G), AUTO_MAX_G))
+
+    def _learn_gate(self, act: float) -> None:
+        """noise_g="auto": one more resting frame's activity; now and then the gate from them."""
+        self._idle_acts[self._n_idle % AUTO_FRAMES] = act
+        self._n_idle += 1
+        if self._n_idle >= AUTO_MIN_FRAMES and self._n_idle % AUTO_EVERY == 0:
+            self.noise_g = self._auto_gate(float(np.percentile(self._idle_acts[: min(self._n_idle, AUTO_FRAMES)], AUTO_QUANTILE)))
+
+    def _backdate(self, before: np.ndarray) -> int:
+        """How many of the frames just before the gate opened (activity `before`, oldest first)
+        belong to the motion: the run at the end whose activity reaches ONSET_FRACTION of the gate."""
+        low = np.flatnonzero(before < ONSET_FRACTION * self.noise_g)
+        return len(before) - (int(low[-1]) + 1 if len(low) else 0)
 
     def _template_peaks(self, templates: Templates, order: np.ndarray) -> np.ndarray:
-        """(T,) each template's peak activity within `window` frames of its gate onset."""
+        """(T, 2) each template's peak activity from its onset over its first ENERGY_FRAMES frames
+        (the energy rule of a start) and over `window` frames (a motion that never gets near it
+        is called off)."""
         return np.array([
-            activity(templates.signals[k], templates.gravity[k])[self._gate_start(templates, k) :][: self.window].max()
-            for k in order
+            self._peaks(activity(templates.signals[k], templates.gravity[k])[self._gate_start(templates, k) :]) for k in order
         ])
+
+    def _peaks(self, act: np.ndarray) -> tuple[float, float]:
+        """(early, window) peaks of an activity series from its onset."""
+        if not len(act):
+            return 0.0, 0.0
+        return float(act[:ENERGY_FRAMES].max()), float(act[: self.window].max())
 
     def _cut_at_gate(self, templates: Templates, k: int) -> np.ndarray:
         """Template k from its gate onset, in the recognizer's feature space."""
@@ -211,6 +302,7 @@ class DualBufferRecognizer:
         self._steady = 0
         self._unchanged = 0
         self._queued: list[dict] = []
+        self._n_recent = 0
         self._begin_motion_state()
 
     def _begin_motion_state(self) -> None:
@@ -267,12 +359,30 @@ class DualBufferRecognizer:
             return events
         if self.state == IDLE:
             if not valid:
+                self._recent[self._n_recent % BACKDATE_MAX] = x
+                self._n_recent += 1
+                if self.auto_gate and not self._moved:
+                    self._learn_gate(self._act)
                 return events
             self.state = ACTIVE
-            self.onset_frame = self.frame
+            self.dtw.reset()
             self._g0 = self.gravity.copy()
             self._g0_list = self._g0.tolist()
-            self.dtw.reset()
+            # The frames just before the gate opened that were already on their way (see
+            # ONSET_FRACTION) start the motion: replayed now, oldest first. (Measured against the
+            # gravity from before them instead of the current one, which follows a slow rise a
+            # little: phone-punches finals 1-5 points lower, so not kept.)
+            m = min(self._n_recent, BACKDATE_MAX)
+            recent = self._recent[(self._n_recent - m + np.arange(m)) % BACKDATE_MAX]
+            back = self._backdate(activity(recent, self._g0)) if m else 0
+            self.onset_frame = self.frame - back
+            xs, act = self._xs, self._act
+            for r in recent[m - back :]:
+                self._xs = r.tolist()
+                self._act = float(activity(r[None], self._g0)[0])
+                self._step_active(r, True, events, backdated=True)
+            self._xs, self._act = xs, act
+            self._n_recent = 0
         self._step_active(x, valid, events)
         return events
 
@@ -322,7 +432,12 @@ class DualBufferRecognizer:
             self.gravity += GRAVITY_FOLLOW * (x - self.gravity)
         return valid
 
-    def _step_active(self, x: np.ndarray, valid: bool, events: list[dict]) -> None:
+    def _step_active(self, x: np.ndarray, valid: bool, events: list[dict], backdated: bool = False) -> None:
+        if self.auto_gate and not self._moved and self.action is None and self.count >= self.window:
+            # Nothing has ever started and this motion was rejected (or outlasted the buffer
+            # undecided): the sensor's noise crossing a gate set too low (e.g. from quieter
+            # training trials) holds the gate open, so these frames count as rest too.
+            self._learn_gate(self._act)
         self.count += 1
         self.quiet = 0 if valid else self.quiet + 1
         self._peak_act_seen = max(self._peak_act_seen, self._act)
@@ -334,9 +449,10 @@ class DualBufferRecognizer:
             # anywhere past min_progress * n in a template). Once it is quiet the motion has
             # probably ended, and the whole template must be matched (closed end); so too once
             # the reading has stopped changing.
-            closed = self._unchanged >= UNCHANGED_FRAMES or (not valid and self.quiet >= self.closed_after)
+            closed = not backdated and (self._unchanged >= UNCHANGED_FRAMES or (not valid and self.quiet >= self.closed_after))
             self.dtw.min_progress = CLOSED_END if closed else self.min_progress
             f = self._features(x)
+            self._acts[self.dtw.n] = self._act
             self._motion[self.dtw.n] = f
             scores = self.dtw.push(f)
             if closed and not self._was_closed:
@@ -351,7 +467,9 @@ class DualBufferRecognizer:
             else:
                 self._extended = True
         if self.quiet >= self.null_frames or complete:
-            if self.action is not None:
+            if self.action is not None and self._called_off():
+                events.append(self._event("reject", self.action_names[self.action], None, called_off=True))
+            elif self.action is not None:
                 if self._extended:
                     self._late_switch(self._stop_scores if self._stopped else self.dtw.scores, events)
                 if self.adapt and self.count <= max(self.window, self._extend_to):
@@ -359,8 +477,19 @@ class DualBufferRecognizer:
                 events.append(self._event("end", self.action_names[self.action], None, reason="complete" if complete else None))
             elif self.pending:
                 events.append(self._event("reject", None, None))
+            if self.action is None and self.auto_gate and not self._moved:
+                for a in self._acts[: min(self.dtw.n, self.window)]:  # as above: it was rest
+                    self._learn_gate(float(a))
             self._begin_motion_state()
             self.state = IDLE
+
+    def _called_off(self) -> bool:
+        """A started motion that ended without ever reaching CALL_OFF_RATIO of the peak of any of
+        its action's templates was no such action (a wiggle the early start took for one)."""
+        if not self.reject:
+            return False
+        lo, hi = self._action_starts[self.action], self._action_ends[self.action]
+        return self._peak_act_seen < CALL_OFF_RATIO * float(self._peak_act[lo:hi, 1].min())
 
     def _adapt(self) -> None:
         """A player drifts from the trials the templates came from (uWave: day-1 templates, days
@@ -379,7 +508,7 @@ class DualBufferRecognizer:
         if not best < (1.0 - ADAPT_MARGIN) * other or best > self.thresholds[k]:
             return
         kept = self._adapted.setdefault(self.action, [])
-        kept.append((self._motion[:n].copy(), self._peak_act_seen))
+        kept.append((self._motion[:n].copy(), self._peaks(self._acts[:n])))
         del kept[: -self.adapt]
         self._set_templates()
 
@@ -392,7 +521,7 @@ class DualBufferRecognizer:
         loosest = np.maximum.reduceat(thr, self._base_starts)  # per action (trained sorted by action)
         acts = np.concatenate([acts, new_acts])
         thr = np.concatenate([thr, loosest[new_acts]])
-        peaks = np.concatenate([peaks, [peak for _, _, peak in extra]])
+        peaks = np.concatenate([peaks, [peak for _, _, peak in extra]]) if extra else peaks
         cut = [*cut, *(motion for motion, _, _ in extra)]
         order = np.argsort(acts, kind="stable")
         self._tmpl_action = acts[order]
@@ -415,12 +544,16 @@ class DualBufferRecognizer:
         best = int(np.argmin(scores))
         best_action = int(self._tmpl_action[best])
         best_score = float(scores[best])
-        strong = not self.reject or self._peak_act_seen >= ENERGY_RATIO * self._peak_act[best]
+        strong = not self.reject or self._peak_act_seen >= ENERGY_RATIO * self._peak_act[best, 0]
         ok = strong and best_score <= self.thresholds[best]
         if self.action is None:
             if not self.pending and not self._first_decision_due(scores):
                 return
+            if self.quiet >= QUIET_DEFER and self.count < self.window:
+                self.pending = True  # the motion is dying down: wait, it may have been a twitch
+                return
             if ok:
+                self._moved = True
                 self.action = best_action
                 self.start_frame = self.frame
                 events.append(self._event("start", self.action_names[best_action], best_score, late=self.pending))
@@ -539,6 +672,8 @@ class DualBufferRecognizer:
             np.copysign(out, x, out=out)
         elif self.feature == "dynamic":
             np.subtract(x, self._g0, out=out)
+        elif self.feature == "grip":
+            out[:] = grip_features(x[None], self._g0)[0]
         else:
             out[:] = x
         return out

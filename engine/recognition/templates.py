@@ -20,7 +20,7 @@ Files are plain .npz (no pickles); a corrupt or foreign file raises TemplateFile
 from __future__ import annotations
 
 import os
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -32,7 +32,7 @@ from engine.recognition.dtw import IncrementalDTW, dtw_distance
 FORMAT_VERSION = 1
 METHODS = ("trials", "average", "dba")
 DEFAULT_METHOD = "trials"  # measured: see docs/recognition.md
-FEATURES = ("log", "raw", "dynamic")
+FEATURES = ("log", "raw", "dynamic", "grip")
 DEFAULT_FEATURE = "log"  # measured: see docs/recognition.md
 LOG_SCALE_G = 0.5  # "log" feature: sign(a) * log(1 + |a| / LOG_SCALE_G)
 MIN_PROGRESS = 1.25  # open-end scoring constraint (dtw.IncrementalDTW.min_progress); measured
@@ -42,6 +42,9 @@ LEAD_IN = 4  # frames kept before the trimmed onset (the recognizer re-cuts at i
 REJECT_K = 2.0  # threshold = mean + REJECT_K * std of same-action training scores ...
 REJECT_RATIO = 2.0  # ... and at least REJECT_RATIO * their max (1.5 -> 2.0: uWave +1.6, synth session +12 points; see docs)
 REJECT_FLOOR_G = 0.05  # and never below this (g): identical trials must not reject all noise
+CUT_OFF_FRACTION = 0.5  # representative_trials(): shorter or fainter than this x the median: cut off
+REST_NOISE_QUANTILE = 90  # resting_noise(): this percentile of the resting activity ...
+REST_NOISE_MIN_FRAMES = 6  # ... over at least this many resting frames
 
 
 class TemplateFileError(InputError):
@@ -67,7 +70,8 @@ def features(frames: np.ndarray, gravity: np.ndarray, kind: str) -> np.ndarray:
     """What DTW compares: "raw" is the signal as read (gravity included, so the hand's holding
     posture and its changes count); "log" is raw compressed per axis (a 12 g punch and a 1.5 g
     gesture both keep their shape, and big peaks do not swamp the posture); "dynamic"
-    subtracts the resting gravity estimated before the onset."""
+    subtracts the resting gravity estimated before the onset; "grip" is the same for any way the
+    sensor is held (see grip_features)."""
     if kind == "raw":
         return np.asarray(frames, dtype=np.float64)
     if kind == "log":
@@ -75,7 +79,40 @@ def features(frames: np.ndarray, gravity: np.ndarray, kind: str) -> np.ndarray:
         return np.sign(x) * np.log1p(np.abs(x) / LOG_SCALE_G)
     if kind == "dynamic":
         return np.asarray(frames, dtype=np.float64) - gravity
+    if kind == "grip":
+        return grip_features(frames, gravity)
     raise ValueError(f"feature must be one of {FEATURES}, not {kind!r}")
+
+
+def resting_noise(trials: Iterable[Sequence[np.ndarray]], quantile: float = REST_NOISE_QUANTILE) -> float:
+    """The sensor's resting noise as the gate sees it (g): the `quantile` (%) of the activity
+    against each trial's resting gravity over the frames before its trimmed onset, pooled over
+    all trials; nan when the trials hold fewer than REST_NOISE_MIN_FRAMES such frames."""
+    pre = []
+    for items in trials:
+        for t in items:
+            t = np.asarray(t, dtype=np.float64)
+            act = activity(t, rest_gravity(t))
+            peak = float(act.max())
+            first = int(np.flatnonzero(act >= TRIM_FRACTION * peak)[0]) if peak > 0 else len(t)
+            pre.append(act[REST_FRAMES:first])
+    pre = np.concatenate(pre) if pre else np.array([])
+    return float(np.percentile(pre, quantile)) if len(pre) >= REST_NOISE_MIN_FRAMES else float("nan")
+
+
+def grip_features(frames: np.ndarray, gravity: np.ndarray) -> np.ndarray:
+    """(n, D) per sensor, against the resting gravity g before the motion: the vertical component
+    a . g/|g|, the horizontal magnitude |a - (a . u) u| and the gravity-removed magnitude |a - g|,
+    each log-compressed as "log" is. A sensor turned in the hand (another grip, another resting
+    tilt) turns a and g alike, so these stay the same; the horizontal direction is lost."""
+    a = np.asarray(frames, dtype=np.float64).reshape(len(frames), -1, 3)
+    g = np.asarray(gravity, dtype=np.float64).reshape(1, -1, 3)
+    u = g / np.maximum(np.linalg.norm(g, axis=2, keepdims=True), 1e-9)
+    v = (a * u).sum(axis=2)
+    h = np.linalg.norm(a - v[..., None] * u, axis=2)
+    d = np.linalg.norm(a - g, axis=2)
+    out = np.stack([v, h, d], axis=2).reshape(len(frames), -1)
+    return np.sign(out) * np.log1p(np.abs(out) / LOG_SCALE_G)
 
 
 def trim_rest(trial: np.ndarray, fraction: float = TRIM_FRACTION, lead_in: int = LEAD_IN) -> tuple[np.ndarray, int]:
@@ -143,6 +180,34 @@ def dtw_path(a: np.ndarray, b: np.ndarray) -> list[tuple[int, int]]:
     return path
 
 
+def representative_trials(trials: Sequence[np.ndarray], keep: int = 3, feature: str = DEFAULT_FEATURE) -> list[np.ndarray]:
+    """The `keep` most representative of an action's trials, in their recorded order: trials
+    whose motion is cut off (trimmed length under CUT_OFF_FRACTION of the median) or faint (peak
+    activity under CUT_OFF_FRACTION of the median) go first, then the remaining trials farthest
+    from the others (summed DTW distance of their trimmed motions) until `keep` are left. A
+    player's first trials are often warm-ups and recorded trials can be cut short."""
+    trials = [np.asarray(t, dtype=np.float64) for t in trials]
+    if len(trials) <= keep:
+        return trials
+    motions = []
+    for t in trials:
+        sig, on = trim_rest(t)
+        motions.append(features(sig[on:], rest_gravity(t), feature))
+    lengths = np.array([len(m) for m in motions], dtype=float)
+    peaks = np.array([activity(t, rest_gravity(t)).max() for t in trials])
+    ok = (lengths >= CUT_OFF_FRACTION * np.median(lengths)) & (peaks >= CUT_OFF_FRACTION * np.median(peaks))
+    cand = list(np.flatnonzero(ok)) if ok.sum() >= keep else list(range(len(trials)))
+    d = np.zeros((len(trials), len(trials)))
+    for i in cand:
+        for j in cand:
+            if i < j:
+                d[i, j] = d[j, i] = dtw_distance(motions[i], motions[j])
+    while len(cand) > keep:
+        sub = d[np.ix_(cand, cand)].sum(axis=1)
+        cand.pop(int(np.argmax(sub)))
+    return [trials[i] for i in sorted(cand)]
+
+
 def _medoid(seqs: list[np.ndarray]) -> int:
     if len(seqs) <= 2:
         return int(np.argmax([len(s) for s in seqs])) if len(seqs) == 2 else 0
@@ -208,6 +273,7 @@ class Templates:
     method: str = DEFAULT_METHOD
     feature: str = DEFAULT_FEATURE
     meta: dict[str, str] = field(default_factory=dict)
+    rest_noise: float = float("nan")  # g: the gate's activity at rest before the trials' motions (nan: unknown)
 
     def __post_init__(self) -> None:
         n = len(self.actions)
@@ -241,12 +307,19 @@ class Templates:
         method: str = DEFAULT_METHOD,
         reject_k: float = REJECT_K,
         feature: str = DEFAULT_FEATURE,
+        keep: int | None = None,
     ) -> Templates:
-        """Templates from {action: [trial (n, D), ...]} at 60 Hz in g, gravity included."""
+        """Templates from {action: [trial (n, D), ...]} at 60 Hz in g, gravity included. With
+        `keep`, each action keeps only its `keep` most representative trials
+        (`representative_trials`: e.g. 5 recorded, 3 kept)."""
         if method not in METHODS:
             raise ValueError(f"method must be one of {METHODS}, not {method!r}")
         features(np.zeros((1, 3)), np.zeros(3), feature)  # validates the name
         trials, _ = _check_trials(trials)
+        if keep is not None:
+            if keep < 1:
+                raise ValueError(f"keep must be >= 1, not {keep}")
+            trials = {a: representative_trials(ts, keep, feature) for a, ts in trials.items()}
         actions, signals, gravity, onsets, thresholds = [], [], [], [], []
         for action, items in trials.items():
             trimmed = [trim_rest(t) for t in items]
@@ -278,7 +351,8 @@ class Templates:
                 signals.append(sig)
                 onsets.append(on)
                 gravity.append(g)
-        return cls(actions, signals, np.array(gravity), np.array(onsets), np.array(thresholds), method, feature)
+        noise = resting_noise(trials.values())
+        return cls(actions, signals, np.array(gravity), np.array(onsets), np.array(thresholds), method, feature, rest_noise=noise)
 
     # -- transforms --------------------------------------------------------------------------
     def mirrored(self) -> Templates:
@@ -308,6 +382,7 @@ class Templates:
             self.method,
             self.feature,
             {**self.meta, "mirrored": "1" if self.meta.get("mirrored") != "1" else "0"},
+            self.rest_noise,
         )
 
     # -- files -------------------------------------------------------------------------------
@@ -330,6 +405,7 @@ class Templates:
                 feature=np.array(self.feature),
                 meta_keys=keys,
                 meta_values=vals,
+                rest_noise=np.array(self.rest_noise),
             )
 
     @classmethod
@@ -367,6 +443,7 @@ class Templates:
                 str(data["method"]),
                 str(data["feature"]),
                 meta,
+                float(data["rest_noise"]) if "rest_noise" in data else float("nan"),  # absent in older files
             )
             if t.feature not in FEATURES:
                 raise ValueError(f"unknown feature {t.feature!r}")

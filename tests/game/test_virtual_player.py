@@ -125,8 +125,11 @@ def test_shipped_templates_are_rebuilt_by_the_synth_command(tmp_path):
     out = tmp_path / "t.npz"
     assert main(["synth", "--templates", "-o", str(out)]) == 0
     with np.load(out, allow_pickle=False) as a, np.load(shipped, allow_pickle=False) as b:
-        assert sorted(a.files) == sorted(b.files)
-        for k in a.files:
+        # optional keys added since the shipped file was written; these trials hold no rest
+        newer = set(a.files) - set(b.files)
+        assert newer <= {"rest_noise"} and all(np.isnan(a[k]) for k in newer)
+        assert set(b.files) <= set(a.files)
+        for k in b.files:
             if a[k].dtype.kind == "f":
                 assert np.allclose(a[k], b[k], rtol=0, atol=1e-9), k
             else:

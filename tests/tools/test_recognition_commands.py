@@ -92,3 +92,39 @@ def test_stream_scoring_matches_starts_to_intervals_in_order():
     assert [o.first for o in s.outcomes] == ["jab", "hook", None]
     assert s.false_starts == 1 and s.idle_minutes > 0.9
     assert s.row()["started"] == round(2 / 3, 4)
+
+
+def test_true_onset_is_the_first_frame_0_3_g_from_the_rest_before():
+    from tools.evaluate_recognition import stream_onset, true_onset
+
+    ramp = np.tile(G, (20, 1))
+    ramp[:, 1] += np.arange(20) * 0.05  # 0.3 g away at frame 6 of the ramp
+    trial = np.vstack([rest(10), ramp, rest(5) + [0.0, 1.0, 0.0]])
+    assert true_onset(trial) == 10 + 6
+    # a stream interval labelled from frame 10: the rest is the mean of the 5 frames before it
+    assert stream_onset(trial, 10, len(trial)) == 16
+    assert stream_onset(trial, 17, len(trial)) == 20  # rest before 17 = frames 12-16 (0.2 g): 0.5 g at 20
+    assert stream_onset(rest(30), 10, 30) == 10  # never 0.3 g away: the first labelled frame
+
+
+def test_evaluate_prints_lag_median_and_p90_and_accepts_auto(tmp_path, trials_dir, capsys):
+    assert main(["evaluate", "--train", str(trials_dir), str(trials_dir), "--mains", "6", "--noise-g", "auto", "--json"]) == 0
+    row = json.loads(capsys.readouterr().out.splitlines()[-1])
+    assert row["n"] == 6 and row["final_correct"] == 1.0
+    assert row["lag_ms"] is not None and row["lag_p90_ms"] >= row["lag_ms"]
+    with pytest.raises(SystemExit) as bad:
+        main(["evaluate", "--train", str(trials_dir), str(trials_dir), "--mains", "6", "--noise-g", "loud"])
+    assert bad.value.code == 2
+
+
+def test_evaluate_phone_punches_cross_session(capsys):
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[2].parent / "shared" / "data" / "phone-punches"
+    if not root.is_dir():
+        pytest.skip("../shared/data/phone-punches is not here")
+    assert main(["evaluate", "--phone-punches", str(root), "--mains", "6", "--json"]) == 0
+    rows = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
+    assert [r["set"] for r in rows] == [f"phone-punches {h} {a} -> {b}" for h in ("left", "right") for a, b in (("fast", "slow"), ("slow", "fast"))]
+    for r in rows:
+        assert r["n"] >= 50 and r["started"] >= 0.9 and r["final_correct"] >= 0.85 and r["lag_ms"] <= 150
