@@ -191,3 +191,39 @@ def test_default_sources_are_two_wiimotes_else_the_keyboard_halves() -> None:
     assert urls == ["serial:///dev/ttyACM0", "keyboard://?seed=1"]  # a lone keyboard player keeps it all
     with pytest.raises(InputError):
         source_urls("serial:///dev/ttyACM0", "serial:///dev/ttyACM0", demo=False, seed=0)
+
+
+def test_train_profile_saves_beside_the_default_set_and_play_uses_it(tmp_path, capsys) -> None:
+    from game.cli import main
+    from game.userdata import profile_templates_path, user_templates_path
+
+    assert main(["train", "--headless", "--demo", "--source", "keyboard://?seed=3", "--actions", "straight_r",
+                 "--size", "640x360", "--profile", "ana"]) == 0
+    assert profile_templates_path("ana").exists() and not user_templates_path().exists()
+    s = make_session(["keyboard://?seed=1", "keyboard://?seed=2"], render=False)
+    assert len(s.seats[0].templates) > 1  # without profiles: the default (shipped) set
+    from game.two_player import seat_templates
+
+    pygame.init()
+    clock = VirtualClock()
+    sources = [open_source(u, clock=clock.seconds) for u in ("keyboard://?seed=1", "keyboard://?seed=2")]
+    s = TwoPlayerSession(sources, SessionConfig(size=SIZE, sound=False, render=False), clock=clock,
+                         templates=(None, seat_templates("ana", None)[0]))
+    assert s.seats[1].templates.action_names == ["straight_r"]  # player 2 plays with ana's set
+    assert len(s.seats[0].templates) > 1
+
+
+def test_two_player_bad_input_is_one_line_and_exit_2(capsys) -> None:
+    from game.cli import main
+
+    assert main(["play", "--players", "2", "--headless", "--frames", "1", "--source", "replay://x.csv",
+                 "--source2", "replay://x.csv"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "same device" in err[0]
+    assert main(["play", "--players", "2", "--headless", "--frames", "1", "--source", "keyboard://",
+                 "--source2", "keyboard://", "--profile", "../../etc"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--profile" in err[0]
+    assert main(["play", "--players", "2", "--headless", "--frames", "1", "--source", "keyboard://?keys=middle",
+                 "--source2", "keyboard://"]) == 2
+    assert "keys must be one of" in capsys.readouterr().err
