@@ -163,12 +163,13 @@ def make_naive(session) -> None:
 def one_run(mode: str, args: argparse.Namespace, size: tuple[int, int]):
     from tools.scripted_match import build_session, build_two_player_session
 
-    render = mode != "naive"  # the naive peer changes recognition and physics only
-    if getattr(args, "players", 1) == 2:
+    render = mode not in ("naive", "one_player")  # the peers are compared on the simulation only
+    if getattr(args, "players", 1) == 2 and mode != "one_player":
         s = build_two_player_session(seed=args.seed, low_power=mode == "low_power", render=render, size=size,
                                      templates=args.templates)
     else:
-        s = build_session(seed=args.seed, low_power=mode == "low_power", render=render, size=size,
+        low_power = mode == "low_power" or (mode == "one_player" and args.low_power and not args.all_modes)
+        s = build_session(seed=args.seed, low_power=low_power, render=render, size=size,
                           templates=args.templates, graph=args.graph)
     if mode == "naive":
         make_naive(s)
@@ -259,6 +260,8 @@ def run(args: argparse.Namespace) -> int:
     modes = ["full", "low_power"] if args.all_modes else ["low_power" if args.low_power else "full"]
     if not args.no_naive:
         modes.append("naive")
+    if getattr(args, "players", 1) == 2 and not args.no_naive:
+        modes.append("one_player")  # the one-player match as shipped: what the second player adds
     configs = {m: measure(m, args, size) for m in modes}
     out: dict = {"players": getattr(args, "players", 1), "steps": args.steps, "seed": args.seed, "size": list(size), "budget_ms": BUDGET_MS,
                  "clock": "virtual (stage timings real: wall perf_counter_ns and thread CPU time)",
@@ -266,6 +269,9 @@ def run(args: argparse.Namespace) -> int:
     if "naive" in configs:
         ref = configs["full" if "full" in configs else "low_power"]
         out["naive_over_game"] = naive_ratios(configs["naive"], ref)
+    if "one_player" in configs:
+        out["two_over_one_player"] = naive_ratios(configs["full" if "full" in configs else "low_power"],
+                                                  configs["one_player"])
     if args.realtime_seconds > 0:
         out["realtime"] = realtime(args, size, low_power=args.low_power and not args.all_modes)
     out["targets"] = targets(configs, getattr(args, "players", 1))
@@ -299,7 +305,7 @@ def targets(configs: dict, players: int = 1) -> dict:
     out = {}
     sim_target = SIM_TARGET_P99_MS_TWO_PLAYERS if players == 2 else SIM_TARGET_P99_MS
     for mode, c in configs.items():
-        if mode == "naive":
+        if mode in ("naive", "one_player"):
             continue
         out[f"{mode}_sim_p99_le_{sim_target}ms"] = c["sim_per_step"]["least"]["p99"] <= sim_target
         r = next((v for k, v in c["stages"].items() if k.startswith("render")), None)
@@ -333,6 +339,10 @@ def format_report(out: dict) -> str:
     if "naive_over_game" in out:
         r = out["naive_over_game"]
         lines += ["", "naive peer / game, same run (least-disturbed): " + "; ".join(
+            f"{name} mean {r[name]['mean'] or 0:.1f}x, p99 {r[name]['p99'] or 0:.1f}x" for name in r)]
+    if "two_over_one_player" in out:
+        r = out["two_over_one_player"]
+        lines += ["two players / one player, same run (least-disturbed): " + "; ".join(
             f"{name} mean {r[name]['mean'] or 0:.1f}x, p99 {r[name]['p99'] or 0:.1f}x" for name in r)]
     if "realtime" in out:
         rt = out["realtime"]
