@@ -375,8 +375,9 @@ def source_urls(url1: str | None, url2: str | None, demo: bool, seed: int,
                 elif u is None:
                     urls[i] = "keyboard://"
                     notes.append(f"player {i + 1}: no Wiimote found, playing from the keyboard")
-                else:
-                    raise InputError(f"player {i + 1}: {u}: no Wiimote left for this player (two are needed)")
+                elif any(x.startswith("wiimote:///") for x in urls):
+                    raise InputError(f"player {i + 1}: {u}: only one Wiimote found; each player needs their own")
+                # else none at all: opening wiimote:// says so, with the pairing help
     if urls[0] == urls[1] and not urls[0].startswith("keyboard://"):
         raise InputError(f"--source and --source2 are the same device ({urls[0]}): each player needs their own")
     keyboards = [i for i, u in enumerate(urls) if u.startswith("keyboard://")]

@@ -191,6 +191,8 @@ def test_default_sources_are_two_wiimotes_else_the_keyboard_halves() -> None:
     assert urls == ["serial:///dev/ttyACM0", "keyboard://?seed=1"]  # a lone keyboard player keeps it all
     with pytest.raises(InputError):
         source_urls("serial:///dev/ttyACM0", "serial:///dev/ttyACM0", demo=False, seed=0)
+    with pytest.raises(InputError, match="only one Wiimote"):  # not the same remote twice
+        source_urls("wiimote://", "wiimote://", demo=False, seed=0, wiimotes=lambda: ["/dev/hidraw3"])
 
 
 def test_train_profile_saves_beside_the_default_set_and_play_uses_it(tmp_path, capsys) -> None:
