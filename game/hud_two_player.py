@@ -97,7 +97,8 @@ class TwoPlayerHud(Hud):
 
     def _centre_two(self, surf: pygame.Surface, st: HudState, u: float) -> None:
         if st.phase != "over":
-            self._centre(surf, st, u)
+            if not (st.paused and self.second.disconnected):  # the overlay says why, not PAUSED
+                self._centre(surf, st, u)
             return
         w, h = surf.get_size()
         title = "DRAW" if st.winner is None else f"{st.result} - {st.names[st.winner]} WINS"

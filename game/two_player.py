@@ -324,8 +324,7 @@ class TwoPlayerSession(Session):
         h.phase, h.count, h.down = m.phase, m.count, m.down
         h.knockdowns = list(m.knockdowns)
         h.winner, h.result, h.paused = m.winner, m.result, m.paused
-        for seat in self.seats:
-            seat.hud.source_url = f"{NAMES[seat.index]} {seat.source.url}"
+        for seat in self.seats:  # (the source line's URL is set once, at the seat's making)
             seat.hud.source_state = seat.source.state.value
             seat.hud.battery = seat.source.battery
         self.seats[1].hud.tick()
