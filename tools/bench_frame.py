@@ -163,7 +163,7 @@ def make_naive(session) -> None:
 def one_run(mode: str, args: argparse.Namespace, size: tuple[int, int]):
     from tools.scripted_match import build_session, build_two_player_session
 
-    render = mode not in ("naive", "one_player")  # the peers are compared on the simulation only
+    render = mode != "naive"  # the naive peer changes recognition and physics only
     if getattr(args, "players", 1) == 2 and mode != "one_player":
         s = build_two_player_session(seed=args.seed, low_power=mode == "low_power", render=render, size=size,
                                      templates=args.templates)
