@@ -229,3 +229,22 @@ def test_two_player_bad_input_is_one_line_and_exit_2(capsys) -> None:
     assert main(["play", "--players", "2", "--headless", "--frames", "1", "--source", "keyboard://?keys=middle",
                  "--source2", "keyboard://"]) == 2
     assert "keys must be one of" in capsys.readouterr().err
+
+
+def test_the_side_on_camera_keeps_player_one_on_the_left_from_every_side() -> None:
+    from game.camera import SIDE_ON_HEADINGS, side_on_camera, side_on_heading
+
+    for deg in range(0, 360, 15):
+        phi = math.radians(deg)
+        d = np.array([math.sin(phi), math.cos(phi)])
+        p1, p2 = -0.6 * d, 0.6 * d
+        k = side_on_heading(p1, p2)
+        assert 0 <= k < SIDE_ON_HEADINGS
+        cam = side_on_camera((1280, 720), k)
+        xy, _ = cam.project(np.array([[p1[0], 1.0, p1[1]], [p2[0], 1.0, p2[1]]]))
+        assert xy[0, 0] < xy[1, 0] - 150  # side by side, player 1 on the left
+    # hysteresis: a line 30 degrees round from view 0 keeps it; 35 degrees cuts to view 1
+    line = lambda deg: (np.zeros(2), np.array([math.sin(math.radians(deg)), math.cos(math.radians(deg))]))  # noqa: E731
+    assert side_on_heading(*line(30), current=0) == 0
+    assert side_on_heading(*line(35), current=0) == 1
+    assert side_on_heading(*line(30)) == 1  # without a current view: the nearest
