@@ -51,8 +51,9 @@ class Camera:
         return self.focal / np.maximum(depth, 1e-3)
 
 
-# Two players (play --players 2): from the side of the ring, level with the boxers' chests, so
-# the two stand left (player 1) and right (player 2) in profile and neither hides the other.
+# Two players (play --players 2): from the side of the ring, raised so the near ropes pass
+# below the boxers' feet; the two stand left (player 1) and right (player 2) in profile and
+# neither hides the other.
 SIDE_ON_EYE = (5.6, 2.9, -0.5)
 SIDE_ON_TARGET = (0.0, 0.95, 0.0)
 

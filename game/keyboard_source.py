@@ -8,9 +8,9 @@ noise): game.virtual_player.VirtualPlayerStream does the synthesis. A press duri
 cuts it and starts the new one, as a player changing their mind would.
 
 URL options: `keyboard://?profile=novice&seed=3` (virtual player profile, noise seed),
-`keyboard://?auto=1` performs random actions by itself, `keyboard://?keys=left` (or `right`)
-answers only that half of the keyboard (two players on one keyboard: `play --players 2`). (`play --demo` drives the source from
-the Interaction Graph instead: see game.session.)
+`keyboard://?auto=1` performs random actions by itself. (`play --demo` drives the source from
+the Interaction Graph instead: see game.session.) `keyboard://?keys=left` (or `right`) answers
+only that half of the keyboard: two players on one keyboard (`play --players 2`).
 """
 
 from __future__ import annotations
