@@ -57,7 +57,7 @@ from game.session import (
     load_templates,
 )
 
-# Two recognizers, two sources, two resamplers: those stages get twice the one-player budget
+# Two recognizers, two sources, two resamplers: those stages get more than the one-player budget
 TWO_PLAYER_BUDGETS_MS = {**STAGE_BUDGETS_MS, "input": 0.40, "frames": 0.20, "recognize": 2.00}
 NAMES = ("P1", "P2")
 PILOT_PAUSE_STEPS = 12  # the pilot's hands come back to rest before its next motion
