@@ -49,3 +49,42 @@ class Camera:
     def scale_at(self, depth: np.ndarray | float) -> np.ndarray | float:
         """Pixels per metre at a depth."""
         return self.focal / np.maximum(depth, 1e-3)
+
+
+# Two players (play --players 2): from the side of the ring, raised so the near ropes pass
+# below the boxers' feet; the two stand left (player 1) and right (player 2) in profile and
+# neither hides the other.
+SIDE_ON_EYE = (5.6, 2.9, -0.5)
+SIDE_ON_TARGET = (0.0, 0.95, 0.0)
+
+
+SIDE_ON_HEADINGS = 8  # the side-on camera cuts between 8 views around the ring, 45 degrees apart
+SIDE_ON_HYSTERESIS_DEG = 10.0  # past the half-way line by this much before it cuts
+
+
+def side_on_camera(size: tuple[int, int], heading: int = 0) -> Camera:
+    """The camera of a two-player match: the ring seen side-on, player 1 on the left, for
+    boxers whose line (player 1 to player 2) points `heading` x 45 degrees from +z."""
+    phi = 2.0 * np.pi * heading / SIDE_ON_HEADINGS
+    c, s = np.cos(phi), np.sin(phi)
+
+    def turn(p):  # about the vertical axis: +z goes to (sin phi, 0, cos phi)
+        return (p[0] * c + p[2] * s, p[1], -p[0] * s + p[2] * c)
+
+    return Camera(size, eye=turn(SIDE_ON_EYE), target=turn(SIDE_ON_TARGET))
+
+
+def side_on_heading(p1: np.ndarray, p2: np.ndarray, current: int | None = None) -> int:
+    """The view (0..7) that sees the line from p1 to p2 (world x, z) side-on. Keeps `current`
+    until the line is SIDE_ON_HYSTERESIS_DEG past the half-way mark to the next view, so two
+    boxers circling on the boundary do not make the camera flicker between two views."""
+    dx, dz = float(p2[0] - p1[0]), float(p2[1] - p1[1])
+    if dx * dx + dz * dz < 1e-6:
+        return 0 if current is None else current
+    step = 360.0 / SIDE_ON_HEADINGS
+    phi = np.degrees(np.arctan2(dx, dz))
+    if current is not None:
+        off = (phi - current * step + 180.0) % 360.0 - 180.0
+        if abs(off) < step / 2 + SIDE_ON_HYSTERESIS_DEG:
+            return current
+    return int(round(phi / step)) % SIDE_ON_HEADINGS

@@ -9,7 +9,8 @@ cuts it and starts the new one, as a player changing their mind would.
 
 URL options: `keyboard://?profile=novice&seed=3` (virtual player profile, noise seed),
 `keyboard://?auto=1` performs random actions by itself. (`play --demo` drives the source from
-the Interaction Graph instead: see game.session.)
+the Interaction Graph instead: see game.session.) `keyboard://?keys=left` (or `right`) answers
+only that half of the keyboard: two players on one keyboard (`play --players 2`).
 """
 
 from __future__ import annotations
@@ -37,7 +38,25 @@ KEYMAP: dict[str, str] = {
     "up": "step_forward", "down": "step_back", "left": "step_left", "right": "step_right",
 }  # fmt: skip
 
-KEY_LABELS = {"space": "Space", "up": "Up", "down": "Down", "left": "Left", "right": "Right"}
+# Two players on one keyboard: one half each (play --players 2). The left player's hands on the
+# top and home rows, footwork on the bottom row; the right player's mirror them, footwork on the
+# arrows; each blocks with their shift key.
+KEYMAP_LEFT: dict[str, str] = {
+    "q": "straight_l", "w": "hook_l", "e": "uppercut_l", "r": "parry_l",
+    "a": "straight_r", "s": "hook_r", "d": "uppercut_r", "f": "parry_r",
+    "left shift": "block",
+    "c": "step_forward", "x": "step_back", "z": "step_left", "v": "step_right",
+}  # fmt: skip
+KEYMAP_RIGHT: dict[str, str] = {
+    "p": "straight_r", "o": "hook_r", "i": "uppercut_r", "u": "parry_r",
+    ";": "straight_l", "l": "hook_l", "k": "uppercut_l", "j": "parry_l",
+    "right shift": "block",
+    "up": "step_forward", "down": "step_back", "left": "step_left", "right": "step_right",
+}  # fmt: skip
+KEYMAPS = {"all": KEYMAP, "left": KEYMAP_LEFT, "right": KEYMAP_RIGHT}
+
+KEY_LABELS = {"space": "Space", "up": "Up", "down": "Down", "left": "Left", "right": "Right",
+              "left shift": "LShift", "right shift": "RShift"}
 
 # The attract mode picks among these (weights: mostly punches, some defence and footwork)
 AUTO_ACTIONS = ("straight_l", "straight_r", "hook_l", "hook_r", "uppercut_l", "uppercut_r",
@@ -46,16 +65,16 @@ AUTO_WEIGHTS = np.array([4, 4, 3, 3, 2, 2, 1, 1, 1, 3, 1, 1, 1], dtype=np.float6
 AUTO_P = AUTO_WEIGHTS / AUTO_WEIGHTS.sum()
 
 
-def key_help() -> list[tuple[str, str]]:
+def key_help(keymap: dict[str, str] | None = None) -> list[tuple[str, str]]:
     """(key label, action) pairs in the order the HUD shows them."""
-    return [(KEY_LABELS.get(k, k.upper()), a) for k, a in KEYMAP.items()]
+    return [(KEY_LABELS.get(k, k.upper()), a) for k, a in (keymap or KEYMAP).items()]
 
 
 class KeyboardSource(Source):
     """Samples synthesized from key presses. `press(action)` is what a key does."""
 
     def __init__(self, url: str, clock: Clock, lib: dict, profile: str = "experienced", seed: int = 0,
-                 auto: bool = False):
+                 auto: bool = False, keys: str = "all"):
         super().__init__(url=url, sensors=2, clock=clock, state=SourceState.CONNECTED,
                          rate_hz=float(HZ), description="keyboard (virtual player)")
         from game.virtual_player import VirtualPlayerStream  # the motion helper's module
@@ -69,6 +88,7 @@ class KeyboardSource(Source):
         self._next_t: float | None = None
         self._auto_wait = 0
         self.pressed: list[str] = []  # actions pressed, for tests and the HUD
+        self.keymap = KEYMAPS[keys]  # the whole keyboard, or one half of it (two players)
 
     def press(self, action: str) -> None:
         """Start performing `action` from the next sample on (cutting one under way)."""
@@ -79,7 +99,7 @@ class KeyboardSource(Source):
 
     def press_key(self, key_name: str) -> str | None:
         """A key by its pygame name; returns the action it pressed, or None for other keys."""
-        action = KEYMAP.get(key_name)
+        action = self.keymap.get(key_name)
         if action is not None:
             self.press(action)
         return action
@@ -138,7 +158,10 @@ def open_keyboard(url: str, clock: Clock) -> KeyboardSource:
     if profile not in PROFILES:
         raise SourceError(f"{url}: profile must be one of {', '.join(PROFILES)}")
     auto = params.get("auto", "0").lower() in ("1", "true", "yes", "on")
-    return KeyboardSource(url, clock, load_library(), profile=profile, seed=seed, auto=auto)
+    keys = params.get("keys", "all")
+    if keys not in KEYMAPS:
+        raise SourceError(f"{url}: keys must be one of {', '.join(KEYMAPS)}")
+    return KeyboardSource(url, clock, load_library(), profile=profile, seed=seed, auto=auto, keys=keys)
 
 
 register_scheme("keyboard", open_keyboard)

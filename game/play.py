@@ -54,6 +54,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--left-handed", action="store_true", help="Wiimote in the left hand: mirror the templates (your own trained set is used as it is)")
     p.add_argument("--budget", action="store_true", help="show the frame-budget overlay from the start (F3 toggles)")
     p.add_argument("--no-sound", action="store_true", help="no sound")
+    p.add_argument("--players", type=int, choices=(1, 2), default=1, help="2: a local match between two people, a controller each (game.two_player)")
+    p.add_argument("--source2", default=None, help="player 2's source URL with --players 2 (default: the second Wiimote found, else the keyboard's right half)")
+    p.add_argument("--profile", default=None, metavar="NAME", help="play with the templates `quickjab train --profile NAME` saved (default: your default set)")
+    p.add_argument("--profile2", default=None, metavar="NAME", help="player 2's profile with --players 2")
     p.set_defaults(func=run)
 
 
@@ -86,6 +90,10 @@ def open_player_source(url: str | None, demo: bool, seed: int, clock) -> tuple[o
 
 
 def run(args: argparse.Namespace) -> int:
+    if getattr(args, "players", 1) == 2:
+        from game.two_player import run_match
+
+        return run_match(args)
     size = parse_size(args.size)
     if args.frames is not None and args.frames < 1:
         raise InputError("--frames must be at least 1")
@@ -97,6 +105,12 @@ def run(args: argparse.Namespace) -> int:
     from engine.trace import write_chrome_trace
     from game.session import Session, SessionConfig
 
+    if getattr(args, "profile", None) is not None and args.templates is None:
+        from game.two_player import seat_templates
+
+        args.templates, note = seat_templates(args.profile, None)
+        if note:
+            print(f"quickjab play: {note}", file=sys.stderr)
     clock = VirtualClock() if args.headless or args.virtual_clock else RealClock()
     source, fallback = open_player_source(args.source, args.demo, args.seed, clock.seconds)
     if fallback:

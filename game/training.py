@@ -259,6 +259,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--left-handed", action="store_true", help="mirror the animations for a left-handed player")
     p.add_argument("--actions", default=None, help="comma-separated subset of actions (default: all 13)")
     p.add_argument("-o", "--output", default=None, help="where to save the templates (default: your data directory)")
+    p.add_argument("--profile", default=None, metavar="NAME", help="save as this player's templates (`play --profile NAME`; default: your default set)")
     p.add_argument("--headless", action="store_true", help="no window: SDL dummy driver, virtual clock")
     p.add_argument("--frames", type=int, default=None, help="stop after N rendered frames")
     p.add_argument("--screenshot", metavar="PNG", help="save the last frame to this PNG")
@@ -286,7 +287,7 @@ def run(args: argparse.Namespace) -> int:
     from engine.clock import RealClock, VirtualClock
     from engine.frames import FrameResampler
     from engine.loop import FixedStepLoop
-    from game.userdata import user_templates_path
+    from game.userdata import profile_templates_path, user_templates_path
 
     clock = VirtualClock() if args.headless else RealClock()
     source, fallback = open_player_source(args.source, False, args.seed, clock.seconds)
@@ -304,7 +305,8 @@ def run(args: argparse.Namespace) -> int:
     resampler = FrameResampler(sensors=2)
     t0 = clock.seconds()
     state = {"frame": None}
-    output = Path(args.output) if args.output else user_templates_path()
+    output = Path(args.output) if args.output else (
+        profile_templates_path(args.profile) if getattr(args, "profile", None) else user_templates_path())
     loop = FixedStepLoop(clock)
 
     def perform() -> None:

@@ -17,3 +17,20 @@ def data_dir() -> Path:
 def user_templates_path() -> Path:
     """The templates `Train your moves` saves and `play` prefers."""
     return data_dir() / TEMPLATES_NAME
+
+
+DEFAULT_PROFILE = "default"
+
+
+def profile_templates_path(profile: str | None = None) -> Path:
+    """The templates of a named player (`train --profile NAME`, `play --profile NAME`). The
+    default profile is the file `train` has always saved, so existing sets keep working."""
+    import re
+
+    from engine.errors import InputError
+
+    if profile is None or profile == DEFAULT_PROFILE:
+        return user_templates_path()
+    if not re.fullmatch(r"[A-Za-z0-9][A-Za-z0-9_-]{0,39}", profile):
+        raise InputError(f"--profile {profile!r}: letters, digits, _ and - only (up to 40)")
+    return data_dir() / "profiles" / f"{profile}.npz"

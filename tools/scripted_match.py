@@ -62,3 +62,26 @@ def build_session(seed: int = 0, low_power: bool = False, render: bool = True,
     cfg = SessionConfig(seed=seed, size=size, low_power=low_power, demo=True, sound=False, render=render,
                         templates=templates if templates is not None else default_templates(), graph=graph)
     return Session(source, cfg, clock=clock)
+
+
+def build_two_player_session(seed: int = 0, low_power: bool = False, render: bool = True,
+                             size: tuple[int, int] = (1280, 720), templates: str | Path | None = None, clock=None):
+    """A two-player match (game.two_player) on a VirtualClock (or the clock given): two keyboard
+    sources, each a virtual player pressing moves on its half of the keyboard (the demo's
+    pilots), two real recognizers with the same templates. `session.loop.run(steps=N)` plays."""
+    headless_env()
+    import pygame
+
+    import game.keyboard_source  # noqa: F401 - registers keyboard://
+    from engine.clock import VirtualClock
+    from engine.sensors import open_source
+    from game.session import SessionConfig
+    from game.two_player import TwoPlayerSession, source_urls
+
+    pygame.init()
+    clock = clock if clock is not None else VirtualClock()
+    urls, _ = source_urls(None, None, demo=True, seed=seed)
+    sources = [open_source(u, clock=clock.seconds) for u in urls]
+    tmpl = templates if templates is not None else default_templates()
+    cfg = SessionConfig(seed=seed, size=size, low_power=low_power, demo=True, sound=False, render=render)
+    return TwoPlayerSession(sources, cfg, clock=clock, templates=(tmpl, tmpl))

@@ -1,0 +1,107 @@
+"""The two-player HUD: the one-player HUD's parts, with a panel per player.
+
+Player 1 keeps the one-player places (health bar, source line and recognition panel on the
+left); player 2 gets the mirror image on the right. Two keyboard players see their half of the
+keyboard under their own panel. The disconnected overlay names the player whose controller
+was lost; the result names the winner (P1 / P2).
+"""
+
+from __future__ import annotations
+
+import pygame
+
+from engine.budget import FrameBudget
+from game.hud import DIM, OK_COLOR, REJECT_COLOR, SWITCH_COLOR, TEXT, Hud, HudState
+
+PANEL_W, PANEL_MARGIN = 330, 16  # the recognition panel's width and margin (game.hud, at 720 p)
+
+
+def compact_keys(keys: list[tuple[str, str]]) -> list[str]:
+    """A player's key legend in two short lines: each punch with its left/right keys, then
+    the block and the footwork (the one-player legend's one key per action is too wide for
+    half a screen)."""
+    by_action = {a: k for k, a in keys}
+    punches = []
+    for base in ("straight", "hook", "uppercut", "parry"):
+        left, right = by_action.get(f"{base}_l"), by_action.get(f"{base}_r")
+        if left or right:
+            punches.append(f"{base} {left or '-'}/{right or '-'}")
+    moves = []
+    if "block" in by_action:
+        moves.append(f"block {by_action['block']}")
+    steps = [f"{by_action[f'step_{d}']}" for d in ("forward", "back", "left", "right") if f"step_{d}" in by_action]
+    if steps:
+        moves.append("step fwd/back/left/right " + " ".join(steps))
+    return ["  ".join(punches) + " (left/right hand)", "   ".join(moves)]
+
+
+class TwoPlayerHud(Hud):
+    """`draw(surf, st, budget)` as the one-player Hud; `second` is player 2's HudState (its
+    recognition and source fields; the match fields come from `st`, player 1's)."""
+
+    def __init__(self, second: HudState) -> None:
+        super().__init__()
+        self.second = second
+
+    def draw(self, surf: pygame.Surface, st: HudState, budget: FrameBudget | None = None) -> None:
+        w, h = surf.get_size()
+        u = h / 720.0
+        two = self.second
+        self._health(surf, st, u)
+        self._clock(surf, st, u)
+        self._source(surf, st, u)
+        self._source_right(surf, two, u)
+        self._recognition(surf, st, u)
+        # player 2's panel: the same drawing on a strip of the screen's right edge, so the
+        # panel sits mirrored at the bottom right
+        strip_w = min(w, int((PANEL_W + 2 * PANEL_MARGIN) * u))
+        self._recognition(surf.subsurface(pygame.Rect(w - strip_w, 0, strip_w, h)), two, u)
+        self._legends(surf, st, two, u)
+        self._centre_two(surf, st, u)
+        if st.show_budget and budget is not None:
+            self._budget(surf, budget, u)
+        lost = next((s for s in (st, two) if s.disconnected), None)
+        if lost is not None:
+            self._disconnected(surf, lost, u)
+
+    def _source_right(self, surf: pygame.Surface, st: HudState, u: float) -> None:
+        """Player 2's source, state and battery under the right health bar, right-aligned."""
+        _, right = self.health_rects(surf.get_size())
+        y = right.bottom + 32 * u
+        state_col = OK_COLOR if st.source_state == "connected" else (
+            SWITCH_COLOR if st.source_state in ("reconnecting", "connecting") else REJECT_COLOR)
+        x = right.right
+        if st.battery is not None:
+            body = pygame.Rect(0, int(y + 2 * u), int(34 * u), int(14 * u))
+            body.right = int(x - 3 * u)
+            pygame.draw.rect(surf, DIM, body, 2)
+            pygame.draw.rect(surf, DIM, (body.right, body.top + body.height // 4, int(3 * u), body.height // 2))
+            b = max(0.0, min(1.0, st.battery))
+            pygame.draw.rect(surf, OK_COLOR if b > 0.25 else REJECT_COLOR,
+                             (body.left + 3, body.top + 3, int((body.width - 6) * b), body.height - 6))
+            x = body.left - 12 * u
+        r = self.blit(surf, f"{st.source_url}  {st.source_state}", int(22 * u), (x, y), DIM, "topright")
+        pygame.draw.circle(surf, state_col, (int(r.left - 11 * u), int(y + 8 * u)), int(6 * u))
+
+    def _legends(self, surf: pygame.Surface, one: HudState, two: HudState, u: float) -> None:
+        """Each keyboard player's keys under their own panel; the shared keys in the middle."""
+        w, h = surf.get_size()
+        size = int(19 * u)
+        for st, x, anchor in ((one, PANEL_MARGIN * u, "topleft"), (two, w - PANEL_MARGIN * u, "topright")):
+            if not st.keys:
+                continue
+            for n, line in enumerate(compact_keys(st.keys)):
+                self.blit(surf, line, size, (x, h - 46 * u + n * 20 * u), DIM, anchor)
+        # the shared keys under the round clock (the bottom corners are the players')
+        self.blit(surf, "Esc pause  F3 budget  F11 fullscreen", int(18 * u), (w // 2, 118 * u), DIM, "midtop")
+
+    def _centre_two(self, surf: pygame.Surface, st: HudState, u: float) -> None:
+        if st.phase != "over":
+            if not (st.paused and self.second.disconnected):  # the overlay says why, not PAUSED
+                self._centre(surf, st, u)
+            return
+        w, h = surf.get_size()
+        title = "DRAW" if st.winner is None else f"{st.result} - {st.names[st.winner]} WINS"
+        self._banner(surf, title, int(96 * u), (w // 2, h * 0.42))
+        if not st.demo:
+            self.blit(surf, "Enter: a new match", int(40 * u), (w // 2, h * 0.42 + 60 * u), TEXT, "midtop")

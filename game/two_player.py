@@ -1,0 +1,467 @@
+"""A local two-player match: two people, two controllers, two recognizers (`play --players 2`).
+
+Each player has a seat: their source (any mix of wiimote://, serial://, keyboard://), their own
+templates (a profile), their own dual-buffer recognizer and frame resampler, and their own HUD
+panel. Both boxers are driven the same way: the seat's recognizer events go to that boxer's
+PlayerController. No Interaction Graph: the opponent is the other person.
+
+The stages are the one-player session's (game/session.py) with every per-player stage done
+for both seats; `player` steps boxer 1, `opponent` boxer 2, so the F3 overlay and
+`bench frame --players 2` read the same. A seat whose source drops pauses the match for both
+until it is back. The camera looks at the boxers side-on (game/render_two_player.py): player 1
+on the left, player 2 on the right, neither hiding the other.
+
+`--demo`: a pilot per seat presses random moves on a keyboard source (a virtual player each),
+so two real recognizers decide what they were: tests, screenshots and the benchmark.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pygame
+
+from engine.clock import RealClock, VirtualClock
+from engine.errors import InputError
+from engine.frames import FrameResampler
+from engine.loop import FixedStepLoop
+from engine.sensors.source import Source, SourceState
+from game.history import History
+from game.hits import hits_from_contacts
+from game.hud import HudState
+from game.hud_two_player import TwoPlayerHud
+from game.match import Match
+from game.session import (
+    BLOCKED_SHARE,
+    DEMO_RESTART_STEPS,
+    HOME_BUTTON,
+    HZ,
+    LOG_KEPT,
+    LOW_POWER_RENDER_BUDGET_MS,
+    PILOT_ATTACKS,
+    PILOT_REACH,
+    PILOT_SETTLE_STEPS,
+    REFERENCE_SPEED,
+    RENDER_BUDGET_MS,
+    RING_LIMIT,
+    RUMBLE_MS,
+    STAGE_BUDGETS_MS,
+    START_GAP,
+    Session,
+    SessionConfig,
+    _event_key,
+    load_templates,
+)
+
+# Two recognizers, two sources, two resamplers: those stages get more than the one-player budget
+TWO_PLAYER_BUDGETS_MS = {**STAGE_BUDGETS_MS, "input": 0.40, "frames": 0.20, "recognize": 2.00}
+NAMES = ("P1", "P2")
+PILOT_PAUSE_STEPS = 12  # the pilot's hands come back to rest before its next motion
+
+
+@dataclass
+class Seat:
+    """One player: source, templates, recognizer, frames, HUD panel, demo pilot."""
+
+    index: int
+    source: Source
+    templates: object
+    recognizer: object
+    resampler: FrameResampler
+    hud: HudState
+    frame_vec: np.ndarray | None = None
+    buttons: int = 0
+    pilot_wait: int = PILOT_SETTLE_STEPS
+    pilot_seen: bool = True
+    pilot_rng: np.random.Generator = field(default_factory=lambda: np.random.default_rng(0))
+
+    @property
+    def disconnected(self) -> bool:
+        return self.source.state in (SourceState.DISCONNECTED, SourceState.RECONNECTING, SourceState.CONNECTING)
+
+
+def _seat_event_key(item: tuple[int, dict]) -> tuple:
+    seat, ev = item
+    return (seat, *_event_key(ev))
+
+
+def build_recognizer(templates):
+    from engine.recognition import DualBufferRecognizer
+
+    return DualBufferRecognizer(templates)
+
+
+class TwoPlayerSession(Session):
+    """Two seats, two boxers, one match. Reuses the one-player session's physics, knockdown
+    hold, corners, rendering and state hash; its own input, recognition, boxers, hits and HUD."""
+
+    def __init__(self, sources: Sequence[Source], config: SessionConfig | None = None,
+                 clock: RealClock | VirtualClock | None = None,
+                 surface_provider: Callable[[], pygame.Surface] | None = None,
+                 templates: Sequence[str | Path | None] = (None, None)):
+        from engine.physics import World
+        from game.actions import load_library
+        from game.boxer import Boxer
+        from game.render_two_player import SideOnLowPowerRenderer, SideOnRenderer
+        from game.sound import Sounds
+
+        if len(sources) != 2:
+            raise InputError(f"a two-player match needs two sources, got {len(sources)}")
+        self.config = cfg = config or SessionConfig()
+        self.clock = clock or RealClock()
+        self.lib = load_library()
+        self.world = World(gravity=(0.0, -9.81, 0.0), ground_y=0.0, damping=0.01,
+                           iterations=max(1, cfg.physics_iterations // (2 if cfg.low_power else 1)))
+        self.boxers = (Boxer(self.world, self.lib, x=0.0, z=-START_GAP / 2, yaw=0.0),
+                       Boxer(self.world, self.lib, x=0.0, z=START_GAP / 2, yaw=math.pi))
+        self.player, self.opponent = self.boxers
+        self.graph = None  # the opponent is a person: no Interaction Graph
+        self.seats: list[Seat] = []
+        for i, (source, tmpl) in enumerate(zip(sources, templates, strict=True)):
+            # handedness is player 1's option (the one-player flag); player 2 plays right-handed
+            t = load_templates(tmpl, cfg.left_handed and i == 0)
+            if source.sensors * 3 != t.dim:
+                raise InputError(f"{source.url}: the source has {source.sensors} sensor(s), player {i + 1}'s "
+                                 f"templates need {t.dim // 3} (a Wiimote + Nunchuk, or two IMUs)")
+            rec = build_recognizer(t)
+            hud = HudState(keys=[], source_url=f"{NAMES[i]} {source.url}", demo=cfg.demo,
+                           main_size=int(rec.main) if rec.main != "auto" else 6, supp_size=rec.supplementary)
+            if hasattr(source, "keymap"):
+                from game.keyboard_source import key_help
+
+                hud.keys = key_help(source.keymap)
+            self.seats.append(Seat(i, source, t, rec, FrameResampler(sensors=t.dim // 3), hud,
+                                   pilot_rng=np.random.default_rng(cfg.seed + 1 + 7919 * i)))
+        # the one-player names, for what the shared methods and tools read (player 1's)
+        self.source = self.seats[0].source
+        self.templates = self.seats[0].templates
+        self.recognizer = self.seats[0].recognizer
+        self.resampler = self.seats[0].resampler
+        self.match = Match()
+        self.hud_state = self.seats[0].hud  # player 1's panel carries the match state
+        self.hud_state.names = NAMES
+        self.hud_state.mode = "LOW POWER" if cfg.low_power else ""
+        self.hud_state.message = "ROUND 1"
+        self.hud = TwoPlayerHud(self.seats[1].hud)
+        self.sounds = Sounds(enabled=cfg.sound, seed=cfg.seed)
+        # side-on, following the boxers' line (game/render_two_player.py)
+        self.renderer = SideOnLowPowerRenderer(cfg.size) if cfg.low_power else SideOnRenderer(cfg.size)
+        self._surface_provider = surface_provider
+        self._offscreen: pygame.Surface | None = None
+        self._low_power_surface: pygame.Surface | None = None
+        self.events_log: History = History(LOG_KEPT, key=_seat_event_key)  # (seat, event)
+        self.blows_log: History = History(LOG_KEPT)
+        self.on_toggle_fullscreen: Callable[[], None] | None = None
+        self._t0: float | None = None
+        self._auto_paused = False
+        self._over_steps = 0
+        self._step = 0
+        self.prev_joints = [b.joint_positions().copy() for b in self.boxers]
+        self.curr_joints = [j.copy() for j in self.prev_joints]
+        self.frame_vec = None
+
+        self.loop = FixedStepLoop(self.clock, hz=HZ, render_hz=HZ // 2 if cfg.low_power else HZ)
+        for name, fn in (("input", self._input), ("frames", self._frames), ("recognize", self._recognize),
+                         ("player", self._player), ("opponent", self._opponent), ("physics", self._physics),
+                         ("hits", self._hits), ("match", self._match)):
+            self.loop.add_stage(name, fn, TWO_PLAYER_BUDGETS_MS[name])
+        if cfg.render:
+            self.loop.set_render(self.render, LOW_POWER_RENDER_BUDGET_MS if cfg.low_power else RENDER_BUDGET_MS)
+        self.sounds.play("bell")
+
+    # -- stages --------------------------------------------------------------------------
+    def _input(self, step: int, dt: float) -> None:
+        if pygame.display.get_init():
+            for event in pygame.event.get():
+                self.handle_event(event)
+        for seat in self.seats:
+            if self.config.demo:
+                self._pilot_seat(seat)
+            samples = seat.source.poll()
+            buttons = int(getattr(seat.source, "buttons", 0) or 0)
+            if buttons & HOME_BUTTON and not seat.buttons & HOME_BUTTON:
+                self.match.toggle_pause()
+            seat.buttons = buttons
+            seat.resampler.push(samples)
+            lost = seat.disconnected
+            if not lost and seat.hud.disconnected:
+                # back: the controller may sit differently in the hand; learn gravity afresh
+                seat.recognizer.reset()
+            seat.hud.disconnected = lost
+        # either player's controller lost pauses the match for both; it resumes when both are back
+        lost_any = any(s.hud.disconnected for s in self.seats)
+        if lost_any and not self.match.paused:
+            self.match.toggle_pause()
+            self._auto_paused = True
+        elif not lost_any and self._auto_paused:
+            if self.match.paused:
+                self.match.toggle_pause()
+            self._auto_paused = False
+
+    def _pilot_seat(self, seat: Seat) -> None:
+        """The demo's player at this seat: a random move (an attack when within reach, else a
+        step in), performed by the virtual player on the keyboard source; the seat's REAL
+        recognizer must recognize it before the boxer moves."""
+        source = seat.source
+        if not hasattr(source, "press") or source.busy or not self.match.fighting:
+            return
+        if self.boxers[seat.index].controller.action != "guard":
+            return
+        if seat.pilot_wait > 0:
+            seat.pilot_wait -= 1
+            return
+        me, them = self.boxers[seat.index].root, self.boxers[1 - seat.index].root
+        near = math.hypot(me[0] - them[0], me[1] - them[1]) < PILOT_REACH
+        choices = PILOT_ATTACKS if near else ("step_forward",)
+        source.press(choices[int(seat.pilot_rng.integers(len(choices)))])
+        seat.pilot_seen = False
+        seat.pilot_wait = PILOT_PAUSE_STEPS
+
+    def handle_event(self, event: pygame.event.Event) -> None:
+        if event.type == pygame.KEYDOWN and event.key not in (pygame.K_ESCAPE, pygame.K_F3, pygame.K_F11) \
+                and not (event.key == pygame.K_RETURN and self.match.over):
+            if not self.match.paused:
+                name = pygame.key.name(event.key)
+                for seat in self.seats:  # each keyboard seat answers only its half of the keys
+                    if hasattr(seat.source, "press_key"):
+                        seat.source.press_key(name)
+            return
+        super().handle_event(event)
+
+    def _frames(self, step: int, dt: float) -> None:
+        if self._t0 is None:
+            self._t0 = self.clock.seconds() - step * dt
+        t = self._t0 + step * dt
+        for seat in self.seats:
+            seat.frame_vec = seat.resampler.frame_at(t)
+        self.frame_vec = self.seats[0].frame_vec
+
+    def _recognize(self, step: int, dt: float) -> None:
+        for seat in self.seats:
+            if seat.frame_vec is None:
+                continue
+            rec, hud = seat.recognizer, seat.hud
+            boxer = self.boxers[seat.index]
+            for ev in rec.push(seat.frame_vec, t=step * dt):
+                self.events_log.append((seat.index, ev))
+                seat.pilot_seen |= ev.get("event") == "start"
+                hud.mark(ev)
+                if self.match.fighting and not ev.get("whole_motion"):
+                    boxer.controller.on_event(ev)
+                    clip = self.lib.get(ev.get("action") or "")
+                    if ev.get("event") == "start" and clip is not None and clip.kind == "attack":
+                        self.sounds.play("punch", 0.5)
+            active = rec.state == "active"
+            hud.main_fill = min(rec.count, hud.main_size) if active else 0
+            hud.supp_fill = min(rec.count, rec.supplementary) if active else 0
+
+    def _step_boxer(self, i: int, dt: float) -> None:
+        self._hold_knockdown(i)
+        me, other = self.boxers[i], self.boxers[1 - i]
+        ox, oz, _ = other.root
+        me.turn_towards(ox, oz)
+        me.keep_inside(RING_LIMIT)
+        me.step(dt)
+        if me.controller.finished_action():
+            self.seats[i].recognizer.character_finished()
+
+    def _player(self, step: int, dt: float) -> None:
+        self._step_boxer(0, dt)
+
+    def _opponent(self, step: int, dt: float) -> None:
+        self._step_boxer(1, dt)
+
+    def _hits(self, step: int, dt: float) -> None:
+        for hit in hits_from_contacts(self.contacts, list(self.boxers)):
+            self.apply_hit(step, hit)
+
+    def apply_hit(self, step: int, hit: dict) -> None:
+        """As the one-player session's, but a fair fight: no CPU handicap; the player who was
+        hit feels it in their own controller."""
+        target = 1 - hit["attacker"]
+        scale = float(np.clip(hit["speed"] / REFERENCE_SPEED, 0.5, 1.5))
+        damage = float(hit.get("damage", 8.0)) * scale * (BLOCKED_SHARE if hit["blocked"] else 1.0)
+        if not self.match.hit(target, damage):
+            return
+        self.blows_log.append((step, hit["attacker"], hit["target"], hit["blocked"], round(damage, 4)))
+        point = hit.get("point")
+        if point is None:
+            point = self.boxers[target].joint_positions()[4]
+        self.renderer.add_flash(point, strong=damage >= 8, blocked=hit["blocked"])
+        if hit["blocked"]:
+            self.sounds.play("block")
+        else:
+            self.sounds.play("hit" if damage >= 8 else "hit_light")
+            if self.match.down != target:
+                self.boxers[target].react(hit)
+        self.seats[target].source.rumble(RUMBLE_MS)
+
+    def _match(self, step: int, dt: float) -> None:
+        m = self.match
+        m.step()
+        for kind, who in m.drain_events():
+            if kind == "bell":
+                self.sounds.play("bell")
+                if m.phase == "fight":
+                    self.hud_state.message, self.hud_state.message_age = f"ROUND {m.round}", 0
+                    self._to_corners()
+            elif kind == "knockdown":
+                self.boxers[who].controller.play("knockdown")
+            elif kind == "rise":
+                self.boxers[who].controller.play("guard")
+        if m.over:
+            self._over_steps += 1
+            if self.config.demo and self._over_steps >= DEMO_RESTART_STEPS:
+                self.new_match()
+        h = self.hud_state
+        h.health = list(m.health)
+        h.round, h.rounds = m.round, m.rounds
+        h.seconds_left = m.seconds_left()
+        h.phase, h.count, h.down = m.phase, m.count, m.down
+        h.knockdowns = list(m.knockdowns)
+        h.winner, h.result, h.paused = m.winner, m.result, m.paused
+        for seat in self.seats:  # (the source line's URL is set once, at the seat's making)
+            seat.hud.source_state = seat.source.state.value
+            seat.hud.battery = seat.source.battery
+        self.seats[1].hud.tick()
+        h.tick()
+        self._step = step
+
+    def new_match(self) -> None:
+        """A fresh match (Enter after the last bell; by itself in the demo)."""
+        self.match = Match()
+        self._over_steps = 0
+        self._to_corners()
+        for seat in self.seats:
+            seat.recognizer.reset()
+            seat.pilot_wait = PILOT_SETTLE_STEPS
+        self.hud_state.message, self.hud_state.message_age = "ROUND 1", 0
+        self.sounds.play("bell")
+
+
+# -- `quickjab play --players 2` --------------------------------------------------------------
+def _with_param(url: str, key: str, value: str) -> str:
+    """url with ?key=value added unless it already names that key."""
+    from engine.sensors.source import parse_source_url
+
+    if key in parse_source_url(url)[2]:
+        return url
+    return url + ("&" if "?" in url else "?") + f"{key}={value}"
+
+
+def source_urls(url1: str | None, url2: str | None, demo: bool, seed: int,
+                wiimotes: Callable[[], list[str]] | None = None) -> tuple[list[str], list[str]]:
+    """The two seats' source URLs and notes for the player. Default: the first two Wiimotes
+    found (a seat without one plays from its half of the keyboard). Two keyboard seats split
+    the keyboard (keys=left / keys=right) unless their URLs say otherwise."""
+    from game.play import DEMO_SOURCE
+
+    notes: list[str] = []
+    if demo:
+        return [f"{DEMO_SOURCE}&seed={seed + i}&keys={half}" for i, half in enumerate(("left", "right"))], notes
+    urls = [url1, url2]
+    if any(u is None or u.rstrip("/") == "wiimote:" for u in urls):
+        # `wiimote://` would open the first remote found for both seats: give each its own
+        found = list(wiimotes() if wiimotes is not None else _wiimote_paths())
+        for i, u in enumerate(urls):
+            if u is None or u.rstrip("/") == "wiimote:":
+                if found:
+                    urls[i] = f"wiimote://{found.pop(0)}?player={i + 1}"
+                elif u is None:
+                    urls[i] = "keyboard://"
+                    notes.append(f"player {i + 1}: no Wiimote found, playing from the keyboard")
+                elif any(x.startswith("wiimote:///") for x in urls):
+                    raise InputError(f"player {i + 1}: {u}: only one Wiimote found; each player needs their own")
+                # else none at all: opening wiimote:// says so, with the pairing help
+    if urls[0] == urls[1] and not urls[0].startswith("keyboard://"):
+        raise InputError(f"--source and --source2 are the same device ({urls[0]}): each player needs their own")
+    keyboards = [i for i, u in enumerate(urls) if u.startswith("keyboard://")]
+    for i in keyboards:
+        urls[i] = _with_param(urls[i], "seed", str(seed + i))
+        if len(keyboards) == 2:
+            urls[i] = _with_param(urls[i], "keys", ("left", "right")[i])
+    return urls, notes
+
+
+def _wiimote_paths() -> list[str]:
+    """Paths of the Wiimotes this machine sees (none when the HID backend is missing)."""
+    try:
+        from engine.sensors.wiimote import list_wiimotes
+
+        return [w.path.decode() if isinstance(w.path, bytes) else str(w.path) for w in list_wiimotes()]
+    except Exception:  # noqa: BLE001 - no backend, no permission: no Wiimotes, the keyboard plays
+        return []
+
+
+def seat_templates(profile: str | None, templates: str | None) -> tuple[Path | str | None, str | None]:
+    """A seat's templates: --templates, else the profile's trained set, else the default chain
+    (the default profile's file, the shipped set...), with a note when a named profile has none."""
+    from game.userdata import DEFAULT_PROFILE, profile_templates_path
+
+    if templates is not None:
+        return templates, None
+    path = profile_templates_path(profile)
+    if profile in (None, DEFAULT_PROFILE):
+        return None, None
+    if path.exists():
+        return path, None
+    return None, f"profile {profile!r} has no trained templates yet (quickjab train --profile {profile}); using the default set"
+
+
+def run_match(args) -> int:
+    """`quickjab play --players 2`: open both sources, build the session, play (see play.run)."""
+    import sys
+
+    from engine.sensors import open_source
+    from game.play import headless_env, parse_size
+
+    size = parse_size(args.size)
+    if args.frames is not None and args.frames < 1:
+        raise InputError("--frames must be at least 1")
+    if args.headless:
+        headless_env()
+    import game.keyboard_source  # noqa: F401 - registers keyboard://
+    from engine.trace import write_chrome_trace
+
+    clock = VirtualClock() if args.headless or args.virtual_clock else RealClock()
+    templates, notes = [], []
+    for profile in (args.profile, args.profile2):
+        path, note = seat_templates(profile, args.templates)
+        templates.append(path)
+        if note:
+            notes.append(note)
+    urls, url_notes = source_urls(args.source, args.source2, args.demo, args.seed)
+    for note in url_notes + notes:
+        print(f"quickjab play: {note}", file=sys.stderr)
+    sources: list[Source] = []
+    try:
+        for url in urls:
+            sources.append(open_source(url, clock=clock.seconds))
+        pygame.init()
+        flags = pygame.RESIZABLE | (pygame.FULLSCREEN if args.fullscreen and not args.headless else 0)
+        pygame.display.set_mode(size, flags)
+        pygame.display.set_caption("QuickJab - two players")
+        config = SessionConfig(seed=args.seed, size=size, low_power=args.low_power, demo=args.demo,
+                               sound=not args.no_sound and not args.headless, left_handed=args.left_handed)
+        session = TwoPlayerSession(sources, config, clock=clock, surface_provider=pygame.display.get_surface,
+                                   templates=templates)
+        session.hud_state.show_budget = args.budget
+        session.on_toggle_fullscreen = pygame.display.toggle_fullscreen
+        try:
+            session.loop.run(frames=args.frames)
+        finally:
+            if args.screenshot:
+                pygame.image.save(pygame.display.get_surface(), args.screenshot)
+                print(f"quickjab play: wrote {args.screenshot}", file=sys.stderr)
+            if args.trace:
+                write_chrome_trace(session.loop.budget, args.trace)
+                print(f"quickjab play: wrote {args.trace}", file=sys.stderr)
+    finally:
+        for source in sources:
+            source.close()
+        pygame.quit()
+    return 0

@@ -1,0 +1,250 @@
+"""`play --players 2`: two people on two sources, two real recognizers, one match. Played
+headless under the dummy video driver: a keyboard-vs-keyboard match to a decision is
+reproducible to the bit, player 2's emulated Wiimote unplugged mid-round pauses the match for
+both under an overlay that clears when it is back, and the CLI writes a screenshot."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pygame
+import pytest
+
+from engine.clock import VirtualClock
+from engine.sensors import SourceState, open_source
+from game.keyboard_source import KEYMAP_LEFT, KEYMAP_RIGHT
+from game.match import Match
+from game.session import PILOT_ATTACKS, SessionConfig
+from game.two_player import TwoPlayerSession, source_urls
+
+SIZE = (640, 360)
+
+
+@pytest.fixture(autouse=True)
+def own_data_dir(tmp_path, monkeypatch):
+    """Never read (or write) the real user's trained templates."""
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "xdg"))
+
+
+def make_session(urls: list[str], seed: int = 0, render: bool = True, display: bool = False,
+                 demo: bool = False) -> TwoPlayerSession:
+    import game.keyboard_source  # noqa: F401 - registers keyboard://
+
+    pygame.init()
+    clock = VirtualClock()
+    sources = [open_source(u, clock=clock.seconds) for u in urls]
+    provider = None
+    if display:
+        pygame.display.set_mode(SIZE)
+        provider = pygame.display.get_surface
+    cfg = SessionConfig(seed=seed, size=SIZE, sound=False, render=render, demo=demo)
+    return TwoPlayerSession(sources, cfg, clock=clock, surface_provider=provider)
+
+
+def key_event(name: str) -> pygame.event.Event:
+    return pygame.event.Event(pygame.KEYDOWN, key=pygame.key.key_code(name), mod=0, unicode="", scancode=0)
+
+
+def play_by_keys(s: TwoPlayerSession, rng: np.random.Generator, max_steps: int) -> None:
+    """Two people at one keyboard: each presses a key of their own half now and then, stepping
+    in when out of reach, else a punch, block or step (what they press is seeded)."""
+    keys_of = [{a: k for k, a in km.items()} for km in (KEYMAP_LEFT, KEYMAP_RIGHT)]
+    waits = [0, 0]
+    while not s.match.over and s.loop.step_index < max_steps:
+        a, b = s.boxers[0].root, s.boxers[1].root
+        near = math.hypot(a[0] - b[0], a[1] - b[1]) < 1.0
+        for i in (0, 1):
+            busy = s.seats[i].source.busy or s.boxers[i].controller.action != "guard"
+            if waits[i] > 0:
+                waits[i] -= 1
+            elif not busy and s.match.fighting:
+                action = PILOT_ATTACKS[int(rng.integers(len(PILOT_ATTACKS)))] if near else "step_forward"
+                pygame.event.post(key_event(keys_of[i][action]))
+                waits[i] = int(rng.integers(8, 30))
+        s.loop.run(steps=1)
+
+
+def test_two_keyboard_players_box_to_a_decision_reproducibly() -> None:
+    urls, _ = source_urls("keyboard://", "keyboard://", demo=False, seed=5)
+    assert "keys=left" in urls[0] and "keys=right" in urls[1]  # one keyboard, split in two
+    outcomes = []
+    for _ in range(2):
+        s = make_session(urls, seed=5, render=False, display=True)
+        assert s.graph is None  # no Interaction Graph: both boxers are people
+        assert s.seats[0].recognizer is not s.seats[1].recognizer
+        s.match = Match(round_seconds=12)
+        play_by_keys(s, np.random.default_rng(11), max_steps=3 * 12 * 60 + 2 * 3 * 60 + 600)
+        assert s.match.over  # a decision: KO, TKO or the scorecards
+        outcomes.append((s.state_hash(), s.match.state(), s.loop.step_index))
+        # each half of the keyboard reached only its own player's source ...
+        pressed = [set(seat.source.pressed) for seat in s.seats]
+        assert pressed[0] and pressed[1]
+        # ... each player's recognizer started actions for its own boxer, and both landed blows
+        starts = [{ev["action"] for seat, ev in s.events_log if seat == i and ev["event"] == "start"} for i in (0, 1)]
+        assert len(starts[0]) >= 3 and len(starts[1]) >= 3
+        assert {blow[1] for blow in s.blows_log} == {0, 1}
+        assert s.match.result in ("KO", "TKO", "points", "draw")
+    assert outcomes[0] == outcomes[1]
+
+
+def test_keys_of_each_half_drive_only_their_own_boxer() -> None:
+    s = make_session(["keyboard://?seed=1&keys=left", "keyboard://?seed=2&keys=right"], display=True)
+    s.loop.run(steps=30)  # the recognizers learn the resting gravity
+    pygame.event.post(key_event("q"))  # player 1's left straight
+    actions = [[], []]
+    for _ in range(70):
+        s.loop.run(steps=1)
+        for i in (0, 1):
+            actions[i].append(s.boxers[i].controller.action)
+    assert s.seats[0].source.pressed == ["straight_l"] and s.seats[1].source.pressed == []
+    assert "straight_l" in actions[0] and set(actions[1]) <= {"guard"}
+    pygame.event.post(key_event("p"))  # player 2's right straight
+    for _ in range(70):
+        s.loop.run(steps=1)
+        actions[1].append(s.boxers[1].controller.action)
+    assert s.seats[1].source.pressed == ["straight_r"]
+    assert "straight_r" in actions[1]
+    assert s.seats[0].source.pressed == ["straight_l"]
+
+
+def test_player_two_unplugged_mid_round_pauses_both_and_resumes(tmp_path) -> None:
+    from game.cli import main
+
+    rec = tmp_path / "p2.csv"
+    assert main(["synth", "--session", "8", "--seed", "2", "-o", str(rec)]) == 0
+    # player 2 on an emulated Wiimote + Nunchuk that is unplugged 3 s in and back at 5 s
+    s = make_session(["keyboard://?seed=4&keys=left", f"wiimote-emu://{rec}?unplug_at=3&replug_at=5"], display=True)
+    surf = pygame.display.get_surface()
+    probe = (SIZE[0] // 2, int(SIZE[1] * 0.80))  # the canvas, where no HUD panel is
+    s.loop.run(steps=2 * 60)
+    assert [seat.source.state for seat in s.seats] == [SourceState.CONNECTED] * 2
+    assert s.seats[1].hud.battery is not None  # the remote's battery is shown
+    bright = sum(surf.get_at(probe)[:3])
+    assert s.match.fighting
+    s.loop.run(steps=int(1.5 * 60))  # 3.5 s: unplugged
+    assert s.seats[1].source.state != SourceState.CONNECTED
+    assert s.seats[1].hud.disconnected and not s.seats[0].hud.disconnected
+    assert s.seats[1].hud.source_state != "connected" and s.seats[0].hud.source_state == "connected"
+    assert s.match.paused  # for both players
+    assert sum(surf.get_at(probe)[:3]) < 0.5 * bright  # the overlay
+    clock, p1_events = s.match.clock_steps, s.events_log.total
+    pygame.event.post(key_event("q"))  # player 1 cannot box on while player 2 is away
+    s.loop.run(steps=60)
+    assert s.match.clock_steps == clock and s.seats[0].source.pressed == []
+    s.loop.run(steps=3 * 60)  # 7.5 s: back
+    assert [seat.source.state for seat in s.seats] == [SourceState.CONNECTED] * 2
+    assert not s.seats[1].hud.disconnected and not s.match.paused
+    assert s.match.clock_steps < clock  # the round clock runs again
+    assert sum(surf.get_at(probe)[:3]) > 0.7 * bright
+    assert s.events_log.total >= p1_events
+
+
+def test_demo_renders_two_panels_side_on(tmp_path) -> None:
+    from game.cli import main
+
+    out = tmp_path / "two.png"
+    assert main(["play", "--players", "2", "--demo", "--headless", "--frames", "240", "--size", "640x360",
+                 "--seed", "2", "--screenshot", str(out)]) == 0
+    img = pygame.surfarray.array3d(pygame.image.load(str(out))).astype(int)
+    w, h = SIZE
+    # both recognition panels: dark translucent boxes at the bottom left and bottom right
+    left, right = img[16:150, h - 80:h - 30], img[w - 150:w - 16, h - 80:h - 30]
+    assert left.mean() < 90 and right.mean() < 90
+    # both boxers' trunks (red, blue) are on screen, red left of blue: side-on, neither hidden
+    red = (img[..., 0] > 150) & (img[..., 1] < 70) & (img[..., 2] < 70)
+    blue = (img[..., 2] > 150) & (img[..., 0] < 80) & (img[..., 1] < 140)
+    body = np.zeros_like(red)
+    body[:, 70:h - 90] = True  # between the HUD's bars and panels
+    xr, xb = np.nonzero(red & body)[0], np.nonzero(blue & body)[0]
+    assert len(xr) > 100 and len(xb) > 100
+    assert np.median(xr) < np.median(xb)
+
+
+def test_profiles_keep_their_own_templates(tmp_path) -> None:
+    from engine.errors import InputError
+    from game.two_player import seat_templates
+    from game.userdata import profile_templates_path, user_templates_path
+
+    assert profile_templates_path(None) == user_templates_path()  # the default keeps today's file
+    assert profile_templates_path("default") == user_templates_path()
+    assert profile_templates_path("ana") != profile_templates_path("ben") != user_templates_path()
+    with pytest.raises(InputError):
+        profile_templates_path("../etc")
+    path, note = seat_templates("ana", None)
+    assert path is None and "ana" in note  # untrained: the default set, and it says so
+    from game.session import synthesized_templates
+
+    profile_templates_path("ana").parent.mkdir(parents=True)
+    synthesized_templates(seed=4).save(profile_templates_path("ana"))
+    assert seat_templates("ana", None) == (profile_templates_path("ana"), None)
+
+
+def test_default_sources_are_two_wiimotes_else_the_keyboard_halves() -> None:
+    from engine.errors import InputError
+
+    urls, notes = source_urls(None, None, demo=False, seed=0, wiimotes=lambda: ["/dev/hidraw3", "/dev/hidraw5"])
+    assert urls == ["wiimote:///dev/hidraw3?player=1", "wiimote:///dev/hidraw5?player=2"] and not notes
+    urls, notes = source_urls(None, None, demo=False, seed=0, wiimotes=lambda: ["/dev/hidraw3"])
+    assert urls[0] == "wiimote:///dev/hidraw3?player=1" and urls[1].startswith("keyboard://") and notes
+    urls, _ = source_urls("serial:///dev/ttyACM0", "keyboard://", demo=False, seed=0)
+    assert urls == ["serial:///dev/ttyACM0", "keyboard://?seed=1"]  # a lone keyboard player keeps it all
+    with pytest.raises(InputError):
+        source_urls("serial:///dev/ttyACM0", "serial:///dev/ttyACM0", demo=False, seed=0)
+    with pytest.raises(InputError, match="only one Wiimote"):  # not the same remote twice
+        source_urls("wiimote://", "wiimote://", demo=False, seed=0, wiimotes=lambda: ["/dev/hidraw3"])
+
+
+def test_train_profile_saves_beside_the_default_set_and_play_uses_it(tmp_path, capsys) -> None:
+    from game.cli import main
+    from game.userdata import profile_templates_path, user_templates_path
+
+    assert main(["train", "--headless", "--demo", "--source", "keyboard://?seed=3", "--actions", "straight_r",
+                 "--size", "640x360", "--profile", "ana"]) == 0
+    assert profile_templates_path("ana").exists() and not user_templates_path().exists()
+    s = make_session(["keyboard://?seed=1", "keyboard://?seed=2"], render=False)
+    assert len(s.seats[0].templates) > 1  # without profiles: the default (shipped) set
+    from game.two_player import seat_templates
+
+    pygame.init()
+    clock = VirtualClock()
+    sources = [open_source(u, clock=clock.seconds) for u in ("keyboard://?seed=1", "keyboard://?seed=2")]
+    s = TwoPlayerSession(sources, SessionConfig(size=SIZE, sound=False, render=False), clock=clock,
+                         templates=(None, seat_templates("ana", None)[0]))
+    assert s.seats[1].templates.action_names == ["straight_r"]  # player 2 plays with ana's set
+    assert len(s.seats[0].templates) > 1
+
+
+def test_two_player_bad_input_is_one_line_and_exit_2(capsys) -> None:
+    from game.cli import main
+
+    assert main(["play", "--players", "2", "--headless", "--frames", "1", "--source", "replay://x.csv",
+                 "--source2", "replay://x.csv"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "same device" in err[0]
+    assert main(["play", "--players", "2", "--headless", "--frames", "1", "--source", "keyboard://",
+                 "--source2", "keyboard://", "--profile", "../../etc"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--profile" in err[0]
+    assert main(["play", "--players", "2", "--headless", "--frames", "1", "--source", "keyboard://?keys=middle",
+                 "--source2", "keyboard://"]) == 2
+    assert "keys must be one of" in capsys.readouterr().err
+
+
+def test_the_side_on_camera_keeps_player_one_on_the_left_from_every_side() -> None:
+    from game.camera import SIDE_ON_HEADINGS, side_on_camera, side_on_heading
+
+    for deg in range(0, 360, 15):
+        phi = math.radians(deg)
+        d = np.array([math.sin(phi), math.cos(phi)])
+        p1, p2 = -0.6 * d, 0.6 * d
+        k = side_on_heading(p1, p2)
+        assert 0 <= k < SIDE_ON_HEADINGS
+        cam = side_on_camera((1280, 720), k)
+        xy, _ = cam.project(np.array([[p1[0], 1.0, p1[1]], [p2[0], 1.0, p2[1]]]))
+        assert xy[0, 0] < xy[1, 0] - 150  # side by side, player 1 on the left
+    # hysteresis: a line 30 degrees round from view 0 keeps it; 35 degrees cuts to view 1
+    line = lambda deg: (np.zeros(2), np.array([math.sin(math.radians(deg)), math.cos(math.radians(deg))]))  # noqa: E731
+    assert side_on_heading(*line(30), current=0) == 0
+    assert side_on_heading(*line(35), current=0) == 1
+    assert side_on_heading(*line(30)) == 1  # without a current view: the nearest
