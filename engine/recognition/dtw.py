@@ -20,7 +20,10 @@ scan. Two ways to run it, identical results:
 - "jit": one compiled numba call per frame (dtw_kernel.push_row_kernel()) doing the local costs, the
   row, the normalization and the per-template minimum; no numpy call overhead, and its loop over
   templates vectorizes. Needs numba (not installed, or QUICKJAB_NO_JIT=1: unavailable).
-`method="auto"` picks "jit" when numba is available, else scan or loop by the number of
+- "native": the same kernel in C (dtw_native.py), built once with the system's C compiler and
+  loaded with ctypes: no numba import (~0.6 s, ~110 MB) at start-up. Same results as "jit".
+`method="auto"` picks "native" when it can be had; else "jit" from JIT_FROM_TEMPLATES templates
+(where its start-up cost pays) when numba is available; else scan or loop by the number of
 templates (measured by `quickjab bench recognition`).
 """
 
@@ -31,6 +34,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from engine.recognition.dtw_kernel import push_row_kernel
+from engine.recognition.dtw_native import push_row_native
 
 # Below this many templates the scan's few whole-block calls beat the per-position loop;
 # measured with `quickjab bench recognition --sweep` (crossover between 100 and 300 templates).
@@ -38,12 +42,30 @@ LOOP_FROM_TEMPLATES = 200
 # Local costs: |t - q|^2 = |t|^2 - 2 t.q + |q|^2 from precomputed squared norms and one
 # matrix-vector product (half the cost of a broadcast subtract-square-sum; rounding ~1e-7 g).
 # `exact_costs=True` computes them the direct way (the reference tests use it; "jit" always does).
-METHODS = ("scan", "loop", "jit")
+METHODS = ("scan", "loop", "jit", "native")
+# numba's import and code load cost ~0.6 s and ~110 MB of a process (issue 14): without the C
+# kernel, auto takes it only from here, where numpy's per-frame cost passes ~0.25 ms.
+JIT_FROM_TEMPLATES = 200
 
 
 def jit_available() -> bool:
     """True when the "jit" method can run (numba importable and QUICKJAB_NO_JIT not set)."""
     return push_row_kernel() is not None
+
+
+def native_available() -> bool:
+    """True when the "native" method can run (the C kernel built or buildable here, and neither
+    QUICKJAB_NO_NATIVE nor QUICKJAB_NO_JIT set)."""
+    return push_row_native() is not None
+
+
+def auto_method(n_templates: int) -> str:
+    """The method `method="auto"` runs for this many templates (numba imported only when chosen)."""
+    if native_available():
+        return "native"
+    if n_templates >= JIT_FROM_TEMPLATES and jit_available():
+        return "jit"
+    return "loop" if n_templates >= LOOP_FROM_TEMPLATES else "scan"
 
 
 def pad_templates(templates: Sequence[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
@@ -74,11 +96,13 @@ class IncrementalDTW:
         self.tmpl, self.lengths = pad_templates([np.asarray(t, dtype=np.float64) for t in templates])
         self.L, self.T, self.D = self.tmpl.shape
         if method == "auto":
-            method = "jit" if jit_available() else "loop" if self.T >= LOOP_FROM_TEMPLATES else "scan"
+            method = auto_method(self.T)
         if method not in METHODS:
-            raise ValueError(f"method must be 'auto', 'scan', 'loop' or 'jit', not {method!r}")
+            raise ValueError(f"method must be 'auto', 'scan', 'loop', 'jit' or 'native', not {method!r}")
         if method == "jit" and not jit_available():
             raise ValueError("method 'jit' needs numba (not importable here, or QUICKJAB_NO_JIT=1 is set)")
+        if method == "native" and not native_available():
+            raise ValueError("method 'native' needs a C compiler (none here, or QUICKJAB_NO_NATIVE=1 is set)")
         self.method = method
         # Scoring only (the accumulated costs are plain DTW): after n query frames the query's
         # end may only align to template positions j + 1 >= min(L, min_progress * n), so a
@@ -95,22 +119,43 @@ class IncrementalDTW:
         self._recip: dict[int, tuple[np.ndarray, np.ndarray]] = {}
         self._take: dict[tuple[int, float], np.ndarray] = {}
         self.scores = np.empty(self.T)
-        if method == "jit":
+        if method in ("jit", "native"):
             # The kernel's template layout: (L, D, T), a position's values contiguous across
             # templates (its innermost loop); always the direct |t - q| (exact costs).
-            self._kernel = push_row_kernel()
+            self._kernel = push_row_kernel() if method == "jit" else push_row_native()
             self._tmpl_ldt = np.ascontiguousarray(self.tmpl.transpose(0, 2, 1))
             self._q = np.empty(self.D)  # frames are copied here: float64, contiguous, right length
             self._jit_cost = np.empty(self.T)
             self._jit_left = np.empty(self.T)
             self._jit_first = np.empty(self.T, dtype=np.int64)
             self._rows = [e[1:] for e in self._ext]
+            if method == "native":
+                self._bind_native()
             # Compile (or load from numba's cache) now, not on the first game frame.
             self.n = 0
             self.push(np.zeros(self.D))
         else:
             self._init_numpy_buffers(exact_costs)
         self.reset()
+
+    def _bind_native(self) -> None:
+        """The C kernel's arguments as addresses, taken once (ctypes converts ints cheaply; the
+        arrays never move while this DTW holds them)."""
+        addr = [a.ctypes.data for a in (self._tmpl_ldt, self.lengths, self._q)]
+        self._native_prev = [self._init.ctypes.data, *(e.ctypes.data for e in self._ext)]
+        self._native_args = (addr, self._jit_cost.ctypes.data, self._jit_left.ctypes.data,
+                             self._jit_first.ctypes.data, self.scores.ctypes.data)
+
+    def _push_native(self, frame: np.ndarray) -> np.ndarray:
+        self._q[:] = frame
+        (tmpl, lengths, q), cost, left, first, scores = self._native_args
+        prev = self._native_prev[0 if self.n == 0 else 1 + self._cur]
+        self._cur ^= 1
+        self._kernel(tmpl, lengths, q, prev, self._native_prev[1 + self._cur], cost, left, first,
+                     self.L, self.D, self.T, self.n, self.min_progress, scores)
+        self._row = self._rows[self._cur]
+        self.n += 1
+        return self.scores
 
     def _init_numpy_buffers(self, exact_costs: bool) -> None:
         """What the numpy methods ("scan", "loop") reuse every frame; "jit" needs none of it."""
@@ -162,6 +207,8 @@ class IncrementalDTW:
         return c
 
     def push(self, frame: np.ndarray) -> np.ndarray:
+        if self.method == "native":
+            return self._push_native(frame)
         if self.method == "jit":
             q = self._q
             q[:] = frame

@@ -1,0 +1,151 @@
+"""The incremental DTW's per-frame step in C, loaded with ctypes: IncrementalDTW's "native" method.
+
+Why: the numba kernel (dtw_kernel.py) is fast but importing numba and loading its cached code
+costs ~0.6 s and ~110 MB on every start, more than the whole game on a 1 GB board (issue 14).
+The same loop nest in C is ~40 lines, built once with the system's C compiler into a small
+shared library in the user's cache directory, and afterwards costs a dlopen (~1 ms, <1 MB).
+
+The arithmetic is the numba kernel's, operation for operation (no fused multiply-add:
+-ffp-contract=off; sqrt correctly rounded), so "native", "jit" and the exact-cost numpy scan give
+the same scores, and the recognizer the same events.
+
+`push_row_native()` is None when there is no C compiler (cc, or $CC) and no library built
+earlier, or when QUICKJAB_NO_NATIVE=1 (or QUICKJAB_NO_JIT=1: no compiled kernel at all) is set;
+IncrementalDTW then uses numba for hundreds of templates, else numpy.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import hashlib
+import os
+import platform
+import shutil
+import subprocess
+import sys
+import tempfile
+from collections.abc import Callable
+from pathlib import Path
+
+from engine.recognition.dtw_kernel import NO_JIT_ENV
+
+NO_NATIVE_ENV = "QUICKJAB_NO_NATIVE"
+CACHE_ENV = "QUICKJAB_CACHE_DIR"
+
+SOURCE = r"""
+#include <math.h>
+/* One query frame (index n, 0-based) against every template; see dtw_kernel._push_row_py,
+   which this follows line by line. tmpl: (L, D, T); prev, cur: (L + 1, T) with a sentinel row. */
+void push_row(const double *restrict tmpl, const long long *restrict lengths,
+              const double *restrict q, const double *restrict prev, double *restrict cur,
+              double *restrict cost, double *restrict left, long long *restrict first,
+              long long L, long long D, long long T, long long n, double min_progress,
+              double *restrict scores)
+{
+    long long frames = n + 1;
+    double need = min_progress * (double)frames;
+    for (long long k = 0; k < T; k++) {
+        long long length = lengths[k];
+        first[k] = need >= (double)length ? length - 1 : (long long)ceil(need) - 1;
+        scores[k] = INFINITY;
+        left[k] = INFINITY;
+    }
+    for (long long j = 0; j < L; j++) {
+        for (long long k = 0; k < T; k++) cost[k] = 0.0;
+        for (long long d = 0; d < D; d++) {
+            const double qd = q[d];
+            const double *row = tmpl + (j * D + d) * T;
+            for (long long k = 0; k < T; k++) {
+                double diff = row[k] - qd;
+                cost[k] += diff * diff;
+            }
+        }
+        const double inv = 1.0 / (double)(j + 1 + frames);
+        const double *up_row = prev + (j + 1) * T, *diag_row = prev + j * T;
+        double *out = cur + (j + 1) * T;
+        for (long long k = 0; k < T; k++) {
+            double c = sqrt(cost[k]);
+            double up = up_row[k] + c;
+            double diag = diag_row[k] + 2.0 * c;
+            double best = up < diag ? up : diag;
+            double side = left[k] + c;
+            double v = best < side ? best : side;
+            out[k] = v;
+            left[k] = v;
+            double s = v * inv;
+            /* a select on `&` (no branch, no conditional store): the loop vectorizes */
+            int keep = (j >= first[k]) & (j < lengths[k]) & (s < scores[k]);
+            scores[k] = keep ? s : scores[k];
+        }
+    }
+}
+"""
+# Vectorized over templates, the result bit for bit the plain loop's: no FMA contraction, and
+# errno-free sqrt (same value; lets the compiler use the vector instruction).
+FLAGS = ["-O3", "-march=native", "-shared", "-fPIC", "-std=c99", "-ffp-contract=off", "-fno-math-errno"]
+
+_loaded: list[Callable | None] = []
+
+
+def _disabled() -> bool:
+    return any(os.environ.get(v, "").strip() not in ("", "0") for v in (NO_NATIVE_ENV, NO_JIT_ENV))
+
+
+def cache_dir() -> Path:
+    """Where the built library is kept: $QUICKJAB_CACHE_DIR, else $XDG_CACHE_HOME/quickjab or
+    ~/.cache/quickjab."""
+    if os.environ.get(CACHE_ENV):
+        return Path(os.environ[CACHE_ENV])
+    base = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
+    return Path(base) / "quickjab"
+
+
+def library_path() -> Path:
+    """The library's file name names the source, the flags and the machine, so a changed kernel
+    or another interpreter's architecture never loads a stale build."""
+    key = hashlib.sha256("\0".join([SOURCE, *FLAGS, platform.machine(), sys.platform]).encode()).hexdigest()[:16]
+    return cache_dir() / f"dtw_push_row-{key}.so"
+
+
+def _build(target: Path) -> bool:
+    """Compile SOURCE into `target` (atomically: a half-written library never loads)."""
+    cc = os.environ.get("CC") or shutil.which("cc") or shutil.which("gcc") or shutil.which("clang")
+    if not cc:
+        return False
+    try:
+        target.parent.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryDirectory(dir=target.parent) as tmp:
+            src, out = Path(tmp) / "dtw_push_row.c", Path(tmp) / target.name
+            src.write_text(SOURCE)
+            r = subprocess.run([cc, *FLAGS, "-o", str(out), str(src), "-lm"], capture_output=True, timeout=60)
+            if r.returncode != 0 or not out.exists():
+                return False
+            os.replace(out, target)
+        return True
+    except (OSError, subprocess.SubprocessError):
+        return False
+
+
+def _load() -> Callable | None:
+    if _disabled() or os.name != "posix":
+        return None
+    path = library_path()
+    if not path.exists() and not _build(path):
+        return None
+    try:
+        lib = ctypes.CDLL(str(path))
+    except OSError:
+        return None
+    fn = lib.push_row
+    p, i64 = ctypes.c_void_p, ctypes.c_longlong
+    fn.argtypes = [p, p, p, p, p, p, p, p, i64, i64, i64, i64, ctypes.c_double, p]
+    fn.restype = None
+    return fn
+
+
+def push_row_native() -> Callable | None:
+    """The C kernel (a ctypes function taking array addresses), or None when it cannot be had.
+    Built on the first call in a machine's life (~0.3 s), loaded from the cache afterwards."""
+    if not _loaded:
+        _loaded.append(_load())
+    return _loaded[0]
