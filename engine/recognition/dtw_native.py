@@ -20,10 +20,7 @@ import ctypes
 import hashlib
 import os
 import platform
-import shutil
-import subprocess
 import sys
-import tempfile
 from collections.abc import Callable
 from pathlib import Path
 
@@ -109,6 +106,10 @@ def library_path() -> Path:
 
 def _build(target: Path) -> bool:
     """Compile SOURCE into `target` (atomically: a half-written library never loads)."""
+    import shutil  # only for the build, once per machine: not on every start
+    import subprocess
+    import tempfile
+
     cc = os.environ.get("CC") or shutil.which("cc") or shutil.which("gcc") or shutil.which("clang")
     if not cc:
         return False
