@@ -4,8 +4,8 @@ everything, box one frame, quit) against its peer measured in the same run, a ba
 
 Each run starts a fresh interpreter; play and peer alternate so both see the same machine
 load. Reported: min and median over the runs of the wall time and of the child's peak RSS
-(os.wait4's ru_maxrss), the ratio play / peer, and issue 14's targets (wall <= 3x the peer's,
-peak RSS <= 120 MB). One untimed play run first builds what is built once per machine (the
+(its VmHWM from /proc at exit: rusage's maxrss would carry the forking parent's peak across
+exec), the ratio play / peer, and issue 14's targets (wall <= 3x the peer's, peak RSS <= 120 MB). One untimed play run first builds what is built once per machine (the
 native DTW kernel, Python's bytecode cache when it is on).
 """
 
@@ -24,8 +24,13 @@ from engine.errors import InputError
 REPO = Path(__file__).resolve().parents[1]
 MAX_RATIO = 3.0
 MAX_RSS_MB = 120.0
-PLAY = ["-m", "game.cli", "play", "--demo", "--headless", "--frames", "1"]
-PEER = ["-c", "import numpy, pygame"]
+PLAY = ["play", "--demo", "--headless", "--frames", "1"]
+MARK = "STARTUP-PEAK-KB "
+# Each child reports its own peak resident memory when it exits, on stderr.
+REPORT = (f"\ndef _peak():\n    for line in open('/proc/self/status'):\n        if line.startswith('VmHWM:'):\n"
+          f"            import sys; sys.stderr.write('{MARK}' + line.split()[1] + '\\n')\n")
+PLAY_CODE = REPORT + f"import sys\nsys.argv = ['quickjab', *{PLAY!r}]\nfrom game.cli import main\ntry:\n    code = main()\nfinally:\n    _peak()\nsys.exit(code)\n"
+PEER_CODE = REPORT + "import numpy, pygame\n_peak()\n"
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -33,32 +38,28 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--json", action="store_true", help="print the figures as JSON")
 
 
-def run_once(args: list[str]) -> tuple[float, float]:
-    """(wall seconds, peak RSS MB) of one fresh interpreter running `args`."""
+def run_once(code: str) -> tuple[float, float]:
+    """(wall seconds, peak RSS MB) of one fresh interpreter running `code`."""
     env = {**os.environ, "SDL_VIDEODRIVER": "dummy", "SDL_AUDIODRIVER": "dummy",
            "PYTHONPATH": os.pathsep.join([str(REPO), *filter(None, [os.environ.get("PYTHONPATH")])])}
     t0 = time.perf_counter()
-    proc = subprocess.Popen([sys.executable, *args], cwd=REPO, env=env,
-                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
-    _, status, usage = os.wait4(proc.pid, 0)  # this child's own rusage (peak RSS in KB)
+    r = subprocess.run([sys.executable, "-c", code], cwd=REPO, env=env, stdout=subprocess.DEVNULL,
+                       stderr=subprocess.PIPE, text=True)
     wall = time.perf_counter() - t0
-    proc.returncode = os.waitstatus_to_exitcode(status)
-    err = proc.stderr.read().decode(errors="replace") if proc.stderr else ""
-    if proc.stderr:
-        proc.stderr.close()
-    if proc.returncode != 0:
-        raise InputError(f"{' '.join(args)} failed (exit {proc.returncode}): {err.strip().splitlines()[-1:]}")
-    return wall, usage.ru_maxrss / 1024.0
+    peak = [line[len(MARK):] for line in r.stderr.splitlines() if line.startswith(MARK)]
+    if r.returncode != 0 or not peak:
+        raise InputError(f"the start-up run failed (exit {r.returncode}): {r.stderr.strip().splitlines()[-1:]}")
+    return wall, int(peak[-1]) / 1024.0
 
 
 def run(args: argparse.Namespace) -> int:
     if args.runs < 1:
         raise InputError("--runs must be at least 1")
-    run_once(PLAY)  # warm-up: one-time builds and caches, not start-up
+    run_once(PLAY_CODE)  # warm-up: one-time builds and caches, not start-up
     play, peer = [], []
     for _ in range(args.runs):
-        play.append(run_once(PLAY))
-        peer.append(run_once(PEER))
+        play.append(run_once(PLAY_CODE))
+        peer.append(run_once(PEER_CODE))
 
     def summary(runs: list[tuple[float, float]]) -> dict:
         walls, rss = [w for w, _ in runs], [r for _, r in runs]
@@ -76,7 +77,7 @@ def run(args: argparse.Namespace) -> int:
 
         print(json.dumps(result, indent=2))
         return 0
-    print(f"start-up, {args.runs} runs each, fresh interpreters, alternating (play: {' '.join(PLAY[2:])})")
+    print(f"start-up, {args.runs} runs each, fresh interpreters, alternating (quickjab {' '.join(PLAY)})")
     if not result["bytecode_cache"]:
         print("note: PYTHONDONTWRITEBYTECODE is set: every run compiles the game's sources (an install would not)")
     print(f"{'':28} | {'wall min s':>10} | {'wall median s':>13} | {'peak RSS MB (min / median / max)':>32}")

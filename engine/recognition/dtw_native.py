@@ -32,11 +32,13 @@ CACHE_ENV = "QUICKJAB_CACHE_DIR"
 SOURCE = r"""
 #include <math.h>
 /* One query frame (index n, 0-based) against every template; see dtw_kernel._push_row_py,
-   which this follows line by line. tmpl: (L, D, T); prev, cur: (L + 1, T) with a sentinel row. */
+   which this follows line by line. tmpl: (L, D, S); prev, cur: (L + 1, S) with a sentinel row;
+   only the first T of the S (row stride) columns are templates: spare columns let a template
+   be added without reallocating. */
 void push_row(const double *restrict tmpl, const long long *restrict lengths,
               const double *restrict q, const double *restrict prev, double *restrict cur,
               double *restrict cost, double *restrict left, long long *restrict first,
-              long long L, long long D, long long T, long long n, double min_progress,
+              long long L, long long D, long long T, long long S, long long n, double min_progress,
               double *restrict scores)
 {
     long long frames = n + 1;
@@ -51,15 +53,15 @@ void push_row(const double *restrict tmpl, const long long *restrict lengths,
         for (long long k = 0; k < T; k++) cost[k] = 0.0;
         for (long long d = 0; d < D; d++) {
             const double qd = q[d];
-            const double *row = tmpl + (j * D + d) * T;
+            const double *row = tmpl + (j * D + d) * S;
             for (long long k = 0; k < T; k++) {
                 double diff = row[k] - qd;
                 cost[k] += diff * diff;
             }
         }
         const double inv = 1.0 / (double)(j + 1 + frames);
-        const double *up_row = prev + (j + 1) * T, *diag_row = prev + j * T;
-        double *out = cur + (j + 1) * T;
+        const double *up_row = prev + (j + 1) * S, *diag_row = prev + j * S;
+        double *out = cur + (j + 1) * S;
         for (long long k = 0; k < T; k++) {
             double c = sqrt(cost[k]);
             double up = up_row[k] + c;
@@ -139,7 +141,7 @@ def _load() -> Callable | None:
         return None
     fn = lib.push_row
     p, i64 = ctypes.c_void_p, ctypes.c_longlong
-    fn.argtypes = [p, p, p, p, p, p, p, p, i64, i64, i64, i64, ctypes.c_double, p]
+    fn.argtypes = [p, p, p, p, p, p, p, p, i64, i64, i64, i64, i64, ctypes.c_double, p]
     fn.restype = None
     return fn
 

@@ -106,3 +106,48 @@ def test_built_once_then_loaded_from_the_cache(monkeypatch, tmp_path):
     monkeypatch.setattr(dtw_native, "_loaded", [])
     monkeypatch.setenv(dtw_native.NO_NATIVE_ENV, "1")
     assert dtw_native.push_row_native() is None
+
+
+@pytest.mark.parametrize("method", ["native", "jit", "scan", "loop"])
+def test_adding_and_removing_templates_scores_as_a_dtw_built_on_the_new_list(method):
+    """The adaptation's path: update_templates / add_templates / remove_templates leave the DTW
+    scoring exactly as one built from scratch on the same list (longer templates, capacity
+    exhausted, removals, a reordering that falls back to padding afresh included)."""
+    if (method == "native" and not dtw.native_available()) or (method == "jit" and not dtw.jit_available()):
+        pytest.skip(f"{method} not available here")
+    rng = np.random.default_rng(11)
+
+    def make(n: int, longest: int = 40) -> list[np.ndarray]:
+        return [np.cumsum(rng.normal(0, 0.3, (int(rng.integers(3, longest)), 6)), axis=0) for _ in range(n)]
+
+    query = np.cumsum(rng.normal(0, 0.3, (30, 6)), axis=0)
+    current = make(8)
+    d = IncrementalDTW(current, method=method, min_progress=0.5)
+    for step in range(24):
+        for t in make(int(rng.integers(1, 3))):
+            current.insert(int(rng.integers(0, len(current) + 1)), t)
+        for _ in range(step % 3):
+            del current[int(rng.integers(0, len(current)))]
+        if step == 5:
+            current.insert(0, make(1, 80)[0])  # longer than every template so far
+        if step == 9:
+            current.reverse()  # not an insertion or removal: padded afresh
+        d.push(query[0])  # a query in progress is forgotten by the update
+        d.update_templates(current)
+        ref = IncrementalDTW(current, method=method, min_progress=0.5)
+        assert d.n == 0 and d.T == ref.T and d.sources == current
+        np.testing.assert_array_equal(d.lengths, ref.lengths)
+        for f in query:
+            np.testing.assert_array_equal(d.push(f), ref.push(f))
+        np.testing.assert_array_equal(d.closed_scores(), ref.closed_scores())
+        assert d.position(1) == ref.position(1)
+    d.add_templates(make(2), at=[0, d.T])
+    assert d.T == ref.T + 2
+    d.remove_templates([0, d.T - 1])
+    ref.reset()
+    for f in query:
+        np.testing.assert_array_equal(d.push(f), ref.push(f))
+    with pytest.raises(ValueError):
+        d.remove_templates(range(d.T))
+    with pytest.raises(ValueError):
+        d.add_templates([np.zeros((3, 5))])
