@@ -17,17 +17,11 @@ IncrementalDTW then uses numba for hundreds of templates, else numpy.
 from __future__ import annotations
 
 import ctypes
-import hashlib
-import os
-import platform
-import sys
 from collections.abc import Callable
 from pathlib import Path
 
-from engine.recognition.dtw_kernel import NO_JIT_ENV
-
-NO_NATIVE_ENV = "QUICKJAB_NO_NATIVE"
-CACHE_ENV = "QUICKJAB_CACHE_DIR"
+from engine import native
+from engine.native import CACHE_ENV, NO_NATIVE_ENV  # noqa: F401 - the switches, named here too
 
 SOURCE = r"""
 #include <math.h>
@@ -79,65 +73,18 @@ void push_row(const double *restrict tmpl, const long long *restrict lengths,
     }
 }
 """
-# Vectorized over templates, the result bit for bit the plain loop's: no FMA contraction, and
-# errno-free sqrt (same value; lets the compiler use the vector instruction).
-FLAGS = ["-O3", "-march=native", "-shared", "-fPIC", "-std=c99", "-ffp-contract=off", "-fno-math-errno"]
 
 _loaded: list[Callable | None] = []
 
 
-def _disabled() -> bool:
-    return any(os.environ.get(v, "").strip() not in ("", "0") for v in (NO_NATIVE_ENV, NO_JIT_ENV))
-
-
-def cache_dir() -> Path:
-    """Where the built library is kept: $QUICKJAB_CACHE_DIR, else $XDG_CACHE_HOME/quickjab or
-    ~/.cache/quickjab."""
-    if os.environ.get(CACHE_ENV):
-        return Path(os.environ[CACHE_ENV])
-    base = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
-    return Path(base) / "quickjab"
-
-
 def library_path() -> Path:
-    """The library's file name names the source, the flags and the machine, so a changed kernel
-    or another interpreter's architecture never loads a stale build."""
-    key = hashlib.sha256("\0".join([SOURCE, *FLAGS, platform.machine(), sys.platform]).encode()).hexdigest()[:16]
-    return cache_dir() / f"dtw_push_row-{key}.so"
-
-
-def _build(target: Path) -> bool:
-    """Compile SOURCE into `target` (atomically: a half-written library never loads)."""
-    import shutil  # only for the build, once per machine: not on every start
-    import subprocess
-    import tempfile
-
-    cc = os.environ.get("CC") or shutil.which("cc") or shutil.which("gcc") or shutil.which("clang")
-    if not cc:
-        return False
-    try:
-        target.parent.mkdir(parents=True, exist_ok=True)
-        with tempfile.TemporaryDirectory(dir=target.parent) as tmp:
-            src, out = Path(tmp) / "dtw_push_row.c", Path(tmp) / target.name
-            src.write_text(SOURCE)
-            r = subprocess.run([cc, *FLAGS, "-o", str(out), str(src), "-lm"], capture_output=True, timeout=60)
-            if r.returncode != 0 or not out.exists():
-                return False
-            os.replace(out, target)
-        return True
-    except (OSError, subprocess.SubprocessError):
-        return False
+    """Where this kernel's built library is (or would be) kept."""
+    return native.library_path("dtw_push_row", SOURCE)
 
 
 def _load() -> Callable | None:
-    if _disabled() or os.name != "posix":
-        return None
-    path = library_path()
-    if not path.exists() and not _build(path):
-        return None
-    try:
-        lib = ctypes.CDLL(str(path))
-    except OSError:
+    lib = native.load_library("dtw_push_row", SOURCE)
+    if lib is None:
         return None
     fn = lib.push_row
     p, i64 = ctypes.c_void_p, ctypes.c_longlong
