@@ -40,10 +40,24 @@ def cache_dir() -> Path:
     return Path(base) / "quickjab"
 
 
+def _cpu_features() -> str:
+    """The CPU's feature flags (Linux), part of the library's key: it is built with
+    -march=native, so a cache shared with another CPU (a network home) must not run it there."""
+    try:
+        with open("/proc/cpuinfo") as fh:
+            for line in fh:
+                if line.startswith(("flags", "Features")):
+                    return line
+    except OSError:
+        pass
+    return ""
+
+
 def library_path(stem: str, source: str) -> Path:
-    """The library's file name names the source, the flags and the machine, so a changed kernel
-    or another interpreter's architecture never loads a stale build."""
-    key = hashlib.sha256("\0".join([source, *FLAGS, platform.machine(), sys.platform]).encode()).hexdigest()[:16]
+    """The library's file name names the source, the flags and the machine (architecture and
+    CPU features), so a changed kernel or another CPU never loads a stale build."""
+    parts = [source, *FLAGS, platform.machine(), sys.platform, _cpu_features()]
+    key = hashlib.sha256("\0".join(parts).encode()).hexdigest()[:16]
     return cache_dir() / f"{stem}-{key}.so"
 
 
