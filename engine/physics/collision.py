@@ -64,6 +64,29 @@ long long narrow(const double *restrict x, const long long *restrict quad, long 
     return bad;
 }
 
+/* CapsulePairs.candidates: the pairs whose bounding spheres come within margin, ascending;
+   returns how many were written to out. mid2 (C, 3) and extent (C,) are scratch. */
+long long candidates(const double *restrict x, const long long *restrict caps, long long C,
+                     const double *restrict diameters, const long long *restrict cap_a,
+                     const long long *restrict cap_b, long long K, double margin,
+                     double *restrict mid2, double *restrict extent, long long *restrict out)
+{
+    for (long long c = 0; c < C; c++) {
+        const double *p = x + 3 * caps[2 * c], *q = x + 3 * caps[2 * c + 1];
+        double axis[3];
+        for (int i = 0; i < 3; i++) { mid2[3 * c + i] = p[i] + q[i]; axis[i] = q[i] - p[i]; }
+        extent[c] = sqrt(dot3(axis, axis)) + diameters[c];
+    }
+    long long n = 0;
+    for (long long k = 0; k < K; k++) {
+        const double *ma = mid2 + 3 * cap_a[k], *mb = mid2 + 3 * cap_b[k];
+        double d[3] = {mb[0] - ma[0], mb[1] - ma[1], mb[2] - ma[2]};
+        double reach = (extent[cap_a[k]] + extent[cap_b[k]]) + 2.0 * margin;
+        if (dot3(d, d) < reach * reach) out[n++] = k;
+    }
+    return n;
+}
+
 /* ContactSet.project: lambda_k = max(rsum_k - sum_q gn_qk . x_qk, 0), then the pushes scattered. */
 void contact_project(double *restrict x, const long long *restrict quad, long long K,
                      const double *restrict gn, const double *restrict rsum, const double *restrict push,
@@ -103,7 +126,9 @@ def kernels():
             lib.narrow.restype = i64
             lib.contact_project.argtypes = [p, p, i64, p, p, p, p, p, p, i64]
             lib.contact_project.restype = None
-            _kernels.append((lib.narrow, lib.contact_project))
+            lib.candidates.argtypes = [p, p, i64, p, p, p, i64, f64, p, p, p]
+            lib.candidates.restype = i64
+            _kernels.append((lib.narrow, lib.contact_project, lib.candidates))
     return _kernels[0]
 
 
@@ -222,13 +247,30 @@ class CapsulePairs:
         self.diameters = 2.0 * radii
         self._quad_c = np.ascontiguousarray(self.quad, dtype=np.int64)  # for the C narrow phase
         self._rsum_c = np.ascontiguousarray(self.rsum, dtype=np.float64)
+        # for the C broad phase: each capsule's two end particles, and scratch
+        self._caps_c = np.ascontiguousarray(np.stack([caps[:, 0], caps[:, 1]], axis=1), dtype=np.int64)
+        self._diam_c = np.ascontiguousarray(self.diameters, dtype=np.float64)
+        self._cap_a_c = np.ascontiguousarray(cap_a, dtype=np.int64)
+        self._cap_b_c = np.ascontiguousarray(cap_b, dtype=np.int64)
+        self._mid2, self._extent = np.empty((len(caps), 3)), np.empty(len(caps))
+        self._cand = np.empty(len(cap_a), dtype=np.int64)
 
     def __len__(self) -> int:
         return len(self.cap_a)
 
     def candidates(self, x: np.ndarray, margin: float) -> np.ndarray:
         """Indices of pairs whose bounding spheres (capsule midpoint, half length + radius)
-        come within `margin`: a cheap broad phase before the exact segment test."""
+        come within `margin`: a cheap broad phase before the exact segment test (one C call
+        when it can, else numpy)."""
+        k = kernels()
+        if k is not None and x.flags.c_contiguous and x.dtype == np.float64:
+            n = k[2](x.ctypes.data, self._caps_c.ctypes.data, self.n_caps, self._diam_c.ctypes.data,
+                     self._cap_a_c.ctypes.data, self._cap_b_c.ctypes.data, len(self.cap_a), float(margin),
+                     self._mid2.ctypes.data, self._extent.ctypes.data, self._cand.ctypes.data)
+            return self._cand[:n].copy()
+        return self.candidates_numpy(x, margin)
+
+    def candidates_numpy(self, x: np.ndarray, margin: float) -> np.ndarray:
         c = self.n_caps
         k = len(self.cap_a)
         ends = x[self.cap_ends]

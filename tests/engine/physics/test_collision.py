@@ -229,7 +229,8 @@ def test_fast_fist_from_close_range_is_turned_back_too():
 
 def test_the_c_narrow_phase_and_contact_projection_are_numpys_bit_for_bit():
     """engine/physics/collision.py's C kernels follow the numpy code operation for operation:
-    random capsule pairs (crossing, parallel, point-like) give the same s, t, normals, depths,
+    random capsule pairs (crossing, parallel, point-like) give the same broad-phase candidates,
+    the same s, t, normals, depths,
     and projecting their contact set moves the particles to the same bits."""
     from engine.physics import collision
 
@@ -249,6 +250,8 @@ def test_the_c_narrow_phase_and_contact_projection_are_numpys_bit_for_bit():
         x = rng.normal(0.0, 0.4, (n, 3))
         if trial % 4 == 0:
             x[caps[5, 1]] = x[caps[5, 0]] + (x[caps[17, 1]] - x[caps[17, 0]])  # parallel segments
+        for margin in (0.0, 0.05, 0.3):
+            assert np.array_equal(pairs.candidates(x, margin), pairs.candidates_numpy(x, margin))
         idx = rng.choice(len(pairs), 30, replace=False)
         c_out, np_out = pairs.narrow(x, idx), pairs.narrow_numpy(x, idx)
         for a, b in zip(c_out, np_out, strict=True):
