@@ -9,10 +9,12 @@ as (17, 3) world joints, already interpolated with the loop's alpha by the calle
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 import pygame
+from pygame import gfxdraw
 
 from game.camera import Camera
 from game.skeleton import JOINTS
@@ -28,6 +30,7 @@ POST_HEIGHT = 1.4
 
 KEY = (255, 0, 255)
 LIGHT_2D = np.array([-0.55, -0.83])  # the key light comes from the upper left of the screen
+LIGHT_X, LIGHT_Y = float(LIGHT_2D[0]), float(LIGHT_2D[1])  # the same as plain floats (per limb)
 
 
 @dataclass(frozen=True)
@@ -60,6 +63,12 @@ SHADOW_RING = np.stack([0.45 * np.cos(_SHADOW_ANG), np.full_like(_SHADOW_ANG, 0.
 _STAR_POINTS = 10
 STAR_ANG = np.arange(2 * _STAR_POINTS) * np.pi / _STAR_POINTS
 STAR_RADII = np.where(np.arange(2 * _STAR_POINTS) % 2 == 0, 1.0, 0.45)
+
+
+def _aacircle(surf: pygame.Surface, color, x: float, y: float, r: float) -> None:
+    """An antialiased circle outline: gfxdraw's (2-6 us a call) rather than pygame.draw's
+    (11-36 us), on integer pixels as gfxdraw takes them."""
+    gfxdraw.aacircle(surf, int(round(x)), int(round(y)), max(1, int(round(r))), color)
 
 
 def lerp_joints(prev: np.ndarray, curr: np.ndarray, alpha: float) -> np.ndarray:
@@ -256,19 +265,22 @@ class Renderer:
             "skin": look.skin, "trunks_leg": look.trunks, "gloves": look.gloves, "shoes": look.shoes,
         }
         prims: list[tuple[float, int, tuple]] = []
+        # the limbs and spheres from plain floats (one conversion per body, not numpy per limb)
+        pts, zs, ks = xy.tolist(), z.tolist(), scale.tolist()
         for a, b, r, part in LIMBS:
             ia, ib = J[a], J[b]
-            d = (z[ia] + z[ib]) / 2
-            prims.append((d, 0, (xy[ia], xy[ib], r * scale[ia], r * scale[ib], colors[part])))
+            d = (zs[ia] + zs[ib]) / 2
+            prims.append((d, 0, (pts[ia], pts[ib], r * ks[ia], r * ks[ib], colors[part])))
         # trunks legs: over the upper half of each thigh
         for hip, knee in (("hip_l", "knee_l"), ("hip_r", "knee_r")):
             ia, ib = J[hip], J[knee]
-            mid_xy = xy[ia] + (xy[ib] - xy[ia]) * 0.5
-            d = (z[ia] * 0.75 + z[ib] * 0.25) - 0.01
-            prims.append((d, 0, (xy[ia], mid_xy, 0.09 * scale[ia], 0.085 * scale[ib], look.trunks)))
+            (ax, ay), (bx, by) = pts[ia], pts[ib]
+            mid_xy = (ax + (bx - ax) * 0.5, ay + (by - ay) * 0.5)
+            d = (zs[ia] * 0.75 + zs[ib] * 0.25) - 0.01
+            prims.append((d, 0, (pts[ia], mid_xy, 0.09 * ks[ia], 0.085 * ks[ib], look.trunks)))
         for name, r, part in SPHERES:
             i = J[name]
-            prims.append((z[i] - r, 1, (xy[i], r * scale[i], colors[part])))
+            prims.append((zs[i] - r, 1, (pts[i], r * ks[i], colors[part])))
         # the face: eyes and brows on the side of the head the boxer faces, drawn just after
         # the head when that side is towards the camera (so a boxer's facing reads at once)
         right = joints[J["shoulder_r"]] - joints[J["shoulder_l"]]
@@ -288,37 +300,43 @@ class Renderer:
         prims.append((d, 2, (xy, scale, look)))
         return prims
 
-    def _capsule(self, surf: pygame.Surface, a: np.ndarray, b: np.ndarray, ra: float, rb: float, color) -> None:
+    # Capsules and spheres are drawn from plain floats: at ~40 capsules a frame the small numpy
+    # arrays per limb (difference, normal, quad, .tolist()) cost more than the drawing (issue 14).
+    def _capsule(self, surf: pygame.Surface, a, b, ra: float, rb: float, color) -> None:
+        ax, ay, bx, by = float(a[0]), float(a[1]), float(b[0]), float(b[1])
         outline = shade(color, 0.45)
-        self._capsule_fill(surf, a, b, ra + 1.5, rb + 1.5, outline)
+        self._capsule_fill(surf, (ax, ay), (bx, by), ra + 1.5, rb + 1.5, outline)
         if self.antialias:  # smooth the silhouette: the outline's edges and end caps
-            self._capsule_edges(surf, a, b, ra + 1.5, rb + 1.5, outline)
-        self._capsule_fill(surf, a, b, ra, rb, color)
+            self._capsule_edges(surf, (ax, ay), (bx, by), ra + 1.5, rb + 1.5, outline)
+        self._capsule_fill(surf, (ax, ay), (bx, by), ra, rb, color)
         if not self.detailed:
             return
         # highlight: a thinner, lighter capsule shifted towards the light
-        off = LIGHT_2D * 0.35
-        self._capsule_fill(surf, a + off * ra, b + off * rb, ra * 0.45, rb * 0.45, shade(color, 1.28))
+        ox, oy = LIGHT_X * 0.35, LIGHT_Y * 0.35
+        self._capsule_fill(surf, (ax + ox * ra, ay + oy * ra), (bx + ox * rb, by + oy * rb), ra * 0.45, rb * 0.45,
+                           shade(color, 1.28))
 
-    def _capsule_fill(self, surf: pygame.Surface, a: np.ndarray, b: np.ndarray, ra: float, rb: float, color) -> None:
-        d = b - a
-        n = float(np.hypot(d[0], d[1]))
+    def _capsule_fill(self, surf: pygame.Surface, a, b, ra: float, rb: float, color) -> None:
+        ax, ay, bx, by = float(a[0]), float(a[1]), float(b[0]), float(b[1])
+        dx, dy = bx - ax, by - ay
+        n = math.sqrt(dx * dx + dy * dy)
         if n > 1e-6:
-            perp = np.array([-d[1], d[0]]) / n
-            quad = np.array([a + perp * ra, b + perp * rb, b - perp * rb, a - perp * ra])
-            self._poly(surf, color, quad)
-        pygame.draw.circle(surf, color, (float(a[0]), float(a[1])), max(1.0, ra))
-        pygame.draw.circle(surf, color, (float(b[0]), float(b[1])), max(1.0, rb))
+            px, py = -dy / n, dx / n
+            pygame.draw.polygon(surf, color, ((ax + px * ra, ay + py * ra), (bx + px * rb, by + py * rb),
+                                              (bx - px * rb, by - py * rb), (ax - px * ra, ay - py * ra)))
+        pygame.draw.circle(surf, color, (ax, ay), max(1.0, ra))
+        pygame.draw.circle(surf, color, (bx, by), max(1.0, rb))
 
-    def _capsule_edges(self, surf: pygame.Surface, a: np.ndarray, b: np.ndarray, ra: float, rb: float, color) -> None:
-        d = b - a
-        n = float(np.hypot(d[0], d[1]))
+    def _capsule_edges(self, surf: pygame.Surface, a, b, ra: float, rb: float, color) -> None:
+        ax, ay, bx, by = float(a[0]), float(a[1]), float(b[0]), float(b[1])
+        dx, dy = bx - ax, by - ay
+        n = math.sqrt(dx * dx + dy * dy)
         if n > 1e-6:
-            px, py = -d[1] / n, d[0] / n
-            pygame.draw.aaline(surf, color, (a[0] + px * ra, a[1] + py * ra), (b[0] + px * rb, b[1] + py * rb))
-            pygame.draw.aaline(surf, color, (a[0] - px * ra, a[1] - py * ra), (b[0] - px * rb, b[1] - py * rb))
-        pygame.draw.aacircle(surf, color, (float(a[0]), float(a[1])), max(1.0, ra))
-        pygame.draw.aacircle(surf, color, (float(b[0]), float(b[1])), max(1.0, rb))
+            px, py = -dy / n, dx / n
+            pygame.draw.aaline(surf, color, (ax + px * ra, ay + py * ra), (bx + px * rb, by + py * rb))
+            pygame.draw.aaline(surf, color, (ax - px * ra, ay - py * ra), (bx - px * rb, by - py * rb))
+        _aacircle(surf, color, ax, ay, ra)
+        _aacircle(surf, color, bx, by, rb)
 
     def _eyes(self, surf: pygame.Surface, xy: np.ndarray, k: float) -> None:
         r = max(1.0, 0.014 * k)
@@ -330,12 +348,12 @@ class Renderer:
         pos = (float(c[0]), float(c[1]))
         pygame.draw.circle(surf, shade(color, 0.45), pos, r + 1.5)
         if self.antialias:
-            pygame.draw.aacircle(surf, shade(color, 0.45), pos, r + 1.5)
+            _aacircle(surf, shade(color, 0.45), pos[0], pos[1], r + 1.5)
         pygame.draw.circle(surf, shade(color, 0.8), pos, r)
         if not self.detailed:
             return
-        pygame.draw.circle(surf, color, (pos[0] + LIGHT_2D[0] * r * 0.15, pos[1] + LIGHT_2D[1] * r * 0.15), r * 0.8)
-        pygame.draw.circle(surf, shade(color, 1.35), (pos[0] + LIGHT_2D[0] * r * 0.4, pos[1] + LIGHT_2D[1] * r * 0.4), r * 0.3)
+        pygame.draw.circle(surf, color, (pos[0] + LIGHT_X * r * 0.15, pos[1] + LIGHT_Y * r * 0.15), r * 0.8)
+        pygame.draw.circle(surf, shade(color, 1.35), (pos[0] + LIGHT_X * r * 0.4, pos[1] + LIGHT_Y * r * 0.4), r * 0.3)
 
     def _torso(self, surf: pygame.Surface, xy: np.ndarray, scale: np.ndarray, look: BoxerLook) -> None:
         sl, sr, hl, hr = xy[J["shoulder_l"]], xy[J["shoulder_r"]], xy[J["hip_l"]], xy[J["hip_r"]]

@@ -122,16 +122,17 @@ def load_templates(path: str | Path | None = None, left_handed: bool = False):
 
 def load_graph(path: str | Path | None = None):
     """The Interaction Graph: `path`, else the shipped table, else one cached in the user's
-    data directory, else a small one built now (~3 s) and cached there."""
+    data directory, else a small one built now (~3 s) and cached there. A match needs the
+    policy and the look-up, not the edges: they stay compressed in the file."""
     import sys
 
     from game.interaction import DEFAULT_GRAPH, InteractionGraph
     from game.userdata import data_dir
 
     if path is not None:
-        return InteractionGraph.load(path)
+        return InteractionGraph.load(path, edges=False)
     if DEFAULT_GRAPH.exists():
-        return InteractionGraph.load(DEFAULT_GRAPH)
+        return InteractionGraph.load(DEFAULT_GRAPH, edges=False)
     cached = data_dir() / "graph-small.npz"
     if not cached.exists():
         from game.actions import load_library
@@ -140,7 +141,7 @@ def load_graph(path: str | Path | None = None):
         print(f"quickjab: no shipped Interaction Graph; building a small one in {cached} (once)", file=sys.stderr)
         cached.parent.mkdir(parents=True, exist_ok=True)
         build_graph(load_library(), BuildParams(states=3000, bouts=256)).save(cached)
-    return InteractionGraph.load(cached)
+    return InteractionGraph.load(cached, edges=False)
 
 
 LOG_KEPT = 1024  # recent recognizer events / blows kept in memory (an hour makes ~7,000-12,000 events)

@@ -17,6 +17,7 @@ TARGETS = {
     "recognition": "tools.bench_recognition",
     "serial": "tools.bench_serial",
     "frame": "tools.bench_frame",
+    "startup": "tools.bench_startup",
 }
 
 

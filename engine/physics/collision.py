@@ -3,11 +3,133 @@ all candidate capsule pairs, resolved by moving particles weighted by inverse ma
 
 from __future__ import annotations
 
+import ctypes
 from dataclasses import dataclass
 
 import numpy as np
 
+from engine import native
+
 _EPS = 1e-12
+
+# The narrow phase and the contact projection in C (engine/native.py): the numpy code below
+# operation for operation, in its order (dot products (x + y) + z, the contact sums end by end,
+# the scatter in bincount's order), so a world steps to the same bits with or without a C
+# compiler. A contact step runs them up to 8 times; each is one call instead of 6-35 numpy
+# calls on arrays of a few pairs.
+KERNEL_SOURCE = r"""
+#include <math.h>
+static double maxnan(double a, double b) { return (a >= b || a != a) ? a : b; }  /* np.maximum */
+static double minnan(double a, double b) { return (a <= b || a != a) ? a : b; }  /* np.minimum */
+static double dot3(const double *u, const double *w) { return (u[0] * w[0] + u[1] * w[1]) + u[2] * w[2]; }
+
+/* CapsulePairs.narrow for the pairs idx: s, t, unit normal a->b (K, 3), depth. Returns how
+   many pairs have (nearly) coincident closest points: the caller then redoes the call in numpy,
+   whose fallback direction this does not implement. */
+long long narrow(const double *restrict x, const long long *restrict quad, long long P,
+                 const long long *restrict idx, long long K, const double *restrict rsum, double eps,
+                 double *restrict s_out, double *restrict t_out, double *restrict n_out,
+                 double *restrict depth_out)
+{
+    long long bad = 0;
+    for (long long k = 0; k < K; k++) {
+        long long p = idx[k];
+        const double *e0 = x + 3 * quad[p], *e1 = x + 3 * quad[P + p];
+        const double *e2 = x + 3 * quad[2 * P + p], *e3 = x + 3 * quad[3 * P + p];
+        double v0[3], v1[3], v2[3];
+        for (int i = 0; i < 3; i++) { v0[i] = e1[i] - e0[i]; v1[i] = e3[i] - e2[i]; v2[i] = e0[i] - e2[i]; }
+        double a = dot3(v0, v0), b = dot3(v0, v1), c = dot3(v0, v2), e = dot3(v1, v1), f = dot3(v1, v2);
+        double a_safe = maxnan(a, eps);
+        double ae = a_safe * maxnan(e, eps);
+        double sp = -c / a_safe, sq = (b - c) / a_safe;
+        double denom = a * e - b * b;
+        double lo = minnan(sp, sq), hi = maxnan(sp, sq);
+        double s_par = 0.5 * (maxnan(lo, 0.0) + minnan(hi, 1.0));
+        double s_gen = (b * f - c * e) / maxnan(denom, eps);
+        double s = denom <= 1e-6 * ae ? s_par : s_gen;
+        s = minnan(maxnan(s, 0.0), 1.0);
+        double t = (b * s + f) / maxnan(e, eps);
+        s = t < 0.0 ? sp : (t > 1.0 ? sq : s);
+        s = minnan(maxnan(s, 0.0), 1.0);
+        t = minnan(maxnan(t, 0.0), 1.0);
+        double d[3];
+        for (int i = 0; i < 3; i++) d[i] = (t * v1[i] - s * v0[i]) - v2[i];
+        double dist = sqrt(dot3(d, d));
+        depth_out[k] = rsum[p] - dist;
+        s_out[k] = s;
+        t_out[k] = t;
+        if (dist < 1e-9) bad++;
+        for (int i = 0; i < 3; i++) n_out[3 * k + i] = d[i] / dist;
+    }
+    return bad;
+}
+
+/* CapsulePairs.candidates: the pairs whose bounding spheres come within margin, ascending;
+   returns how many were written to out. mid2 (C, 3) and extent (C,) are scratch. */
+long long candidates(const double *restrict x, const long long *restrict caps, long long C,
+                     const double *restrict diameters, const long long *restrict cap_a,
+                     const long long *restrict cap_b, long long K, double margin,
+                     double *restrict mid2, double *restrict extent, long long *restrict out)
+{
+    for (long long c = 0; c < C; c++) {
+        const double *p = x + 3 * caps[2 * c], *q = x + 3 * caps[2 * c + 1];
+        double axis[3];
+        for (int i = 0; i < 3; i++) { mid2[3 * c + i] = p[i] + q[i]; axis[i] = q[i] - p[i]; }
+        extent[c] = sqrt(dot3(axis, axis)) + diameters[c];
+    }
+    long long n = 0;
+    for (long long k = 0; k < K; k++) {
+        const double *ma = mid2 + 3 * cap_a[k], *mb = mid2 + 3 * cap_b[k];
+        double d[3] = {mb[0] - ma[0], mb[1] - ma[1], mb[2] - ma[2]};
+        double reach = (extent[cap_a[k]] + extent[cap_b[k]]) + 2.0 * margin;
+        if (dot3(d, d) < reach * reach) out[n++] = k;
+    }
+    return n;
+}
+
+/* ContactSet.project: lambda_k = max(rsum_k - sum_q gn_qk . x_qk, 0), then the pushes scattered. */
+void contact_project(double *restrict x, const long long *restrict quad, long long K,
+                     const double *restrict gn, const double *restrict rsum, const double *restrict push,
+                     const long long *restrict flat, double *restrict lam, double *restrict acc,
+                     long long size)
+{
+    for (long long k = 0; k < K; k++) {
+        double tot = 0.0;
+        for (long long q = 0; q < 4; q++) {
+            double sq = dot3(gn + 3 * (q * K + k), x + 3 * quad[q * K + k]);
+            tot = q == 0 ? sq : tot + sq;
+        }
+        lam[k] = maxnan(rsum[k] - tot, 0.0);
+    }
+    for (long long q = 0; q < size; q++) acc[q] = 0.0;
+    for (long long q = 0; q < 4; q++)
+        for (long long k = 0; k < K; k++)
+            for (long long i = 0; i < 3; i++) {
+                long long m = (q * K + k) * 3 + i;
+                acc[flat[m]] += push[m] * lam[k];
+            }
+    for (long long q = 0; q < size; q++) x[q] += acc[q];
+}
+"""
+_kernels: list = []
+
+
+def kernels():
+    """(narrow, contact_project) as ctypes functions, or None without a C compiler."""
+    if not _kernels:
+        lib = native.load_library("contacts", KERNEL_SOURCE)
+        if lib is None:
+            _kernels.append(None)
+        else:
+            p, i64, f64 = ctypes.c_void_p, ctypes.c_longlong, ctypes.c_double
+            lib.narrow.argtypes = [p, p, i64, p, i64, p, f64, p, p, p, p]
+            lib.narrow.restype = i64
+            lib.contact_project.argtypes = [p, p, i64, p, p, p, p, p, p, i64]
+            lib.contact_project.restype = None
+            lib.candidates.argtypes = [p, p, i64, p, p, p, i64, f64, p, p, p]
+            lib.candidates.restype = i64
+            _kernels.append((lib.narrow, lib.contact_project, lib.candidates))
+    return _kernels[0]
 
 
 @dataclass(frozen=True)
@@ -65,17 +187,30 @@ _PLUS = np.array([1, 3, 0])
 _MINUS = np.array([0, 2, 2])
 
 
-def _gram(ends: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """ends (4, K, 3) -> the three edge vectors V (3, K, 3) and their Gram matrices (3, 3, K)."""
+def _dot3(u: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """Row dot products of (K, 3) arrays, summed (x + y) + z: the order the C kernels use
+    (einsum's own order is its business and changes with its inner loops)."""
+    return (u * w).sum(1)
+
+
+def _dot12(gn: np.ndarray, xq: np.ndarray) -> np.ndarray:
+    """sum over the four ends q and x, y, z of gn * xq (both (4, K, 3)) -> (K,), per end
+    (x + y) + z, then end by end: the C kernels' order."""
+    return (gn * xq).sum(2).sum(0)
+
+
+def _gram(ends: np.ndarray) -> tuple[np.ndarray, tuple[np.ndarray, ...]]:
+    """ends (4, K, 3) -> the three edge vectors V (3, K, 3) and the Gram entries _params takes:
+    d1.d1, d1.d2, d1.r, d2.d2, d2.r."""
     v = ends[_PLUS] - ends[_MINUS]
-    return v, np.einsum("aki,bki->abk", v, v)
+    return v, (_dot3(v[0], v[0]), _dot3(v[0], v[1]), _dot3(v[0], v[2]), _dot3(v[1], v[1]), _dot3(v[1], v[2]))
 
 
 def closest_params(p1: np.ndarray, q1: np.ndarray, p2: np.ndarray, q2: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Parameters (s, t) in [0, 1] of the closest points p1 + s (q1 - p1) and p2 + t (q2 - p2)
     of K segment pairs (all inputs (K, 3)). Degenerate segments (points) are handled."""
     _, g = _gram(np.stack([p1, q1, p2, q2]))
-    return _params(g[0, 0], g[0, 1], g[0, 2], g[1, 1], g[1, 2])
+    return _params(*g)
 
 
 def segment_distance(p1: np.ndarray, q1: np.ndarray, p2: np.ndarray, q2: np.ndarray) -> np.ndarray:
@@ -110,13 +245,32 @@ class CapsulePairs:
         self.not_sphere_b = (self.ib != self.jb).astype(float)
         self.quad_flat = self.quad[:, :, None] * 3 + np.arange(3)  # (4, K, 3) x.ravel() indices
         self.diameters = 2.0 * radii
+        self._quad_c = np.ascontiguousarray(self.quad, dtype=np.int64)  # for the C narrow phase
+        self._rsum_c = np.ascontiguousarray(self.rsum, dtype=np.float64)
+        # for the C broad phase: each capsule's two end particles, and scratch
+        self._caps_c = np.ascontiguousarray(np.stack([caps[:, 0], caps[:, 1]], axis=1), dtype=np.int64)
+        self._diam_c = np.ascontiguousarray(self.diameters, dtype=np.float64)
+        self._cap_a_c = np.ascontiguousarray(cap_a, dtype=np.int64)
+        self._cap_b_c = np.ascontiguousarray(cap_b, dtype=np.int64)
+        self._mid2, self._extent = np.empty((len(caps), 3)), np.empty(len(caps))
+        self._cand = np.empty(len(cap_a), dtype=np.int64)
 
     def __len__(self) -> int:
         return len(self.cap_a)
 
     def candidates(self, x: np.ndarray, margin: float) -> np.ndarray:
         """Indices of pairs whose bounding spheres (capsule midpoint, half length + radius)
-        come within `margin`: a cheap broad phase before the exact segment test."""
+        come within `margin`: a cheap broad phase before the exact segment test (one C call
+        when it can, else numpy)."""
+        k = kernels()
+        if k is not None and x.flags.c_contiguous and x.dtype == np.float64:
+            n = k[2](x.ctypes.data, self._caps_c.ctypes.data, self.n_caps, self._diam_c.ctypes.data,
+                     self._cap_a_c.ctypes.data, self._cap_b_c.ctypes.data, len(self.cap_a), float(margin),
+                     self._mid2.ctypes.data, self._extent.ctypes.data, self._cand.ctypes.data)
+            return self._cand[:n].copy()
+        return self.candidates_numpy(x, margin)
+
+    def candidates_numpy(self, x: np.ndarray, margin: float) -> np.ndarray:
         c = self.n_caps
         k = len(self.cap_a)
         ends = x[self.cap_ends]
@@ -132,9 +286,24 @@ class CapsulePairs:
 
     def narrow(self, x: np.ndarray, idx: np.ndarray):
         """For the pairs `idx`: (s, t, unit normal a->b, depth); depth > 0 means the capsules
-        overlap. Written for few numpy calls: at this size their overhead is the cost."""
+        overlap. One C call when it can (see KERNEL_SOURCE), else numpy."""
+        k = kernels()
+        if k is not None and x.flags.c_contiguous and x.dtype == np.float64:
+            idx = np.ascontiguousarray(idx, dtype=np.int64)
+            n = len(idx)
+            s, t, depth = np.empty(n), np.empty(n), np.empty(n)
+            normal = np.empty((n, 3))
+            bad = k[0](x.ctypes.data, self._quad_c.ctypes.data, len(self.cap_a), idx.ctypes.data, n,
+                       self._rsum_c.ctypes.data, _EPS, s.ctypes.data, t.ctypes.data, normal.ctypes.data,
+                       depth.ctypes.data)
+            if bad == 0:
+                return s, t, normal, depth
+        return self.narrow_numpy(x, idx)
+
+    def narrow_numpy(self, x: np.ndarray, idx: np.ndarray):
+        """`narrow` in numpy. Written for few numpy calls: at this size their overhead is the cost."""
         v, g = _gram(x[self.quad[:, idx]])
-        s, t = _params(g[0, 0], g[0, 1], g[0, 2], g[1, 1], g[1, 2])
+        s, t = _params(*g)
         d = t[:, None] * v[1] - s[:, None] * v[0] - v[2]  # closest point on b - on a
         dist = np.sqrt((d * d).sum(1))
         depth = self.rsum[idx] - dist
@@ -182,13 +351,30 @@ class ContactSet:
         self.rsum = rsum
         self.gn = g[:, :, None] * n[None, :, :]  # (4, K, 3)
         w = inv_mass[quad]  # (4, K)
-        inv_wsum = 1.0 / np.maximum(np.einsum("qk,qk->k", w, g * g), _EPS)
+        inv_wsum = 1.0 / np.maximum((w * (g * g)).sum(0), _EPS)
         self.push = self.gn * (w * inv_wsum)[:, :, None]  # displacement per unit lambda
         self.flat = quad_flat.reshape(-1)  # x.ravel() indices of the push
         self.size = 3 * len(inv_mass)
+        k = kernels()
+        self._c = None
+        if k is not None:
+            self.quad = np.ascontiguousarray(self.quad, dtype=np.int64)
+            self.flat = np.ascontiguousarray(self.flat, dtype=np.int64)
+            self.rsum = np.ascontiguousarray(self.rsum, dtype=np.float64)
+            self._lam, self._acc = np.empty(self.quad.shape[1]), np.empty(self.size)
+            self._c = (k[1], self.quad.ctypes.data, self.quad.shape[1], self.gn.ctypes.data, self.rsum.ctypes.data,
+                       self.push.ctypes.data, self.flat.ctypes.data, self._lam.ctypes.data, self._acc.ctypes.data,
+                       self.size)
 
     def project(self, x: np.ndarray) -> None:
-        depth = self.rsum - np.einsum("qki,qki->k", self.gn, x[self.quad])
+        if self._c is not None and x.flags.c_contiguous and x.dtype == np.float64 and x.size == self.size:
+            fn, *args = self._c
+            fn(x.ctypes.data, *args)
+            return
+        self.project_numpy(x)
+
+    def project_numpy(self, x: np.ndarray) -> None:
+        depth = self.rsum - _dot12(self.gn, x[self.quad])
         lam = np.maximum(depth, 0.0, out=depth)
         dx = np.bincount(self.flat, weights=(self.push * lam[:, None]).reshape(-1), minlength=self.size)
         x += dx.reshape(x.shape)
@@ -196,8 +382,8 @@ class ContactSet:
     def separations(self, x: np.ndarray) -> np.ndarray:
         """(closest point on b - closest point on a) . n at positions x, with this step's
         barycentric weights and normals -> (K,)."""
-        return np.einsum("qki,qki->k", self.gn, x[self.quad])
+        return _dot12(self.gn, x[self.quad])
 
     def closing_speeds(self, v: np.ndarray) -> np.ndarray:
         """Speed at which each pair's closest points approach along its normal (> 0 closing)."""
-        return -np.einsum("qki,qki->k", self.gn, v[self.quad])
+        return -_dot12(self.gn, v[self.quad])

@@ -20,7 +20,10 @@ scan. Two ways to run it, identical results:
 - "jit": one compiled numba call per frame (dtw_kernel.push_row_kernel()) doing the local costs, the
   row, the normalization and the per-template minimum; no numpy call overhead, and its loop over
   templates vectorizes. Needs numba (not installed, or QUICKJAB_NO_JIT=1: unavailable).
-`method="auto"` picks "jit" when numba is available, else scan or loop by the number of
+- "native": the same kernel in C (dtw_native.py), built once with the system's C compiler and
+  loaded with ctypes: no numba import (~0.6 s, ~110 MB) at start-up. Same results as "jit".
+`method="auto"` picks "native" when it can be had; else "jit" from JIT_FROM_TEMPLATES templates
+(where its start-up cost pays) when numba is available; else scan or loop by the number of
 templates (measured by `quickjab bench recognition`).
 """
 
@@ -31,6 +34,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from engine.recognition.dtw_kernel import push_row_kernel
+from engine.recognition.dtw_native import push_row_native
 
 # Below this many templates the scan's few whole-block calls beat the per-position loop;
 # measured with `quickjab bench recognition --sweep` (crossover between 100 and 300 templates).
@@ -38,12 +42,30 @@ LOOP_FROM_TEMPLATES = 200
 # Local costs: |t - q|^2 = |t|^2 - 2 t.q + |q|^2 from precomputed squared norms and one
 # matrix-vector product (half the cost of a broadcast subtract-square-sum; rounding ~1e-7 g).
 # `exact_costs=True` computes them the direct way (the reference tests use it; "jit" always does).
-METHODS = ("scan", "loop", "jit")
+METHODS = ("scan", "loop", "jit", "native")
+# numba's import and code load cost ~0.6 s and ~110 MB of a process (issue 14): without the C
+# kernel, auto takes it only from here, where numpy's per-frame cost passes ~0.25 ms.
+JIT_FROM_TEMPLATES = 200
 
 
 def jit_available() -> bool:
     """True when the "jit" method can run (numba importable and QUICKJAB_NO_JIT not set)."""
     return push_row_kernel() is not None
+
+
+def native_available() -> bool:
+    """True when the "native" method can run (the C kernel built or buildable here, and neither
+    QUICKJAB_NO_NATIVE nor QUICKJAB_NO_JIT set)."""
+    return push_row_native() is not None
+
+
+def auto_method(n_templates: int) -> str:
+    """The method `method="auto"` runs for this many templates (numba imported only when chosen)."""
+    if native_available():
+        return "native"
+    if n_templates >= JIT_FROM_TEMPLATES and jit_available():
+        return "jit"
+    return "loop" if n_templates >= LOOP_FROM_TEMPLATES else "scan"
 
 
 def pad_templates(templates: Sequence[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
@@ -71,46 +93,215 @@ class IncrementalDTW:
         min_progress: float = 0.0,
         exact_costs: bool = False,
     ):
-        self.tmpl, self.lengths = pad_templates([np.asarray(t, dtype=np.float64) for t in templates])
-        self.L, self.T, self.D = self.tmpl.shape
+        tmpl, lengths = pad_templates([np.asarray(t, dtype=np.float64) for t in templates])
         if method == "auto":
-            method = "jit" if jit_available() else "loop" if self.T >= LOOP_FROM_TEMPLATES else "scan"
+            method = auto_method(tmpl.shape[1])
         if method not in METHODS:
-            raise ValueError(f"method must be 'auto', 'scan', 'loop' or 'jit', not {method!r}")
+            raise ValueError(f"method must be 'auto', 'scan', 'loop', 'jit' or 'native', not {method!r}")
         if method == "jit" and not jit_available():
             raise ValueError("method 'jit' needs numba (not importable here, or QUICKJAB_NO_JIT=1 is set)")
+        if method == "native" and not native_available():
+            raise ValueError("method 'native' needs a C compiler (none here, or QUICKJAB_NO_NATIVE=1 is set)")
         self.method = method
         # Scoring only (the accumulated costs are plain DTW): after n query frames the query's
         # end may only align to template positions j + 1 >= min(L, min_progress * n), so a
         # template cannot win by matching a short prefix of itself to a long query.
         self.min_progress = float(min_progress)
-        pos = np.arange(self.L)[:, None]
-        self._steps = pos + 1.0  # (L, 1): j + 1, the path-length term of the normalization
-        self._cols = np.arange(self.T)
-        self._ext = [np.full((self.L + 1, self.T), np.inf) for _ in range(2)]
-        self._init = np.full((self.L + 1, self.T), np.inf)
-        self._init[0] = 0.0
-        self._cur = 0
-        self._row = self._ext[0][1:]
-        self._recip: dict[int, tuple[np.ndarray, np.ndarray]] = {}
-        self._take: dict[tuple[int, float], np.ndarray] = {}
-        self.scores = np.empty(self.T)
-        if method == "jit":
-            # The kernel's template layout: (L, D, T), a position's values contiguous across
-            # templates (its innermost loop); always the direct |t - q| (exact costs).
-            self._kernel = push_row_kernel()
-            self._tmpl_ldt = np.ascontiguousarray(self.tmpl.transpose(0, 2, 1))
-            self._q = np.empty(self.D)  # frames are copied here: float64, contiguous, right length
-            self._jit_cost = np.empty(self.T)
-            self._jit_left = np.empty(self.T)
-            self._jit_first = np.empty(self.T, dtype=np.int64)
-            self._rows = [e[1:] for e in self._ext]
+        self._exact_costs = exact_costs
+        # The templates as given, in order: update_templates() tells kept ones by identity.
+        self.sources = list(templates)
+        # The kernel's template layout: (L, D, T), a position's values contiguous across
+        # templates (its innermost loop); always the direct |t - q| (exact costs).
+        self._kernel = push_row_kernel() if method == "jit" else push_row_native() if method == "native" else None
+        self._set_padded(tmpl, lengths)
+        if self._kernel is not None:
             # Compile (or load from numba's cache) now, not on the first game frame.
             self.n = 0
             self.push(np.zeros(self.D))
-        else:
-            self._init_numpy_buffers(exact_costs)
         self.reset()
+
+    @property
+    def tmpl(self) -> np.ndarray:
+        """(L, T, D) zero-padded templates (for "native" a view of its own layout)."""
+        return self._ldt_full[:, :, : self.T].transpose(0, 2, 1) if self.method == "native" else self._tmpl
+
+    def _set_padded(self, tmpl: np.ndarray, lengths: np.ndarray) -> None:
+        """Take the (L, T, D) padded templates and their lengths; size every per-frame buffer."""
+        L, T, D = tmpl.shape
+        self.L, self.D = L, D
+        pos = np.arange(L)[:, None]
+        self._steps = pos + 1.0  # (L, 1): j + 1, the path-length term of the normalization
+        self._cur = 0
+        self._recip: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+        self._take: dict[tuple[int, float], np.ndarray] = {}
+        self._q = np.empty(D)  # kernels: frames are copied here (float64, contiguous, right length)
+        if self.method == "native":
+            # Room for more templates: the C kernel takes the row stride (capacity) apart from T,
+            # so add_templates() writes a column instead of reallocating (the adaptation).
+            cap = T + max(8, T // 2)
+            self._ldt_full = np.zeros((L, D, cap))
+            self._ldt_full[:, :, :T] = tmpl.transpose(0, 2, 1)
+            self._len_full = np.zeros(cap, dtype=np.int64)
+            self._len_full[:T] = lengths
+            self._arange_full = np.arange(cap)
+            self._ext_full = [np.full((L + 1, cap), np.inf) for _ in range(2)]
+            self._init_full = np.full((L + 1, cap), np.inf)
+            self._init_full[0] = 0.0
+            self._scratch = [np.empty(cap), np.empty(cap), np.empty(cap, dtype=np.int64), np.empty(cap)]
+            self._bind_native()
+            self._set_count(T)
+            return
+        self._tmpl, self.lengths, self.T = tmpl, lengths, T
+        self._cols = np.arange(T)
+        self._ext = [np.full((L + 1, T), np.inf) for _ in range(2)]
+        self._init = np.full((L + 1, T), np.inf)
+        self._init[0] = 0.0
+        self._row = self._ext[0][1:]
+        self.scores = np.empty(T)
+        if self.method == "jit":
+            self._tmpl_ldt = np.ascontiguousarray(tmpl.transpose(0, 2, 1))
+            self._jit_cost = np.empty(T)
+            self._jit_left = np.empty(T)
+            self._jit_first = np.empty(T, dtype=np.int64)
+            self._rows = [e[1:] for e in self._ext]
+        else:
+            self._init_numpy_buffers(self._exact_costs)
+
+    def _set_count(self, T: int) -> None:
+        """"native": the first T columns of the buffers are the templates; views of them."""
+        self.T = T
+        self.lengths = self._len_full[:T]
+        self._cols = self._arange_full[:T]
+        self._ext = [e[:, :T] for e in self._ext_full]
+        self._init = self._init_full[:, :T]
+        self._rows = [e[1:] for e in self._ext]
+        self._row = self._rows[self._cur]
+        self.scores = self._scratch[3][:T]
+
+    def _insert_column(self, k: int, template: np.ndarray) -> None:
+        """"native", room left and no longer than L: template k moves right, the new one in."""
+        T, ldt, lengths = self.T, self._ldt_full, self._len_full
+        ldt[:, :, k + 1 : T + 1] = ldt[:, :, k:T]  # overlapping: numpy copies through a buffer
+        lengths[k + 1 : T + 1] = lengths[k:T]
+        ldt[:, :, k] = 0.0
+        ldt[: len(template), :, k] = template
+        lengths[k] = len(template)
+        self._set_count(T + 1)
+
+    def _delete_column(self, k: int) -> None:
+        T, ldt, lengths = self.T, self._ldt_full, self._len_full
+        ldt[:, :, k : T - 1] = ldt[:, :, k + 1 : T]
+        lengths[k : T - 1] = lengths[k + 1 : T]
+        self._set_count(T - 1)
+
+    # -- changing the templates (the recognizer's adaptation) ---------------------------------
+    def add_templates(self, templates: Sequence[np.ndarray], at: Sequence[int] | None = None) -> None:
+        """Add templates without rebuilding: each new one goes before position at[i] of the
+        current order (np.insert's rule; default: at the end). With "native" a template no
+        longer than the longest so far is written into a spare column (the rest shift over);
+        otherwise the padded block is extended by np.insert. The kernel stays loaded, and the
+        scores are those of a DTW built on the new list. The query is forgotten (as reset())."""
+        new = [np.asarray(t, dtype=np.float64) for t in templates]
+        if not new:
+            return
+        at = [self.T] * len(new) if at is None else [int(i) for i in at]
+        if len(at) != len(new) or not all(0 <= i <= self.T for i in at):
+            raise ValueError(f"need one position in 0..{self.T} per new template")
+        if any(t.ndim != 2 or t.shape[1] != self.D or len(t) < 1 for t in new):
+            raise ValueError(f"templates must be (length >= 1, {self.D}) arrays")
+        lengths = np.array([len(t) for t in new], dtype=np.int64)
+        # where each template of the new order comes from: >= 0 an old index, < 0 a new one
+        # (np.insert's order: by position, new ones at one position in their given order)
+        origin: list[int] = []
+        done = 0
+        for pos, i in sorted(zip(at, range(len(new)), strict=True)):
+            origin += [*range(done, pos), -1 - i]
+            done = pos
+        origin += range(done, self.T)
+        sources = list(templates)
+        self.sources = [self.sources[i] if i >= 0 else sources[-1 - i] for i in origin]
+        if self.method == "native" and lengths.max() <= self.L and self.T + len(new) <= len(self._len_full):
+            for k, i in enumerate(origin):  # ascending: the earlier new ones are already in place
+                if i < 0:
+                    self._insert_column(k, new[-1 - i])
+            self.reset()
+            return
+        L = max(self.L, int(lengths.max()))
+        block = np.zeros((L, len(new), self.D))
+        for k, t in enumerate(new):
+            block[: len(t), k] = t
+        tmpl = self.tmpl if L == self.L else np.concatenate([self.tmpl, np.zeros((L - self.L, self.T, self.D))])
+        self._set_padded(np.insert(tmpl, at, block, axis=1), np.insert(self.lengths, at, lengths))
+        self.reset()
+
+    def remove_templates(self, indices: Sequence[int]) -> None:
+        """Drop the templates at these positions (at least one must stay); the rest keep their
+        order. The query is forgotten (as after reset())."""
+        gone = {int(i) for i in indices}
+        if not gone:
+            return
+        if min(gone) < 0 or max(gone) >= self.T or len(gone) >= self.T:
+            raise ValueError(f"can drop positions 0..{self.T - 1}, and not all of them")
+        drop = sorted(gone)
+        self.sources = [t for i, t in enumerate(self.sources) if i not in gone]
+        if self.method == "native":
+            # the padding past the longest template left stays: computed, never counted
+            for k in reversed(drop):
+                self._delete_column(k)
+        else:
+            lengths = np.delete(self.lengths, drop)
+            tmpl = np.delete(self.tmpl, drop, axis=1)[: int(lengths.max())]
+            self._set_padded(np.ascontiguousarray(tmpl), lengths)
+        self.reset()
+
+    def update_templates(self, templates: Sequence[np.ndarray]) -> None:
+        """Make `templates` the template list, where a template kept from the current list is
+        the same array object and the kept ones stay in their order: the ones gone are removed
+        and the new ones added in place (remove_templates, add_templates), no rebuild. Any other
+        change (e.g. a reordering), and the numpy methods, pad afresh. The query is forgotten."""
+        templates = list(templates)
+        old = {id(t): i for i, t in enumerate(self.sources)}
+        new_ids = [id(t) for t in templates]
+        kept = [old[i] for i in new_ids if i in old]
+        # The numpy methods size a dozen buffers by T: padding afresh measured faster for them
+        # than inserting (scan: 135 against 270 us at 39 templates), so only "native" edits in place.
+        if self.method != "native" or not kept or len(old) != len(self.sources) or \
+                len(set(new_ids)) != len(new_ids) or kept != sorted(kept):
+            self._set_padded(*pad_templates([np.asarray(t, dtype=np.float64) for t in templates]))
+            self.sources = templates
+            self.reset()
+            return
+        if len(kept) < self.T:
+            kept_set = set(kept)
+            self.remove_templates([i for i in range(self.T) if i not in kept_set])
+        if len(templates) > len(kept):
+            added, at, before = [], [], 0
+            for t, i in zip(templates, new_ids, strict=True):
+                if i in old:
+                    before += 1
+                else:
+                    added.append(t)
+                    at.append(before)
+            self.add_templates(added, at)
+        self.reset()
+
+    def _bind_native(self) -> None:
+        """The C kernel's arguments as addresses, taken once per allocation (ctypes converts
+        ints cheaply; the arrays never move while this DTW holds them)."""
+        self._native_prev = [self._init_full.ctypes.data, *(e.ctypes.data for e in self._ext_full)]
+        self._native_args = ((self._ldt_full.ctypes.data, self._len_full.ctypes.data, self._q.ctypes.data),
+                             *(a.ctypes.data for a in self._scratch), len(self._len_full))
+
+    def _push_native(self, frame: np.ndarray) -> np.ndarray:
+        self._q[:] = frame
+        (tmpl, lengths, q), cost, left, first, scores, stride = self._native_args
+        prev = self._native_prev[0 if self.n == 0 else 1 + self._cur]
+        self._cur ^= 1
+        self._kernel(tmpl, lengths, q, prev, self._native_prev[1 + self._cur], cost, left, first,
+                     self.L, self.D, self.T, stride, self.n, self.min_progress, scores)
+        self._row = self._rows[self._cur]
+        self.n += 1
+        return self.scores
 
     def _init_numpy_buffers(self, exact_costs: bool) -> None:
         """What the numpy methods ("scan", "loop") reuse every frame; "jit" needs none of it."""
@@ -162,6 +353,8 @@ class IncrementalDTW:
         return c
 
     def push(self, frame: np.ndarray) -> np.ndarray:
+        if self.method == "native":
+            return self._push_native(frame)
         if self.method == "jit":
             q = self._q
             q[:] = frame

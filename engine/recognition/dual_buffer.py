@@ -531,7 +531,7 @@ class DualBufferRecognizer:
         self._peak_act = peaks[order]
         cut = [cut[k] for k in order]
         self.template_lengths = np.array([len(c) for c in cut])
-        self.dtw = IncrementalDTW(cut, method=self._dtw_method, min_progress=self.min_progress)
+        self.dtw.update_templates(cut)  # the adopted one added, a dropped one removed: no rebuild
         self._stop_scores = np.empty(len(cut))
 
     def forget_adaptation(self) -> None:

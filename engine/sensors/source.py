@@ -13,12 +13,13 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from enum import Enum
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
 from urllib.parse import parse_qsl, urlsplit
 
-import numpy as np
-
 from engine.errors import InputError
+
+if TYPE_CHECKING:  # numpy only names the sample's type here: `import game` need not load it
+    import numpy as np
 
 
 class Sample(NamedTuple):

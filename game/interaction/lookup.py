@@ -60,7 +60,8 @@ class StateIndex:
         if fill is None:
             fill = neighbour_fill(grid, self.keys)
         self.fill_keys = np.asarray(fill[0], dtype=np.int64)
-        self.fill_state = np.asarray(fill[1], dtype=np.int64)
+        # int32 as stored (a state id fits): the fill has ~900,000 cells, 3.5 MB less than int64
+        self.fill_state = np.asarray(fill[1], dtype=np.int32)
         self._nfill = len(self.fill_keys)
         self._by_key = dict(zip(self.keys.tolist(), range(self.n), strict=True))
         bucket, _, _, _ = grid.split_key(self.keys)
@@ -165,7 +166,7 @@ class StateIndex:
         keys = np.atleast_1d(g.key(distance, bearing_self, bearing_other, other_action, other_frame))
         pos = np.minimum(np.searchsorted(self.fill_keys, keys), self._nfill - 1)
         found = self.fill_keys[pos] == keys
-        out = np.where(found, self.fill_state[pos], -1)
+        out = np.where(found, self.fill_state[pos].astype(np.int64), -1)
         miss = np.flatnonzero(~found)
         if len(miss):
             q = g.cell_centres(keys[miss])

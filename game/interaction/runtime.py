@@ -31,8 +31,9 @@ class InteractionGraph:
         self._best_names = [self.names[i] for i in self._best]
 
     @classmethod
-    def load(cls, path: str | Path = DEFAULT_GRAPH) -> InteractionGraph:
-        return cls(GraphTable.load(path), path)
+    def load(cls, path: str | Path = DEFAULT_GRAPH, edges: bool = True) -> InteractionGraph:
+        """`edges=False`: the policy and the look-up only (a match's needs; GraphTable.load)."""
+        return cls(GraphTable.load(path, edges=edges), path)
 
     @property
     def n_states(self) -> int:

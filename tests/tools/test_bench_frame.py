@@ -42,6 +42,8 @@ def test_bench_frame_json(tmp_path) -> None:
     assert set(out["naive_over_game"]) == {"recognize", "physics", "sim_per_step"}
     assert out["realtime"]["steps"] == 30
     assert any(k.startswith("full_sim_p99") for k in out["targets"])
+    # issue 14's low-power-board targets, on the least-disturbed p99s
+    assert {"full_sim_p99_le_1.2ms", "full_render_p99_le_6ms"} <= set(out["targets"])
 
 
 def test_naive_peer_swaps_in_and_keeps_the_decisions() -> None:

@@ -256,7 +256,8 @@ print(w.state_hash())
 def test_state_hash_does_not_depend_on_the_cpu_kernels():
     """The step uses no BLAS (whose kernels OpenBLAS picks per CPU and which round
     differently), so forcing another kernel set, or numpy without its AVX paths, must give
-    the same bits: two bodies walking into each other, contacts included."""
+    the same bits: two bodies walking into each other, contacts included. The same with and
+    without the C stick projection (engine/native.py: QUICKJAB_NO_NATIVE=1 runs numpy)."""
     import os
     import subprocess
     import sys
@@ -264,7 +265,8 @@ def test_state_hash_does_not_depend_on_the_cpu_kernels():
 
     root = Path(__file__).resolve().parents[3]
     hashes = set()
-    for extra in ({}, {"OPENBLAS_CORETYPE": "Prescott", "NPY_DISABLE_CPU_FEATURES": "X86_V3 X86_V4"}):
+    for extra in ({}, {"OPENBLAS_CORETYPE": "Prescott", "NPY_DISABLE_CPU_FEATURES": "X86_V3 X86_V4"},
+                  {"QUICKJAB_NO_NATIVE": "1"}):
         env = {**os.environ, **extra}
         out = subprocess.run([sys.executable, "-c", _HASH_RUN], cwd=root, env=env, capture_output=True,
                              text=True, timeout=120)

@@ -65,6 +65,7 @@ def test_identical_sequences_score_zero_and_distance_is_symmetric():
 
 def test_auto_method_picks_loop_for_many_templates_without_jit(monkeypatch):
     monkeypatch.setattr(dtw, "jit_available", lambda: False)  # with numba, auto is "jit" (test_dtw_jit)
+    monkeypatch.setattr(dtw, "native_available", lambda: False)  # with a C compiler, "native"
     few = [np.zeros((5, 3))] * 13
     assert IncrementalDTW(few).method == "scan"
     assert IncrementalDTW(few * 40).method == "loop"

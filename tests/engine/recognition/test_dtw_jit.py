@@ -89,9 +89,13 @@ def test_jit_takes_any_frame_like_and_rejects_a_wrong_length():
         a.push(np.zeros(4))
 
 
-def test_auto_picks_jit_when_available_else_scan_or_loop(monkeypatch):
+def test_auto_picks_native_else_jit_for_many_else_scan_or_loop(monkeypatch):
     few = [np.zeros((5, 3))] * 13
-    assert IncrementalDTW(few).method == ("jit" if dtw.jit_available() else "scan")
+    assert IncrementalDTW(few).method == ("native" if dtw.native_available() else "scan")
+    monkeypatch.setattr(dtw, "native_available", lambda: False)
+    assert IncrementalDTW(few).method == "scan"  # numba is not worth its start-up for 13
+    many = few * (dtw.JIT_FROM_TEMPLATES // 13 + 1)
+    assert IncrementalDTW(many).method == ("jit" if dtw.jit_available() else "loop")
     monkeypatch.setattr(dtw, "jit_available", lambda: False)
     assert IncrementalDTW(few).method == "scan"
     assert IncrementalDTW(few * 40).method == "loop"
@@ -103,6 +107,7 @@ def test_auto_picks_jit_when_available_else_scan_or_loop(monkeypatch):
 def test_fallback_without_numba(monkeypatch, hide):
     """QUICKJAB_NO_JIT=1, or numba not importable: no kernel, auto uses numpy, results equal."""
     monkeypatch.setattr(dtw_kernel, "_compiled", [])
+    monkeypatch.setattr(dtw, "native_available", lambda: False)  # the C kernel: test_dtw_native
     if hide == "env":
         monkeypatch.setenv(dtw_kernel.NO_JIT_ENV, "1")
     else:
