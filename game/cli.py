@@ -19,7 +19,7 @@ from engine.errors import InputError
 # A module may add several commands (tools.recognition_commands: templates, recognize, evaluate).
 COMMANDS: dict[str, tuple[str, str]] = {
     "play": ("game.play", "box: a match against the CPU (Wiimote, serial IMUs or the keyboard)"),
-    "train": ("game.training", "Train your moves: record 3 trials of each action, build your templates"),
+    "train": ("game.training", "Train your moves: record 5 trials of each action, build your templates from the 3 most representative"),
     "record": ("tools.record", "record a source to a CSV file"),
     "devices": ("tools.devices", "list Wiimotes and serial ports"),
     "scope": ("tools.scope", "show a source's acceleration live (sensor oscilloscope)"),
