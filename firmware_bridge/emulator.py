@@ -375,6 +375,11 @@ class Emulator:
                     if self._stop.wait(self.faults.unplug_s):
                         break
                     self.port.plug()
+                    # faults due while nothing was plugged in never happened
+                    for kind, every in self._every.items():
+                        self._pending[kind] = 0
+                        while 0 < every and self._next[kind] <= self.elapsed():
+                            self._next[kind] += every
                     self.on_port(self.port.name)
                 # a replugged USB device powered up again: it reboots too
                 self.stats.reboots += 1

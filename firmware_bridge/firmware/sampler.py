@@ -132,11 +132,11 @@ class Sampler:
         """Sample at rate_hz on deadlines computed from ticks_add (no drift) until stop(self)
         returns true. A deadline missed by more than a period is skipped, not caught up.
 
-        stop(self) is called once per tick after the tick's time is taken and before its frame
-        is built; that is where the board and the emulator read host bytes, so a HELLO request
-        that arrived before the SAMPLE's time stamp is answered before that SAMPLE
-        (PROTOCOL.md, "Host to device"). A SAMPLE stamped earlier than the request may still go
-        first: it was made before the request arrived."""
+        stop(self) is called once per tick (again after a stall), after the tick's time is taken
+        and before its frame is built; that is where the board and the emulator read host bytes,
+        so a HELLO request that arrived before the SAMPLE's time stamp is answered before that
+        SAMPLE (PROTOCOL.md, "Host to device"). A SAMPLE stamped earlier than the request may
+        still go first: it was made before the request arrived."""
         t = self.ticks
         deadline = t.ticks_us()
         while True:
@@ -149,7 +149,11 @@ class Sampler:
                 break
             later = t.ticks_us()
             if t.ticks_diff(later, now) > self.period_us:
-                now = later  # stop() hung (a stall): stamp the reading when it is really made
+                # stop() hung (a stall): stamp the reading when it is really made, and read the
+                # host again, so no request that came before the stamp waits behind this SAMPLE
+                now = later
+                if stop(self):
+                    break
             self.step(now)
             deadline = t.ticks_add(deadline, self.period_us)
             if t.ticks_diff(t.ticks_us(), deadline) > self.period_us:

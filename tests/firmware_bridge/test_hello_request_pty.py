@@ -68,7 +68,7 @@ def test_hundred_requests_none_answered_after_a_later_sample():
     finally:
         emu.kill()
         emu.wait(10)
-    assert dec.crc_errors == 0 and dec.lost == 0 and dec.cobs_errors == 0
+    assert dec.crc_errors == 0 and dec.lost == 0 and dec.cobs_errors == 0, dec.counts()
     late_samples = 0
     for before, done in requests:
         # frames stamped after the request was sent, in wire order, up to the first HELLO: none of
