@@ -8,6 +8,7 @@ import json
 import math
 import sys
 import time
+from dataclasses import asdict
 
 from engine.errors import InputError
 
@@ -123,7 +124,7 @@ def run_emulate(args: argparse.Namespace) -> int:
         emu.stop()
         stats = emu.stats
     if not args.quiet:
-        print(f"emulator: {stats}", file=sys.stderr)
+        print("emulator: " + " ".join(f"{k}={v}" for k, v in asdict(stats).items()), file=sys.stderr)
     return 0
 
 
