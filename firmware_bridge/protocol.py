@@ -302,6 +302,7 @@ class Decoder:
         self.boot_id = None
         self.hello = None  # the last Hello seen
         self.old_boots = []  # boot ids before the current one, newest last
+        self._headless_boot = False  # a seq_jump started a boot whose HELLO has not come yet
         # seen[s] is 1 when this boot delivered seq s in the last SEQ_WINDOW frames
         self._seen = bytearray(SEQ_MASK + 1)
 
@@ -369,9 +370,11 @@ class Decoder:
                 self.replays += 1  # an earlier boot's HELLO played back: not a reboot
                 return
             if self.boot_id is not None and hello.boot_id != self.boot_id:
-                self.reboots += 1
                 self.old_boots = (self.old_boots + [self.boot_id])[-OLD_BOOTS:]
-                self._restart_seq()  # the new boot counts its sequence from its first HELLO
+                if not self._headless_boot:  # else the seq_jump already counted this reboot
+                    self.reboots += 1
+                    self._restart_seq()  # the new boot counts its sequence from its first HELLO
+            self._headless_boot = False
         if self.last_seq is not None:
             gap = (frame.seq - self.last_seq - 1) & SEQ_MASK
             if gap >= SEQ_WINDOW:
@@ -381,6 +384,7 @@ class Decoder:
                 self.seq_jumps += 1  # never seen: a reboot whose HELLO was lost
                 frame.jump = True
                 self._restart_seq()
+                self._headless_boot = True  # its HELLO, when it comes, is no second reboot
             else:
                 self.lost += gap
                 self._forget(self.last_seq + 1, gap)

@@ -254,3 +254,19 @@ def test_fuzz_memory_stays_flat():
           f"memory growth over the last 10000 frames: {grown} B")
     assert counts["samples"] > 500  # the stream was not all garbage
     assert grown < 200_000
+
+
+def test_a_reboot_whose_hello_was_lost_counts_once():
+    src = open_source("serial://loop://")
+    # the host came in mid-stream (seq 30000 on), then the board rebooted and its HELLO was lost:
+    # seq 1.. again, behind but never seen, then the new boot's next HELLO
+    data = (hello(boot=1, seq=29999) + samples(600, start_seq=30000)
+            + samples(200, start_seq=1, t0=100) + hello(boot=2, seq=201, t_us=1_000_100)
+            + samples(5, start_seq=202, t0=1_005_100))
+    got = 0
+    for i in range(0, len(data), 2000):  # loop:// holds 4096 bytes: a bigger write would block
+        src.port.write(data[i : i + 2000])
+        got += len(src.poll())
+    assert got == 805
+    stats = src.stats
+    assert stats["seq_jumps"] == 1 and stats["reboots"] == 0 and stats["lost"] == 0
