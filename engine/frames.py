@@ -79,6 +79,10 @@ class FrameResampler:
     instant equals `resample`'s once the first sample after the instant has been pushed;
     before that it holds the last value. A live consumer that wants interpolated frames asks
     for an instant a little in the past (one sample period of latency): see docs/engine.md.
+
+    A source whose sensor count changes mid-run (a serial board rebooting with one IMU fewer)
+    says so by the shape of its samples. Frames keep this resampler's width: a missing sensor
+    holds its last value, an extra one is left out, and `resized` counts those samples.
     """
 
     def __init__(self, sensors: int, mode: str = "linear"):
@@ -90,9 +94,25 @@ class FrameResampler:
         self._have = False
         self._out = np.zeros(self.dim)
         self._tmp = np.zeros(self.dim)
+        self.resized = 0
 
     def push(self, samples: list[Sample]) -> None:
-        self._pending.extend(samples)
+        dim = self.dim
+        for s in samples:
+            if np.size(s.accel) != dim:
+                self._pending.append(Sample(s.t, self._fit(s.accel)))
+                self.resized += 1
+            else:
+                self._pending.append(s)
+
+    def _fit(self, accel: np.ndarray) -> np.ndarray:
+        """A sample of another width to this resampler's: sensors it lacks hold their last value."""
+        flat = np.asarray(accel, dtype=np.float64).ravel()
+        last = np.asarray(self._pending[-1].accel, dtype=np.float64).ravel() if self._pending else self._prev
+        out = last.copy()
+        k = min(flat.size, self.dim)
+        out[:k] = flat[:k]
+        return out
 
     def frame_at(self, t: float) -> np.ndarray | None:
         """The frame for instant t, or None before the first sample. The returned array is

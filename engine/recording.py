@@ -195,6 +195,9 @@ class RecordingWriter:
         if self.t0 is None:
             self.t0 = sample.t
         accel = np.asarray(sample.accel, dtype=np.float64).reshape(-1, 3)[: self.sensors]
+        if len(accel) < self.sensors:  # a short row would make the file unreadable: the caller
+            # starts a new file for a new sensor count (tools/record.py)
+            raise ValueError(f"{self.path}: a sample with {len(accel)} sensor(s) in a file of {self.sensors}")
         self._file.write(_format_row(sample.t - self.t0, accel, label))
         self.rows += 1
         self._dirty = True

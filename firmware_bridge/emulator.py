@@ -8,11 +8,15 @@ always points at the current one, so a host can keep one path across replugs).
 
 from __future__ import annotations
 
+import fcntl
 import os
 import random
+import struct
+import termios
 import threading
 import time
 import tty
+from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
@@ -136,6 +140,15 @@ class PtyPort:
                 os.close(fd)
         self.master = self.slave = -1
 
+    def pending(self) -> int:
+        """Bytes written to the port that the host has not read yet (the slave's input queue)."""
+        if self.slave < 0:
+            return 0
+        try:
+            return struct.unpack("i", fcntl.ioctl(self.slave, termios.FIONREAD, b"\0\0\0\0"))[0]
+        except OSError:
+            return 0
+
     def read_host(self) -> bytes:
         """What the host wrote to the port since the last call (b'' when nothing)."""
         if self.master < 0:
@@ -176,8 +189,16 @@ class Faults:
 
 @dataclass
 class EmulatorStats:
-    frames: int = 0
-    bytes: int = 0
+    """What reached the host. A frame counts once the host has read all of it: frames still in
+    the port's queue when it closes (end of run, unplug) count as `undelivered` instead."""
+
+    frames: int = 0  # whole frames delivered (intact + broken)
+    samples: int = 0  # intact frames delivered, by type
+    hellos: int = 0
+    texts: int = 0
+    broken: int = 0  # delivered with a flipped or dropped byte: no receiver can accept them
+    undelivered: int = 0  # written whole, never read by the host
+    bytes: int = 0  # bytes delivered, garbage and cut frames included
     short_writes: int = 0
     garbage_bursts: int = 0
     bit_flips: int = 0
@@ -192,11 +213,11 @@ class Emulator:
     `on_port(path)` is told the port path at start and after every replug."""
 
     def __init__(self, signal: Signal, sensors: int = 2, *, rate_hz: int = 200, faults: Faults | None = None,
-                 link: str | None = None, ticks_start: int | None = None, seed: int = 0,
+                 link: str | None = None, ticks_start: int | None = None, seed: int | None = None,
                  on_port: Callable[[str], None] | None = None, on_event: Callable[[str], None] | None = None):
         self.signal, self.sensors, self.rate_hz = signal, sensors, rate_hz
         self.faults = faults or Faults()
-        self.rng = random.Random(seed)
+        self.rng = random.Random(seed)  # seed None: boot ids and faults differ on every run
         self.seed = seed
         self.ticks_start = ticks_start
         self.port = PtyPort(link)
@@ -215,6 +236,9 @@ class Emulator:
         self._stalls = sorted(self.faults.stall_at)
         self._reboots = sorted(self.faults.reboot_at)
         self._unplugs = sorted(self.faults.unplug_at)
+        # frames written to the port, not yet known to be read: (end byte offset, type, broken)
+        self._in_flight: deque[tuple[int, int, bool]] = deque()
+        self._written = 0  # bytes written to the current port
 
     @property
     def path(self) -> str:
@@ -229,6 +253,7 @@ class Emulator:
     def _write(self, frame: bytes) -> int:
         """The sampler's write, through the fault injector."""
         data = frame
+        broken = False
         for kind in ("garbage", "flip", "drop"):
             if self._pending[kind]:
                 self._pending[kind] -= 1
@@ -237,30 +262,68 @@ class Emulator:
                     data = self.rng.randbytes(n) + data
                     self.stats.garbage_bursts += 1
                 elif kind == "flip":
+                    # within the frame (delimiters included): a flip anywhere breaks it
                     b = bytearray(data)
-                    i = self.rng.randrange(len(b))
+                    i = len(data) - len(frame) + self.rng.randrange(len(frame))
                     b[i] ^= 1 << self.rng.randrange(8)
                     data = bytes(b)
                     self.stats.bit_flips += 1
+                    broken = True
                 else:
-                    i = self.rng.randrange(len(data))
+                    # inside the frame's COBS bytes: a dropped delimiter would cost nothing
+                    # (its neighbour's delimiter stands in), so every drop breaks its frame
+                    i = len(data) - len(frame) + 1 + self.rng.randrange(len(frame) - 2)
                     data = data[:i] + data[i + 1 :]
                     self.stats.dropped_bytes += 1
-        n = self.port.write(data)
-        self.stats.bytes += max(n, 0)
+                    broken = True
+        n = max(self.port.write(data), 0)
+        self._written += n
         if n < len(data):
             self.stats.short_writes += 1
             return 0
-        self.stats.frames += 1
+        # the body's first byte (after 0x00 and the COBS code) is ver_type; never 0 in v1
+        self._in_flight.append((self._written, frame[2] & 0x0F, broken))
+        self._settle()
         return len(frame)
+
+    def _settle(self, closing: bool = False) -> None:
+        """Move frames the host has read (all their bytes left the port's queue) into the
+        stats; when closing, the rest are undelivered."""
+        pending = self.port.pending()
+        read_up_to = self._written - pending
+        s = self.stats
+        q = self._in_flight
+        while q and q[0][0] <= read_up_to:
+            _, kind, broken = q.popleft()
+            s.frames += 1
+            if broken:
+                s.broken += 1
+            elif kind == protocol.SAMPLE:
+                s.samples += 1
+            elif kind == protocol.HELLO:
+                s.hellos += 1
+            else:
+                s.texts += 1
+        if closing:
+            s.undelivered += len(q)
+            q.clear()
+            s.bytes += read_up_to
+            self._written = 0
+
+    def _close_port(self, drain_s: float) -> None:
+        """Give the host up to `drain_s` to read what is queued (0: a real unplug loses it),
+        then count what it got and close."""
+        time.sleep(0.02)  # let the kernel move the last write into the queue FIONREAD sees
+        end = time.monotonic() + drain_s
+        while self.port.pending() and time.monotonic() < end:
+            time.sleep(0.005)
+        self._settle(closing=True)
 
     def _control(self, sampler: Sampler) -> bool:
         """Called by Sampler.run every loop: schedule faults; True ends this boot."""
         if self._stop.is_set() or (self.seconds is not None and self.elapsed() >= self.seconds):
             self._reason = "end"
             return True
-        if protocol.HELLO_REQUEST in self.port.read_host():
-            sampler.request_hello()
         t = self.elapsed()
         for kind, every in self._every.items():
             if every > 0 and t >= self._next[kind]:
@@ -279,12 +342,15 @@ class Emulator:
             self._unplugs.pop(0)
             self._reason = "unplug"
             return True
+        # last, after any stall: a request that came meanwhile is answered before this tick's SAMPLE
+        if protocol.HELLO_REQUEST in self.port.read_host():
+            sampler.request_hello()
         return False
 
     def _sampler(self, boot: int) -> Sampler:
         start = self.ticks_start
         ticks = HostTicks(TS_BITS, None if start is None else (start if boot == 0 else 0))
-        imus = [SimIMU(self.signal, i, self.elapsed, seed=self.seed) for i in range(self.sensors)]
+        imus = [SimIMU(self.signal, i, self.elapsed, seed=self.seed or 0) for i in range(self.sensors)]
         imus += [None] * (2 - len(imus))
         return Sampler(imus, self._write, ticks, rate_hz=self.rate_hz,
                        boot_id=self.rng.getrandbits(32), ts_bits=TS_BITS)
@@ -304,15 +370,22 @@ class Emulator:
                 if self._reason == "unplug":
                     self.stats.unplugs += 1
                     self.on_event(f"unplug for {self.faults.unplug_s:.2f} s")
+                    self._close_port(0.0)
                     self.port.unplug()
                     if self._stop.wait(self.faults.unplug_s):
                         break
                     self.port.plug()
+                    # faults due while nothing was plugged in never happened
+                    for kind, every in self._every.items():
+                        self._pending[kind] = 0
+                        while 0 < every and self._next[kind] <= self.elapsed():
+                            self._next[kind] += every
                     self.on_port(self.port.name)
                 # a replugged USB device powered up again: it reboots too
                 self.stats.reboots += 1
                 self.on_event("reboot")
         finally:
+            self._close_port(0.0 if self._stop.is_set() else 1.0)
             self.port.close()
         return self.stats
 

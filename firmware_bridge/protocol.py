@@ -230,6 +230,24 @@ class Hello:
         self.sensors = sensor_count(frame.flags)
 
 
+def hello_problem(payload, flags):
+    # type: (bytes, int) -> str | None
+    """Why a HELLO payload of the right size is malformed (PROTOCOL.md), or None: every field
+    must make sense, because the host divides by the scales and sizes its clock by ts_bits."""
+    accel, gyro, rate, _, ts_bits, _ = struct.unpack(HELLO_FMT, payload)
+    if not 8 <= ts_bits <= 32:
+        return "ts_bits %d outside 8..32" % ts_bits
+    if accel == 0:
+        return "accel_lsb_per_g is 0"
+    if gyro == 0 and flags & FLAG_GYRO:
+        return "gyro_mlsb_per_dps is 0 with GYRO set"
+    if rate == 0:
+        return "rate_hz is 0"
+    if flags & FLAG_OVERRUN:
+        return "OVERRUN set on a HELLO"
+    return None
+
+
 def parse_body(body):
     # type: (bytes) -> tuple
     """(Frame, None) for a valid body, or (None, counter_name) saying why it was rejected."""
@@ -250,7 +268,7 @@ def parse_body(body):
         if not flags & FLAGS_SENSORS or len(payload) != sample_payload_size(flags):
             return None, "malformed"
     elif msg_type == HELLO:
-        if len(payload) != HELLO_SIZE or not 8 <= payload[12] <= 32:
+        if len(payload) != HELLO_SIZE or hello_problem(payload, flags) is not None:
             return None, "malformed"
     elif len(payload) > MAX_TEXT:
         return None, "malformed"
@@ -258,7 +276,10 @@ def parse_body(body):
 
 
 COUNTERS = ("frames_ok", "crc_errors", "cobs_errors", "oversize", "runts", "unknown_type",
-            "malformed", "lost", "reboots", "seq_jumps", "bytes_in")
+            "malformed", "lost", "reboots", "seq_jumps", "replays", "bytes_in")
+
+SEQ_WINDOW = 0x8000  # a seq up to this far behind the last one is a repeat; further is a jump
+OLD_BOOTS = 8  # boot ids remembered: a HELLO of an earlier boot is a replay, not a reboot
 
 
 class Decoder:
@@ -268,7 +289,8 @@ class Decoder:
     bytes without a delimiter longer than any frame), runts (too short for a header and CRC),
     unknown_type, malformed (CRC ok but a layout v1 does not allow), lost (frames missing by
     sequence number), reboots (HELLO with a new boot_id), seq_jumps (a backwards sequence jump
-    not explained by a HELLO: a reboot whose HELLO was lost), bytes_in.
+    not explained by a HELLO: a reboot whose HELLO was lost), replays (a frame whose seq this
+    boot already delivered, or a HELLO of an earlier boot: dropped), bytes_in.
     """
 
     def __init__(self):
@@ -279,6 +301,10 @@ class Decoder:
         self.last_seq = None
         self.boot_id = None
         self.hello = None  # the last Hello seen
+        self.old_boots = []  # boot ids before the current one, newest last
+        self._headless_boot = False  # a seq_jump started a boot whose HELLO has not come yet
+        # seen[s] is 1 when this boot delivered seq s in the last SEQ_WINDOW frames
+        self._seen = bytearray(SEQ_MASK + 1)
 
     def resync(self):
         """Forget the unfinished frame and the sequence position (after a reconnect), keeping
@@ -337,20 +363,50 @@ class Decoder:
         if frame is None:
             setattr(self, why, getattr(self, why) + 1)
             return
+        hello = None
         if frame.msg_type == HELLO:
             hello = Hello(frame)
+            if hello.boot_id != self.boot_id and hello.boot_id in self.old_boots:
+                self.replays += 1  # an earlier boot's HELLO played back: not a reboot
+                return
             if self.boot_id is not None and hello.boot_id != self.boot_id:
-                self.reboots += 1
-                self.last_seq = None  # the new boot counts its sequence from its first HELLO
-            self.boot_id = hello.boot_id
-            self.hello = hello
+                self.old_boots = (self.old_boots + [self.boot_id])[-OLD_BOOTS:]
+                if not self._headless_boot:  # else the seq_jump already counted this reboot
+                    self.reboots += 1
+                    self._restart_seq()  # the new boot counts its sequence from its first HELLO
+            self._headless_boot = False
         if self.last_seq is not None:
             gap = (frame.seq - self.last_seq - 1) & SEQ_MASK
-            if gap >= 0x8000:
-                self.seq_jumps += 1
+            if gap >= SEQ_WINDOW:
+                if self._seen[frame.seq]:
+                    self.replays += 1  # delivered before in this boot: old bytes played back
+                    return
+                self.seq_jumps += 1  # never seen: a reboot whose HELLO was lost
                 frame.jump = True
+                self._restart_seq()
+                self._headless_boot = True  # its HELLO, when it comes, is no second reboot
             else:
                 self.lost += gap
+                self._forget(self.last_seq + 1, gap)
+        if hello is not None:
+            self.boot_id = hello.boot_id
+            self.hello = hello
         self.last_seq = frame.seq
+        self._seen[frame.seq] = 1
         self.frames_ok += 1
         out.append(frame)
+
+    def _restart_seq(self):
+        self.last_seq = None
+        self._seen = bytearray(SEQ_MASK + 1)
+
+    def _forget(self, start, n):
+        """Clear `n` seen marks from seq `start` on (wrapping): the lost ones were never seen."""
+        start &= SEQ_MASK
+        end = start + n
+        seen = self._seen
+        if end <= SEQ_MASK + 1:
+            seen[start:end] = bytes(n)
+        else:
+            seen[start:] = bytes(SEQ_MASK + 1 - start)
+            seen[: end - SEQ_MASK - 1] = bytes(end - SEQ_MASK - 1)

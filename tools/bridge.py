@@ -5,8 +5,10 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 import time
+from dataclasses import asdict
 
 from engine.errors import InputError
 
@@ -38,7 +40,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     e.add_argument("--unplug-at", type=float, action="append", default=[], metavar="T",
                    help="the port vanishes at T s and comes back (a new pty) after --unplug-s (repeatable)")
     e.add_argument("--unplug-s", type=float, default=1.0, help="how long an unplug lasts")
-    e.add_argument("--seed", type=int, default=0)
+    e.add_argument("--seed", type=int, default=None,
+                   help="make boot ids, faults and noise reproducible (default: a random boot id per boot)")
     e.add_argument("--quiet", action="store_true", help="print only port paths")
     e.set_defaults(func=run_emulate)
 
@@ -55,17 +58,50 @@ def register(sub: argparse._SubParsersAction) -> None:
     f.set_defaults(func=run_faults)
 
 
+MAX_SECONDS = 1e7  # ~116 days: any longer is a typo, and time.sleep overflows on some values
+
+
+def _check(name: str, value: float | None, low: float, high: float, *, low_open: bool = False) -> None:
+    """One-line InputError unless `value` is None or a finite number in [low, high] ((low, high]
+    with low_open)."""
+    if value is None:
+        return
+    ok = math.isfinite(value) and (value > low if low_open else value >= low) and value <= high
+    if not ok:
+        bound = f"({low:g}" if low_open else f"[{low:g}"
+        raise InputError(f"{name} {value}: must be a number in {bound}, {high:g}]")
+
+
+def check_emulate_args(args: argparse.Namespace) -> None:
+    """Every option, before anything starts (nan or a negative duration would hang or crash the
+    run later)."""
+    if args.rate <= 0 or args.rate > 1000:
+        raise InputError(f"--rate {args.rate}: must be 1..1000 Hz")
+    _check("--seconds", args.seconds, 0, MAX_SECONDS, low_open=True)
+    for name in ("garbage_every", "flip_every", "drop_every"):
+        _check("--" + name.replace("_", "-"), getattr(args, name), 0, MAX_SECONDS)
+    _check("--garbage-len", args.garbage_len, 1, 4096)
+    for name in ("stall_s", "unplug_s"):
+        _check("--" + name.replace("_", "-"), getattr(args, name), 0, 3600)
+    for name in ("stall_at", "reboot_at", "unplug_at"):
+        for v in getattr(args, name):
+            _check("--" + name.replace("_", "-"), v, 0, MAX_SECONDS)
+    if args.ticks_start is not None and not 0 <= args.ticks_start < (1 << 30):
+        raise InputError(f"--ticks-start {args.ticks_start}: must be 0..{(1 << 30) - 1} (a 30-bit counter)")
+    if args.seed is not None and args.seed < 0:
+        raise InputError(f"--seed {args.seed}: must be 0 or more")
+
+
 def run_emulate(args: argparse.Namespace) -> int:
     from firmware_bridge.emulator import Emulator, Faults, recording_motion, synthetic_motion
 
-    if args.rate <= 0 or args.rate > 1000:
-        raise InputError(f"--rate {args.rate}: must be 1..1000 Hz")
+    check_emulate_args(args)
     if args.replay:
         signal, sensors = recording_motion(args.replay)  # RecordingError names the file
     else:
-        signal, sensors = synthetic_motion(args.sensors or 2, args.seed), args.sensors or 2
+        signal, sensors = synthetic_motion(args.sensors or 2, args.seed or 0), args.sensors or 2
     sensors = min(args.sensors or sensors, sensors)
-    faults = Faults(garbage_every=args.garbage_every, garbage_len=max(1, args.garbage_len),
+    faults = Faults(garbage_every=args.garbage_every, garbage_len=args.garbage_len,
                     flip_every=args.flip_every, drop_every=args.drop_every, stall_at=args.stall_at,
                     stall_s=args.stall_s, reboot_at=args.reboot_at, unplug_at=args.unplug_at,
                     unplug_s=args.unplug_s)
@@ -88,13 +124,18 @@ def run_emulate(args: argparse.Namespace) -> int:
         emu.stop()
         stats = emu.stats
     if not args.quiet:
-        print(f"emulator: {stats}", file=sys.stderr)
+        print("emulator: " + " ".join(f"{k}={v}" for k, v in asdict(stats).items()), file=sys.stderr)
     return 0
 
 
 def run_faults(args: argparse.Namespace) -> int:
     from firmware_bridge import faults
 
+    _check("--random-mb", args.random_mb, 0, 1024)
+    for name in ("corrupted", "frames", "events"):
+        _check("--" + name, getattr(args, name), 0, 100_000_000)
+    if args.seed < 0:
+        raise InputError(f"--seed {args.seed}: must be 0 or more")
     if args.events * 3 > args.frames:
         raise InputError(f"--events {args.events}: at most --frames/3 ({args.frames // 3})")
     t0 = time.perf_counter()

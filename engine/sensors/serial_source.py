@@ -11,6 +11,12 @@ Polling never waits: each poll drains `in_waiting` (the Linux tty buffer holds o
 so a slow reader loses data), decodes frames, and maps device time to host time. A lost port
 (OSError, SerialException, termios.error) becomes SourceState.RECONNECTING, and the port is
 reopened every `retry` seconds until it comes back.
+
+Hostile or broken input is counted and dropped, never raised: the decoder rejects HELLOs whose
+fields make no sense (protocol.hello_problem) and frames replayed from earlier (same boot and
+seq). A board that reboots with another sensor count changes `sensors` (counted as
+`sensor_changes`); from then on its samples have the new shape, which is how the frames stage
+(engine.frames.FrameResampler) and the recorder (tools/record.py) learn of it.
 """
 
 from __future__ import annotations
@@ -240,8 +246,17 @@ class SerialSource(Source):
         frames = self.decoder.feed(data)
         return self._samples(frames, now)
 
-    def _apply_hello(self, hello: protocol.Hello) -> None:
+    def _apply_hello(self, f: protocol.Frame) -> bool:
+        """Take a HELLO's scales and layout; False (counted, dropped) if a field is invalid. The
+        decoder already drops those: this guards against a decoder that lets one through, since
+        a zero scale here would raise in the game loop."""
+        if len(f.payload) != protocol.HELLO_SIZE or protocol.hello_problem(f.payload, f.flags) is not None:
+            self.count("bad_hellos")
+            return False
+        hello = protocol.Hello(f)
         changed = self.hello is None or hello.boot_id != self.hello.boot_id or hello.ts_bits != self.hello.ts_bits
+        if hello.sensors and hello.sensors != self.sensors and self.hello is not None:
+            self.count("sensor_changes")
         self.hello = hello
         if hello.sensors:
             self.sensors = hello.sensors
@@ -250,14 +265,21 @@ class SerialSource(Source):
             self.devclock.reset(hello.ts_bits)
             kind = {1: "MPU-6050", 2: "LSM6DS3", 3: "simulated"}.get(hello.imu_kind, "IMU")
             self.description = f"serial bridge {self.port_name} ({kind} x{hello.sensors}, {hello.rate_hz} Hz)"
+        return True
 
     def _samples(self, frames: list[protocol.Frame], now: float) -> list[Sample]:
+        out: list[Sample] = []
         times: list[float] = []
         sample_frames: list[protocol.Frame] = []
         latest = None
         for f in frames:
             if f.msg_type == protocol.HELLO:
-                self._apply_hello(protocol.Hello(f))
+                if sample_frames:  # SAMPLEs before this HELLO keep the scales and clock they came with
+                    self.devclock.observe(now, latest)
+                    out += self._map(times, sample_frames)
+                    times, sample_frames, latest = [], [], None
+                if not self._apply_hello(f):
+                    continue
             elif f.jump:  # a reboot whose HELLO was lost: the device clock restarted
                 self.devclock.reset(self.devclock.mask.bit_length())
             dev = self.devclock.unwrap(f.t_us)
@@ -280,8 +302,12 @@ class SerialSource(Source):
                 sample_frames.append(f)
         if latest is not None:
             self.devclock.observe(now, latest)
-        if not times:
-            return []
+        if times:
+            out += self._map(times, sample_frames)
+        return out
+
+    def _map(self, times: list[float], sample_frames: list[protocol.Frame]) -> list[Sample]:
+        """Samples for SAMPLE frames of one layout and clock, at device times `times`."""
         # a few samples per poll: plain floats beat numpy calls here
         offset, last = self.devclock.offset, self.devclock.last_t
         out = []

@@ -117,22 +117,28 @@ class StdoutWriter:
 
 
 class Watch:
-    """Called by Sampler.run every loop: LED code, and the stdin stop word every 50 ms."""
+    """Called by Sampler.run once per tick, before the tick's frame is built: host bytes every
+    tick (a '?' is answered with a HELLO before the next SAMPLE; the stop word ends streaming),
+    the LED code every 50 ms."""
 
-    def __init__(self, led):
+    def __init__(self, led, stdin=None, poller=None):
         self.led = led
-        self.poll = select.poll()
-        self.poll.register(sys.stdin, select.POLLIN)
+        self.stdin = stdin if stdin is not None else sys.stdin
+        self.poll = poller if poller is not None else select.poll()
+        self.poll.register(self.stdin, select.POLLIN)
         self.tail = b""
-        self.next_check = time.ticks_us()
+        self.next_led = time.ticks_us()
         self.dropped_seen = 0
         self.overrun_until = 0
 
     def __call__(self, sampler):
         now = time.ticks_us()
-        if time.ticks_diff(now, self.next_check) < 0:
-            return False
-        self.next_check = time.ticks_add(now, 50000)
+        if time.ticks_diff(now, self.next_led) >= 0:
+            self.next_led = time.ticks_add(now, 50000)
+            self.show_led(sampler, now)
+        return self.read_host(sampler)
+
+    def show_led(self, sampler, now):
         if sampler.dropped != self.dropped_seen:
             self.dropped_seen = sampler.dropped
             self.overrun_until = time.ticks_add(now, 1000000)
@@ -143,10 +149,13 @@ class Watch:
         else:
             code = "both"
         self.led.show(now, code)
+
+    def read_host(self, sampler):
+        """What the host sent since the last tick; True on the stop word."""
         for _ in range(16):  # bounded: the 200 Hz loop comes first
             if not self.poll.poll(0):
                 break
-            b = sys.stdin.buffer.read(1)
+            b = self.stdin.buffer.read(1)
             if not b:  # readable but empty: the port's closed end, nothing to act on
                 break
             if b == protocol.HELLO_REQUEST:

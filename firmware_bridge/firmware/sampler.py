@@ -13,9 +13,17 @@ HELLO_EVERY_US = 1000000
 TEXT_EVERY_US = 1000000  # at most one error line per second, so a broken sensor cannot flood
 
 
+# The scales a HELLO announces before any IMU is found (the drivers' settings: +-8 g, +-500 dps),
+# so that every HELLO carries real scales (PROTOCOL.md), even the "no IMU yet" ones.
+DEFAULT_ACCEL_LSB_PER_G = 4096
+DEFAULT_GYRO_MLSB_PER_DPS = 65500
+
+
 class Sampler:
     """Reads one IMU per hand at `rate_hz` and writes one SAMPLE frame per reading, a HELLO at
-    start and every second, and TEXT lines for read errors.
+    start and every second, and TEXT lines for read errors. Every frame of a boot, whatever its
+    type and whoever sends it (main.py's wait for IMUs too), goes through `_send`, so one
+    sequence counter counts them all.
 
     imus: [imu_a, imu_b]; either may be None (absent). A driver has read() -> (ax, ay, az, gx,
     gy, gz) raw ints, and accel_lsb_per_g, gyro_mlsb_per_dps, kind.
@@ -25,7 +33,6 @@ class Sampler:
     """
 
     def __init__(self, imus, write, ticks, rate_hz=200, boot_id=0, ts_bits=30, gyro=False):
-        self.imus = imus
         self.write = write
         self.ticks = ticks
         self.rate_hz = rate_hz
@@ -42,10 +49,17 @@ class Sampler:
         self.late = 0  # deadlines missed by more than one period
         self._last_hello = None
         self._last_text = None
+        self.set_imus(imus)
+
+    def set_imus(self, imus):
+        """Use these IMUs from now on (main.py: once detection finds them) and announce them
+        with a HELLO before the next SAMPLE."""
+        self.imus = imus
         ref = imus[0] if imus[0] is not None else imus[1]
-        self.accel_lsb_per_g = ref.accel_lsb_per_g if ref is not None else 4096
-        self.gyro_mlsb_per_dps = ref.gyro_mlsb_per_dps if ref is not None else 0
-        self.imu_kind = ref.kind if ref is not None else 0
+        self.accel_lsb_per_g = ref.accel_lsb_per_g if ref is not None else DEFAULT_ACCEL_LSB_PER_G
+        self.gyro_mlsb_per_dps = ref.gyro_mlsb_per_dps if ref is not None else DEFAULT_GYRO_MLSB_PER_DPS
+        self.imu_kind = ref.kind if ref is not None else protocol.IMU_UNKNOWN
+        self._last_hello = None
 
     def _send(self, frame):
         self.seq = (self.seq + 1) & protocol.SEQ_MASK
@@ -116,15 +130,30 @@ class Sampler:
 
     def run(self, stop=None):
         """Sample at rate_hz on deadlines computed from ticks_add (no drift) until stop(self)
-        returns true. A deadline missed by more than a period is skipped, not caught up."""
+        returns true. A deadline missed by more than a period is skipped, not caught up.
+
+        stop(self) is called once per tick (again after a stall), after the tick's time is taken
+        and before its frame is built; that is where the board and the emulator read host bytes,
+        so a HELLO request that arrived before the SAMPLE's time stamp is answered before that
+        SAMPLE (PROTOCOL.md, "Host to device"). A SAMPLE stamped earlier than the request may
+        still go first: it was made before the request arrived."""
         t = self.ticks
         deadline = t.ticks_us()
-        while stop is None or not stop(self):
+        while True:
             now = t.ticks_us()
             wait = t.ticks_diff(deadline, now)
             if wait > 0:
                 t.sleep_us(wait)
                 now = t.ticks_us()
+            if stop is not None and stop(self):
+                break
+            later = t.ticks_us()
+            if t.ticks_diff(later, now) > self.period_us:
+                # stop() hung (a stall): stamp the reading when it is really made, and read the
+                # host again, so no request that came before the stamp waits behind this SAMPLE
+                now = later
+                if stop(self):
+                    break
             self.step(now)
             deadline = t.ticks_add(deadline, self.period_us)
             if t.ticks_diff(t.ticks_us(), deadline) > self.period_us:

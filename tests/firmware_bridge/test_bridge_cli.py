@@ -107,3 +107,30 @@ def test_bench_serial_runs_and_reports_both_readers(capsys):
         assert r["samples"] > 100  # 200 Hz for 1 s
         assert r["poll_cost_us_per_frame"]["median"] > 0 and r["sample_age_ms"]["median"] > 0
     assert fig["decode_only_us_per_frame"]["decoder"] > 0
+
+
+def test_bad_numbers_are_one_line_and_exit_2(capsys):
+    for argv in (["faults", "--random-mb", "-1"], ["faults", "--random-mb", "nan"], ["emulate", "--seconds", "nan"],
+                 ["emulate", "--seconds", "-1"], ["emulate", "--seconds", "inf"], ["emulate", "--flip-every", "-0.5"],
+                 ["emulate", "--stall-s", "nan"], ["emulate", "--reboot-at", "inf"], ["emulate", "--garbage-len", "0"],
+                 ["emulate", "--ticks-start", "-5"]):
+        start = time.perf_counter()
+        assert main(["bridge", *argv]) == 2, argv
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and argv[1] in err[0], (argv, err)
+        assert time.perf_counter() - start < 5  # no hang
+
+
+def test_boot_id_is_random_per_boot_unless_seeded():
+    from firmware_bridge.emulator import Emulator, synthetic_motion
+
+    def boot_ids(seed, boots=3):
+        emu = Emulator(synthetic_motion(), seed=seed)
+        try:
+            return [emu._sampler(b).boot_id for b in range(boots)]
+        finally:
+            emu.port.close()
+
+    a, b = boot_ids(None), boot_ids(None)
+    assert len(set(a + b)) == 6  # every boot of every run its own (2^-32 chance of a clash)
+    assert boot_ids(5) == boot_ids(5) and len(set(boot_ids(5))) == 3

@@ -22,11 +22,16 @@ class Done(Exception):
 
 class I2C:
     reads_left = 300
+    reads = 0  # sample reads so far, all buses
+    empty_scans = 0  # scans that find nothing before the two sensors show up
 
     def __init__(self, *a, **k):
         self.n = {}  # reads per address
 
     def scan(self):
+        if I2C.empty_scans > 0:
+            I2C.empty_scans -= 1
+            return []
         return [0x68, 0x69]
 
     def readfrom_mem(self, addr, reg, n):
@@ -37,6 +42,7 @@ class I2C:
 
     def readfrom_mem_into(self, addr, reg, buf):
         I2C.reads_left -= 1
+        I2C.reads += 1
         if I2C.reads_left < 0:
             raise Done()
         n = self.n.get(addr, 0) + 1

@@ -1,0 +1,41 @@
+"""`quickjab play` on a serial board that reboots with one sensor fewer (an IMU that fails at
+boot): the game keeps running (the frames stage raised a broadcast error before)."""
+
+from __future__ import annotations
+
+import os
+import sys
+import threading
+import tty
+from pathlib import Path
+
+from firmware_bridge import protocol
+from game.cli import main
+
+sys.path.insert(0, str(Path(__file__).parent))
+from game_graph import graph_path  # noqa: E402,F401 - the fixture
+
+
+def test_play_survives_a_reboot_to_one_sensor(tmp_path, monkeypatch, capsys, graph_path):  # noqa: F811
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "xdg"))
+    master, slave = os.openpty()
+    tty.setraw(slave)
+
+    def board():
+        os.read(master, 1)  # the host opened the port and asked for a HELLO (its open flushed before)
+        two = protocol.encode_hello(0, 0, 1, 200, 4096, 65500, 30, protocol.IMU_MPU6050, 3) + b"".join(
+            protocol.encode_sample(i, 5000 * i, (0, 0, 4096), (0, 4096, 0)) for i in range(1, 40))
+        one = protocol.encode_hello(0, 0, 2, 200, 4096, 65500, 30, protocol.IMU_MPU6050, protocol.FLAG_SENSOR_A) + b"".join(
+            protocol.encode_sample(i, 5000 * i, (4096, 0, 0)) for i in range(1, 40))
+        os.write(master, two + one)
+
+    th = threading.Thread(target=board, daemon=True)
+    th.start()
+    try:
+        rc = main(["play", "--headless", "--frames", "40", "--graph", graph_path, "--no-sound",
+                   "--source", f"serial://{os.ttyname(slave)}"])
+    finally:
+        th.join(5)
+        os.close(master)
+        os.close(slave)
+    assert rc == 0, capsys.readouterr().err
