@@ -29,6 +29,9 @@ Per 60 Hz frame (`push`):
   `reject`ed when the buffer is full. A started motion that ends without ever reaching
   CALL_OFF_RATIO of its action's peak is called off: `reject` with `called_off`, no `end`.
 - Null signal (IV-C): `null_frames` quiet frames in a row `end` the motion.
+- Return rule: a motion that follows the previous one without the hand resting in between
+  (after a `complete` end or a discard that ran out) starts only once it reaches RETURN_RATIO of
+  that motion's peak activity, a bar that fades by RETURN_DECAY a frame (probably the return).
 - Beyond the paper: the motion also ends (`reason: "complete"`) once the current action's
   template has been matched past `complete_fraction` of its length and the hand has calmed
   down, so punches thrown back to back without a rest start one action each even when no
