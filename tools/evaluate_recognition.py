@@ -8,11 +8,14 @@ are put in the paper's four outcome groups:
   4 wrong or missed        -- wrong in the end, rejected, or never started.
 plus the first-decision accuracy and the lag of the first decision from the TRUE motion onset,
 not the frame the gate opens: the first frame whose acceleration is ONSET_G (0.3 g) away from
-the rest before the motion (any sensor, |a - rest| per sensor). The rest is the mean of the
-REST_FRAMES frames just before the motion: a trial's first frames (the player starts from the
-guard), the frames before a stream interval's first labelled frame. The search starts at the
-trial's first frame or the interval's first labelled frame; a motion that never gets 0.3 g away
-falls back to its 10 %-of-peak onset (trials) or its first labelled frame (streams).
+the rest before the motion (any sensor, |a - rest| per sensor). The rest: a trial's first
+REST_FRAMES frames (the player starts from the guard; the trial starts where the motion does);
+in a stream, the stillest REST_WINDOW frames (least spread of the readings) between the
+previous labelled interval's end and the interval's first labelled frame, at most REST_SEARCH
+frames back: hand labels begin 10-15 frames after the hand has left the rest, so the frames just
+before the label are mid-wind-up. The search runs from the trial's first frame or from the end
+of the stream's rest window; a motion that never gets 0.3 g away falls back to its 10 %-of-peak
+onset (trials) or its first labelled frame (streams).
 
 Two kinds of input: isolated trials (rest padded before and after, as a player starts from
 the guard) and labelled streams (every labelled interval is one motion; starts outside any
@@ -37,7 +40,9 @@ UNNOTICEABLE_FRAMES = 6
 PAD_BEFORE, PAD_AFTER = 20, 40
 CLIP_FRAMES = 24  # the simulated character's punch clip: 0.4 s (0 = never finishes)
 ONSET_G = 0.3  # the true onset: this far (g) from the rest before the motion
-REST_FRAMES = 5  # the rest: the mean of this many frames just before the motion
+REST_FRAMES = 5  # a trial's rest: the mean of its first frames
+REST_WINDOW = 8  # a stream interval's rest: the stillest window of this many frames ...
+REST_SEARCH = 45  # ... between the previous interval's end and the label, at most this far back
 EARLY_TOLERANCE = 20  # frames a stream start may precede its labelled interval (1/3 s)
 GROUPS = ("correct", "unnoticeable switch", "noticeable switch", "wrong or missed")
 
@@ -65,6 +70,7 @@ class Summary:
     outcomes: list[Outcome] = field(default_factory=list)
     false_starts: int = 0
     idle_minutes: float = 0.0
+    extra_starts: int = 0  # starts inside a labelled interval that already had its own
 
     def counts(self) -> np.ndarray:
         c = np.zeros(4, dtype=int)
@@ -91,6 +97,7 @@ class Summary:
         }
         if self.idle_minutes > 0:
             out["false_starts"] = self.false_starts
+            out["extra_starts"] = self.extra_starts
             out["false_starts_per_idle_min"] = round(self.false_starts / self.idle_minutes, 3)
         return out
 
@@ -111,12 +118,27 @@ def true_onset(trial: np.ndarray, fraction: float = 0.1) -> int:
     return int(np.flatnonzero(act >= fraction * max(float(act.max()), 1e-12))[0])
 
 
-def stream_onset(frames: np.ndarray, first: int, end: int) -> int:
-    """A labelled interval's true onset: the first frame in [first, end) ONSET_G away from the
-    mean of the REST_FRAMES frames before `first`; `first` when none is."""
-    rest = np.asarray(frames[max(0, first - REST_FRAMES) : max(first, 1)], dtype=np.float64).mean(axis=0)
-    away = _away_from_rest(frames[first:end], rest)
-    return first + int(away[0]) if len(away) else first
+def stream_onset(frames: np.ndarray, first: int, end: int, prev_end: int = 0) -> int:
+    """A labelled interval [first, end)'s true onset. The rest: the mean of the stillest
+    REST_WINDOW frames (least summed spread of the sensors' readings about their mean) in
+    [max(prev_end, first - REST_SEARCH), first), `prev_end` being the previous interval's end
+    (hand labels start after the wind-up, so the frames just before `first` are already moving).
+    The onset: the first frame after that window ONSET_G away from the rest, before `end`;
+    `first` when none is."""
+    x = np.asarray(frames, dtype=np.float64)
+    lo = max(prev_end, first - REST_SEARCH, 0)
+    w = min(REST_WINDOW, first - lo)
+    if w < 2:  # no room between the intervals: the frames just before the label
+        lo, w = max(0, first - REST_WINDOW), min(REST_WINDOW, first)
+    if w < 1:
+        return first
+    win = np.lib.stride_tricks.sliding_window_view(x[lo:first], w, axis=0)  # (n, D, w)
+    dev = win - win.mean(axis=2, keepdims=True)
+    spread = np.sqrt((dev.reshape(len(win), -1, 3, w) ** 2).sum(axis=2).mean(axis=2)).sum(axis=1)
+    k = lo + int(np.argmin(spread))
+    rest = x[k : k + w].mean(axis=0)
+    away = _away_from_rest(x[k + w : end], rest)
+    return k + w + int(away[0]) if len(away) else first
 
 
 def _decisions(events: Iterable[dict]) -> tuple[str | None, str | None, int, int | None]:
@@ -236,13 +258,17 @@ def score_stream(
     """Match starts to intervals, in order: each interval takes the first start not yet taken
     inside [first - tolerance, end) (hand-labelled intervals begin after the wind-up the sensor
     already sees, and a start in the last frames of an interval that already has one is the
-    next punch's). Starts outside every (widened) interval are false starts. The lag is counted
-    from each interval's true onset (`stream_onset`) when the `frames` are given, else from its
-    first labelled frame."""
+    next punch's). Starts outside every (widened) interval are false starts; the other starts
+    not taken, inside a (widened) interval, are `extra_starts` (a player sees a second punch, e.g.
+    the return of a full blow after the character's clip ended). The lag is counted from each
+    interval's true onset (`stream_onset`, the rest after the previous interval) when the
+    `frames` are given, else from its first labelled frame."""
     s = Summary(main)
     starts = [e for e in events if e["event"] == "start"]
     used: set[int] = set()
+    prev_end = 0
     for action, a, b in ivs:
+        prev, prev_end = prev_end, b
         mine = [k for k, e in enumerate(starts) if a - tolerance <= e["frame"] < b and k not in used]
         if not mine:
             s.outcomes.append(Outcome(action, None, None, -1, None))
@@ -252,12 +278,14 @@ def score_stream(
         e = starts[k]
         after = [x for x in events if x["frame"] >= e["frame"]]
         first, final, last_np, at = _decisions(after)
-        onset = a if frames is None else stream_onset(frames, a, b)
+        onset = a if frames is None else stream_onset(frames, a, b, prev)
         s.outcomes.append(Outcome(action, first, final, last_np, at - onset))
     labelled = np.zeros(n_frames, dtype=bool)
     for _, a, b in ivs:
         labelled[max(0, a - tolerance) : b] = True
-    s.false_starts = sum(1 for k, e in enumerate(starts) if k not in used and not labelled[min(e["frame"], n_frames - 1)])
+    spare = [labelled[min(e["frame"], n_frames - 1)] for k, e in enumerate(starts) if k not in used]
+    s.false_starts = spare.count(False)
+    s.extra_starts = spare.count(True)
     s.idle_minutes = float((~labelled).sum()) / 60.0 / 60.0
     return s
 
@@ -288,6 +316,7 @@ def evaluate_stream_folds(
             s = score_stream(events, test, hi - lo, m, frames=frames[lo:hi])
             pool.outcomes += s.outcomes
             pool.false_starts += s.false_starts
+            pool.extra_starts += s.extra_starts
             pool.idle_minutes += s.idle_minutes
     return pooled
 
@@ -312,7 +341,7 @@ def evaluate_stream(
 def format_table(rows: Sequence[dict]) -> str:
     cols = ["main", "n", *GROUPS, "acceptable", "final_correct", "first_correct", "lag_ms", "lag_p90_ms"]
     if any("false_starts" in r for r in rows):
-        cols += ["started", "type", "false_starts", "false_starts_per_idle_min"]
+        cols += ["started", "type", "false_starts", "false_starts_per_idle_min", "extra_starts"]
     head = " | ".join(cols)
     lines = [head, "-" * len(head)]
     for r in rows:
@@ -388,6 +417,7 @@ def evaluate_cross_session(
             s = score_stream(replay_stream(rec, frames, clip_frames), ivs, len(frames), m, frames=frames)
             pool.outcomes += s.outcomes
             pool.false_starts += s.false_starts
+            pool.extra_starts += s.extra_starts
             pool.idle_minutes += s.idle_minutes
     return pooled
 

@@ -101,10 +101,36 @@ def test_true_onset_is_the_first_frame_0_3_g_from_the_rest_before():
     ramp[:, 1] += np.arange(20) * 0.05  # 0.3 g away at frame 6 of the ramp
     trial = np.vstack([rest(10), ramp, rest(5) + [0.0, 1.0, 0.0]])
     assert true_onset(trial) == 10 + 6
-    # a stream interval labelled from frame 10: the rest is the mean of the 5 frames before it
+    # a stream interval labelled from frame 10: the rest is the stillest window before it
     assert stream_onset(trial, 10, len(trial)) == 16
-    assert stream_onset(trial, 17, len(trial)) == 20  # rest before 17 = frames 12-16 (0.2 g): 0.5 g at 20
     assert stream_onset(rest(30), 10, 30) == 10  # never 0.3 g away: the first labelled frame
+
+
+def test_stream_onset_finds_the_rest_before_a_label_that_starts_mid_motion():
+    """Hand labels begin after the hand has left the rest: the onset is where it left, not
+    0.3 g after wherever the motion was 5 frames before the label."""
+    from tools.evaluate_recognition import score_stream, stream_onset
+
+    rng = np.random.default_rng(0)
+    prev = rest(20) + [0.0, 1.5, 0.0]  # the previous punch, still moving at its label's end
+    still = rest(30) + rng.normal(0, 0.01, (30, 3))
+    wind_up = np.tile(G, (40, 1))
+    wind_up[:, 1] += np.arange(40) * 0.04  # 0.3 g away at frame 8 of the wind-up
+    stream = np.vstack([prev, still, wind_up])
+    onset = 20 + 30 + 8
+    label = onset + 12  # labelled 12 frames after the hand left the rest
+    assert stream_onset(stream, label, len(stream), prev_end=20) == onset
+    # without the previous end the search window reaches into that punch: still the same rest
+    assert stream_onset(stream, label, len(stream), prev_end=0) == onset
+    # the lag in score_stream counts from there (a start 2 frames after the label)
+    ivs = [("x", 0, 20), ("jab", label, len(stream))]
+    events = [{"event": "start", "action": "jab", "frame": label + 2}]
+    s = score_stream(events, ivs, len(stream), 6, frames=stream)
+    assert s.outcomes[1].lag == 14
+    # two starts inside one interval: one scored, the other an extra start (not a false one)
+    events.append({"event": "start", "action": "jab", "frame": label + 20})
+    s = score_stream(events, ivs, len(stream), 6, frames=stream)
+    assert s.extra_starts == 1 and s.false_starts == 0
 
 
 def test_evaluate_prints_lag_median_and_p90_and_accepts_auto(tmp_path, trials_dir, capsys):

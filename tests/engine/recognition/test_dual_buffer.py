@@ -149,6 +149,34 @@ def test_discard_ends_at_null_signal(templates):
     assert [e["action"] for e in events if e["event"] == "start"] == ["upper"]
 
 
+def test_a_weak_motion_right_after_the_discard_is_held_back_but_not_after_a_rest(templates, monkeypatch):
+    """The discard ran out while the hand still moved hard: a weaker motion straight after it is
+    probably the return, so its start waits for RETURN_RATIO of the previous motion's peak (a bar
+    that fades a little every frame); after a rest the same motion starts on time."""
+    from engine.recognition import dual_buffer
+
+    busy = np.tile(G + np.array([2.0, 0.0, 0.0]), (20, 1))
+    busy[::2, 0] -= 4.0
+    weak = bump(2, 1.3)
+
+    def after_discard(then: np.ndarray) -> tuple[int, int]:
+        rec = DualBufferRecognizer(templates)
+        run(rec, np.vstack([rest(10), bump(0, 3.0)[:12]]))
+        rec.character_finished()
+        run(rec, busy)  # 20 frames discarded, the hand still moving
+        f0 = rec.frame
+        starts = [e for e in run(rec, np.vstack([then, rest(20)])) if e["event"] == "start"]
+        assert [e["action"] for e in starts] == ["upper"]
+        return starts[0]["onset_frame"] - f0, starts[0]["frame"] - starts[0]["onset_frame"]
+
+    onset, held = after_discard(weak)
+    rested = after_discard(np.vstack([rest(10), weak]))
+    monkeypatch.setattr(dual_buffer, "RETURN_RATIO", 0.0)
+    assert after_discard(weak) == (onset, 5)  # without the rule: main frames from the onset
+    assert held >= 10  # with it: until the motion is near the previous one's (fading) peak
+    assert rested == after_discard(np.vstack([rest(10), weak])) == (12, 5)  # a rest clears it
+
+
 def test_motion_unlike_any_template_is_rejected(templates):
     rec = DualBufferRecognizer(templates)
     # fast shaking on the y axis, which no template has
