@@ -68,6 +68,7 @@ class HudState:
     source_state: str = "connected"
     battery: float | None = None
     keyboard_banner: bool = False
+    templates: str = ""  # which template set the recognizer uses (session.templates_in_use)
     disconnected: bool = False
     keys: list[tuple[str, str]] = field(default_factory=list)
     mode: str = ""
@@ -229,6 +230,8 @@ class Hud:
         state_col = OK_COLOR if st.source_state == "connected" else (SWITCH_COLOR if st.source_state in ("reconnecting", "connecting") else REJECT_COLOR)
         pygame.draw.circle(surf, state_col, (int(left.left + 7 * u), int(y + 8 * u)), int(6 * u))
         r = self.blit(surf, f"{st.source_url}  {st.source_state}", int(22 * u), (left.left + 18 * u, y), DIM)
+        if st.templates:
+            self.blit(surf, st.templates, int(18 * u), (left.left + 18 * u, y + 22 * u), DIM)
         if st.battery is not None:
             bx, by = r.right + 12 * u, y + 2 * u
             body = pygame.Rect(int(bx), int(by), int(34 * u), int(14 * u))

@@ -120,6 +120,25 @@ def load_templates(path: str | Path | None = None, left_handed: bool = False):
     return templates
 
 
+def templates_in_use(path: str | Path | None = None) -> str:
+    """What `load_templates(path)` loads, said for the HUD and the console: the player has to
+    know when a trained set (perhaps of a few moves) is in play, and how to go back."""
+    from engine.recognition import Templates
+    from game.actions import ACTION_NAMES
+    from game.userdata import user_templates_path
+
+    if path is not None:
+        return f"templates {Path(path).name}"
+    if user_templates_path().exists():
+        try:
+            trained = [a for a in Templates.load(user_templates_path()).meta.get("trained", "").split(",") if a]
+        except InputError:
+            trained = []
+        mine = f"{len(trained)} of {len(ACTION_NAMES)} moves" if trained and len(trained) < len(ACTION_NAMES) else "all moves"
+        return f"your templates ({mine}; `quickjab train --reset` for the defaults)"
+    return "default templates"
+
+
 def load_graph(path: str | Path | None = None):
     """The Interaction Graph: `path`, else the shipped table, else one cached in the user's
     data directory, else a small one built now (~3 s) and cached there."""
@@ -192,6 +211,7 @@ class Session:
                                   main_size=int(self.recognizer.main) if self.recognizer.main != "auto" else 6,
                                   supp_size=self.recognizer.supplementary)
         self.hud_state.message = "ROUND 1"
+        self.hud_state.templates = templates_in_use(cfg.templates)
         if hasattr(source, "press_key"):
             from game.keyboard_source import key_help
 

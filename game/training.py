@@ -113,14 +113,45 @@ class Trainer:
         self.phase = phase
         self.phase_step = 0
 
-    def templates(self, left_handed: bool = False):
-        """The player's templates from the recorded trials."""
+    def templates(self, left_handed: bool = False, base=None):
+        """The player's templates from the recorded trials. With `base` (the set in use: the
+        player's file, else the defaults) only the actions trained now are replaced; the
+        others are kept, so training one move never loses the rest."""
         from engine.recognition import Templates
 
         templates = Templates.from_trials(self.recorded)
+        trained = set(self.recorded)
+        if base is not None:
+            if base.meta.get("source") == "quickjab train":
+                trained |= set(filter(None, base.meta.get("trained", "").split(",")))
+            templates = merge_templates(base, templates, left_handed)
+        templates.meta["trained"] = ",".join(sorted(trained))  # the actions that are the player's own
         templates.meta["source"] = "quickjab train"
         templates.meta["left_handed"] = "1" if left_handed else "0"
         return templates
+
+
+def merge_templates(base, new, left_handed: bool = False):
+    """`base`'s templates for the actions `new` does not have, then all of `new`'s. A base of
+    the other handedness is mirrored first (the file holds the player's own motions)."""
+    from engine.recognition import Templates
+
+    if (base.meta.get("left_handed") == "1") != left_handed:
+        base = base.mirrored()
+    if base.dim != new.dim:
+        return new  # another sensor layout: nothing of the old set fits
+    trained = set(new.action_names)
+    keep = [i for i, a in enumerate(base.actions) if a not in trained]
+    return Templates(
+        [base.actions[i] for i in keep] + list(new.actions),
+        [base.signals[i] for i in keep] + list(new.signals),
+        np.vstack([base.gravity[keep], new.gravity]),
+        np.concatenate([base.onsets[keep], new.onsets]),
+        np.concatenate([base.thresholds[keep], new.thresholds]),
+        new.method,
+        new.feature,
+        {**base.meta, **new.meta},
+    )
 
 
 class TrainingScreen:
@@ -253,7 +284,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--source", default=None, help="source URL (default: the first Wiimote, else the keyboard)")
     p.add_argument("--demo", action="store_true", help="the virtual player performs every move by itself")
     p.add_argument("--left-handed", action="store_true", help="mirror the animations for a left-handed player")
-    p.add_argument("--actions", default=None, help="comma-separated subset of actions (default: all 13)")
+    p.add_argument("--actions", default=None,
+                   help="comma-separated subset of actions (default: all 13); the others keep the templates you have")
+    p.add_argument("--reset", action="store_true",
+                   help="delete your trained templates (play goes back to the default set) and exit")
     p.add_argument("-o", "--output", default=None, help="where to save the templates (default: your data directory)")
     p.add_argument("--headless", action="store_true", help="no window: SDL dummy driver, virtual clock")
     p.add_argument("--frames", type=int, default=None, help="stop after N rendered frames")
@@ -263,12 +297,39 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=run)
 
 
+def base_templates(output: Path):
+    """The set newly trained actions are merged into: the file being written if it exists,
+    else the default set `play` uses without one (merge_templates mirrors it if needed)."""
+    from engine.recognition import Templates
+    from game.session import synthesized_templates
+    from game.userdata import SHIPPED_TEMPLATES
+
+    if output.exists():
+        return Templates.load(output)
+    return Templates.load(SHIPPED_TEMPLATES) if SHIPPED_TEMPLATES.exists() else synthesized_templates()
+
+
+def reset_templates(output: Path | None) -> int:
+    """`train --reset`: remove the player's templates; `play` uses the default set again."""
+    from game.userdata import user_templates_path
+
+    path = output or user_templates_path()
+    if path.exists():
+        path.unlink()
+        print(f"quickjab train: removed {path}; play uses the default templates again", file=sys.stderr)
+    else:
+        print(f"quickjab train: no trained templates at {path}; play already uses the default set", file=sys.stderr)
+    return 0
+
+
 def run(args: argparse.Namespace) -> int:
-    from game.play import headless_env, open_player_source, parse_size
+    from game.play import check_visible_window, headless_env, open_player_source, parse_size
 
     size = parse_size(args.size)
     from game.actions import ACTION_NAMES, load_library
 
+    if args.reset:
+        return reset_templates(Path(args.output) if args.output else None)
     actions = list(ACTION_NAMES)
     if args.actions:
         actions = [a.strip() for a in args.actions.split(",") if a.strip()]
@@ -286,7 +347,9 @@ def run(args: argparse.Namespace) -> int:
 
     clock = VirtualClock() if args.headless else RealClock()
     source, fallback = open_player_source(args.source, False, args.seed, clock.seconds)
-    if fallback:
+    if args.demo:
+        print("quickjab train: demo: the virtual player performs every move by itself", file=sys.stderr)
+    elif fallback:
         print("quickjab train: No Wiimote found: training from the keyboard (press a key to perform)", file=sys.stderr)
     auto = args.demo or bool(getattr(source, "auto", False))
     if hasattr(source, "auto"):
@@ -295,6 +358,13 @@ def run(args: argparse.Namespace) -> int:
     trainer = Trainer(actions)
     pygame.init()
     pygame.display.set_mode(size, pygame.RESIZABLE)
+    if not args.headless:
+        try:
+            check_visible_window("train")
+        except InputError:
+            source.close()
+            pygame.quit()
+            raise
     pygame.display.set_caption("QuickJab - Train your moves")
     screen_view = TrainingScreen(lib, trainer, source.url, args.left_handed)
     resampler = FrameResampler(sensors=2)
@@ -324,7 +394,7 @@ def run(args: argparse.Namespace) -> int:
         if trainer.go and auto:
             perform()
         if trainer.done and not was_done:
-            templates = trainer.templates(args.left_handed)
+            templates = trainer.templates(args.left_handed, base=base_templates(output))
             output.parent.mkdir(parents=True, exist_ok=True)
             templates.save(output)
             screen_view.saved_to = str(output)
