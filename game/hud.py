@@ -23,6 +23,7 @@ BAR_BACK = (34, 30, 38)
 BAR_LOSS = (250, 210, 90)  # the recently lost health, shown draining after the fill
 TEXT = (242, 240, 232)
 DIM = (170, 166, 160)
+KEY_TEXT = (228, 225, 218)  # the key legend, on its dark panel
 SWITCH_COLOR = (255, 200, 40)
 REJECT_COLOR = (255, 70, 70)
 OK_COLOR = (90, 220, 120)
@@ -69,6 +70,7 @@ class HudState:
     battery: float | None = None
     keyboard_banner: bool = False
     templates: str = ""  # which template set the recognizer uses (session.templates_in_use)
+    difficulty: str = ""  # the CPU's (game/difficulty.py), shown in the pause menu
     disconnected: bool = False
     keys: list[tuple[str, str]] = field(default_factory=list)
     mode: str = ""
@@ -103,6 +105,14 @@ class HudState:
                 self.shown_health[i] = max(self.health[i], self.shown_health[i] - 40.0 / 60.0)
             else:
                 self.shown_health[i] = self.health[i]
+
+
+def action_label(action: str) -> str:
+    """An action as the HUD names it: "straight L", not "straight l" (which reads as "I")."""
+    name = action.replace("_", " ")
+    if name.endswith(" l") or name.endswith(" r"):
+        name = name[:-1] + name[-1].upper()
+    return name
 
 
 class TextCache:
@@ -144,6 +154,7 @@ class Hud:
         self._fills: dict[tuple, pygame.Surface] = {}  # translucent backgrounds, by size and colour
         self._rows_text: list[str] = []
         self._text_frame = -10**9
+        self.key_panel: pygame.Rect | None = None  # where the key legend was drawn last (tests)
 
     # layout helpers (fractions of the window, so resizes keep the layout)
     @staticmethod
@@ -253,7 +264,7 @@ class Hud:
         surf.blit(self._translucent(panel.size, (10, 10, 16, 170)), panel)
         x, y = panel.left + 12 * u, panel.top + 8 * u
         self.blit(surf, "RECOGNIZED", int(18 * u), (x, y), DIM)
-        name = st.action.replace("_", " ") if st.action else "-"
+        name = action_label(st.action) if st.action else "-"
         r = self.blit(surf, name, int(34 * u), (x, y + 16 * u), TEXT)
         if st.score is not None:
             self.blit(surf, f"score {st.score:.2f}", int(22 * u), (r.right + 10 * u, y + 24 * u), DIM)
@@ -289,16 +300,23 @@ class Hud:
         self.blit(surf, "Esc pause   F3 budget   F11 fullscreen", int(20 * u), (right.right, right.bottom + 32 * u), DIM, "topright")
         if not st.keys:
             return
-        parts = [f"{k} {a.replace('_', ' ')}" for k, a in st.keys]
+        parts = [f"{k} {action_label(a)}" for k, a in st.keys]
         line = "   ".join(parts)
         size = int(19 * u)
-        img = self.text.render(line, size, DIM)
-        if img.get_width() > w - 20:  # two lines on narrow windows
+        img = self.text.render(line, size, KEY_TEXT)
+        lines = [line]
+        if img.get_width() > w - 40:  # two lines on narrow windows
             half = (len(parts) + 1) // 2
-            for n, chunk in enumerate((parts[:half], parts[half:])):
-                self.blit(surf, "   ".join(chunk), size, (w // 2, h - 44 * u + n * 20 * u), DIM, "midtop")
-        else:
-            self.blit(surf, line, size, (w // 2, h - 26 * u), DIM, "midtop")
+            lines = ["   ".join(parts[:half]), "   ".join(parts[half:])]
+        # on a dark panel of its own: the ring's ropes run behind the bottom of the screen
+        line_h = int(21 * u)
+        widest = max(self.text.render(t, size, KEY_TEXT).get_width() for t in lines)
+        panel = pygame.Rect(0, 0, widest + int(24 * u), line_h * len(lines) + int(8 * u))
+        panel.midbottom = (w // 2, h - int(4 * u))
+        surf.blit(self._translucent(panel.size, (8, 8, 12, 215)), panel)
+        self.key_panel = panel
+        for n, text in enumerate(lines):
+            self.blit(surf, text, size, (w // 2, panel.top + int(4 * u) + n * line_h), KEY_TEXT, "midtop")
 
     def _centre(self, surf: pygame.Surface, st: HudState, u: float) -> None:
         w, h = surf.get_size()
@@ -311,12 +329,16 @@ class Hud:
             self._banner(surf, title, big, (w // 2, h * 0.42))
             if not st.demo:
                 self.blit(surf, "Enter: a new match", mid, (w // 2, h * 0.42 + 60 * u), DIM, "midtop")
+                if st.difficulty:
+                    self.blit(surf, f"D: difficulty {st.difficulty}", int(30 * u), (w // 2, h * 0.42 + 104 * u), DIM, "midtop")
         elif st.phase == "count" and st.down is not None:
             self._banner(surf, f"{st.count}", int(140 * u), (w // 2, h * 0.40))
             self.blit(surf, "KNOCKDOWN", mid, (w // 2, h * 0.40 + 70 * u), SWITCH_COLOR, "midtop")
         elif st.paused and not st.disconnected:
             self._banner(surf, "PAUSED", big, (w // 2, h * 0.42))
             self.blit(surf, "Esc or Home to resume", mid, (w // 2, h * 0.42 + 56 * u), DIM, "midtop")
+            if st.difficulty:
+                self.blit(surf, f"D: difficulty {st.difficulty}", mid, (w // 2, h * 0.42 + 100 * u), SWITCH_COLOR, "midtop")
         elif st.message and st.message_age < 90:
             self._banner(surf, st.message, big, (w // 2, h * 0.42))
 

@@ -53,7 +53,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--low-power", action="store_true", help="render at 30 Hz on a half-size surface, flat shading, no antialiasing, fewer solver iterations (docs/performance.md)")
     p.add_argument("--templates", metavar="NPZ", help="recognition templates (default: yours from `quickjab train`, else the shipped set)")
     p.add_argument("--graph", metavar="NPZ", help="Interaction Graph table (default: the shipped one)")
-    p.add_argument("--difficulty", choices=("easy", "normal", "hard"), default="normal", help="how much the CPU's blows hurt (default normal)")
+    p.add_argument("--difficulty", choices=("easy", "normal", "hard", "adaptive"), default="normal",
+                   help="the CPU: how often it takes its best action, how late it reacts, its rest between moves, how "
+                        "much its blows hurt; adaptive follows you to about half the rounds won (default normal; "
+                        "D in the pause menu changes it)")
     p.add_argument("--left-handed", action="store_true", help="Wiimote in the left hand: mirror the templates (your own trained set is used as it is)")
     p.add_argument("--budget", action="store_true", help="show the frame-budget overlay from the start (F3 toggles)")
     p.add_argument("--no-sound", action="store_true", help="no sound")
