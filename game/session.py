@@ -33,11 +33,11 @@ from engine.frames import FrameResampler
 from engine.loop import FixedStepLoop
 from engine.sensors.source import Source, SourceState
 from engine.state_hash import state_hash
+from game.difficulty import DifficultySetting
 from game.history import History
 from game.hits import hits_from_contacts
 from game.hud import Hud, HudState
 from game.interaction import OpponentController, Situation
-from game.difficulty import DifficultySetting
 from game.match import Match
 from game.render import Renderer
 from game.render_low_power import LowPowerRenderer
