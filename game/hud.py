@@ -34,6 +34,8 @@ STAGE_COLORS = [
 MARK_STEPS = 45  # how long a switch / reject mark stays lit
 CHART_BG = (30, 30, 36)
 TEXT_EVERY = 10  # frames between refreshes of the F3 overlay's numbers
+BUDGET_HEADERS = ("stage", "last ms", "p99 / budget ms", "overruns")
+BUDGET_COLUMNS = (0, 110, 185, 320)  # their x in the F3 panel (720p pixels from the colour key)
 HISTORY_FRAMES = 120  # the F3 overlay's chart: the last two seconds, a stacked column a frame
 
 
@@ -309,10 +311,10 @@ class Hud:
             half = (len(parts) + 1) // 2
             lines = ["   ".join(parts[:half]), "   ".join(parts[half:])]
         # on a dark panel of its own: the ring's ropes run behind the bottom of the screen
-        line_h = int(21 * u)
+        line_h = int(20 * u)
         widest = max(self.text.render(t, size, KEY_TEXT).get_width() for t in lines)
         panel = pygame.Rect(0, 0, widest + int(24 * u), line_h * len(lines) + int(8 * u))
-        panel.midbottom = (w // 2, h - int(4 * u))
+        panel.midbottom = (w // 2, h - int(2 * u))
         surf.blit(self._translucent(panel.size, (8, 8, 12, 215)), panel)
         self.key_panel = panel
         for n, text in enumerate(lines):
@@ -372,7 +374,7 @@ class Hud:
         """A stacked bar per stage against the 16.7 ms line, and each stage's p99."""
         w, h = surf.get_size()
         chart_h = int(90 * u)
-        panel = pygame.Rect(w - int(440 * u), int(130 * u), int(424 * u), int(60 * u + 20 * u * len(budget.stages)) + chart_h)
+        panel = pygame.Rect(w - int(440 * u), int(130 * u), int(424 * u), int(80 * u + 20 * u * len(budget.stages)) + chart_h)
         surf.blit(self._translucent(panel.size, (0, 0, 0, 190)), panel)
         last = budget.last_frame_ms()
         names = [s.name for s in budget.stages if s.name not in (WAIT, UNACCOUNTED)] + [UNACCOUNTED]
@@ -383,10 +385,10 @@ class Hud:
         x = float(bar.left)
         for k, name in enumerate(names):
             ms = last.get(name, 0.0)
-            wpx = bar.width * ms / scale_ms
+            wpx = min(bar.width * ms / scale_ms, bar.right - x)  # an overrun stops at the bar's end
             if wpx >= 1:
                 pygame.draw.rect(surf, STAGE_COLORS[k % len(STAGE_COLORS)], (int(x), bar.top, int(np.ceil(wpx)), bar.height))
-            x += wpx
+            x += max(wpx, 0.0)
         line_x = bar.left + bar.width * budget.frame_budget_ms / scale_ms
         pygame.draw.line(surf, REJECT_COLOR, (line_x, bar.top - 4), (line_x, bar.bottom + 4), 2)
         stages = {s.name: s for s in budget.stages}
@@ -426,10 +428,16 @@ class Hud:
             self._rows_text = []
             for name in names:
                 st = stages[name]
-                over = f"  over {st.overruns}" if st.overruns else ""
-                budget_txt = f"/{st.budget_ms:.1f}" if st.budget_ms else ""
-                self._rows_text.append(f"{name:<12} {last.get(name, 0.0):5.2f} ms  p99 {self._p99.get(name, 0.0):5.2f}{budget_txt}{over}")
-        for k, text in enumerate(self._rows_text):
-            y = bar.bottom + 8 * u + k * 20 * u
+                budget_txt = f" / {st.budget_ms:.2f}" if st.budget_ms else ""
+                self._rows_text.append((name, f"{last.get(name, 0.0):.2f}", f"{self._p99.get(name, 0.0):.2f}{budget_txt}",
+                                        str(st.overruns) if st.overruns else ""))
+        # one column each, under a header: stage, last frame's ms, p99 / budget ms, overruns
+        cols = [panel.left + 28 * u + x * u for x in BUDGET_COLUMNS]
+        y = bar.bottom + 8 * u
+        for x, head in zip(cols, BUDGET_HEADERS, strict=True):
+            self.blit(surf, head, int(16 * u), (x, y + 2 * u), DIM)
+        for k, row in enumerate(self._rows_text):
+            y = bar.bottom + 28 * u + k * 20 * u
             pygame.draw.rect(surf, STAGE_COLORS[k % len(STAGE_COLORS)], (int(panel.left + 10 * u), int(y + 3 * u), int(12 * u), int(12 * u)))
-            self.blit(surf, text, int(18 * u), (panel.left + 28 * u, y), TEXT)
+            for x, text in zip(cols, row, strict=True):
+                self.blit(surf, text, int(18 * u), (x, y), TEXT)

@@ -35,6 +35,10 @@ LEAD_IN = 30  # frames of the ready phase kept at the start of a trial (the rest
 RECORD_STEPS = 96  # the recording window after GO
 
 SHOW, READY, RECORD, DONE = "show", "ready", "record", "done"
+# the live signal: one colour per hand (as the contact sheet: right red, left blue), x y z in
+# three shades of it
+TRACE_COLOURS = (((255, 150, 140), (235, 80, 70), (170, 40, 35)),
+                 ((150, 190, 255), (80, 130, 240), (40, 70, 170)))
 
 MIRROR_JOINT = {}  # joint index -> the mirrored joint's index (filled below)
 
@@ -266,13 +270,16 @@ class TrainingScreen:
         if len(self.history) < 2:
             return
         data = np.array(self.history)
-        colors = [(240, 90, 80), (90, 220, 120), (100, 150, 255), (240, 160, 80), (160, 230, 160), (160, 180, 255)]
         xs = rect.left + np.arange(len(data)) * rect.width / 149.0
         for d in range(min(6, data.shape[1])):
             ys = mid - np.clip(data[:, d] / 3.0, -1, 1) * rect.height * 0.45
-            pygame.draw.lines(surf, colors[d], False, np.stack([xs, ys], axis=1).tolist(), 2)
-        self._text(surf, "Wiimote x y z", 16, (rect.left + 6, rect.top + 4), (240, 90, 80))
-        self._text(surf, "Nunchuk x y z", 16, (rect.left + 120, rect.top + 4), (240, 160, 80))
+            pygame.draw.lines(surf, TRACE_COLOURS[d // 3][d % 3], False, np.stack([xs, ys], axis=1).tolist(), 2)
+        # the legend in each hand's colour: its three axes are shades of it (x light, z dark)
+        x = rect.left + 6
+        for hand, name in enumerate(("Wiimote (right) x y z", "Nunchuk (left) x y z")):
+            img = self.text.render(name, 16, TRACE_COLOURS[hand][1])
+            surf.blit(img, (x, rect.top + 4))
+            x += img.get_width() + 16
 
     def _text(self, surf: pygame.Surface, text: str, size: int, pos, color) -> None:
         surf.blit(self.text.render(text, size, color), (int(pos[0]), int(pos[1])))

@@ -115,3 +115,28 @@ def test_no_display_is_a_clear_error_not_an_invisible_window(command):
     assert r.returncode == 2, r.stderr
     assert "no display" in r.stderr and "--headless" in r.stderr
     assert "Traceback" not in r.stderr
+
+
+def test_training_traces_are_one_colour_per_hand():
+    import pygame
+
+    from game.actions import load_library
+    from game.training import TRACE_COLOURS, Trainer, TrainingScreen
+
+    pygame.init()
+    screen = TrainingScreen(load_library(), Trainer(["straight_r"]), "keyboard://")
+    t = np.arange(150)
+    for k in t:
+        screen.push_frame(np.array([np.sin(k / 7 + p) * 2 for p in range(6)]))
+    surf = pygame.Surface((640, 300))
+    rect = pygame.Rect(0, 0, 640, 300)
+    screen._plot(surf, rect)
+    a = pygame.surfarray.array3d(surf).reshape(-1, 3).astype(int)
+    lit = a[a.max(axis=1) > 60]
+    reddish = (lit[:, 0] > lit[:, 2] + 40)
+    bluish = (lit[:, 2] > lit[:, 0] + 40)
+    assert reddish.sum() > 500 and bluish.sum() > 500
+    # nothing green or orange: every trace pixel is one hand's hue (or the grey mid line)
+    greenish = (lit[:, 1] > lit[:, 0] + 30) & (lit[:, 1] > lit[:, 2] + 30)
+    assert greenish.sum() == 0
+    assert TRACE_COLOURS[0][0][0] > TRACE_COLOURS[0][0][2] and TRACE_COLOURS[1][0][2] > TRACE_COLOURS[1][0][0]
