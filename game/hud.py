@@ -34,6 +34,7 @@ STAGE_COLORS = [
 MARK_STEPS = 45  # how long a switch / reject mark stays lit
 CHART_BG = (30, 30, 36)
 TEXT_EVERY = 10  # frames between refreshes of the F3 overlay's numbers
+COUNT_X = 0.3  # the knockdown count's centre, as a fraction of the width
 BUDGET_HEADERS = ("stage", "last ms", "p99 / budget ms", "overruns")
 BUDGET_COLUMNS = (0, 110, 185, 320)  # their x in the F3 panel (720p pixels from the colour key)
 HISTORY_FRAMES = 120  # the F3 overlay's chart: the last two seconds, a stacked column a frame
@@ -157,6 +158,7 @@ class Hud:
         self._rows_text: list[str] = []
         self._text_frame = -10**9
         self.key_panel: pygame.Rect | None = None  # where the key legend was drawn last (tests)
+        self.count_rect: pygame.Rect | None = None  # where the knockdown count was drawn last
 
     # layout helpers (fractions of the window, so resizes keep the layout)
     @staticmethod
@@ -334,8 +336,11 @@ class Hud:
                 if st.difficulty:
                     self.blit(surf, f"D: difficulty {st.difficulty}", int(30 * u), (w // 2, h * 0.42 + 104 * u), DIM, "midtop")
         elif st.phase == "count" and st.down is not None:
-            self._banner(surf, f"{st.count}", int(140 * u), (w // 2, h * 0.40))
-            self.blit(surf, "KNOCKDOWN", mid, (w // 2, h * 0.40 + 70 * u), SWITCH_COLOR, "midtop")
+            # left of the ring's centre line: in the middle of the screen it sat over the far
+            # corner post, white on white
+            cx = w * COUNT_X
+            self.count_rect = self._banner(surf, f"{st.count}", int(140 * u), (cx, h * 0.40), alpha=215)
+            self.blit(surf, "KNOCKDOWN", mid, (cx, h * 0.40 + 70 * u), SWITCH_COLOR, "midtop")
         elif st.paused and not st.disconnected:
             self._banner(surf, "PAUSED", big, (w // 2, h * 0.42))
             self.blit(surf, "Esc or Home to resume", mid, (w // 2, h * 0.42 + 56 * u), DIM, "midtop")
@@ -344,11 +349,12 @@ class Hud:
         elif st.message and st.message_age < 90:
             self._banner(surf, st.message, big, (w // 2, h * 0.42))
 
-    def _banner(self, surf: pygame.Surface, text: str, size: int, center) -> None:
+    def _banner(self, surf: pygame.Surface, text: str, size: int, center, alpha: int = 150) -> pygame.Rect:
         img = self.text.render(text, size, TEXT)
         box = img.get_rect(center=(int(center[0]), int(center[1]))).inflate(40, 16)
-        surf.blit(self._translucent(box.size, (0, 0, 0, 150)), box)
+        surf.blit(self._translucent(box.size, (0, 0, 0, alpha)), box)
         surf.blit(img, img.get_rect(center=box.center))
+        return box
 
     def _disconnected(self, surf: pygame.Surface, st: HudState, u: float) -> None:
         w, h = surf.get_size()

@@ -191,3 +191,23 @@ def test_key_legend_sits_on_a_dark_panel_and_names_hands_in_capitals() -> None:
         a = pygame.surfarray.array3d(surf)[panel.left:panel.right, panel.top:panel.bottom].astype(int).sum(axis=2) / 3
         assert np.median(a) < 70  # the panel hides what is behind it
         assert (a > 180).sum() > 200  # and the legend's text is bright on it
+
+
+@pytest.mark.parametrize("size", [SIZE, (960, 540), (1600, 900)])
+def test_knockdown_count_is_clear_of_the_corner_posts(size) -> None:
+    """Issue 17: the count "2" sat over the far corner post."""
+    from game.render import POST_HALF, POST_HEIGHT
+
+    pygame.init()
+    r = Renderer(size)
+    surf = pygame.Surface(size)
+    hud = Hud()
+    hud.draw(surf, HudState(phase="count", down=1, count=2, knockdowns=[0, 2]))
+    assert hud.count_rect is not None and surf.get_rect().contains(hud.count_rect)
+    for x, z in ((-1, -1), (1, -1), (1, 1), (-1, 1)):
+        ends = np.array([[x * POST_HALF, 0.0, z * POST_HALF], [x * POST_HALF, POST_HEIGHT, z * POST_HALF]])
+        xy, depth = r.camera.project(ends)
+        half = 0.08 * float(r.camera.scale_at(depth.min()))
+        post = pygame.Rect(int(xy[:, 0].min() - half), int(xy[:, 1].min()), int(2 * half + abs(xy[0, 0] - xy[1, 0])),
+                           int(abs(xy[0, 1] - xy[1, 1])))
+        assert not hud.count_rect.colliderect(post), (x, z, post, hud.count_rect)
