@@ -184,6 +184,7 @@ class TrainingScreen:
         import pygame
 
         from game.camera import Camera
+        from game.hud import action_label
         from game.render import Renderer
         from game.skeleton import local_to_world
 
@@ -220,7 +221,7 @@ class TrainingScreen:
             done = len(tr.recorded.get(a, []))
             current = i == tr.index and not tr.done
             col = (255, 200, 40) if current else ((90, 220, 120) if done >= tr.trials else (200, 196, 190))
-            self._text(surf, a.replace("_", " "), int(24 * u), (x + 18 * u, y), col)
+            self._text(surf, action_label(a), int(24 * u), (x + 18 * u, y), col)
             for k in range(tr.trials):
                 c = (int(x + 190 * u + k * 16 * u), int(y + 9 * u))
                 pygame.draw.circle(surf, (90, 220, 120) if k < done else (70, 70, 80), c, int(5 * u))
@@ -240,16 +241,18 @@ class TrainingScreen:
     def _instruction(self, surf: pygame.Surface, stage: pygame.Rect, u: float) -> None:
         import pygame
 
+        from game.hud import action_label
+
         tr = self.trainer
         if tr.done:
             title, sub = "ALL DONE", (f"templates saved to {self.saved_to}" if self.saved_to else "building templates...")
         elif tr.phase == SHOW:
-            title, sub = tr.action.replace("_", " ").upper(), "watch the move, then copy it"
+            title, sub = action_label(tr.action).upper(), "watch the move, then copy it"
         elif tr.phase == READY:
             secs = int(np.ceil((READY_STEPS - tr.phase_step) / HZ))
             title, sub = f"GET READY {secs}", f"trial {tr.trial + 1} of {tr.trials}: hold your guard still"
         else:
-            title, sub = "GO!", f"trial {tr.trial + 1} of {tr.trials}: {tr.action.replace('_', ' ')}"
+            title, sub = "GO!", f"trial {tr.trial + 1} of {tr.trials}: {action_label(tr.action)}"
         col = (255, 200, 40) if tr.phase == RECORD else (242, 240, 232)
         img = self.text.render(title, int(64 * u), col)
         surf.blit(img, img.get_rect(midtop=(stage.centerx, int(24 * u))))

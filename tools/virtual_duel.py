@@ -30,7 +30,7 @@ class MatchResult:
 
 
 def play_match(difficulty: str, profile: str, seed: int, graph: str | None = None,
-               templates: str | None = None) -> MatchResult:
+               templates: str | None = None, max_steps: int = MAX_STEPS) -> MatchResult:
     """One whole match, headless (seconds of CPU per round)."""
     from tools.scripted_match import default_templates, headless_env
 
@@ -49,7 +49,7 @@ def play_match(difficulty: str, profile: str, seed: int, graph: str | None = Non
                         templates=templates if templates is not None else default_templates())
     session = Session(source, cfg, clock=clock)
     try:
-        session.loop.run(steps=MAX_STEPS, until=lambda: session.match.over)
+        session.loop.run(steps=max_steps, until=lambda: session.match.over)
     finally:
         source.close()
     m = session.match

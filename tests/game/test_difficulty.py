@@ -89,3 +89,22 @@ def test_session_difficulty_sets_the_policy_and_the_menu_changes_it(tmp_path, mo
     s.loop.run(steps=2)
     assert s.match.round_winners == [0]
     assert s.opponent_ai.best_share > before
+
+
+def test_virtual_duel_plays_the_real_session(graph_path):  # noqa: F811
+    from tools.virtual_duel import DuelSummary, play_match
+
+    r = play_match("hard", "novice", seed=3, graph=graph_path, max_steps=700)
+    assert r.steps == 700 and r.result == "unfinished" and r.round_winners == []
+    s = DuelSummary("hard", "novice")
+    s.add(r)
+    s.add(r.__class__("hard", "novice", 4, [0, 1, None], "points", 0, 11000))
+    d = s.as_dict()
+    assert d["rounds"] == 3 and d["rounds_won"] == 1 and d["matches_won"] == 1 and d["rounds_per_match"] == 1.5
+
+
+def test_graph_duel_virtual_bad_difficulty_exits_2(capsys):
+    from game.cli import main
+
+    assert main(["graph", "duel", "--opponent", "virtual", "--difficulty", "brutal"]) == 2
+    assert "--difficulty" in capsys.readouterr().err
