@@ -67,7 +67,7 @@ PILOT_SETTLE_STEPS = 90  # the pilot's hands rest first: the recognizer learns g
 PILOT_VARIETY = 0.4
 # how the virtual player boxes, by its profile (keyboard://?profile=...): how often it picks a
 # move other than the graph's best for its side, and the steps its hands rest between motions
-PILOT_STYLE = {"experienced": (PILOT_VARIETY, 12), "novice": (0.5, 16)}
+PILOT_STYLE = {"experienced": (PILOT_VARIETY, 12), "novice": (PILOT_VARIETY, 12)}
 PILOT_REACH = 1.0
 PILOT_ATTACKS = ("straight_l", "straight_r", "hook_l", "hook_r", "uppercut_l", "uppercut_r", "block", "step_left", "step_right")
 KNOCKDOWN_HOLD = 0.55  # the fraction of the knockdown clip held while the referee counts
