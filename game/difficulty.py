@@ -8,7 +8,11 @@ waits for the recognizer, was crushed):
   actions, at random (a boxer who misreads the situation);
 - `reaction_steps`: it sees the situation that many 60 Hz steps late (a human's reaction);
 - `rest_steps`: steps at the guard after each of its moves before it may act again;
-- `damage`: how much its blows count (a scale on the game's damage).
+- `damage`: how much its blows count (a scale on the game's damage);
+- `ease_lead`: when it leads the round by this much damage it eases off (takes its best action
+  less often, rests longer; in proportion up to that lead), and when it trails by as much it
+  presses (rests less): a player who falls behind gets back into the round, one who leads has
+  to hold it against a CPU that comes back (inf: neither; a rubber band, as boxing games do).
 
 `adaptive` starts at normal and moves a continuous level in [0, 1] (0 easy, 0.5 normal, 1 hard)
 after every round: up when the player won it, down when the player lost it, so the player's
@@ -24,6 +28,9 @@ import numpy as np
 LEVELS = ("easy", "normal", "hard")
 CHOICES = (*LEVELS, "adaptive")
 ADAPT_STEP = 0.15  # level change per round won or lost (a third of easy -> normal)
+EASE_BEST = 0.6  # fully eased, the CPU takes its best action 60 % less often ...
+EASE_REST = 2.0  # ... and rests three times as long between moves
+PRESS_REST = 0.5  # trailing by ease_lead, it rests half as long
 
 
 @dataclass(frozen=True)
@@ -33,13 +40,23 @@ class Difficulty:
     reaction_steps: int
     rest_steps: int
     damage: float
+    ease_lead: float = float("inf")
+
+    def eased(self, lead: float) -> tuple[float, int]:
+        """(best_share, rest_steps) when the CPU leads the round by `lead` damage (< 0: trails)."""
+        if not np.isfinite(self.ease_lead):
+            return self.best_share, self.rest_steps
+        f = float(np.clip(lead / self.ease_lead, -1.0, 1.0))
+        ease, press = max(f, 0.0), max(-f, 0.0)
+        return (self.best_share * (1.0 - EASE_BEST * ease),
+                int(round(self.rest_steps * (1.0 + EASE_REST * ease) * (1.0 - PRESS_REST * press))))
 
 
 # Tuned with `quickjab graph duel --opponent virtual` (docs/game.md has the figures).
 PRESETS = {
-    "easy": Difficulty("easy", best_share=0.35, reaction_steps=18, rest_steps=40, damage=0.45),
-    "normal": Difficulty("normal", best_share=0.6, reaction_steps=10, rest_steps=24, damage=0.7),
-    "hard": Difficulty("hard", best_share=0.95, reaction_steps=3, rest_steps=8, damage=1.0),
+    "easy": Difficulty("easy", best_share=0.6, reaction_steps=10, rest_steps=32, damage=0.6, ease_lead=6.0),
+    "normal": Difficulty("normal", best_share=1.0, reaction_steps=0, rest_steps=22, damage=0.92, ease_lead=12.0),
+    "hard": Difficulty("hard", best_share=1.0, reaction_steps=0, rest_steps=12, damage=1.0),
 }
 
 
@@ -52,9 +69,12 @@ def at_level(level: float) -> Difficulty:
     def mix(a: float, b: float) -> float:
         return a + (b - a) * f
 
+    # easing mixed as its strength (1 / lead): none (hard) is 0
+    ease = mix(1.0 / lo.ease_lead, 1.0 / hi.ease_lead)
     return Difficulty(f"adaptive {level:.2f}", mix(lo.best_share, hi.best_share),
                       int(round(mix(lo.reaction_steps, hi.reaction_steps))),
-                      int(round(mix(lo.rest_steps, hi.rest_steps))), mix(lo.damage, hi.damage))
+                      int(round(mix(lo.rest_steps, hi.rest_steps))), mix(lo.damage, hi.damage),
+                      1.0 / ease if ease > 0 else float("inf"))
 
 
 class DifficultySetting:

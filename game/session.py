@@ -199,6 +199,7 @@ class Session:
         graph = load_graph(cfg.graph)
         self.graph = graph
         self.difficulty = DifficultySetting(cfg.difficulty)
+        self._rest_next = self.difficulty.current.rest_steps  # its rest after the move it plays
         self.opponent_ai = OpponentController(graph, self.lib, controller=self.opponent.controller,
                                               rng=np.random.default_rng(cfg.seed + 2))
         self._apply_difficulty()
@@ -394,6 +395,9 @@ class Session:
                 self._cpu_rest -= 1
                 self.opponent_ai.observe(situation)  # its reaction delay reads these later
             else:
+                d = self.difficulty.current
+                lead = self.match.round_damage[1] - self.match.round_damage[0]
+                self.opponent_ai.best_share, self._rest_next = d.eased(lead)
                 self.opponent_ai.decide(situation)
         elif self._cpu_rest > 0:
             self._cpu_rest -= 1
@@ -402,7 +406,7 @@ class Session:
         self.opponent.keep_inside(RING_LIMIT)
         self.opponent.step(dt)
         if self.opponent.controller.finished_action():
-            self._cpu_rest = self.difficulty.current.rest_steps
+            self._cpu_rest = self._rest_next
 
     def _hold_knockdown(self, i: int) -> None:
         """While the referee counts, the downed boxer stays down (the clip's low frame)."""

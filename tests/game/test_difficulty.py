@@ -17,21 +17,28 @@ from game_graph import graph_path  # noqa: E402,F401 - the fixture
 
 def test_presets_order_the_policy_not_only_the_damage():
     e, n, h = PRESETS["easy"], PRESETS["normal"], PRESETS["hard"]
-    assert e.best_share < n.best_share < h.best_share
-    assert e.reaction_steps > n.reaction_steps > h.reaction_steps
+    assert e.best_share <= n.best_share <= h.best_share and e.best_share < h.best_share
+    assert e.reaction_steps >= n.reaction_steps >= h.reaction_steps and e.reaction_steps > h.reaction_steps
     assert e.rest_steps > n.rest_steps > h.rest_steps
-    assert at_level(0.0) == PRESETS["easy"].__class__("adaptive 0.00", e.best_share, e.reaction_steps, e.rest_steps, e.damage)
+    assert e.ease_lead < n.ease_lead < h.ease_lead  # the easier, the sooner it eases off when ahead
+    # easing: leading the round by its ease_lead, the CPU plays worse and rests longer
+    best, rest = n.eased(n.ease_lead)
+    assert best < n.best_share and rest > n.rest_steps
+    best, rest = n.eased(-n.ease_lead)  # trailing: it presses
+    assert best == n.best_share and rest < n.rest_steps
+    assert n.eased(0.0) == (n.best_share, n.rest_steps) and h.eased(100.0) == (h.best_share, h.rest_steps)
+    assert at_level(0.0).best_share == e.best_share and at_level(0.0).ease_lead == pytest.approx(e.ease_lead)
     assert at_level(0.5).best_share == pytest.approx(n.best_share) and at_level(1.0).reaction_steps == h.reaction_steps
 
 
 def test_adaptive_follows_the_player():
     d = DifficultySetting("adaptive")
-    start = d.current.best_share
+    start = d.current
     d.round_over(+1)  # the player won a round: harder
-    assert d.current.best_share > start and d.level > 0.5
+    assert d.current.rest_steps < start.rest_steps and d.current.damage > start.damage and d.level > 0.5
     d.round_over(-1)
     d.round_over(-1)  # lost two: easier than at the start
-    assert d.current.best_share < start
+    assert d.current.rest_steps > start.rest_steps and d.current.best_share < start.best_share
     fixed = DifficultySetting("hard")
     fixed.round_over(+1)
     assert fixed.current == PRESETS["hard"]
@@ -78,17 +85,18 @@ def test_session_difficulty_sets_the_policy_and_the_menu_changes_it(tmp_path, mo
     s.match.toggle_pause()
     s.handle_event(pygame.event.Event(pygame.KEYDOWN, key=pygame.K_d))
     assert s.difficulty.name == "normal" and s.opponent_ai.best_share == PRESETS["normal"].best_share
+    assert s.opponent_ai._seen.maxlen == PRESETS["normal"].reaction_steps + 1
     assert s.hud_state.difficulty == "normal"
     # adaptive: a round the player won makes the CPU better
     s.difficulty = DifficultySetting("adaptive")
     s._apply_difficulty()
-    before = s.opponent_ai.best_share
+    before = s.difficulty.current
     s.match.toggle_pause()
     s.match.round_damage = [50.0, 0.0]
     s.match.clock_steps = 1
     s.loop.run(steps=2)
     assert s.match.round_winners == [0]
-    assert s.opponent_ai.best_share > before
+    assert s.difficulty.level > 0.5 and s.difficulty.current.damage > before.damage
 
 
 def test_virtual_duel_plays_the_real_session(graph_path):  # noqa: F811
