@@ -54,8 +54,8 @@ class Difficulty:
 
 # Tuned with `quickjab graph duel --opponent virtual` (docs/game.md has the figures).
 PRESETS = {
-    "easy": Difficulty("easy", best_share=0.6, reaction_steps=10, rest_steps=32, damage=0.6, ease_lead=6.0),
-    "normal": Difficulty("normal", best_share=1.0, reaction_steps=0, rest_steps=22, damage=0.92, ease_lead=12.0),
+    "easy": Difficulty("easy", best_share=0.6, reaction_steps=10, rest_steps=32, damage=0.6, ease_lead=4.0),
+    "normal": Difficulty("normal", best_share=1.0, reaction_steps=0, rest_steps=22, damage=0.92, ease_lead=8.0),
     "hard": Difficulty("hard", best_share=1.0, reaction_steps=0, rest_steps=12, damage=1.0),
 }
 
