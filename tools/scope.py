@@ -138,6 +138,14 @@ class Scope:
         except pygame.error as exc:
             source.close()
             raise InputError(f"cannot open a window ({exc}); without a display use --headless") from None
+        from game.play import check_visible_window
+
+        try:
+            check_visible_window("scope")  # SDL fell back to a driver that shows nothing
+        except InputError:
+            source.close()
+            pygame.display.quit()
+            raise
         pygame.font.init()
         pygame.display.set_caption(f"QuickJab scope: {source.url}")
         self.font = pygame.font.Font(None, 20)

@@ -106,11 +106,12 @@ def test_headless_play_without_frames_ends(tmp_path, graph_path, capsys):  # noq
     assert f"stopping after {HEADLESS_FRAMES} frames" in capsys.readouterr().err
 
 
-@pytest.mark.parametrize("command", ["play", "train"])
+@pytest.mark.parametrize("command", ["play", "train", "scope"])
 def test_no_display_is_a_clear_error_not_an_invisible_window(command):
     env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY", "SDL_VIDEODRIVER")}
     env.update(PYTHONPATH=str(REPO), SDL_AUDIODRIVER="dummy")
-    r = subprocess.run([sys.executable, "-m", "game.cli", command, "--source", "keyboard://", "--frames", "100000"],
+    source = "demo://" if command == "scope" else "keyboard://"
+    r = subprocess.run([sys.executable, "-m", "game.cli", command, "--source", source, "--frames", "100000"],
                        cwd=REPO, env=env, capture_output=True, text=True, timeout=120)
     assert r.returncode == 2, r.stderr
     assert "no display" in r.stderr and "--headless" in r.stderr

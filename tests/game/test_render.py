@@ -211,3 +211,33 @@ def test_knockdown_count_is_clear_of_the_corner_posts(size) -> None:
         post = pygame.Rect(int(xy[:, 0].min() - half), int(xy[:, 1].min()), int(2 * half + abs(xy[0, 0] - xy[1, 0])),
                            int(abs(xy[0, 1] - xy[1, 1])))
         assert not hud.count_rect.colliderect(post), (x, z, post, hud.count_rect)
+
+
+def test_budget_overlay_has_a_header_over_its_columns() -> None:
+    """Issue 17: the F3 overlay's first column (the stage names) had no header."""
+    from engine.clock import VirtualClock
+    from engine.loop import FixedStepLoop
+    from game.hud import BUDGET_HEADERS
+
+    assert BUDGET_HEADERS[0] == "stage"
+    pygame.init()
+    loop = FixedStepLoop(VirtualClock())
+    loop.add_stage("physics", lambda s, dt: None, 3.0)
+    loop.set_render(lambda a: None, 8.0)
+    loop.run(frames=5)
+    drawn = {}
+    for headers in (BUDGET_HEADERS, ("", "", "", "")):
+        import game.hud as hud_mod
+
+        old = hud_mod.BUDGET_HEADERS
+        hud_mod.BUDGET_HEADERS = headers
+        try:
+            surf = pygame.Surface(SIZE)
+            hud = Hud()
+            hud.draw(surf, HudState(show_budget=True), loop.budget)
+            drawn[headers[0]] = pygame.surfarray.array3d(surf).astype(int)
+        finally:
+            hud_mod.BUDGET_HEADERS = old
+    # the header row sits between the stacked bar and the first stage row, left in the panel
+    band = (slice(SIZE[0] - 440, SIZE[0] - 300), slice(178, 200))
+    assert (drawn["stage"][band] != drawn[""][band]).any(axis=2).sum() > 30
