@@ -23,6 +23,7 @@ BAR_BACK = (34, 30, 38)
 BAR_LOSS = (250, 210, 90)  # the recently lost health, shown draining after the fill
 TEXT = (242, 240, 232)
 DIM = (170, 166, 160)
+KEY_TEXT = (228, 225, 218)  # the key legend, on its dark panel
 SWITCH_COLOR = (255, 200, 40)
 REJECT_COLOR = (255, 70, 70)
 OK_COLOR = (90, 220, 120)
@@ -33,6 +34,9 @@ STAGE_COLORS = [
 MARK_STEPS = 45  # how long a switch / reject mark stays lit
 CHART_BG = (30, 30, 36)
 TEXT_EVERY = 10  # frames between refreshes of the F3 overlay's numbers
+COUNT_X = 0.3  # the knockdown count's centre, as a fraction of the width
+BUDGET_HEADERS = ("stage", "last ms", "p99 / budget ms", "overruns")
+BUDGET_COLUMNS = (0, 110, 185, 320)  # their x in the F3 panel (720p pixels from the colour key)
 HISTORY_FRAMES = 120  # the F3 overlay's chart: the last two seconds, a stacked column a frame
 
 
@@ -68,6 +72,8 @@ class HudState:
     source_state: str = "connected"
     battery: float | None = None
     keyboard_banner: bool = False
+    templates: str = ""  # which template set the recognizer uses (session.templates_in_use)
+    difficulty: str = ""  # the CPU's (game/difficulty.py), shown in the pause menu
     disconnected: bool = False
     keys: list[tuple[str, str]] = field(default_factory=list)
     mode: str = ""
@@ -102,6 +108,14 @@ class HudState:
                 self.shown_health[i] = max(self.health[i], self.shown_health[i] - 40.0 / 60.0)
             else:
                 self.shown_health[i] = self.health[i]
+
+
+def action_label(action: str) -> str:
+    """An action as the HUD names it: "straight L", not "straight l" (which reads as "I")."""
+    name = action.replace("_", " ")
+    if name.endswith(" l") or name.endswith(" r"):
+        name = name[:-1] + name[-1].upper()
+    return name
 
 
 class TextCache:
@@ -143,6 +157,8 @@ class Hud:
         self._fills: dict[tuple, pygame.Surface] = {}  # translucent backgrounds, by size and colour
         self._rows_text: list[str] = []
         self._text_frame = -10**9
+        self.key_panel: pygame.Rect | None = None  # where the key legend was drawn last (tests)
+        self.count_rect: pygame.Rect | None = None  # where the knockdown count was drawn last
 
     # layout helpers (fractions of the window, so resizes keep the layout)
     @staticmethod
@@ -229,6 +245,8 @@ class Hud:
         state_col = OK_COLOR if st.source_state == "connected" else (SWITCH_COLOR if st.source_state in ("reconnecting", "connecting") else REJECT_COLOR)
         pygame.draw.circle(surf, state_col, (int(left.left + 7 * u), int(y + 8 * u)), int(6 * u))
         r = self.blit(surf, f"{st.source_url}  {st.source_state}", int(22 * u), (left.left + 18 * u, y), DIM)
+        if st.templates:
+            self.blit(surf, st.templates, int(18 * u), (left.left + 18 * u, y + 22 * u), DIM)
         if st.battery is not None:
             bx, by = r.right + 12 * u, y + 2 * u
             body = pygame.Rect(int(bx), int(by), int(34 * u), int(14 * u))
@@ -250,7 +268,7 @@ class Hud:
         surf.blit(self._translucent(panel.size, (10, 10, 16, 170)), panel)
         x, y = panel.left + 12 * u, panel.top + 8 * u
         self.blit(surf, "RECOGNIZED", int(18 * u), (x, y), DIM)
-        name = st.action.replace("_", " ") if st.action else "-"
+        name = action_label(st.action) if st.action else "-"
         r = self.blit(surf, name, int(34 * u), (x, y + 16 * u), TEXT)
         if st.score is not None:
             self.blit(surf, f"score {st.score:.2f}", int(22 * u), (r.right + 10 * u, y + 24 * u), DIM)
@@ -286,16 +304,23 @@ class Hud:
         self.blit(surf, "Esc pause   F3 budget   F11 fullscreen", int(20 * u), (right.right, right.bottom + 32 * u), DIM, "topright")
         if not st.keys:
             return
-        parts = [f"{k} {a.replace('_', ' ')}" for k, a in st.keys]
+        parts = [f"{k} {action_label(a)}" for k, a in st.keys]
         line = "   ".join(parts)
         size = int(19 * u)
-        img = self.text.render(line, size, DIM)
-        if img.get_width() > w - 20:  # two lines on narrow windows
+        img = self.text.render(line, size, KEY_TEXT)
+        lines = [line]
+        if img.get_width() > w - 40:  # two lines on narrow windows
             half = (len(parts) + 1) // 2
-            for n, chunk in enumerate((parts[:half], parts[half:])):
-                self.blit(surf, "   ".join(chunk), size, (w // 2, h - 44 * u + n * 20 * u), DIM, "midtop")
-        else:
-            self.blit(surf, line, size, (w // 2, h - 26 * u), DIM, "midtop")
+            lines = ["   ".join(parts[:half]), "   ".join(parts[half:])]
+        # on a dark panel of its own: the ring's ropes run behind the bottom of the screen
+        line_h = int(20 * u)
+        widest = max(self.text.render(t, size, KEY_TEXT).get_width() for t in lines)
+        panel = pygame.Rect(0, 0, widest + int(24 * u), line_h * len(lines) + int(8 * u))
+        panel.midbottom = (w // 2, h - int(2 * u))
+        surf.blit(self._translucent(panel.size, (8, 8, 12, 215)), panel)
+        self.key_panel = panel
+        for n, text in enumerate(lines):
+            self.blit(surf, text, size, (w // 2, panel.top + int(4 * u) + n * line_h), KEY_TEXT, "midtop")
 
     def _centre(self, surf: pygame.Surface, st: HudState, u: float) -> None:
         w, h = surf.get_size()
@@ -308,20 +333,28 @@ class Hud:
             self._banner(surf, title, big, (w // 2, h * 0.42))
             if not st.demo:
                 self.blit(surf, "Enter: a new match", mid, (w // 2, h * 0.42 + 60 * u), DIM, "midtop")
+                if st.difficulty:
+                    self.blit(surf, f"D: difficulty {st.difficulty}", int(30 * u), (w // 2, h * 0.42 + 104 * u), DIM, "midtop")
         elif st.phase == "count" and st.down is not None:
-            self._banner(surf, f"{st.count}", int(140 * u), (w // 2, h * 0.40))
-            self.blit(surf, "KNOCKDOWN", mid, (w // 2, h * 0.40 + 70 * u), SWITCH_COLOR, "midtop")
+            # left of the ring's centre line: in the middle of the screen it sat over the far
+            # corner post, white on white
+            cx = w * COUNT_X
+            self.count_rect = self._banner(surf, f"{st.count}", int(140 * u), (cx, h * 0.40), alpha=215)
+            self.blit(surf, "KNOCKDOWN", mid, (cx, h * 0.40 + 70 * u), SWITCH_COLOR, "midtop")
         elif st.paused and not st.disconnected:
             self._banner(surf, "PAUSED", big, (w // 2, h * 0.42))
             self.blit(surf, "Esc or Home to resume", mid, (w // 2, h * 0.42 + 56 * u), DIM, "midtop")
+            if st.difficulty:
+                self.blit(surf, f"D: difficulty {st.difficulty}", mid, (w // 2, h * 0.42 + 100 * u), SWITCH_COLOR, "midtop")
         elif st.message and st.message_age < 90:
             self._banner(surf, st.message, big, (w // 2, h * 0.42))
 
-    def _banner(self, surf: pygame.Surface, text: str, size: int, center) -> None:
+    def _banner(self, surf: pygame.Surface, text: str, size: int, center, alpha: int = 150) -> pygame.Rect:
         img = self.text.render(text, size, TEXT)
         box = img.get_rect(center=(int(center[0]), int(center[1]))).inflate(40, 16)
-        surf.blit(self._translucent(box.size, (0, 0, 0, 150)), box)
+        surf.blit(self._translucent(box.size, (0, 0, 0, alpha)), box)
         surf.blit(img, img.get_rect(center=box.center))
+        return box
 
     def _disconnected(self, surf: pygame.Surface, st: HudState, u: float) -> None:
         w, h = surf.get_size()
@@ -347,7 +380,7 @@ class Hud:
         """A stacked bar per stage against the 16.7 ms line, and each stage's p99."""
         w, h = surf.get_size()
         chart_h = int(90 * u)
-        panel = pygame.Rect(w - int(440 * u), int(130 * u), int(424 * u), int(60 * u + 20 * u * len(budget.stages)) + chart_h)
+        panel = pygame.Rect(w - int(440 * u), int(130 * u), int(424 * u), int(80 * u + 20 * u * len(budget.stages)) + chart_h)
         surf.blit(self._translucent(panel.size, (0, 0, 0, 190)), panel)
         last = budget.last_frame_ms()
         names = [s.name for s in budget.stages if s.name not in (WAIT, UNACCOUNTED)] + [UNACCOUNTED]
@@ -358,10 +391,10 @@ class Hud:
         x = float(bar.left)
         for k, name in enumerate(names):
             ms = last.get(name, 0.0)
-            wpx = bar.width * ms / scale_ms
+            wpx = min(bar.width * ms / scale_ms, bar.right - x)  # an overrun stops at the bar's end
             if wpx >= 1:
                 pygame.draw.rect(surf, STAGE_COLORS[k % len(STAGE_COLORS)], (int(x), bar.top, int(np.ceil(wpx)), bar.height))
-            x += wpx
+            x += max(wpx, 0.0)
         line_x = bar.left + bar.width * budget.frame_budget_ms / scale_ms
         pygame.draw.line(surf, REJECT_COLOR, (line_x, bar.top - 4), (line_x, bar.bottom + 4), 2)
         stages = {s.name: s for s in budget.stages}
@@ -401,10 +434,16 @@ class Hud:
             self._rows_text = []
             for name in names:
                 st = stages[name]
-                over = f"  over {st.overruns}" if st.overruns else ""
-                budget_txt = f"/{st.budget_ms:.1f}" if st.budget_ms else ""
-                self._rows_text.append(f"{name:<12} {last.get(name, 0.0):5.2f} ms  p99 {self._p99.get(name, 0.0):5.2f}{budget_txt}{over}")
-        for k, text in enumerate(self._rows_text):
-            y = bar.bottom + 8 * u + k * 20 * u
+                budget_txt = f" / {st.budget_ms:.2f}" if st.budget_ms else ""
+                self._rows_text.append((name, f"{last.get(name, 0.0):.2f}", f"{self._p99.get(name, 0.0):.2f}{budget_txt}",
+                                        str(st.overruns) if st.overruns else ""))
+        # one column each, under a header: stage, last frame's ms, p99 / budget ms, overruns
+        cols = [panel.left + 28 * u + x * u for x in BUDGET_COLUMNS]
+        y = bar.bottom + 8 * u
+        for x, head in zip(cols, BUDGET_HEADERS, strict=True):
+            self.blit(surf, head, int(16 * u), (x, y + 2 * u), DIM)
+        for k, row in enumerate(self._rows_text):
+            y = bar.bottom + 28 * u + k * 20 * u
             pygame.draw.rect(surf, STAGE_COLORS[k % len(STAGE_COLORS)], (int(panel.left + 10 * u), int(y + 3 * u), int(12 * u), int(12 * u)))
-            self.blit(surf, text, int(18 * u), (panel.left + 28 * u, y), TEXT)
+            for x, text in zip(cols, row, strict=True):
+                self.blit(surf, text, int(18 * u), (x, y), TEXT)

@@ -47,6 +47,8 @@ class Match:
     round_knockdowns: list[int] = field(default_factory=lambda: [0, 0])
     round_damage: list[float] = field(default_factory=lambda: [0.0, 0.0])  # dealt BY boxer i
     scores: list[int] = field(default_factory=lambda: [0, 0])
+    # who won each round so far: the round's points (damage, knockdowns), or the KO/TKO; None even
+    round_winners: list[int | None] = field(default_factory=list)
     down: int | None = None  # who is on the canvas
     count: int = 0  # the referee's current number
     count_steps: int = 0
@@ -156,9 +158,10 @@ class Match:
 
     def _score_round(self) -> None:
         d = self.round_damage
+        points = [(10 if d[i] >= d[1 - i] else 9) - self.round_knockdowns[i] for i in (0, 1)]
         for i in (0, 1):
-            points = 10 if d[i] >= d[1 - i] else 9
-            self.scores[i] += points - self.round_knockdowns[i]
+            self.scores[i] += points[i]
+        self.round_winners.append(None if points[0] == points[1] else int(points[1] > points[0]))
 
     def _end_round(self) -> None:
         self._score_round()
@@ -176,6 +179,8 @@ class Match:
         self.health = [min(MAX_HEALTH, h + BREAK_RECOVERY) for h in self.health]
 
     def _finish(self, winner: int | None, result: str) -> None:
+        if result in ("KO", "TKO"):
+            self.round_winners.append(winner)  # the round ends with the match
         self.phase = OVER
         self.winner = winner
         self.result = result

@@ -22,6 +22,8 @@ DEFAULT_SOURCE = "wiimote://"
 KEYBOARD_SOURCE = "keyboard://"
 DEMO_SOURCE = "keyboard://?profile=experienced"
 KEYBOARD_BANNER = "No Wiimote found: playing from the keyboard"
+HEADLESS_FRAMES = 600  # `--headless` without `--frames` stops after 10 s of play, never runs on unseen
+INVISIBLE_DRIVERS = ("offscreen", "dummy")  # SDL video drivers that open no window
 
 
 def parse_size(text: str) -> tuple[int, int]:
@@ -40,7 +42,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--source", default=None, help=f"source URL (default: {DEFAULT_SOURCE}, else {KEYBOARD_SOURCE})")
     p.add_argument("--demo", action="store_true", help="attract mode: a synthesized session from the virtual player")
     p.add_argument("--headless", action="store_true", help="no window: SDL dummy driver and a virtual clock (reproducible)")
-    p.add_argument("--frames", type=int, default=None, help="stop after N rendered frames (default: until the window closes)")
+    p.add_argument("--frames", type=int, default=None,
+                   help=f"stop after N rendered frames (default: until the window closes; {HEADLESS_FRAMES} with --headless)")
     p.add_argument("--screenshot", metavar="PNG", help="save the last frame to this PNG")
     p.add_argument("--trace", metavar="JSON", help="write the loop's Chrome trace here on exit")
     p.add_argument("--virtual-clock", action="store_true", help="a virtual clock in a real window: the same frames as --headless (tests)")
@@ -50,7 +53,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--low-power", action="store_true", help="render at 30 Hz on a half-size surface, flat shading, no antialiasing, fewer solver iterations (docs/performance.md)")
     p.add_argument("--templates", metavar="NPZ", help="recognition templates (default: yours from `quickjab train`, else the shipped set)")
     p.add_argument("--graph", metavar="NPZ", help="Interaction Graph table (default: the shipped one)")
-    p.add_argument("--difficulty", choices=("easy", "normal", "hard"), default="normal", help="how much the CPU's blows hurt (default normal)")
+    p.add_argument("--difficulty", choices=("easy", "normal", "hard", "adaptive"), default="normal",
+                   help="the CPU: how often it takes its best action, how late it reacts, its rest between moves, how "
+                        "much its blows hurt; adaptive follows you to about half the rounds won (default normal; "
+                        "D in the pause menu changes it)")
     p.add_argument("--left-handed", action="store_true", help="Wiimote in the left hand: mirror the templates (your own trained set is used as it is)")
     p.add_argument("--budget", action="store_true", help="show the frame-budget overlay from the start (F3 toggles)")
     p.add_argument("--no-sound", action="store_true", help="no sound")
@@ -59,6 +65,26 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--profile", default=None, metavar="NAME", help="play with the templates `quickjab train --profile NAME` saved (default: your default set)")
     p.add_argument("--profile2", default=None, metavar="NAME", help="player 2's profile with --players 2")
     p.set_defaults(func=run)
+
+
+def check_visible_window(command: str) -> None:
+    """A window was asked for but SDL fell back to a driver that shows nothing (no display: a
+    server, an SSH session): say so and stop, rather than run unseen forever. Choosing such a
+    driver on purpose (SDL_VIDEODRIVER=dummy) is allowed."""
+    import pygame
+
+    driver = pygame.display.get_driver()
+    if driver in INVISIBLE_DRIVERS and os.environ.get("SDL_VIDEODRIVER", "").lower() != driver:
+        raise InputError(f"no display: SDL opened its {driver!r} video driver, so no window would show; "
+                         f"run it where a display is (DISPLAY / WAYLAND_DISPLAY), or use `quickjab {command} --headless --frames N`")
+
+
+def headless_frames(frames: int | None, headless: bool, command: str) -> int | None:
+    """The frame count to run: a headless run without --frames ends after HEADLESS_FRAMES."""
+    if frames is None and headless:
+        print(f"quickjab {command}: --headless without --frames: stopping after {HEADLESS_FRAMES} frames", file=sys.stderr)
+        return HEADLESS_FRAMES
+    return frames
 
 
 def headless_env() -> None:
@@ -97,6 +123,7 @@ def run(args: argparse.Namespace) -> int:
     size = parse_size(args.size)
     if args.frames is not None and args.frames < 1:
         raise InputError("--frames must be at least 1")
+    frames = headless_frames(args.frames, args.headless, "play")
     if args.headless:
         headless_env()
     import pygame
@@ -119,16 +146,19 @@ def run(args: argparse.Namespace) -> int:
     try:
         flags = pygame.RESIZABLE | (pygame.FULLSCREEN if args.fullscreen and not args.headless else 0)
         pygame.display.set_mode(size, flags)
+        if not args.headless:
+            check_visible_window("play")
         pygame.display.set_caption("QuickJab")
         config = SessionConfig(seed=args.seed, size=size, low_power=args.low_power, demo=args.demo,
                                keyboard_banner=fallback, templates=args.templates, graph=args.graph,
                                sound=not args.no_sound and not args.headless,
                                left_handed=args.left_handed, difficulty=args.difficulty)
         session = Session(source, config, clock=clock, surface_provider=pygame.display.get_surface)
+        print(f"quickjab play: {session.hud_state.templates}", file=sys.stderr)
         session.hud_state.show_budget = args.budget
         session.on_toggle_fullscreen = pygame.display.toggle_fullscreen
         try:
-            session.loop.run(frames=args.frames)
+            session.loop.run(frames=frames)
         finally:
             if args.screenshot:
                 pygame.image.save(pygame.display.get_surface(), args.screenshot)

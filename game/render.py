@@ -29,6 +29,10 @@ ROPE_HEIGHTS = (0.55, 0.9, 1.25)
 POST_HEIGHT = 1.4
 
 KEY = (255, 0, 255)
+# When the near boxer (the player, seen from behind) covers this share of the far one's screen
+# box, it is drawn at NEAR_OPACITY: the CPU shows through it in clinches.
+OVERLAP_SHARE = 0.15
+NEAR_OPACITY = 0.55
 LIGHT_2D = np.array([-0.55, -0.83])  # the key light comes from the upper left of the screen
 LIGHT_X, LIGHT_Y = float(LIGHT_2D[0]), float(LIGHT_2D[1])  # the same as plain floats (per limb)
 
@@ -74,6 +78,13 @@ def _aacircle(surf: pygame.Surface, color, x: float, y: float, r: float) -> None
 def lerp_joints(prev: np.ndarray, curr: np.ndarray, alpha: float) -> np.ndarray:
     """The pose between two steps: prev + alpha (curr - prev)."""
     return prev + (curr - prev) * alpha
+
+
+def _shifted(kind: int, args: tuple, offset: np.ndarray) -> tuple:
+    """A primitive's arguments moved by -offset pixels (its points come first, or first two)."""
+    if kind == 0:
+        return (args[0] - offset, args[1] - offset, *args[2:])
+    return (args[0] - offset, *args[1:])
 
 
 def shade(c: tuple[int, int, int], k: float) -> tuple[int, int, int]:
@@ -228,11 +239,44 @@ class Renderer:
             self._build_static()
         surf.blit(self._static, (0, 0))
         self._draw_shadows(surf, bodies)
-        prims: list[tuple[float, int, tuple]] = []
-        for i, joints in enumerate(bodies):
-            prims.extend(self._boxer_prims(joints, self.looks[i % 2]))
-        prims.sort(key=lambda p: -p[0])
+        per_body = [self._boxer_prims(joints, self.looks[i % 2]) for i, joints in enumerate(bodies)]
+        # the near boxer over the far one: keep what lies behind it, to show it through
+        see_through = self._overlap(bodies) if self.see_through and len(bodies) == 2 else None
+        behind = surf.subsurface(see_through[0]).copy() if see_through else None
+        prims = sorted((p for body in per_body for p in body), key=lambda p: -p[0])
+        self._draw_prims(surf, prims)
+        if see_through is not None and behind is not None:
+            box, far = see_through
+            # the same region without the near boxer (background + the far boxer), blended over
+            # it: the near boxer drawn at NEAR_OPACITY, so who hits whom stays visible
+            self._draw_prims(behind, sorted(per_body[far], key=lambda p: -p[0]), offset=np.array(box.topleft, float))
+            behind.set_alpha(int(255 * (1.0 - NEAR_OPACITY)))
+            surf.blit(behind, box.topleft)
+        surf.blit(self._front, (0, 0))
+        self._draw_flashes(surf)
+
+    see_through = True  # the near boxer translucent over the far one (low power: off, flat colours)
+
+    def _overlap(self, bodies: list[np.ndarray]) -> tuple[pygame.Rect, int] | None:
+        """(the near boxer's screen box, the far boxer's index) when the near one covers a
+        good part of the far one, else None."""
+        depth = [float(self.camera.project(b)[1].mean()) for b in bodies]
+        near, far = (0, 1) if depth[0] < depth[1] else (1, 0)
+        near_box = self.screen_box(bodies[near]).clip(self.screen_rect())
+        far_box = self.screen_box(bodies[far])
+        hidden = near_box.clip(far_box)
+        if hidden.w * hidden.h < OVERLAP_SHARE * max(1, far_box.w * far_box.h):
+            return None
+        return near_box, far
+
+    def screen_rect(self) -> pygame.Rect:
+        return pygame.Rect((0, 0), self.camera.size)
+
+    def _draw_prims(self, surf: pygame.Surface, prims: list, offset: np.ndarray | None = None) -> None:
+        """Draw depth-sorted primitives; `offset` (pixels) is subtracted (drawing into a region)."""
         for _, kind, args in prims:
+            if offset is not None:
+                args = _shifted(kind, args, offset)
             if kind == 0:
                 self._capsule(surf, *args)
             elif kind == 1:
@@ -241,8 +285,6 @@ class Renderer:
                 self._eyes(surf, *args)
             else:
                 self._torso(surf, *args)
-        surf.blit(self._front, (0, 0))
-        self._draw_flashes(surf)
 
     def _draw_shadows(self, surf: pygame.Surface, bodies: list[np.ndarray]) -> None:
         cam = self.camera

@@ -21,6 +21,8 @@ SHADOW = (120, 116, 106)  # the canvas colour darkened: an opaque shadow, no alp
 
 
 class LowPowerRenderer(Renderer):
+    see_through = False  # exact flat colours, and no extra blit
+
     def __init__(self, size: tuple[int, int], detailed: bool = False):
         super().__init__(size, detailed=False)
 

@@ -33,6 +33,7 @@ from engine.frames import FrameResampler
 from engine.loop import FixedStepLoop
 from engine.sensors.source import Source, SourceState
 from engine.state_hash import state_hash
+from game.difficulty import DifficultySetting
 from game.history import History
 from game.hits import hits_from_contacts
 from game.hud import Hud, HudState
@@ -53,16 +54,20 @@ START_GAP = 1.1  # metres between the two roots at the bell: just out of a strai
 RING_LIMIT = 2.6  # metres from the centre a root may go (the ropes are at 3)
 REFERENCE_SPEED = 4.0  # m/s: a blow closing at this speed does its window's damage
 BLOCKED_SHARE = 0.2  # the share of the damage that goes through a block
-# The CPU reads the situation from a solved table and never hesitates: its blows count for less
-# so that a human (whose moves wait for the recognizer) has a fair fight.
-DIFFICULTY = {"easy": 0.45, "normal": 0.7, "hard": 1.0}
-# ... and it catches its breath between moves (steps at the guard before it may act again)
-CPU_REST_STEPS = {"easy": 40, "normal": 24, "hard": 8}
+# Every blow counts for this share of its window's damage: at 1.0 nearly every match ended by
+# TKO in round 1 (issue 17); the CPU's blows are scaled again by its difficulty.
+BLOW_SCALE = 0.6
+# The CPU reads the situation from a solved table: how often it takes the best action, how late
+# it sees the situation, its rest between moves and how much its blows count are its difficulty
+# (game/difficulty.py), so that a human (whose moves wait for the recognizer) has a fair fight.
 HOME_BUTTON = 0x0080  # Wiimote core buttons: Home
 RUMBLE_MS = 120
 DEMO_RESTART_STEPS = 8 * HZ  # the attract mode shows the result, then boxes again
 PILOT_SETTLE_STEPS = 90  # the pilot's hands rest first: the recognizer learns gravity at rest
 PILOT_VARIETY = 0.4
+# how the virtual player boxes, by its profile (keyboard://?profile=...): how often it picks a
+# move other than the graph's best for its side, and the steps its hands rest between motions
+PILOT_STYLE = {"experienced": (PILOT_VARIETY, 12), "novice": (PILOT_VARIETY, 12)}
 PILOT_REACH = 1.0
 PILOT_ATTACKS = ("straight_l", "straight_r", "hook_l", "hook_r", "uppercut_l", "uppercut_r", "block", "step_left", "step_right")
 KNOCKDOWN_HOLD = 0.55  # the fraction of the knockdown clip held while the referee counts
@@ -80,7 +85,7 @@ class SessionConfig:
     sound: bool = True
     physics_iterations: int = 4
     left_handed: bool = False
-    difficulty: str = "normal"
+    difficulty: str = "normal"  # easy | normal | hard | adaptive (game/difficulty.py)
     render: bool = True  # False: no render stage (headless benchmarks and reproducibility tests)
 
 
@@ -118,6 +123,25 @@ def load_templates(path: str | Path | None = None, left_handed: bool = False):
     if left_handed and templates.meta.get("left_handed") != "1":
         templates = templates.mirrored()
     return templates
+
+
+def templates_in_use(path: str | Path | None = None) -> str:
+    """What `load_templates(path)` loads, said for the HUD and the console: the player has to
+    know when a trained set (perhaps of a few moves) is in play, and how to go back."""
+    from engine.recognition import Templates
+    from game.actions import ACTION_NAMES
+    from game.userdata import user_templates_path
+
+    if path is not None:
+        return f"templates {Path(path).name}"
+    if user_templates_path().exists():
+        try:
+            trained = [a for a in Templates.load(user_templates_path()).meta.get("trained", "").split(",") if a]
+        except InputError:
+            trained = []
+        mine = f"{len(trained)} of {len(ACTION_NAMES)} moves" if trained and len(trained) < len(ACTION_NAMES) else "all moves"
+        return f"your templates ({mine}; `quickjab train --reset` for the defaults)"
+    return "default templates"
 
 
 def load_graph(path: str | Path | None = None):
@@ -175,7 +199,11 @@ class Session:
         self.player, self.opponent = self.boxers
         graph = load_graph(cfg.graph)
         self.graph = graph
-        self.opponent_ai = OpponentController(graph, self.lib, controller=self.opponent.controller)
+        self.difficulty = DifficultySetting(cfg.difficulty)
+        self._rest_next = self.difficulty.current.rest_steps  # its rest after the move it plays
+        self.opponent_ai = OpponentController(graph, self.lib, controller=self.opponent.controller,
+                                              rng=np.random.default_rng(cfg.seed + 2))
+        self._apply_difficulty()
         self._pilot_wait = PILOT_SETTLE_STEPS
         self._cpu_rest = 0
         self._over_steps = 0
@@ -193,6 +221,9 @@ class Session:
                                   main_size=int(self.recognizer.main) if self.recognizer.main != "auto" else 6,
                                   supp_size=self.recognizer.supplementary)
         self.hud_state.message = "ROUND 1"
+        self.hud_state.templates = templates_in_use(cfg.templates)
+        self._apply_difficulty()
+        self._rounds_seen = 0
         if hasattr(source, "press_key"):
             from game.keyboard_source import key_help
 
@@ -276,7 +307,8 @@ class Session:
                                          self.opponent.root, them.action, them.frame)
         action = self.graph.best_action(situation)
         unrecognized = not self._pilot_seen  # the last motion started nothing: try another
-        if unrecognized or self._pilot_rng.random() < PILOT_VARIETY:
+        variety, rest = PILOT_STYLE.get(getattr(self.source, "profile", ""), PILOT_STYLE["experienced"])
+        if unrecognized or self._pilot_rng.random() < variety:
             # an attract mode that only ever throws the one best punch is dull to watch: now
             # and then a different move (closing in when out of reach)
             near = situation.distance < PILOT_REACH
@@ -285,7 +317,7 @@ class Session:
         if action in self.lib and action != "guard":
             self.source.press(action)
             self._pilot_seen = False
-            self._pilot_wait = 12  # the hands come back to rest before the next motion
+            self._pilot_wait = rest  # the hands come back to rest before the next motion
         else:
             self._pilot_wait = 8
 
@@ -302,6 +334,8 @@ class Session:
                     self.on_toggle_fullscreen()
             elif event.key == pygame.K_RETURN and self.match.over:
                 self.new_match()
+            elif event.key == pygame.K_d and (self.match.paused or self.match.over):
+                self.cycle_difficulty()  # the pause menu
             elif hasattr(self.source, "press_key") and not self.match.paused:
                 self.source.press_key(pygame.key.name(event.key))
 
@@ -341,21 +375,39 @@ class Session:
         if self.player.controller.finished_action():
             self.recognizer.character_finished()
 
+    def _apply_difficulty(self) -> None:
+        d = self.difficulty.current
+        self.opponent_ai.set_policy(d.best_share, d.reaction_steps)
+        if hasattr(self, "hud_state"):  # not yet while the session is being built
+            self.hud_state.difficulty = self.difficulty.label
+
+    def cycle_difficulty(self) -> None:
+        """The pause menu's D: the next difficulty, from now on."""
+        self.difficulty = self.difficulty.next()
+        self._apply_difficulty()
+
     def _opponent(self, step: int, dt: float) -> None:
         self._hold_knockdown(1)
-        if self._cpu_rest > 0:
-            self._cpu_rest -= 1
-        elif self.match.fighting:
+        if self.match.fighting:
             me, them = self.opponent.controller, self.player.controller
             situation = Situation.from_roots(self.opponent.root, me.action, me.frame,
                                              self.player.root, them.action, them.frame)
-            self.opponent_ai.decide(situation)
+            if self._cpu_rest > 0:
+                self._cpu_rest -= 1
+                self.opponent_ai.observe(situation)  # its reaction delay reads these later
+            else:
+                d = self.difficulty.current
+                lead = self.match.round_damage[1] - self.match.round_damage[0]
+                self.opponent_ai.best_share, self._rest_next = d.eased(lead)
+                self.opponent_ai.decide(situation)
+        elif self._cpu_rest > 0:
+            self._cpu_rest -= 1
         px, pz, _ = self.player.root
         self.opponent.turn_towards(px, pz)
         self.opponent.keep_inside(RING_LIMIT)
         self.opponent.step(dt)
         if self.opponent.controller.finished_action():
-            self._cpu_rest = CPU_REST_STEPS[self.config.difficulty]
+            self._cpu_rest = self._rest_next
 
     def _hold_knockdown(self, i: int) -> None:
         """While the referee counts, the downed boxer stays down (the clip's low frame)."""
@@ -380,9 +432,9 @@ class Session:
         scaled by the closing speed, a fifth through a block; reaction, flash, sound, rumble."""
         target = 1 - hit["attacker"]
         scale = float(np.clip(hit["speed"] / REFERENCE_SPEED, 0.5, 1.5))
-        damage = float(hit.get("damage", 8.0)) * scale * (BLOCKED_SHARE if hit["blocked"] else 1.0)
+        damage = float(hit.get("damage", 8.0)) * scale * BLOW_SCALE * (BLOCKED_SHARE if hit["blocked"] else 1.0)
         if hit["attacker"] == 1:
-            damage *= DIFFICULTY[self.config.difficulty]
+            damage *= self.difficulty.current.damage
         if not self.match.hit(target, damage):
             return
         self.blows_log.append((step, hit["attacker"], hit["target"], hit["blocked"], round(damage, 4)))
@@ -412,6 +464,11 @@ class Session:
                 self.boxers[who].controller.play("knockdown")
             elif kind == "rise":
                 self.boxers[who].controller.play("guard")
+        while self._rounds_seen < len(m.round_winners):
+            winner = m.round_winners[self._rounds_seen]
+            self._rounds_seen += 1
+            self.difficulty.round_over(0 if winner is None else (1 if winner == 0 else -1))
+            self._apply_difficulty()
         if m.over:
             self._over_steps += 1
             if self.config.demo and self._over_steps >= DEMO_RESTART_STEPS:
@@ -440,6 +497,7 @@ class Session:
     def new_match(self) -> None:
         """A fresh match (Enter after the last bell; by itself in the attract mode)."""
         self.match = Match()
+        self._rounds_seen = 0
         self._over_steps = 0
         self._to_corners()
         self.recognizer.reset()

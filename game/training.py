@@ -39,6 +39,10 @@ LEAD_IN = 30  # frames of the ready phase kept at the start of a trial (the rest
 RECORD_STEPS = 96  # the recording window after GO
 
 SHOW, READY, RECORD, DONE = "show", "ready", "record", "done"
+# the live signal: one colour per hand (as the contact sheet: right red, left blue), x y z in
+# three shades of it
+TRACE_COLOURS = (((255, 150, 140), (235, 80, 70), (170, 40, 35)),
+                 ((150, 190, 255), (80, 130, 240), (40, 70, 170)))
 
 MIRROR_JOINT = {}  # joint index -> the mirrored joint's index (filled below)
 
@@ -117,14 +121,45 @@ class Trainer:
         self.phase = phase
         self.phase_step = 0
 
-    def templates(self, left_handed: bool = False):
-        """The player's templates from the recorded trials."""
+    def templates(self, left_handed: bool = False, base=None):
+        """The player's templates from the recorded trials. With `base` (the set in use: the
+        player's file, else the defaults) only the actions trained now are replaced; the
+        others are kept, so training one move never loses the rest."""
         from engine.recognition import Templates
 
         templates = Templates.from_trials(self.recorded, keep=KEEP)
+        trained = set(self.recorded)
+        if base is not None:
+            if base.meta.get("source") == "quickjab train":
+                trained |= set(filter(None, base.meta.get("trained", "").split(",")))
+            templates = merge_templates(base, templates, left_handed)
+        templates.meta["trained"] = ",".join(sorted(trained))  # the actions that are the player's own
         templates.meta["source"] = "quickjab train"
         templates.meta["left_handed"] = "1" if left_handed else "0"
         return templates
+
+
+def merge_templates(base, new, left_handed: bool = False):
+    """`base`'s templates for the actions `new` does not have, then all of `new`'s. A base of
+    the other handedness is mirrored first (the file holds the player's own motions)."""
+    from engine.recognition import Templates
+
+    if (base.meta.get("left_handed") == "1") != left_handed:
+        base = base.mirrored()
+    if base.dim != new.dim:
+        return new  # another sensor layout: nothing of the old set fits
+    trained = set(new.action_names)
+    keep = [i for i, a in enumerate(base.actions) if a not in trained]
+    return Templates(
+        [base.actions[i] for i in keep] + list(new.actions),
+        [base.signals[i] for i in keep] + list(new.signals),
+        np.vstack([base.gravity[keep], new.gravity]),
+        np.concatenate([base.onsets[keep], new.onsets]),
+        np.concatenate([base.thresholds[keep], new.thresholds]),
+        new.method,
+        new.feature,
+        {**base.meta, **new.meta},
+    )
 
 
 class TrainingScreen:
@@ -153,6 +188,7 @@ class TrainingScreen:
         import pygame
 
         from game.camera import Camera
+        from game.hud import action_label
         from game.render import Renderer
         from game.skeleton import local_to_world
 
@@ -189,7 +225,7 @@ class TrainingScreen:
             done = len(tr.recorded.get(a, []))
             current = i == tr.index and not tr.done
             col = (255, 200, 40) if current else ((90, 220, 120) if done >= tr.trials else (200, 196, 190))
-            self._text(surf, a.replace("_", " "), int(24 * u), (x + 18 * u, y), col)
+            self._text(surf, action_label(a), int(24 * u), (x + 18 * u, y), col)
             for k in range(tr.trials):
                 c = (int(x + 190 * u + k * 16 * u), int(y + 9 * u))
                 pygame.draw.circle(surf, (90, 220, 120) if k < done else (70, 70, 80), c, int(5 * u))
@@ -209,16 +245,18 @@ class TrainingScreen:
     def _instruction(self, surf: pygame.Surface, stage: pygame.Rect, u: float) -> None:
         import pygame
 
+        from game.hud import action_label
+
         tr = self.trainer
         if tr.done:
             title, sub = "ALL DONE", (f"templates saved to {self.saved_to}" if self.saved_to else "building templates...")
         elif tr.phase == SHOW:
-            title, sub = tr.action.replace("_", " ").upper(), "watch the move, then copy it"
+            title, sub = action_label(tr.action).upper(), "watch the move, then copy it"
         elif tr.phase == READY:
             secs = int(np.ceil((READY_STEPS - tr.phase_step) / HZ))
             title, sub = f"GET READY {secs}", f"trial {tr.trial + 1} of {tr.trials}: hold your guard still"
         else:
-            title, sub = "GO!", f"trial {tr.trial + 1} of {tr.trials}: {tr.action.replace('_', ' ')}"
+            title, sub = "GO!", f"trial {tr.trial + 1} of {tr.trials}: {action_label(tr.action)}"
         col = (255, 200, 40) if tr.phase == RECORD else (242, 240, 232)
         img = self.text.render(title, int(64 * u), col)
         surf.blit(img, img.get_rect(midtop=(stage.centerx, int(24 * u))))
@@ -239,13 +277,16 @@ class TrainingScreen:
         if len(self.history) < 2:
             return
         data = np.array(self.history)
-        colors = [(240, 90, 80), (90, 220, 120), (100, 150, 255), (240, 160, 80), (160, 230, 160), (160, 180, 255)]
         xs = rect.left + np.arange(len(data)) * rect.width / 149.0
         for d in range(min(6, data.shape[1])):
             ys = mid - np.clip(data[:, d] / 3.0, -1, 1) * rect.height * 0.45
-            pygame.draw.lines(surf, colors[d], False, np.stack([xs, ys], axis=1).tolist(), 2)
-        self._text(surf, "Wiimote x y z", 16, (rect.left + 6, rect.top + 4), (240, 90, 80))
-        self._text(surf, "Nunchuk x y z", 16, (rect.left + 120, rect.top + 4), (240, 160, 80))
+            pygame.draw.lines(surf, TRACE_COLOURS[d // 3][d % 3], False, np.stack([xs, ys], axis=1).tolist(), 2)
+        # the legend in each hand's colour: its three axes are shades of it (x light, z dark)
+        x = rect.left + 6
+        for hand, name in enumerate(("Wiimote (right) x y z", "Nunchuk (left) x y z")):
+            img = self.text.render(name, 16, TRACE_COLOURS[hand][1])
+            surf.blit(img, (x, rect.top + 4))
+            x += img.get_width() + 16
 
     def _text(self, surf: pygame.Surface, text: str, size: int, pos, color) -> None:
         surf.blit(self.text.render(text, size, color), (int(pos[0]), int(pos[1])))
@@ -257,7 +298,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--source", default=None, help="source URL (default: the first Wiimote, else the keyboard)")
     p.add_argument("--demo", action="store_true", help="the virtual player performs every move by itself")
     p.add_argument("--left-handed", action="store_true", help="mirror the animations for a left-handed player")
-    p.add_argument("--actions", default=None, help="comma-separated subset of actions (default: all 13)")
+    p.add_argument("--actions", default=None,
+                   help="comma-separated subset of actions (default: all 13); the others keep the templates you have")
+    p.add_argument("--reset", action="store_true",
+                   help="delete your trained templates (play goes back to the default set) and exit")
     p.add_argument("-o", "--output", default=None, help="where to save the templates (default: your data directory)")
     p.add_argument("--profile", default=None, metavar="NAME", help="save as this player's templates (`play --profile NAME`; default: your default set)")
     p.add_argument("--headless", action="store_true", help="no window: SDL dummy driver, virtual clock")
@@ -268,12 +312,39 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=run)
 
 
+def base_templates(output: Path):
+    """The set newly trained actions are merged into: the file being written if it exists,
+    else the default set `play` uses without one (merge_templates mirrors it if needed)."""
+    from engine.recognition import Templates
+    from game.session import synthesized_templates
+    from game.userdata import SHIPPED_TEMPLATES
+
+    if output.exists():
+        return Templates.load(output)
+    return Templates.load(SHIPPED_TEMPLATES) if SHIPPED_TEMPLATES.exists() else synthesized_templates()
+
+
+def reset_templates(output: Path | None) -> int:
+    """`train --reset`: remove the player's templates; `play` uses the default set again."""
+    from game.userdata import user_templates_path
+
+    path = output or user_templates_path()
+    if path.exists():
+        path.unlink()
+        print(f"quickjab train: removed {path}; play uses the default templates again", file=sys.stderr)
+    else:
+        print(f"quickjab train: no trained templates at {path}; play already uses the default set", file=sys.stderr)
+    return 0
+
+
 def run(args: argparse.Namespace) -> int:
-    from game.play import headless_env, open_player_source, parse_size
+    from game.play import check_visible_window, headless_env, open_player_source, parse_size
 
     size = parse_size(args.size)
     from game.actions import ACTION_NAMES, load_library
 
+    if args.reset:
+        return reset_templates(Path(args.output) if args.output else None)
     actions = list(ACTION_NAMES)
     if args.actions:
         actions = [a.strip() for a in args.actions.split(",") if a.strip()]
@@ -291,7 +362,9 @@ def run(args: argparse.Namespace) -> int:
 
     clock = VirtualClock() if args.headless else RealClock()
     source, fallback = open_player_source(args.source, False, args.seed, clock.seconds)
-    if fallback:
+    if args.demo:
+        print("quickjab train: demo: the virtual player performs every move by itself", file=sys.stderr)
+    elif fallback:
         print("quickjab train: No Wiimote found: training from the keyboard (press a key to perform)", file=sys.stderr)
     auto = args.demo or bool(getattr(source, "auto", False))
     if hasattr(source, "auto"):
@@ -300,6 +373,13 @@ def run(args: argparse.Namespace) -> int:
     trainer = Trainer(actions)
     pygame.init()
     pygame.display.set_mode(size, pygame.RESIZABLE)
+    if not args.headless:
+        try:
+            check_visible_window("train")
+        except InputError:
+            source.close()
+            pygame.quit()
+            raise
     pygame.display.set_caption("QuickJab - Train your moves")
     screen_view = TrainingScreen(lib, trainer, source.url, args.left_handed)
     resampler = FrameResampler(sensors=2)
@@ -330,7 +410,7 @@ def run(args: argparse.Namespace) -> int:
         if trainer.go and auto:
             perform()
         if trainer.done and not was_done:
-            templates = trainer.templates(args.left_handed)
+            templates = trainer.templates(args.left_handed, base=base_templates(output))
             output.parent.mkdir(parents=True, exist_ok=True)
             templates.save(output)
             screen_view.saved_to = str(output)

@@ -23,6 +23,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     sheet = cmds.add_parser("sheet", help="draw a contact sheet PNG of every action's key frames")
     sheet.add_argument("-o", "--output", default="docs/img/actions.png")
     sheet.add_argument("--dir", default=None, help="action folder (default: the shipped library)")
+    sheet.add_argument("--add", action="append", default=[], metavar="JSON_OR_DIR",
+                       help="also draw these actions (e.g. cut with `quickjab bvh cut`; a file or a folder of *.json; repeatable)")
     sheet.set_defaults(func=run_sheet)
     author = cmds.add_parser("author", help="regenerate the action JSON files")
     author.add_argument("-o", "--output", default=None, help="folder (default: game/assets/actions)")
@@ -42,9 +44,20 @@ def run_list(args: argparse.Namespace) -> int:
 
 def run_sheet(args: argparse.Namespace) -> int:
     os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
+    from pathlib import Path
+
+    from game.actions import ActionError, load_action
     from tools.contact_sheet import write_sheet
 
-    path = write_sheet(load_library(args.dir), args.output)
+    lib = load_library(args.dir)
+    for item in args.add:
+        files = sorted(Path(item).glob("*.json")) if Path(item).is_dir() else [Path(item)]
+        if not files:
+            raise ActionError(f"{item}: no action files (*.json)")
+        for f in files:
+            a = load_action(f)
+            lib[a.name] = a  # a cut action of a library name is drawn instead of the library's
+    path = write_sheet(lib, args.output)
     print(f"wrote {path}")
     return 0
 

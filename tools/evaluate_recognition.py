@@ -349,15 +349,22 @@ def format_table(rows: Sequence[dict]) -> str:
     return "\n".join(lines)
 
 
-def plot(rows_by_title: Mapping[str, Sequence[dict]], path: str) -> None:
-    """Figs. 8-9: stacked outcome groups against the main-buffer size, one panel per set."""
-    import matplotlib
+def plot(rows_by_title: Mapping[str, Sequence[dict]], path: str) -> dict:
+    """Figs. 8-9: stacked outcome groups against the main-buffer size, one panel per set. The
+    legend sits under the panels (inside, it covered the largest buffer sizes' bars). Returns the
+    layout in image pixels: {"size": (w, h), "axes": [(x0, y0, x1, y1)...], "legend": (...)}."""
+    from engine.errors import InputError
 
+    try:
+        import matplotlib
+    except ImportError:
+        raise InputError("--plot needs matplotlib (pip install 'quickjab[dev]')") from None
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     n = len(rows_by_title)
-    fig, axes = plt.subplots(1, n, figsize=(4.2 * n, 3.2), squeeze=False)
+    dpi = 100
+    fig, axes = plt.subplots(1, n, figsize=(6.4 * n, 4.8), squeeze=False, dpi=dpi)
     colors = ["#2a9d8f", "#8ab17d", "#e9c46a", "#e76f51"]
     for ax, (title, rows) in zip(axes[0], rows_by_title.items(), strict=True):
         x = [str(r["main"]) for r in rows]
@@ -366,15 +373,27 @@ def plot(rows_by_title: Mapping[str, Sequence[dict]], path: str) -> None:
             v = np.array([r[g] for r in rows]) * 100
             ax.bar(x, v, bottom=bottom, color=col, label=g, width=0.8)
             bottom += v
-        ax.plot(x, [r["first_correct"] * 100 for r in rows], "k.-", lw=1, label="first decision")
-        ax.set_title(title, fontsize=9)
-        ax.set_xlabel("main buffer (frames)")
+        ax.plot(x, [r["first_correct"] * 100 for r in rows], "k.-", lw=1.5, label="first decision correct")
+        ax.set_title(title, fontsize=13)
+        ax.set_xlabel("main buffer (frames)", fontsize=12)
+        ax.tick_params(labelsize=11)
         ax.set_ylim(0, 100)
-    axes[0][0].set_ylabel("% of motions")
-    axes[0][-1].legend(fontsize=6, loc="lower right")
-    fig.tight_layout()
-    fig.savefig(path, dpi=80)
+    axes[0][0].set_ylabel("% of motions", fontsize=12)
+    handles, labels = axes[0][0].get_legend_handles_labels()
+    legend = fig.legend(handles, labels, loc="lower center", ncol=len(labels), fontsize=11, frameon=False)
+    fig.tight_layout(rect=(0, 0.09, 1, 1))
+    fig.canvas.draw()
+    height = fig.bbox.height
+
+    def box(b) -> tuple[float, float, float, float]:  # display (y up) -> image pixels (y down)
+        return (b.x0, height - b.y1, b.x1, height - b.y0)
+
+    layout = {"size": (int(round(fig.bbox.width)), int(round(height))),
+              "axes": [box(ax.get_window_extent()) for ax in axes[0]],
+              "legend": box(legend.get_window_extent())}
+    fig.savefig(path, dpi=dpi)
     plt.close(fig)
+    return layout
 
 
 # -- cross-session: phone-punches -----------------------------------------------------------------

@@ -42,12 +42,20 @@ def register(sub: argparse._SubParsersAction) -> None:
     i.add_argument("--json", action="store_true", help="machine-readable output")
     i.set_defaults(func=cmd_info)
 
-    d = cmds.add_parser("duel", help="headless bouts: the graph against random / greedy",
+    d = cmds.add_parser("duel", help="headless bouts: the graph against random / greedy, or matches per difficulty against the virtual players",
                         description="Run headless bouts of the graph opponent against a random "
-                        "and/or a greedy one in the bout model; print wins, hits landed and received.")
+                        "and/or a greedy one in the bout model; print wins, hits landed and received. "
+                        "With --opponent virtual (or experienced / novice): whole matches of the game per "
+                        "--difficulty against the virtual player through the real recognizer; print the "
+                        "player's round win rate and rounds per match (tools/virtual_duel.py).")
     d.add_argument("--graph", default=None, help="the .npz (default: the shipped graph)")
     d.add_argument("--bouts", type=int, default=200, help="bouts per opponent")
-    d.add_argument("--opponent", choices=["random", "greedy", "both"], default="both")
+    d.add_argument("--opponent", choices=["random", "greedy", "both", "virtual", "experienced", "novice"], default="both",
+                   help="bout-model policies (random, greedy, both), or the virtual player in the game (virtual: experienced and novice)")
+    d.add_argument("--difficulty", default="easy,normal,hard",
+                   help="with a virtual opponent: comma-separated difficulties (easy, normal, hard, adaptive; default easy,normal,hard)")
+    d.add_argument("--matches", type=int, default=3, help="with a virtual opponent: matches per difficulty and player (default 3)")
+    d.add_argument("--jobs", type=int, default=2, help="with a virtual opponent: processes (default 2)")
     d.add_argument("--player", choices=["graph", "random", "greedy"], default="graph",
                    help="who plays boxer 0 (a baseline other than the graph, for comparison)")
     d.add_argument("--seconds", type=float, default=60.0, help="bout length (ends earlier by knockout)")
@@ -103,9 +111,37 @@ def cmd_info(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_virtual_duel(args: argparse.Namespace) -> int:
+    from game.difficulty import CHOICES
+    from tools.virtual_duel import PROFILES, virtual_duel
+
+    difficulties = [d.strip() for d in args.difficulty.split(",") if d.strip()]
+    bad = [d for d in difficulties if d not in CHOICES]
+    if not difficulties or bad:
+        raise InputError(f"--difficulty {args.difficulty!r}: choose from {', '.join(CHOICES)}")
+    if args.matches < 1 or args.jobs < 1:
+        raise InputError("--matches and --jobs must be at least 1")
+    profiles = list(PROFILES) if args.opponent == "virtual" else [args.opponent]
+    graph = str(_graph_path(args.graph)) if args.graph else None
+    t0 = time.perf_counter()
+    summaries = virtual_duel(difficulties, profiles, args.matches, seed=args.seed, jobs=args.jobs, graph=graph)
+    results = [s.as_dict() for s in summaries]
+    if args.json:
+        print(json.dumps(results, indent=2))
+        return 0
+    for d in results:
+        print(f"{d['difficulty']:8s} vs {d['player']:11s}: player won {d['rounds_won']}/{d['rounds']} rounds "
+              f"({100 * d['round_win_rate']:.0f} %), lost {d['rounds_lost']}; {d['rounds_per_match']:.2f} rounds per match; "
+              f"matches won {d['matches_won']}/{d['matches']} ({', '.join(f'{k} {v}' for k, v in d['results'].items())})")
+    print(f"({len(results) * args.matches} matches in {time.perf_counter() - t0:.0f} s)")
+    return 0
+
+
 def cmd_duel(args: argparse.Namespace) -> int:
     from game.interaction import InteractionGraph
     from game.interaction.duel import duel
+    if args.opponent in ("virtual", "experienced", "novice"):
+        return cmd_virtual_duel(args)
     if args.bouts < 1:
         raise InputError(f"--bouts {args.bouts}: need at least 1")
     g = InteractionGraph.load(_graph_path(args.graph))

@@ -170,6 +170,11 @@ def cmd_recognize(args: argparse.Namespace) -> int:
 
 
 def cmd_evaluate(args: argparse.Namespace) -> int:
+    if args.plot:  # said before minutes of evaluation, not after
+        try:
+            import matplotlib  # noqa: F401
+        except ImportError:
+            raise InputError("--plot needs matplotlib (pip install 'quickjab[dev]')") from None
     kw = _rec_kwargs(args)
     tk = {k: v for k, v in (("method", args.method), ("feature", args.feature), ("keep", args.keep)) if v}
     results: dict[str, list[dict]] = {}

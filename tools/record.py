@@ -8,8 +8,12 @@ import sys
 import time
 from pathlib import Path
 
+from engine.errors import InputError
 from engine.recording import RecordingWriter
 from engine.sensors import SourceState, open_source
+
+CONNECT_TIMEOUT_S = 3.0  # a source that never connects (no port, no board) is an error by then
+RATE_PROBE_S = 0.5  # without an announced rate, the rate is measured over the first samples
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -18,7 +22,16 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("-o", "--output", required=True, help="CSV file to write")
     p.add_argument("--seconds", type=float, default=None, help="stop after this many seconds (default: Ctrl-C)")
     p.add_argument("--label", default="", help="label every row with this action name (for trials)")
+    p.add_argument("--connect-timeout", type=float, default=CONNECT_TIMEOUT_S, metavar="S",
+                   help=f"give up with an error when the source has not connected after S seconds (default {CONNECT_TIMEOUT_S:g})")
     p.set_defaults(func=run)
+
+
+def measured_rate(times: list[float]) -> float | None:
+    """Samples per second over a run of sample times (None with fewer than two)."""
+    if len(times) < 2 or times[-1] <= times[0]:
+        return None
+    return (len(times) - 1) / (times[-1] - times[0])
 
 
 def part_path(output: str | Path, part: int) -> Path:
@@ -37,10 +50,14 @@ def link_counts(stats: dict[str, int]) -> str:
             f"sensor changes {stats.get('sensor_changes', 0)}")
 
 
-def record(url: str, output: str, seconds: float | None, label: str = "", poll_s: float = 0.005) -> int:
+def record(url: str, output: str, seconds: float | None, label: str = "", poll_s: float = 0.005,
+           connect_timeout: float = CONNECT_TIMEOUT_S) -> int:
     """Record until `seconds` pass, the source ends, or Ctrl-C. Returns the number of rows.
-    The output file is created when the first sample arrives (or at the end, empty), so a
-    source that cannot be opened leaves nothing behind.
+    The output file is created when the sample rate is known (the source's announced rate, e.g.
+    the serial bridge's HELLO, else measured over the first RATE_PROBE_S of samples), so
+    `rate_hz` in the file is the rate the samples came at, and a source that cannot be opened
+    leaves nothing behind. A source that has neither connected nor delivered a sample after
+    `connect_timeout` seconds (a missing port, `serial://auto` with no board) is an InputError.
 
     A source whose sensor count changes mid-run (a board rebooting with one IMU fewer or more)
     continues in a new file, out.2.csv and so on, whose header has the new columns: a row never
@@ -48,47 +65,77 @@ def record(url: str, output: str, seconds: float | None, label: str = "", poll_s
     source = open_source(url)
     meta = {"source": source.description or url, "recorded_from": url}
     writer: RecordingWriter | None = None
+    pending: list = []  # samples held until the rate is known
     rows = 0
     files: list[Path] = []
     t0: float | None = None  # every file of a run keeps the run's time origin
     start = time.perf_counter()
     last_state = None
+    ever_connected = False
+
+    def open_writer(width: int) -> RecordingWriter:
+        rate = source.rate_hz or measured_rate([s.t for s in pending])
+        head = {**meta, "source": source.description or url}  # a HELLO may have named the device by now
+        if rate:
+            head = {"rate_hz": f"{rate:g}", **head}
+        files.append(part_path(output, len(files) + 1))
+        if len(files) > 1:
+            head["continues"] = str(files[-2].name)
+        return RecordingWriter(files[-1], width, head, t0=t0)
+
+    def write(samples: list) -> None:
+        nonlocal writer, rows, t0
+        for sample in samples:
+            width = len(sample.accel)
+            if writer is not None and width != writer.sensors:
+                rows += writer.rows
+                writer.close()
+                print(f"source {url}: now {width} sensor(s), continuing in a new file", file=sys.stderr)
+                writer = None
+            if writer is None:
+                writer = open_writer(width)
+            writer.write(sample, label)
+            t0 = writer.t0
+
     try:
         while seconds is None or time.perf_counter() - start < seconds:
             if source.state is not last_state:
                 print(f"source {url}: {source.state.value}", file=sys.stderr)
                 last_state = source.state
-            for sample in source.poll():
-                width = len(sample.accel)
-                if writer is not None and width != writer.sensors:
-                    rows += writer.rows
-                    writer.close()
-                    print(f"source {url}: now {width} sensor(s), continuing in a new file", file=sys.stderr)
-                    writer = None
-                if writer is None:
-                    files.append(part_path(output, len(files) + 1))
-                    part_meta = {**meta, "source": source.description or url}
-                    if len(files) > 1:
-                        part_meta["continues"] = str(files[-2].name)
-                    writer = RecordingWriter(files[-1], width, part_meta, t0=t0)
-                writer.write(sample, label)
-                t0 = writer.t0
+            ever_connected |= source.state is SourceState.CONNECTED
+            samples = source.poll()
+            ever_connected |= bool(samples)
+            if not files:
+                pending.extend(samples)
+                if pending and (source.rate_hz or pending[-1].t - pending[0].t >= RATE_PROBE_S):
+                    write(pending)
+                    pending.clear()
+            else:
+                write(samples)
             if writer is not None:
                 writer.flush_if_due()  # a silent source still gets its rows synced
             if source.state is SourceState.ENDED:
                 break
+            if not ever_connected and time.perf_counter() - start >= connect_timeout:
+                raise InputError(f"{url}: no device connected after {connect_timeout:g} s (source {source.state.value}); "
+                                 "check the port (`quickjab devices`) and that the board is plugged in")
             time.sleep(poll_s)
     except KeyboardInterrupt:
         pass
     finally:
         source.close()
+        if pending:
+            write(pending)
+            pending.clear()
         if writer is not None:
             writer.close()
-    if writer is None:
-        writer = RecordingWriter(output, source.sensors, meta)
+    if not ever_connected:
+        raise InputError(f"{url}: the source never connected (state {source.state.value}); nothing recorded")
+    if writer is None and not files:
+        writer = open_writer(source.sensors)
         writer.close()
-        files.append(Path(output))
-    rows += writer.rows
+    if writer is not None:
+        rows += writer.rows
     names = ", ".join(str(f) for f in files)
     print(f"wrote {rows} samples to {names}", file=sys.stderr)
     if "frames_ok" in source.stats:
@@ -97,5 +144,7 @@ def record(url: str, output: str, seconds: float | None, label: str = "", poll_s
 
 
 def run(args: argparse.Namespace) -> int:
-    record(args.source, args.output, args.seconds, args.label)
+    if not args.connect_timeout > 0:
+        raise InputError(f"--connect-timeout {args.connect_timeout}: must be positive")
+    record(args.source, args.output, args.seconds, args.label, connect_timeout=args.connect_timeout)
     return 0

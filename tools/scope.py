@@ -40,6 +40,25 @@ STATE_COLORS = {
     SourceState.ENDED: (150, 150, 160),
 }
 HAND_NAMES = ("right hand (Wiimote / IMU 1)", "left hand (Nunchuk / IMU 2)")
+CONNECT_TIMEOUT_S = 3.0  # a source that never connects (no port, no board) is an error by then
+AUTO_RANGES = (4.0, 8.0, 16.0, 32.0)  # autoscale steps in g: 4 g is a Wiimote's, 16 g a phone's punch
+
+
+def fit_text(font, text: str, width: int) -> str:
+    """`text` cut (with "...") to fit `width` pixels in `font`: a long status never runs off."""
+    if font.size(text)[0] <= width:
+        return text
+    while text and font.size(text + "...")[0] > width:
+        text = text[:-1]
+    return text + "..."
+
+
+def grid_step(g_range: float, panel_h: float, label_h: float) -> int:
+    """Whole g between labelled grid lines: 1 g, or more when the labels would touch."""
+    step = 1
+    while step < g_range and panel_h / 2 / g_range * step < label_h + 2:
+        step *= 2
+    return step
 
 
 class SampleRing:
@@ -79,6 +98,7 @@ class ScopeView:
     height: int = 600
     seconds: float = 5.0  # time shown across the panel width
     g_range: float = 4.0  # panels show -g_range..+g_range
+    auto_range: bool = False  # grow g_range (AUTO_RANGES) so the visible samples are not clipped
     status_h: int = 64
     margin: int = 44  # left margin for the g labels
 
@@ -98,7 +118,8 @@ class ScopeView:
 class Scope:
     """Polls a source each step, keeps the last seconds of samples, draws them each frame."""
 
-    def __init__(self, source: Source, view: ScopeView | None = None, banner: str = ""):
+    def __init__(self, source: Source, view: ScopeView | None = None, banner: str = "",
+                 connect_timeout: float | None = None):
         os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
         import pygame  # imported here: `quickjab --help` need not load SDL
 
@@ -117,16 +138,36 @@ class Scope:
         except pygame.error as exc:
             source.close()
             raise InputError(f"cannot open a window ({exc}); without a display use --headless") from None
+        from game.play import check_visible_window
+
+        try:
+            check_visible_window("scope")  # SDL fell back to a driver that shows nothing
+        except InputError:
+            source.close()
+            pygame.display.quit()
+            raise
         pygame.font.init()
         pygame.display.set_caption(f"QuickJab scope: {source.url}")
         self.font = pygame.font.Font(None, 20)
         self.small = pygame.font.Font(None, 16)
         self.loop: FixedStepLoop | None = None
         self.final_state = source.state
+        # never connected (no sample, never CONNECTED) after this long on the source's clock: stop
+        self.connect_timeout = connect_timeout
+        self.ever_connected = False
+        self.timed_out = False
+        self._t_open = source.clock()
+        self.label_rects: list[tuple[int, int, int, int]] = []  # the g labels drawn last frame (tests)
 
     # -- stages ----------------------------------------------------------------------------
     def poll(self, step: int, dt: float) -> None:
         samples = self.source.poll()
+        self.ever_connected |= bool(samples) or self.source.state is SourceState.CONNECTED
+        if (not self.ever_connected and self.connect_timeout is not None
+                and self.source.clock() - self._t_open >= self.connect_timeout):
+            self.timed_out = True
+            if self.loop is not None:
+                self.loop.stop()
         if samples:
             self.ring.extend(samples)
             self.rate.add(samples)
@@ -147,13 +188,31 @@ class Scope:
         pg, v, screen = self.pygame, self.view, self.screen
         screen.fill(BACKGROUND)
         t, x = self.ring.since(now - v.seconds)
+        if v.auto_range and len(t):
+            peak = float(np.abs(x[:, : 3 * self.source.sensors]).max())
+            v.g_range = next((r for r in AUTO_RANGES if r >= peak), AUTO_RANGES[-1])
+        self.label_rects = []
+        label_h = self.small.get_height()
         for hand in range(2):
             x0, y0, w, h = v.panel_rect(hand)
-            for gv in range(-int(v.g_range), int(v.g_range) + 1):
+            step = grid_step(v.g_range, h, label_h)
+            top = int(v.g_range)
+            for gv in range(-top, top + 1):
                 y = round(y0 + h / 2 - gv * h / 2 / v.g_range)
                 pg.draw.line(screen, ZERO_LINE if gv == 0 else GRID, (x0, y), (x0 + w, y))
+            placed: list[tuple[int, int]] = []
+            # 0 and the ends first; a label that would touch one already placed is left out
+            for gv in sorted(range(-top, top + 1, step), key=lambda g: (g != 0, abs(g) != top, abs(g))):
+                y = round(y0 + h / 2 - gv * h / 2 / v.g_range)
+                # kept inside its own panel: the -g label of one panel and the +g label of
+                # the next would otherwise overlap in the gap between them
+                ly = min(max(y - label_h // 2, y0), y0 + h - label_h)
+                if any(ly < b + 1 and a < ly + label_h + 1 for a, b in placed):
+                    continue
                 label = self.small.render(f"{gv:+d} g", True, ZERO_LINE)
-                screen.blit(label, (4, y - label.get_height() // 2))
+                screen.blit(label, (4, ly))
+                placed.append((ly, ly + label_h))
+                self.label_rects.append((4, ly, label.get_width(), label_h))
             # a vertical line every second, fixed to sample time so it scrolls with the traces
             for s in range(int(np.ceil(now - v.seconds)), int(np.floor(now)) + 1):
                 px = round(x0 + w - (now - s) * w / v.seconds)
@@ -178,8 +237,9 @@ class Scope:
         color = STATE_COLORS.get(state, TEXT)
         measured = self.rate.rate_hz(now)
         nominal = f" (nominal {src.rate_hz:.0f} Hz)" if src.rate_hz else ""
-        line1 = f"{src.url}   {state.value}   {measured:6.1f} samples/s{nominal}   {self.samples} samples"
-        screen.blit(self.font.render(line1, True, color), (8, 6))
+        line1 = f"{state.value}   {measured:6.1f} samples/s{nominal}   {self.samples} samples   {src.url}"
+        width = self.view.width - 16
+        screen.blit(self.font.render(fit_text(self.font, line1, width), True, color), (8, 6))
         parts = []
         if src.battery is not None:
             parts.append(f"battery {100 * src.battery:.0f}%")
@@ -188,9 +248,9 @@ class Scope:
         if self.loop is not None:
             last = self.loop.budget.last_frame_ms()
             parts.append(f"poll {last.get('poll', 0):.2f} ms  render {last.get('render', 0):.2f} ms  dropped steps {self.loop.dropped_steps}")
-        screen.blit(self.small.render("   ".join(parts), True, TEXT), (8, 27))
+        screen.blit(self.small.render(fit_text(self.small, "   ".join(parts), width), True, TEXT), (8, 27))
         if self.banner:
-            screen.blit(self.small.render(self.banner, True, (230, 190, 70)), (8, 44))
+            screen.blit(self.small.render(fit_text(self.small, self.banner, width), True, (230, 190, 70)), (8, 44))
 
     def state_hash(self) -> str:
         """Hash of what the scope holds: two headless runs of the same source must agree."""
@@ -214,9 +274,11 @@ def run_scope(
     trace: str | None = None,
     banner: str = "",
     view: ScopeView | None = None,
+    connect_timeout: float | None = None,
 ) -> Scope:
-    """Run the scope until closed (or for `frames` frames); save a screenshot / trace if asked."""
-    scope = Scope(source, view, banner)
+    """Run the scope until closed (or for `frames` frames); save a screenshot / trace if asked.
+    With `connect_timeout`, a source that has not connected by then stops it (`scope.timed_out`)."""
+    scope = Scope(source, view, banner, connect_timeout)
     loop = FixedStepLoop(clock=clock)
     scope.loop = loop
     loop.add_stage("poll", scope.poll, budget_ms=1.0)
@@ -270,6 +332,8 @@ def add_view_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--trace", metavar="JSON", help="write the loop's Chrome trace here on exit (read it with `quickjab profile`)")
     p.add_argument("--seconds", type=float, default=5.0, help="seconds shown across the window (default 5)")
     p.add_argument("--size", default="960x600", help="window size WxH (default 960x600)")
+    p.add_argument("--range", type=float, default=None, metavar="G",
+                   help="fixed scale of -G..+G g (default: 4 g, growing to 8, 16, 32 g when a signal would clip)")
 
 
 def view_from_args(args: argparse.Namespace) -> ScopeView:
@@ -279,7 +343,10 @@ def view_from_args(args: argparse.Namespace) -> ScopeView:
         raise InputError(f"--size {args.size!r}: expected WxH, e.g. 960x600") from None
     if w < 200 or h < 150 or not args.seconds > 0:
         raise InputError("--size must be at least 200x150 and --seconds positive")
-    return ScopeView(width=w, height=h, seconds=args.seconds)
+    g_range = getattr(args, "range", None)
+    if g_range is not None and not 0.5 <= g_range <= 64:
+        raise InputError(f"--range {g_range}: expected 0.5..64 g")
+    return ScopeView(width=w, height=h, seconds=args.seconds, g_range=g_range or 4.0, auto_range=g_range is None)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -287,6 +354,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                        formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--source", default="demo://", help="source URL: wiimote://, serial:///dev/ttyACM0, replay://f.csv?loop=1, demo:// (default)")
     add_view_arguments(p)
+    p.add_argument("--connect-timeout", type=float, default=CONNECT_TIMEOUT_S, metavar="S",
+                   help=f"exit with an error when the source has not connected after S seconds (default {CONNECT_TIMEOUT_S:g})")
     p.set_defaults(func=run)
 
 
@@ -296,7 +365,13 @@ def run(args: argparse.Namespace) -> int:
         headless_env()
     clock: RealClock | VirtualClock = VirtualClock() if args.headless else RealClock()
     source = open_source(args.source, clock=clock.seconds)
-    scope = run_scope(source, clock=clock, frames=args.frames, screenshot=args.screenshot, trace=args.trace, view=view)
+    if not args.connect_timeout > 0:
+        raise InputError(f"--connect-timeout {args.connect_timeout}: must be positive")
+    scope = run_scope(source, clock=clock, frames=args.frames, screenshot=args.screenshot, trace=args.trace, view=view,
+                      connect_timeout=args.connect_timeout)
+    if scope.timed_out:
+        raise InputError(f"{args.source}: no device connected after {args.connect_timeout:g} s "
+                         f"(source {scope.final_state.value}); check the port (`quickjab devices`) and that the board is plugged in")
     print(f"scope: {scope.samples} samples from {args.source} in {scope.loop.frame_index} frames, "
           f"source {scope.final_state.value}", file=sys.stderr)
     if args.headless:  # reproducible: the same source and frame count give the same hash

@@ -5,7 +5,10 @@ Shum et al.; choosing "guard" means waiting `rules.wait_frames` steps before cho
 
 from __future__ import annotations
 
+from collections import deque
 from pathlib import Path
+
+import numpy as np
 
 from game.motion import PlayerController
 
@@ -86,24 +89,53 @@ class OpponentController:
     `decide(situation)` is called every step; when the boxer is at the guard (and not
     waiting out a "guard" choice) it looks the best action up and plays it. Returns the
     action chosen this step ("guard" for a wait), or None when it did not choose.
+
+    The policy (game/difficulty.py sets it): it takes the table's best action with probability
+    `best_share`, else another choosable action at random; and it decides on the situation of
+    `reaction_steps` steps ago (`observe` records the steps it does not decide on).
     """
 
-    def __init__(self, graph: InteractionGraph, lib: dict, controller: PlayerController | None = None):
+    def __init__(self, graph: InteractionGraph, lib: dict, controller: PlayerController | None = None,
+                 best_share: float = 1.0, reaction_steps: int = 0, rng: np.random.Generator | None = None):
         self.graph = graph
         self.controller = controller if controller is not None else PlayerController(lib)
         self._wait = 0
+        self.rng = rng if rng is not None else np.random.default_rng(0)
+        self.choices = list(graph.names[:graph.table.n_choices])
+        self.best_share = best_share
+        self._seen: deque[Situation] = deque(maxlen=1)
+        self.set_policy(best_share, reaction_steps)
+
+    def set_policy(self, best_share: float, reaction_steps: int) -> None:
+        self.best_share = float(best_share)
+        if self._seen.maxlen != reaction_steps + 1:
+            self._seen = deque(self._seen, maxlen=max(0, int(reaction_steps)) + 1)
+
+    def observe(self, situation: Situation) -> None:
+        """Record this step's situation (the delayed decisions read it later)."""
+        self._seen.append(situation)
+
+    def choose(self, situation: Situation) -> str:
+        """The policy's action for a situation: the best one, or by `1 - best_share` chance another."""
+        best = self.graph.best_action(situation)
+        if self.best_share < 1.0 and self.rng.random() >= self.best_share:
+            others = [a for a in self.choices if a != best]
+            if others:
+                return others[int(self.rng.integers(len(others)))]
+        return best
 
     def at_guard(self) -> bool:
         return self.controller.action == IDLE
 
     def decide(self, situation: Situation) -> str | None:
+        self.observe(situation)
         if not self.at_guard():
             self._wait = 0
             return None
         if self._wait > 0:
             self._wait -= 1
             return None
-        action = self.graph.best_action(situation)
+        action = self.choose(self._seen[0])  # the oldest kept: reaction_steps ago
         if action == IDLE:
             self._wait = self.graph.table.rules.wait_frames - 1
         else:

@@ -67,6 +67,7 @@ def test_emulate_replay_then_record_end_to_end(tmp_path):
     assert np.all(np.diff(got.t) >= 0)
     dt = np.median(np.diff(got.t))
     assert abs(dt - 0.005) < 0.001
+    assert float(got.meta["rate_hz"]) == 200  # the rate the samples came at, not the 60 Hz default
 
 
 def test_emulate_prints_a_port_that_opens(tmp_path):

@@ -58,8 +58,13 @@ def test_training_saves_templates_that_play_then_uses(tmp_path, monkeypatch) -> 
     from game.session import load_templates
 
     templates = load_templates()
-    assert sorted(templates.action_names) == ["hook_l", "straight_r"]
+    # the two trained moves replace the defaults' two; the other 11 are kept (issue 17: training
+    # one move used to leave a file of that move only, and every other move was rejected)
+    from game.actions import ACTION_NAMES
+
+    assert sorted(templates.action_names) == sorted(ACTION_NAMES)
     assert templates.meta.get("source") == "quickjab train"
+    assert templates.meta.get("trained") == "hook_l,straight_r"
     # and the recognizer built on them recognizes the virtual player's hook_l
     from engine.recognition import DualBufferRecognizer
     from game.actions import load_library

@@ -136,3 +136,108 @@ def test_recognition_panel_shows_buffers_and_marks() -> None:
     for _ in range(60):
         st.tick()
     assert st.switch_age >= 45  # the mark goes out
+
+
+def bluish(surf: pygame.Surface, rect: pygame.Rect) -> int:
+    rect = rect.clip(surf.get_rect())
+    a = pygame.surfarray.array3d(surf)[rect.left:rect.right, rect.top:rect.bottom].astype(int)
+    return int(((a[..., 2] - a[..., 0] > 25) & (a[..., 2] - a[..., 1] > 10)).sum())  # blue over skin or red
+
+
+def test_the_near_boxer_is_translucent_where_it_hides_the_cpu(lib) -> None:
+    """Issue 17: in a clinch the player's boxer, seen from behind, hid the CPU."""
+    pygame.init()
+    # the CPU straight behind the player along the camera's line of sight: fully hidden
+    r = Renderer(SIZE)
+    eye = r.camera.eye
+    back = np.array([eye[0], 0.0, eye[2]]) / np.hypot(eye[0], eye[2])
+    player = local_to_world(lib["guard"].posture(0), (float(back[0]) * 0.4, float(back[2]) * 0.4,
+                                                      float(np.arctan2(-back[0], -back[2]))))
+    opponent = local_to_world(lib["guard"].posture(0), (float(-back[0]) * 0.4, float(-back[2]) * 0.4,
+                                                        float(np.arctan2(back[0], back[2]))))
+    shown = pygame.Surface(SIZE)
+    r.draw(shown, [player, opponent])
+    opaque = Renderer(SIZE)
+    opaque.see_through = False
+    hidden = pygame.Surface(SIZE)
+    opaque.draw(hidden, [player, opponent])
+    box = r.screen_box(player)
+    assert bluish(shown, box) > 2 * bluish(hidden, box) + 300
+    # the player is still there, drawn over it (its red trunks, blended)
+    assert colour_count(shown, box, PLAYER_LOOK.trunks, tol=90) > 200
+    # apart: nothing changes
+    far_apart = scene(lib)
+    a, b = pygame.Surface(SIZE), pygame.Surface(SIZE)
+    r.draw(a, list(far_apart))
+    opaque.draw(b, list(far_apart))
+    assert r._overlap(list(far_apart)) is None
+
+
+def test_key_legend_sits_on_a_dark_panel_and_names_hands_in_capitals() -> None:
+    """Issue 17: a rope crossed the key legend, and "straight l" read as "straight I"."""
+    from game.hud import action_label
+    from game.keyboard_source import key_help
+
+    assert action_label("straight_l") == "straight L" and action_label("hook_r") == "hook R"
+    assert action_label("step_left") == "step left" and action_label("block") == "block"
+    pygame.init()
+    for size in (SIZE, (640, 360)):
+        surf = pygame.Surface(size)
+        surf.fill((235, 235, 235))  # a bright scene (the canvas, a white rope) under the legend
+        hud = Hud()
+        hud.draw(surf, HudState(keys=key_help()))
+        panel = hud.key_panel
+        assert panel is not None and surf.get_rect().contains(panel)
+        a = pygame.surfarray.array3d(surf)[panel.left:panel.right, panel.top:panel.bottom].astype(int).sum(axis=2) / 3
+        assert np.median(a) < 70  # the panel hides what is behind it
+        assert (a > 180).sum() > 200  # and the legend's text is bright on it
+
+
+@pytest.mark.parametrize("size", [SIZE, (960, 540), (1600, 900)])
+def test_knockdown_count_is_clear_of_the_corner_posts(size) -> None:
+    """Issue 17: the count "2" sat over the far corner post."""
+    from game.render import POST_HALF, POST_HEIGHT
+
+    pygame.init()
+    r = Renderer(size)
+    surf = pygame.Surface(size)
+    hud = Hud()
+    hud.draw(surf, HudState(phase="count", down=1, count=2, knockdowns=[0, 2]))
+    assert hud.count_rect is not None and surf.get_rect().contains(hud.count_rect)
+    for x, z in ((-1, -1), (1, -1), (1, 1), (-1, 1)):
+        ends = np.array([[x * POST_HALF, 0.0, z * POST_HALF], [x * POST_HALF, POST_HEIGHT, z * POST_HALF]])
+        xy, depth = r.camera.project(ends)
+        half = 0.08 * float(r.camera.scale_at(depth.min()))
+        post = pygame.Rect(int(xy[:, 0].min() - half), int(xy[:, 1].min()), int(2 * half + abs(xy[0, 0] - xy[1, 0])),
+                           int(abs(xy[0, 1] - xy[1, 1])))
+        assert not hud.count_rect.colliderect(post), (x, z, post, hud.count_rect)
+
+
+def test_budget_overlay_has_a_header_over_its_columns() -> None:
+    """Issue 17: the F3 overlay's first column (the stage names) had no header."""
+    from engine.clock import VirtualClock
+    from engine.loop import FixedStepLoop
+    from game.hud import BUDGET_HEADERS
+
+    assert BUDGET_HEADERS[0] == "stage"
+    pygame.init()
+    loop = FixedStepLoop(VirtualClock())
+    loop.add_stage("physics", lambda s, dt: None, 3.0)
+    loop.set_render(lambda a: None, 8.0)
+    loop.run(frames=5)
+    drawn = {}
+    for headers in (BUDGET_HEADERS, ("", "", "", "")):
+        import game.hud as hud_mod
+
+        old = hud_mod.BUDGET_HEADERS
+        hud_mod.BUDGET_HEADERS = headers
+        try:
+            surf = pygame.Surface(SIZE)
+            hud = Hud()
+            hud.draw(surf, HudState(show_budget=True), loop.budget)
+            drawn[headers[0]] = pygame.surfarray.array3d(surf).astype(int)
+        finally:
+            hud_mod.BUDGET_HEADERS = old
+    # the header row sits between the stacked bar and the first stage row, left in the panel
+    band = (slice(SIZE[0] - 440, SIZE[0] - 300), slice(178, 200))
+    assert (drawn["stage"][band] != drawn[""][band]).any(axis=2).sum() > 30

@@ -83,3 +83,29 @@ def test_bad_trace_is_one_line_and_exit_2(tmp_path, capsys, content):
     assert main(["profile", str(path)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "bad_trace.json" in err[0]
+
+
+def test_plot_uses_the_frame_period_and_is_not_flattened_by_an_outlier(tmp_path):
+    """Issue 17: a first frame of 300 ms flattened the plots, and a 30 Hz (low power) trace
+    drew the 16.7 ms line where its frames have 33.3 ms."""
+    clock = VirtualClock()
+    loop = FixedStepLoop(clock=clock, auto_freeze_gc=False, render_hz=30)
+
+    def render(alpha: float) -> None:
+        if loop.frame_index == 0:
+            time.sleep(0.3)  # the start-up outlier
+        else:
+            time.sleep(0.002)
+
+    loop.add_stage("physics", lambda s, dt: sum(range(300)), budget_ms=1.0)
+    loop.set_render(render, budget_ms=4.0)
+    loop.run(frames=80)
+    path = tmp_path / "t.json"
+    write_chrome_trace(loop.budget, path)
+    from tools.profile import plot_profile
+
+    trace = read_chrome_trace(path)
+    limits = plot_profile(trace, profile_summary(trace), str(tmp_path / "p.png"))
+    assert limits["period_ms"] == pytest.approx(1000 / 30, abs=0.05)
+    assert limits["hist_xmax"] < 100 and limits["bars_ymax"] < 100  # not stretched to 300 ms
+    assert limits["hist_xmax"] >= limits["period_ms"]

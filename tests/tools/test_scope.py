@@ -129,3 +129,69 @@ def test_an_explicit_source_does_not_fall_back(monkeypatch):
         open_with_fallback("wiimote://some/path", clock=lambda: 0.0)
     src, banner = open_with_fallback("demo://?rate=50", clock=lambda: 0.0)
     assert banner == "" and src.rate_hz == 50
+
+
+# -- the first hour (issue 17): no silent zero-sample runs, readable labels, no clipping -----
+
+def test_scope_on_a_missing_serial_port_exits_2_after_the_connect_timeout(tmp_path, capsys):
+    rc = main(["scope", "--headless", "--source", f"serial://{tmp_path / 'no-port'}", "--connect-timeout", "0.5"])
+    err = capsys.readouterr().err
+    assert rc == 2
+    assert "no device connected after 0.5 s" in err and "0 samples" not in err
+
+
+def scope_with_labels(size: str, source: str = "demo://"):
+    from engine.clock import VirtualClock
+    from engine.sensors import open_source
+    from tools.scope import Scope, ScopeView, run_scope  # noqa: F401
+
+    w, h = (int(v) for v in size.split("x"))
+    clock = VirtualClock()
+    view = ScopeView(width=w, height=h, auto_range=True)
+    scope = run_scope(open_source(source, clock=clock.seconds), clock=clock, frames=60, view=view)
+    return scope, view
+
+
+@pytest.mark.parametrize("size", ["960x600", "400x200", "1280x900"])
+def test_scope_g_labels_stay_inside_their_panel_and_never_overlap(size):
+    scope, view = scope_with_labels(size)
+    rects = scope.label_rects
+    assert len(rects) >= 4
+    for i, (x, y, w, h) in enumerate(rects):
+        inside = [hand for hand in range(2) if view.panel_rect(hand)[1] <= y and y + h <= sum(view.panel_rect(hand)[1::2])]
+        assert inside, (x, y, w, h)
+        for x2, y2, w2, h2 in rects[i + 1:]:
+            assert y + h <= y2 or y2 + h2 <= y, ((x, y, w, h), (x2, y2, w2, h2))
+
+
+def test_scope_autoscales_a_punch_beyond_4_g_and_range_fixes_the_scale(tmp_path):
+    t = np.arange(0, 3, 1 / 100)
+    accel = np.zeros((len(t), 2, 3))
+    accel[:, :, 2] = 1.0
+    accel[:, 0, 0] = 11.0 * np.sin(2 * np.pi * 1.5 * t)  # a phone punch: 11 g
+    from engine.recording import Recording, write_recording
+
+    rec = tmp_path / "punch.csv"
+    write_recording(rec, Recording(t, accel))
+    img = scope_shot(tmp_path, "--source", f"replay://{rec}?loop=1", frames=120)
+    x0, y0, w, h = VIEW.panel_rect(0)
+    rows = np.nonzero((np.abs(img[y0:y0 + h, x0:x0 + w - 50] - np.array(AXIS_COLORS[0])).max(axis=2) <= 25).any(axis=1))[0]
+    # the x trace peaks inside the panel (16 g scale), not flattened against its edges
+    assert rows.min() > 0.1 * h and rows.max() < 0.9 * h
+    clipped = scope_shot(tmp_path, "--source", f"replay://{rec}?loop=1", "--range", "4", frames=120, name="c.png")
+    rows = np.nonzero((np.abs(clipped[y0:y0 + h, x0:x0 + w - 50] - np.array(AXIS_COLORS[0])).max(axis=2) <= 25).any(axis=1))[0]
+    assert rows.min() <= 2 and rows.max() >= h - 3
+
+
+def test_a_long_status_line_stays_inside_the_window(tmp_path):
+    long = tmp_path / ("a-very-long-directory-name-" * 4)
+    long.mkdir()
+    rec = long / "rec.csv"
+    rec.write_text("t,rx,ry,rz\n" + "".join(f"{i / 100:.2f},0,0,1\n" for i in range(300)))
+    out = tmp_path / "long.png"
+    assert main(["scope", "--headless", "--frames", "30", "--screenshot", str(out), "--size", "480x400",
+                 "--source", f"replay://{rec}"]) == 0
+    img = load_rgb(out)
+    color = STATE_COLORS[SourceState.CONNECTED]
+    assert count_color(img, color, (0, 0, 480, 24), tol=10) > 50
+    assert count_color(img, color, (472, 0, 8, 24), tol=10) == 0  # nothing drawn into the right margin

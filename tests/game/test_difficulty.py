@@ -1,0 +1,118 @@
+"""Difficulty through the Interaction Graph's policy (issue 17), the adaptive level, the menu."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import numpy as np
+import pygame
+import pytest
+
+from game.difficulty import CHOICES, PRESETS, DifficultySetting, at_level
+
+sys.path.insert(0, str(Path(__file__).parent))
+from game_graph import graph_path  # noqa: E402,F401 - the fixture
+
+
+def test_presets_order_the_policy_not_only_the_damage():
+    e, n, h = PRESETS["easy"], PRESETS["normal"], PRESETS["hard"]
+    assert e.best_share <= n.best_share <= h.best_share and e.best_share < h.best_share
+    assert e.reaction_steps >= n.reaction_steps >= h.reaction_steps and e.reaction_steps > h.reaction_steps
+    assert e.rest_steps > n.rest_steps > h.rest_steps
+    assert e.ease_lead < n.ease_lead < h.ease_lead  # the easier, the sooner it eases off when ahead
+    # easing: leading the round by its ease_lead, the CPU plays worse and rests longer
+    best, rest = n.eased(n.ease_lead)
+    assert best < n.best_share and rest > n.rest_steps
+    best, rest = n.eased(-n.ease_lead)  # trailing: it presses
+    assert best == n.best_share and rest < n.rest_steps
+    assert n.eased(0.0) == (n.best_share, n.rest_steps) and h.eased(100.0) == (h.best_share, h.rest_steps)
+    assert at_level(0.0).best_share == e.best_share and at_level(0.0).ease_lead == pytest.approx(e.ease_lead)
+    assert at_level(0.5).best_share == pytest.approx(n.best_share) and at_level(1.0).reaction_steps == h.reaction_steps
+
+
+def test_adaptive_follows_the_player():
+    d = DifficultySetting("adaptive")
+    start = d.current
+    d.round_over(+1)  # the player won a round: harder
+    assert d.current.rest_steps < start.rest_steps and d.current.damage > start.damage and d.level > 0.5
+    d.round_over(-1)
+    d.round_over(-1)  # lost two: easier than at the start
+    assert d.current.rest_steps > start.rest_steps and d.current.best_share < start.best_share
+    fixed = DifficultySetting("hard")
+    fixed.round_over(+1)
+    assert fixed.current == PRESETS["hard"]
+    assert [DifficultySetting(c).next().name for c in CHOICES] == [*CHOICES[1:], CHOICES[0]]
+    with pytest.raises(ValueError):
+        DifficultySetting("impossible")
+
+
+def test_the_opponent_takes_its_best_action_by_its_share_and_reacts_late(graph_path):  # noqa: F811
+    from game.actions import load_library
+    from game.interaction import InteractionGraph, OpponentController, Situation
+
+    g = InteractionGraph.load(graph_path)
+    lib = load_library()
+    s = Situation(0.9, 0.0, 0.0, np.pi, "guard", 0.0, "straight_r", 3.0)
+    best = g.best_action(s)
+    for share, lo, hi in ((1.0, 1.0, 1.0), (0.5, 0.35, 0.65)):
+        oc = OpponentController(g, lib, best_share=share, rng=np.random.default_rng(1))
+        picks = [oc.choose(s) for _ in range(400)]
+        assert lo <= picks.count(best) / len(picks) <= hi
+    # reaction delay: it decides on the situation seen 5 steps before
+    oc = OpponentController(g, lib, reaction_steps=5)
+    far = Situation(3.5, 0.0, 0.0, np.pi, "guard", 0.0, "guard", 0.0)
+    for _ in range(5):
+        oc.observe(far)
+    assert oc._seen[0] is far
+    oc.observe(s)
+    assert oc._seen[0] is far and oc._seen[-1] is s
+
+
+def test_session_difficulty_sets_the_policy_and_the_menu_changes_it(tmp_path, monkeypatch, graph_path):  # noqa: F811
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path))
+    import game.keyboard_source  # noqa: F401
+    from engine.clock import VirtualClock
+    from engine.sensors import open_source
+    from game.session import Session, SessionConfig
+
+    pygame.init()
+    clock = VirtualClock()
+    src = open_source("keyboard://?seed=1", clock=clock.seconds)
+    s = Session(src, SessionConfig(difficulty="easy", sound=False, render=False, graph=graph_path), clock=clock)
+    assert s.opponent_ai.best_share == PRESETS["easy"].best_share
+    assert s.opponent_ai._seen.maxlen == PRESETS["easy"].reaction_steps + 1
+    s.match.toggle_pause()
+    s.handle_event(pygame.event.Event(pygame.KEYDOWN, key=pygame.K_d))
+    assert s.difficulty.name == "normal" and s.opponent_ai.best_share == PRESETS["normal"].best_share
+    assert s.opponent_ai._seen.maxlen == PRESETS["normal"].reaction_steps + 1
+    assert s.hud_state.difficulty == "normal"
+    # adaptive: a round the player won makes the CPU better
+    s.difficulty = DifficultySetting("adaptive")
+    s._apply_difficulty()
+    before = s.difficulty.current
+    s.match.toggle_pause()
+    s.match.round_damage = [50.0, 0.0]
+    s.match.clock_steps = 1
+    s.loop.run(steps=2)
+    assert s.match.round_winners == [0]
+    assert s.difficulty.level > 0.5 and s.difficulty.current.damage > before.damage
+
+
+def test_virtual_duel_plays_the_real_session(graph_path):  # noqa: F811
+    from tools.virtual_duel import DuelSummary, play_match
+
+    r = play_match("hard", "novice", seed=3, graph=graph_path, max_steps=700)
+    assert r.steps == 700 and r.result == "unfinished" and r.round_winners == []
+    s = DuelSummary("hard", "novice")
+    s.add(r)
+    s.add(r.__class__("hard", "novice", 4, [0, 1, None], "points", 0, 11000))
+    d = s.as_dict()
+    assert d["rounds"] == 3 and d["rounds_won"] == 1 and d["matches_won"] == 1 and d["rounds_per_match"] == 1.5
+
+
+def test_graph_duel_virtual_bad_difficulty_exits_2(capsys):
+    from game.cli import main
+
+    assert main(["graph", "duel", "--opponent", "virtual", "--difficulty", "brutal"]) == 2
+    assert "--difficulty" in capsys.readouterr().err

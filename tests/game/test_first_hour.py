@@ -1,0 +1,143 @@
+"""Issue 17, the first hour of a new player: the traps of `train`, `play` and their screens."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from game.cli import main
+
+sys.path.insert(0, str(Path(__file__).parent))
+from game_graph import graph_path  # noqa: E402,F401 - the fixture
+
+REPO = Path(__file__).resolve().parents[2]
+
+
+def train(*args: str) -> int:
+    return main(["train", "--headless", "--demo", "--source", "keyboard://?seed=3", "--size", "320x180", *args])
+
+
+def test_training_one_move_then_another_keeps_both_and_the_defaults(tmp_path, monkeypatch, capsys):
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "xdg"))
+    from engine.recognition import Templates
+    from game.actions import ACTION_NAMES
+    from game.userdata import SHIPPED_TEMPLATES, user_templates_path
+
+    assert train("--actions", "straight_l") == 0
+    first = Templates.load(user_templates_path())
+    assert sorted(first.action_names) == sorted(ACTION_NAMES)
+    assert train("--actions", "hook_r") == 0
+    second = Templates.load(user_templates_path())
+    assert sorted(second.action_names) == sorted(ACTION_NAMES)
+    assert second.meta["trained"] == "hook_r,straight_l"
+    # straight_l is still the one trained first, not the default's
+    mine = [s for a, s in zip(first.actions, first.signals, strict=True) if a == "straight_l"]
+    kept = [s for a, s in zip(second.actions, second.signals, strict=True) if a == "straight_l"]
+    assert len(mine) == len(kept) and all(np.array_equal(a, b) for a, b in zip(mine, kept, strict=True))
+    # an action neither run trained is the shipped set's
+    if SHIPPED_TEMPLATES.exists():
+        shipped = Templates.load(SHIPPED_TEMPLATES)
+        ref = [s for a, s in zip(shipped.actions, shipped.signals, strict=True) if a == "block"]
+        got = [s for a, s in zip(second.actions, second.signals, strict=True) if a == "block"]
+        assert len(ref) == len(got) and all(np.array_equal(a, b) for a, b in zip(ref, got, strict=True))
+    # a demo never asks the user to press keys
+    assert "press" not in capsys.readouterr().err.lower()
+
+
+def test_train_reset_goes_back_to_the_default_templates(tmp_path, monkeypatch, capsys):
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "xdg"))
+    from game.session import templates_in_use
+    from game.userdata import user_templates_path
+
+    path = user_templates_path()
+    path.parent.mkdir(parents=True)
+    from game.session import synthesized_templates
+
+    t = synthesized_templates(trials=1)
+    t.meta.update({"source": "quickjab train", "trained": "straight_l"})
+    t.save(path)
+    assert templates_in_use().startswith("your templates (1 of 13 moves")
+    assert main(["train", "--reset"]) == 0
+    assert not path.exists()
+    assert "default" in capsys.readouterr().err
+    assert templates_in_use() == "default templates"
+
+
+def test_play_says_which_templates_it_uses_on_screen_and_console(tmp_path, monkeypatch, capsys, graph_path):  # noqa: F811
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "xdg"))
+    import pygame
+
+    from game.session import synthesized_templates
+    from game.userdata import user_templates_path
+
+    shots = []
+    for name in ("default", "mine"):
+        shot = tmp_path / f"{name}.png"
+        assert main(["play", "--headless", "--frames", "2", "--graph", graph_path, "--no-sound", "--source", "keyboard://",
+                     "--screenshot", str(shot)]) == 0
+        shots.append(pygame.surfarray.array3d(pygame.image.load(str(shot))).astype(int))
+        if name == "default":
+            t = synthesized_templates(trials=1)
+            t.meta.update({"source": "quickjab train", "trained": "straight_l"})
+            user_templates_path().parent.mkdir(parents=True, exist_ok=True)
+            t.save(user_templates_path())
+    err = capsys.readouterr().err
+    assert "quickjab play: default templates" in err
+    assert "your templates (1 of 13 moves; `quickjab train --reset` for the defaults)" in err
+    # the line under the source's: its text differs between the two runs
+    band = (slice(20, 700), slice(120, 150))
+    assert (shots[0][band] != shots[1][band]).any()
+
+
+def test_headless_play_without_frames_ends(tmp_path, graph_path, capsys):  # noqa: F811
+    trace = tmp_path / "t.json"
+    assert main(["play", "--headless", "--graph", graph_path, "--no-sound", "--source", "keyboard://",
+                 "--size", "320x180", "--trace", str(trace)]) == 0
+    from game.play import HEADLESS_FRAMES
+
+    frames = [e for e in json.loads(trace.read_text())["traceEvents"] if e.get("name") == "frame"]
+    assert len(frames) == HEADLESS_FRAMES
+    assert f"stopping after {HEADLESS_FRAMES} frames" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("command", ["play", "train", "scope"])
+def test_no_display_is_a_clear_error_not_an_invisible_window(command):
+    env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY", "SDL_VIDEODRIVER")}
+    env.update(PYTHONPATH=str(REPO), SDL_AUDIODRIVER="dummy")
+    source = "demo://" if command == "scope" else "keyboard://"
+    r = subprocess.run([sys.executable, "-m", "game.cli", command, "--source", source, "--frames", "100000"],
+                       cwd=REPO, env=env, capture_output=True, text=True, timeout=120)
+    assert r.returncode == 2, r.stderr
+    assert "no display" in r.stderr and "--headless" in r.stderr
+    assert "Traceback" not in r.stderr
+
+
+def test_training_traces_are_one_colour_per_hand():
+    import pygame
+
+    from game.actions import load_library
+    from game.training import TRACE_COLOURS, Trainer, TrainingScreen
+
+    pygame.init()
+    screen = TrainingScreen(load_library(), Trainer(["straight_r"]), "keyboard://")
+    t = np.arange(150)
+    for k in t:
+        screen.push_frame(np.array([np.sin(k / 7 + p) * 2 for p in range(6)]))
+    surf = pygame.Surface((640, 300))
+    rect = pygame.Rect(0, 0, 640, 300)
+    screen._plot(surf, rect)
+    a = pygame.surfarray.array3d(surf).reshape(-1, 3).astype(int)
+    lit = a[a.max(axis=1) > 60]
+    reddish = (lit[:, 0] > lit[:, 2] + 40)
+    bluish = (lit[:, 2] > lit[:, 0] + 40)
+    assert reddish.sum() > 500 and bluish.sum() > 500
+    # nothing green or orange: every trace pixel is one hand's hue (or the grey mid line)
+    greenish = (lit[:, 1] > lit[:, 0] + 30) & (lit[:, 1] > lit[:, 2] + 30)
+    assert greenish.sum() == 0
+    assert TRACE_COLOURS[0][0][0] > TRACE_COLOURS[0][0][2] and TRACE_COLOURS[1][0][2] > TRACE_COLOURS[1][0][0]
