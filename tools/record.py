@@ -78,10 +78,12 @@ def record(url: str, output: str, seconds: float | None, label: str = "", poll_s
         head = {**meta, "source": source.description or url}  # a HELLO may have named the device by now
         if rate:
             head = {"rate_hz": f"{rate:g}", **head}
-        files.append(part_path(output, len(files) + 1))
-        if len(files) > 1:
-            head["continues"] = str(files[-2].name)
-        return RecordingWriter(files[-1], width, head, t0=t0)
+        path = part_path(output, len(files) + 1)
+        if files:
+            head["continues"] = str(files[-1].name)
+        w = RecordingWriter(path, width, head, t0=t0)
+        files.append(path)
+        return w
 
     def write(samples: list) -> None:
         nonlocal writer, rows, t0
@@ -122,13 +124,15 @@ def record(url: str, output: str, seconds: float | None, label: str = "", poll_s
             time.sleep(poll_s)
     except KeyboardInterrupt:
         pass
-    finally:
-        source.close()
-        if pending:
-            write(pending)
-            pending.clear()
+    except BaseException:
         if writer is not None:
             writer.close()
+        raise
+    finally:
+        source.close()
+    write(pending)  # the source ended, or Ctrl-C, before the rate was known
+    if writer is not None:
+        writer.close()
     if not ever_connected:
         raise InputError(f"{url}: the source never connected (state {source.state.value}); nothing recorded")
     if writer is None and not files:

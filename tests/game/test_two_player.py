@@ -211,7 +211,9 @@ def test_train_profile_saves_beside_the_default_set_and_play_uses_it(tmp_path, c
     sources = [open_source(u, clock=clock.seconds) for u in ("keyboard://?seed=1", "keyboard://?seed=2")]
     s = TwoPlayerSession(sources, SessionConfig(size=SIZE, sound=False, render=False), clock=clock,
                          templates=(None, seat_templates("ana", None)[0]))
-    assert s.seats[1].templates.action_names == ["straight_r"]  # player 2 plays with ana's set
+    # player 2 plays with ana's set: her straight_r, the default set for the moves she did not train
+    assert s.seats[1].templates.meta.get("trained") == "straight_r"
+    assert s.seats[0].templates.meta.get("trained") != "straight_r"
     assert len(s.seats[0].templates) > 1
 
 
