@@ -7,6 +7,7 @@ import json
 import time
 from pathlib import Path
 
+from engine import arguments
 from engine.errors import InputError
 
 
@@ -28,10 +29,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                         description="Sample bouts in the bout model, merge states, expand every "
                         "action from every state, solve by value iteration, save the .npz.")
     b.add_argument("-o", "--output", required=True, help="where to write the .npz")
-    b.add_argument("--seed", type=int, default=0, help="random seed (the build is deterministic for it)")
-    b.add_argument("--states", type=int, default=60000, help="states to keep (most visited cells)")
-    b.add_argument("--bouts", type=int, default=None, help="sampling bouts run at once")
-    b.add_argument("--opponent-max", type=float, default=None,
+    b.add_argument("--seed", type=arguments.seed, default=0, help="random seed (the build is deterministic for it)")
+    b.add_argument("--states", type=arguments.int_range(10, 10_000_000), default=60000, help="states to keep (most visited cells)")
+    b.add_argument("--bouts", type=arguments.int_range(1, 100_000), default=None, help="sampling bouts run at once")
+    b.add_argument("--opponent-max", type=arguments.positive_float, default=None,
                    help="1 = min-max (opponent's best response), 0 = its expectation; blends between")
     b.add_argument("--quiet", action="store_true", help="no progress lines")
     b.set_defaults(func=cmd_build)
@@ -46,12 +47,12 @@ def register(sub: argparse._SubParsersAction) -> None:
                         description="Run headless bouts of the graph opponent against a random "
                         "and/or a greedy one in the bout model; print wins, hits landed and received.")
     d.add_argument("--graph", default=None, help="the .npz (default: the shipped graph)")
-    d.add_argument("--bouts", type=int, default=200, help="bouts per opponent")
+    d.add_argument("--bouts", type=arguments.int_range(1, 1_000_000), default=200, help="bouts per opponent")
     d.add_argument("--opponent", choices=["random", "greedy", "both"], default="both")
     d.add_argument("--player", choices=["graph", "random", "greedy"], default="graph",
                    help="who plays boxer 0 (a baseline other than the graph, for comparison)")
-    d.add_argument("--seconds", type=float, default=60.0, help="bout length (ends earlier by knockout)")
-    d.add_argument("--seed", type=int, default=1)
+    d.add_argument("--seconds", type=arguments.float_range(0.0, 3600.0, lo_open=True), default=60.0, help="bout length (ends earlier by knockout)")
+    d.add_argument("--seed", type=arguments.seed, default=1)
     d.add_argument("--json", action="store_true", help="machine-readable output")
     d.set_defaults(func=cmd_duel)
 

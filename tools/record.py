@@ -7,6 +7,7 @@ import argparse
 import sys
 import time
 
+from engine import arguments
 from engine.recording import RecordingWriter
 from engine.sensors import SourceState, open_source
 
@@ -15,7 +16,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("record", help="record a source to a CSV file", description=__doc__)
     p.add_argument("--source", required=True, help="source URL: wiimote://, serial:///dev/ttyACM0, replay://f.csv, ...")
     p.add_argument("-o", "--output", required=True, help="CSV file to write")
-    p.add_argument("--seconds", type=float, default=None, help="stop after this many seconds (default: Ctrl-C)")
+    p.add_argument("--seconds", type=arguments.positive_float, default=None, help="stop after this many seconds (default: Ctrl-C)")
     p.add_argument("--label", default="", help="label every row with this action name (for trials)")
     p.set_defaults(func=run)
 

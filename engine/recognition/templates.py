@@ -27,6 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from engine.errors import InputError
+from engine.npz_files import NpzFileError, read_npz
 from engine.recognition.dtw import IncrementalDTW, dtw_distance
 
 FORMAT_VERSION = 1
@@ -42,6 +43,7 @@ LEAD_IN = 4  # frames kept before the trimmed onset (the recognizer re-cuts at i
 REJECT_K = 2.0  # threshold = mean + REJECT_K * std of same-action training scores ...
 REJECT_RATIO = 2.0  # ... and at least REJECT_RATIO * their max (1.5 -> 2.0: uWave +1.6, synth session +12 points; see docs)
 REJECT_FLOOR_G = 0.05  # and never below this (g): identical trials must not reject all noise
+MAX_FILE_BYTES = 256 * 2**20  # uncompressed; the shipped set is under 1 MB
 
 
 class TemplateFileError(InputError):
@@ -336,10 +338,11 @@ class Templates:
     def load(cls, path: str | os.PathLike) -> Templates:
         path = Path(path)
         try:
-            with np.load(path, allow_pickle=False) as z:
-                data = {k: z[k] for k in z.files}
+            data = read_npz(path, MAX_FILE_BYTES)
         except FileNotFoundError:
             raise TemplateFileError(path, "no such file") from None
+        except NpzFileError as exc:
+            raise TemplateFileError(path, f"not a template file ({exc})") from None
         except (OSError, ValueError, EOFError) as exc:
             raise TemplateFileError(path, f"not a template file ({exc.__class__.__name__}: {exc})") from None
         except Exception as exc:  # zipfile.BadZipFile and friends: still a bad file, not a crash
@@ -356,6 +359,8 @@ class Templates:
                 raise ValueError("signal lengths do not match the signal data")
             if not np.all(np.isfinite(signals)):
                 raise ValueError("non-finite values in the signals")
+            if not np.isfinite(data["gravity"]).all() or not (data["thresholds"] >= 0).all():  # inf: never reject
+                raise ValueError("gravity must be finite and thresholds >= 0")
             cuts = np.cumsum(lengths)[:-1]
             meta = dict(zip(data["meta_keys"].tolist(), data["meta_values"].tolist(), strict=True))
             t = cls(
