@@ -27,7 +27,7 @@ MAX_RECORDING_BYTES = 256 * 2**20  # an hour at 430 Hz with two hands is about 1
 MAX_DURATION_S = 4 * 3600.0  # 4 h at 60 Hz is 864,000 frames (41 MB for two hands)
 MAX_GAP_S = 600.0  # no sample for 10 minutes: not one recording any more
 MAX_LINE_CHARS = 1 << 20  # metadata and header lines
-CHUNK_ROWS = 65536  # rows converted to numbers at once
+CHUNK_ROWS = 8192  # rows converted to numbers at once
 
 
 class RecordingError(InputError):
@@ -97,14 +97,24 @@ def read_recording(path: str | os.PathLike) -> Recording:
     path = Path(path)
     with _open_regular(path) as f:
         try:
-            return _read_rows(path, f)
+            return _read_rows(path, f, _count_lines(path))
         except UnicodeDecodeError as exc:
             raise RecordingError(path, None, f"cannot read: not UTF-8 text ({exc.reason})") from None
         except csv.Error as exc:  # a field over csv's 128 KiB limit, a NUL byte, ...
             raise RecordingError(path, None, f"not a CSV recording ({exc})") from None
 
 
-def _read_rows(path: Path, f: io.TextIOBase) -> Recording:
+def _count_lines(path: Path) -> int:
+    """Lines in the file (an upper bound on its rows), counted in binary blocks: the numbers
+    then go straight into one array of that size instead of chunks joined at the end."""
+    n = 1
+    with open(path, "rb") as fb:
+        while block := fb.read(1 << 20):
+            n += block.count(b"\n") + block.count(b"\r")
+    return n
+
+
+def _read_rows(path: Path, f: io.TextIOBase, max_rows: int) -> Recording:
     meta: dict[str, str] = {}
     lineno = 0
     while True:
@@ -133,8 +143,9 @@ def _read_rows(path: Path, f: io.TextIOBase) -> Recording:
     numeric = [header.index(c) for c in _header_columns(sensors)]
     label_col = header.index("label") if "label" in header else None
 
-    chunks: list[np.ndarray] = []
-    line_chunks: list[np.ndarray] = []  # each row's line in the file, for messages
+    values = np.empty((max_rows, len(numeric)), dtype=np.float64)
+    lines = np.empty(max_rows, dtype=np.int32)  # each row's line in the file, for messages
+    n = 0
     labels: list[str] = []
     seen_labels: dict[str, str] = {}  # one str object per distinct label, not one per row
     fields: list[list[str]] = []  # the numeric fields of the rows not yet converted, as text
@@ -152,19 +163,22 @@ def _read_rows(path: Path, f: io.TextIOBase) -> Recording:
         label = row[label_col].strip() if label_col is not None and label_col < len(row) else ""
         labels.append(seen_labels.setdefault(label, label))
         if len(fields) >= CHUNK_ROWS:
-            chunks.append(_numbers(path, fields, linenos))
-            line_chunks.append(np.array(linenos, dtype=np.int64))
+            n = _store(path, fields, linenos, values, lines, n)
             fields, linenos = [], []
     if fields:
-        chunks.append(_numbers(path, fields, linenos))
-        line_chunks.append(np.array(linenos, dtype=np.int64))
-    if not chunks:
+        n = _store(path, fields, linenos, values, lines, n)
+    if not n:
         raise RecordingError(path, None, "no samples")
-    values = chunks[0] if len(chunks) == 1 else np.concatenate(chunks)
-    del chunks
-    _check_times(path, values[:, 0], np.concatenate(line_chunks))
-    n = len(values)
+    values = values[:n]
+    _check_times(path, values[:, 0], lines[:n])
     return Recording(values[:, 0], values[:, 1:].reshape(n, sensors, 3), labels, meta)
+
+
+def _store(path: Path, fields: list[list[str]], linenos: list[int], values: np.ndarray, lines: np.ndarray, n: int) -> int:
+    k = len(fields)
+    values[n : n + k] = _numbers(path, fields, linenos)
+    lines[n : n + k] = linenos
+    return n + k
 
 
 def _numbers(path: Path, fields: list[list[str]], linenos: list[int]) -> np.ndarray:

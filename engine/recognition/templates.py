@@ -353,6 +353,8 @@ class Templates:
             version = int(data["version"])
             if version != FORMAT_VERSION:
                 raise TemplateFileError(path, f"template format version {version}, expected {FORMAT_VERSION}")
+            if data["lengths"].dtype.kind not in "iu" or str(data["method"]) not in METHODS:
+                raise ValueError("lengths must be integers and method one of " + ", ".join(METHODS))
             lengths = data["lengths"].astype(np.int64)
             signals = data["signals"].astype(np.float64)
             if lengths.ndim != 1 or lengths.min() < 1 or lengths.sum() != len(signals) or signals.ndim != 2:

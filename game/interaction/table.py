@@ -348,7 +348,8 @@ class GraphTable:
         if not (np.isfinite(a["value"]).all() and np.isfinite(a["features"]).all()
                 and np.isfinite(a["edge_reward"]).all()):
             raise bad("non-finite numbers")
-        if meta["n_choices"] > A or (a["other_action"] < 0).any() or a["other_action"].max() >= A:
+        if meta["n_choices"] > A or (a["other_action"] < 0).any() or a["other_action"].max() >= A or \
+                (E and a["edge_action"].min() < 0):
             raise bad("an action id outside action_names")
         if (a["other_frame"] < 0).any() or (a["visits"] < 0).any():
             raise bad("negative frames or visits")
