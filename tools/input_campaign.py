@@ -137,7 +137,7 @@ def _zip_bomb(path: Path, member: str, declared_gb: float) -> str:
     return str(path)
 
 
-def bad_templates(d: Path) -> dict[str, str]:
+def bad_templates(d: Path, bomb_gb: float = 1.5) -> dict[str, str]:
     with np.load(ASSETS / "templates.npz", allow_pickle=False) as z:
         good = {k: z[k] for k in z.files}
     out = {}
@@ -169,11 +169,11 @@ def bad_templates(d: Path) -> dict[str, str]:
     np.save(out["npy"], good["signals"])
     out["truncated"] = _write(d, "tpl/trunc.npz", (ASSETS / "templates.npz").read_bytes()[:2000])
     out["text"] = _write(d, "tpl/text.npz", "hello")
-    out["zip-bomb"] = _zip_bomb(d / "tpl" / "bomb.npz", "signals", 1.5)
+    out["zip-bomb"] = _zip_bomb(d / "tpl" / "bomb.npz", "signals", bomb_gb)
     return out
 
 
-def bad_graphs(d: Path) -> dict[str, str]:
+def bad_graphs(d: Path, bomb_gb: float = 1.5) -> dict[str, str]:
     with np.load(ASSETS / "graph.npz", allow_pickle=False) as z:
         good = {k: z[k] for k in z.files}
     meta = json.loads(str(good["meta"]))
@@ -233,7 +233,7 @@ def bad_graphs(d: Path) -> dict[str, str]:
     out["npy"] = str(d / "graph" / "arr.npy")
     np.save(out["npy"], good["visits"])
     out["truncated"] = _write(d, "graph/trunc.npz", (ASSETS / "graph.npz").read_bytes()[:5000])
-    out["zip-bomb"] = _zip_bomb(d / "graph" / "bomb.npz", "edge_reward", 1.5)
+    out["zip-bomb"] = _zip_bomb(d / "graph" / "bomb.npz", "edge_reward", bomb_gb)
     return out
 
 
@@ -343,14 +343,14 @@ def bad_bvh(d: Path) -> dict[str, str]:
     return out
 
 
-def build_cases(d: Path, big_mb: int) -> list[Case]:
+def build_cases(d: Path, big_mb: int, bomb_gb: float = 1.5) -> list[Case]:
     q = ["-m", "game.cli"]
     good_rec = _write(d, "good.csv", GOOD_REC)
     tpl = str(ASSETS / "templates.npz")
     out = d / "out"
     out.mkdir(exist_ok=True)
     cases: list[Case] = []
-    recs, tpls, graphs = bad_recordings(d, big_mb), bad_templates(d), bad_graphs(d)
+    recs, tpls, graphs = bad_recordings(d, big_mb), bad_templates(d, bomb_gb), bad_graphs(d, bomb_gb)
     for name, path in recs.items():
         cases.append(Case(f"rec/{name}/recognize", q + ["recognize", path, "--templates", tpl]))
         if not name.startswith("big"):
