@@ -343,6 +343,31 @@ def bad_bvh(d: Path) -> dict[str, str]:
     return out
 
 
+def bad_action_dirs(d: Path) -> dict[str, str]:
+    """Copies of the shipped action library with one file made bad."""
+    import shutil
+
+    out = {}
+    good = json.loads((ASSETS / "actions" / "hook_r.json").read_text())
+    for name, change in (("nan-root", {"root": [[0, float("nan"), 0, 0]]}), ("frames-huge", {"frames": 10**9}),
+                         ("damage-inf", {"attacks": [{**good["attacks"][0], "damage": float("inf")}]}),
+                         ("deep", None), ("fifo", None)):
+        folder = d / "actions" / name
+        if folder.exists():
+            shutil.rmtree(folder)
+        shutil.copytree(ASSETS / "actions", folder)
+        target = folder / "hook_r.json"
+        if name == "deep":
+            target.write_text("[" * 100_000 + "]" * 100_000)
+        elif name == "fifo":
+            target.unlink()
+            os.mkfifo(target)
+        else:
+            target.write_text(json.dumps({**good, **change}))
+        out[name] = str(folder)
+    return out
+
+
 def build_cases(d: Path, big_mb: int, bomb_gb: float = 1.5) -> list[Case]:
     q = ["-m", "game.cli"]
     good_rec = _write(d, "good.csv", GOOD_REC)
@@ -378,6 +403,8 @@ def build_cases(d: Path, big_mb: int, bomb_gb: float = 1.5) -> list[Case]:
         cases.append(Case(f"bvh/{name}/info", q + ["bvh", "info", path]))
         if name.startswith(("pose", "ftime")):
             cases.append(Case(f"bvh/{name}/cut", q + ["bvh", "cut", path, "--start", "0", "--end", "2", "--name", "x", "-o", str(out / "a.json")]))
+    for name, folder in bad_action_dirs(d).items():
+        cases.append(Case(f"actions/{name}/list", q + ["actions", "list", "--dir", folder]))
     emu = f"wiimote-emu://{good_rec}"
     urls = {
         "demo-rate-1e9": "demo://?rate=1e9",
