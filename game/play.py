@@ -27,11 +27,9 @@ KEYBOARD_BANNER = "No Wiimote found: playing from the keyboard"
 
 def parse_size(text: str) -> tuple[int, int]:
     try:
-        w, h = (int(v) for v in text.lower().split("x"))
-    except ValueError:
-        raise InputError(f"--size {text!r}: expected WIDTHxHEIGHT, e.g. 1280x720") from None
-    if w < 160 or h < 120:
-        raise InputError(f"--size {text!r}: at least 160x120")
+        w, h = (int(v) for v in arguments.window_size(text).lower().split("x"))
+    except argparse.ArgumentTypeError as exc:  # one line naming --size, as before
+        raise InputError(f"--size {text!r}: {exc}") from None
     return w, h
 
 
@@ -46,7 +44,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--trace", metavar="JSON", help="write the loop's Chrome trace here on exit")
     p.add_argument("--virtual-clock", action="store_true", help="a virtual clock in a real window: the same frames as --headless (tests)")
     p.add_argument("--seed", type=arguments.seed, default=0, help="seed for the virtual player and anything random (default 0)")
-    p.add_argument("--size", type=arguments.window_size, default="1280x720", help="window size WxH (default 1280x720)")
+    p.add_argument("--size", default="1280x720", help="window size WxH (default 1280x720)")
     p.add_argument("--fullscreen", action="store_true", help="start fullscreen (F11 toggles)")
     p.add_argument("--low-power", action="store_true", help="render at 30 Hz on a half-size surface, flat shading, no antialiasing, fewer solver iterations (docs/performance.md)")
     p.add_argument("--templates", metavar="NPZ", help="recognition templates (default: yours from `quickjab train`, else the shipped set)")

@@ -260,7 +260,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--frames", type=arguments.positive_int, default=None, help="stop after N rendered frames")
     p.add_argument("--screenshot", metavar="PNG", help="save the last frame to this PNG")
     p.add_argument("--seed", type=arguments.seed, default=0)
-    p.add_argument("--size", type=arguments.window_size, default="1280x720", help="window size WxH (default 1280x720)")
+    p.add_argument("--size", default="1280x720", help="window size WxH (default 1280x720)")
     p.set_defaults(func=run)
 
 
