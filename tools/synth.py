@@ -18,7 +18,7 @@ import numpy as np
 
 from engine import arguments
 from engine.errors import InputError
-from engine.recording import Recording, write_recording
+from engine.recording import MAX_DURATION_S, Recording, write_recording
 from game.actions import ACTION_NAMES, Action, load_library
 from game.virtual_player import FPS, PROFILES, synthesize_action, synthesize_rest
 
@@ -119,15 +119,13 @@ def build_default_templates(path: str | Path, seed: int = DEFAULT_TEMPLATE_SEED,
     return path
 
 
-MAX_SESSION_S = 4 * 3600.0  # a session longer than a recording may be (engine/recording.py)
-
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("synth", help="synthesize trials or a labelled session from the virtual player",
                        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)  # fmt: skip
     p.add_argument("--player", default="experienced", choices=sorted(PROFILES), help="player profile")
     mode = p.add_mutually_exclusive_group(required=True)
     mode.add_argument("--trials", type=arguments.int_range(1, 1000), help="trials per action, written to DIR/<action>/<n>.csv")
-    mode.add_argument("--session", type=arguments.float_range(0.0, MAX_SESSION_S, lo_open=True), metavar="SECONDS", help="length of a continuous recording")
+    mode.add_argument("--session", type=arguments.float_range(0.0, MAX_DURATION_S, lo_open=True), metavar="SECONDS", help="length of a continuous recording")
     mode.add_argument("--templates", action="store_true",
                       help="build recognition templates (-o NPZ) from 3 synthesized trials per action")
     p.add_argument("-o", "--output", required=True,
