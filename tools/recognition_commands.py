@@ -51,7 +51,8 @@ def _mains(text: str) -> list[int | str]:
 
 def _users(text: str) -> str:
     """uWave users as `1-6` or `1,3`: checked here, expanded by _mains when the command runs."""
-    _mains(text)
+    if "auto" in _mains(text):
+        raise argparse.ArgumentTypeError(f"expected user numbers such as 1-6 or 1,3, not {text!r}")
     return text
 
 
