@@ -585,7 +585,7 @@ def judge(o: Outcome, max_rss_mb: float) -> str:
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--only", action="append", default=[], help="run the cases whose name contains this (repeatable)")
-    ap.add_argument("--timeout", type=float, default=60.0, help="seconds before a run counts as a hang (default 60)")
+    ap.add_argument("--timeout", type=float, default=120.0, help="seconds before a run counts as a hang (default 120)")
     ap.add_argument("--limit-mb", type=int, default=3072, help="address-space limit per run (default 3072)")
     ap.add_argument("--max-rss-mb", type=float, default=600.0, help="peak RSS that counts as a blow-up (default 600)")
     ap.add_argument("--big-mb", type=int, default=100, help="size of the big-CSV case (0: none)")
