@@ -369,6 +369,30 @@ def bad_action_dirs(d: Path) -> dict[str, str]:
     return out
 
 
+def bad_mocap(d: Path, mocap: Path) -> dict[str, str]:
+    """A real, mappable BVH with its header or one pose made bad: these reach retargeting."""
+    lines = mocap.read_text(encoding="utf-8", errors="replace").splitlines()
+    at = next(i for i, ln in enumerate(lines) if ln.strip().lower().startswith("frames:"))
+    out = {}
+    for name, frames, ftime, pose in (
+        ("frames-text", "abc", None, None), ("frames-neg", "-5", None, None), ("frames-zero", "0", None, None),
+        ("ftime-nan", None, "nan", None), ("ftime-inf", None, "inf", None), ("ftime-1e9", None, "1e9", None),
+        ("ftime-zero", None, "0", None), ("pose-nan", None, None, "nan"), ("pose-inf", None, None, "inf"),
+        ("pose-1e300", None, None, "1e300"), ("pose-1e30", None, None, "1e30"),
+    ):
+        new = list(lines)
+        if frames is not None:
+            new[at] = f"Frames: {frames}"
+        if ftime is not None:
+            new[at + 1] = f"Frame Time: {ftime}"
+        if pose is not None:
+            vals = new[at + 10].split()
+            vals[3:6] = [pose] * 3
+            new[at + 10] = " ".join(vals)
+        out[name] = _write(d, f"mocap/{name}.bvh", "\n".join(new) + "\n")
+    return out
+
+
 def build_cases(d: Path, big_mb: int, bomb_gb: float = 1.5) -> list[Case]:
     q = ["-m", "game.cli"]
     good_rec = _write(d, "good.csv", GOOD_REC)
@@ -406,6 +430,11 @@ def build_cases(d: Path, big_mb: int, bomb_gb: float = 1.5) -> list[Case]:
         cases.append(Case(f"bvh/{name}/info", q + ["bvh", "info", path]))
         if name.startswith(("pose", "ftime")):
             cases.append(Case(f"bvh/{name}/cut", q + ["bvh", "cut", path, "--start", "0", "--end", "2", "--name", "x", "-o", str(out / "a.json")]))
+    mocap = ROOT.parent / "shared" / "data" / "mocap" / "cmu_02_05_punch_strike.bvh"
+    if mocap.exists():
+        for name, path in bad_mocap(d, mocap).items():
+            cases.append(Case(f"mocap/{name}/info", q + ["bvh", "info", path]))
+            cases.append(Case(f"mocap/{name}/cut", q + ["bvh", "cut", path, "--start", "0", "--end", "20", "--name", "x", "-o", str(out / "m.json")]))
     for name, folder in bad_action_dirs(d).items():
         cases.append(Case(f"actions/{name}/list", q + ["actions", "list", "--dir", folder]))
     emu = f"wiimote-emu://{good_rec}"
