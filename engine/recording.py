@@ -10,6 +10,7 @@ from __future__ import annotations
 import csv
 import io
 import os
+import stat
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -21,6 +22,12 @@ from engine.sensors.source import Sample
 
 HAND_COLUMNS = (("rx", "ry", "rz"), ("lx", "ly", "lz"))
 FLUSH_EVERY_S = 0.25  # fsync at least this often: a crashed machine loses at most 0.25 s
+# What a reader accepts. Anything larger is refused with a message instead of exhausting memory:
+MAX_RECORDING_BYTES = 256 * 2**20  # an hour at 430 Hz with two hands is about 100 MB
+MAX_DURATION_S = 4 * 3600.0  # 4 h at 60 Hz is 864,000 frames (41 MB for two hands)
+MAX_GAP_S = 600.0  # no sample for 10 minutes: not one recording any more
+MAX_LINE_CHARS = 1 << 20  # metadata and header lines
+CHUNK_ROWS = 8192  # rows converted to numbers at once
 
 
 class RecordingError(InputError):
@@ -62,26 +69,70 @@ def _header_columns(sensors: int) -> list[str]:
     return ["t"] + [c for hand in HAND_COLUMNS[:sensors] for c in hand]
 
 
-def read_recording(path: str | os.PathLike) -> Recording:
-    """Read a recording CSV. Raises RecordingError (file and line) on anything malformed."""
-    path = Path(path)
+def _open_regular(path: Path):
+    """Open a recording for streaming text reads, refusing what is not a regular file of
+    sane size: a FIFO or a device would block or never end, a huge file would take memory."""
     try:
-        text = path.read_text(encoding="utf-8-sig")  # a spreadsheet's BOM is not part of "t"
-    except (OSError, UnicodeDecodeError) as exc:
-        raise RecordingError(path, None, f"cannot read: {exc}") from None
+        st = os.stat(path)
+    except OSError as exc:
+        raise RecordingError(path, None, f"cannot read: {exc.strerror or exc}") from None
+    if not stat.S_ISREG(st.st_mode):
+        kind = "a directory" if stat.S_ISDIR(st.st_mode) else "not a regular file (a pipe or a device?)"
+        raise RecordingError(path, None, f"cannot read: {kind}")
+    if st.st_size > MAX_RECORDING_BYTES:
+        raise RecordingError(path, None, f"{st.st_size / 2**20:.0f} MiB is over the {MAX_RECORDING_BYTES // 2**20} MiB "
+                                         "limit for a recording: split it into shorter files")
+    try:
+        # a spreadsheet's BOM is not part of "t"; newline="" lets csv see quoted line breaks
+        return open(path, encoding="utf-8-sig", newline="")
+    except OSError as exc:
+        raise RecordingError(path, None, f"cannot read: {exc.strerror or exc}") from None
+
+
+def read_recording(path: str | os.PathLike) -> Recording:
+    """Read a recording CSV. Raises RecordingError (file and line) on anything malformed.
+
+    Streams the file: rows are converted to numbers CHUNK_ROWS at a time, so memory is the
+    numbers' own (about 60 bytes a row for two hands), not the text's many times over."""
+    path = Path(path)
+    with _open_regular(path) as f:
+        try:
+            return _read_rows(path, f, _count_lines(path))
+        except UnicodeDecodeError as exc:
+            raise RecordingError(path, None, f"cannot read: not UTF-8 text ({exc.reason})") from None
+        except csv.Error as exc:  # a field over csv's 128 KiB limit, a NUL byte, ...
+            raise RecordingError(path, None, f"not a CSV recording ({exc})") from None
+
+
+def _count_lines(path: Path) -> int:
+    """Lines in the file (an upper bound on its rows), counted in binary blocks: the numbers
+    then go straight into one array of that size instead of chunks joined at the end."""
+    n = 1
+    with open(path, "rb") as fb:
+        while block := fb.read(1 << 20):
+            n += block.count(b"\n") + block.count(b"\r")
+    return n
+
+
+def _read_rows(path: Path, f: io.TextIOBase, max_rows: int) -> Recording:
     meta: dict[str, str] = {}
-    lines = text.splitlines()
     lineno = 0
-    while lineno < len(lines) and (lines[lineno].startswith("#") or not lines[lineno].strip()):
-        body = lines[lineno][1:].strip()
-        if ":" in body:
-            key, value = body.split(":", 1)
-            meta[key.strip()] = value.strip()
+    while True:
+        line = f.readline(MAX_LINE_CHARS + 1)
+        if len(line) > MAX_LINE_CHARS:
+            raise RecordingError(path, lineno + 1, f"a line over {MAX_LINE_CHARS} characters")
+        if not line:
+            raise RecordingError(path, None, "no header line (expected t,rx,ry,rz,...)")
         lineno += 1
-    if lineno >= len(lines):
-        raise RecordingError(path, None, "no header line (expected t,rx,ry,rz,...)")
-    header = [h.strip() for h in next(csv.reader([lines[lineno]]))]
-    header_line = lineno + 1
+        if line.startswith("#") or not line.strip():
+            body = line[1:].strip()
+            if ":" in body:
+                key, value = body.split(":", 1)
+                meta[key.strip()] = value.strip()
+            continue
+        break
+    header = [h.strip() for h in next(csv.reader([line]))]
+    header_line = lineno
     missing = [c for c in ("t", "rx", "ry", "rz") if c not in header]
     if missing:
         raise RecordingError(path, header_line, f"missing column(s) {', '.join(missing)}")
@@ -92,37 +143,75 @@ def read_recording(path: str | os.PathLike) -> Recording:
     numeric = [header.index(c) for c in _header_columns(sensors)]
     label_col = header.index("label") if "label" in header else None
 
-    fields: list[list[str]] = []  # the numeric fields of each data row, as text
-    linenos: list[int] = []
+    values = np.empty((max_rows, len(numeric)), dtype=np.float64)
+    lines = np.empty(max_rows, dtype=np.int32)  # each row's line in the file, for messages
+    n = 0
     labels: list[str] = []
+    seen_labels: dict[str, str] = {}  # one str object per distinct label, not one per row
+    fields: list[list[str]] = []  # the numeric fields of the rows not yet converted, as text
+    linenos: list[int] = []
     need = max(numeric) + 1
-    for i, row in enumerate(csv.reader(lines[lineno + 1 :])):
+    reader = csv.reader(f)
+    for row in reader:
+        line_at = header_line + reader.line_num
         if not row or (len(row) == 1 and not row[0].strip()):
             continue
         if len(row) < need:
-            raise RecordingError(path, header_line + 1 + i, f"{len(row)} fields, header has {len(header)}")
+            raise RecordingError(path, line_at, f"{len(row)} fields, header has {len(header)}")
         fields.append([row[j] for j in numeric])
-        linenos.append(header_line + 1 + i)
-        labels.append(row[label_col].strip() if label_col is not None and label_col < len(row) else "")
-    if not fields:
+        linenos.append(line_at)
+        label = row[label_col].strip() if label_col is not None and label_col < len(row) else ""
+        labels.append(seen_labels.setdefault(label, label))
+        if len(fields) >= CHUNK_ROWS:
+            n = _store(path, fields, linenos, values, lines, n)
+            fields, linenos = [], []
+    if fields:
+        n = _store(path, fields, linenos, values, lines, n)
+    if not n:
         raise RecordingError(path, None, "no samples")
+    values = values[:n]
+    _check_times(path, values[:, 0], lines[:n])
+    return Recording(values[:, 0], values[:, 1:].reshape(n, sensors, 3), labels, meta)
+
+
+def _store(path: Path, fields: list[list[str]], linenos: list[int], values: np.ndarray, lines: np.ndarray, n: int) -> int:
+    k = len(fields)
+    values[n : n + k] = _numbers(path, fields, linenos)
+    lines[n : n + k] = linenos
+    return n + k
+
+
+def _numbers(path: Path, fields: list[list[str]], linenos: list[int]) -> np.ndarray:
+    """One C-level conversion of a chunk of rows; on failure, the culprit for the message."""
     try:
-        values = np.array(fields, dtype=np.float64)  # one C-level conversion for the whole file
+        values = np.array(fields, dtype=np.float64)
     except ValueError:
-        for line, row in zip(linenos, fields, strict=True):  # find the culprit for the message
+        for line, row in zip(linenos, fields, strict=True):
             bad = next((f for f in row if not _is_float(f)), None)
             if bad is not None:
-                raise RecordingError(path, line, f"not a number: {bad!r}") from None
+                raise RecordingError(path, line, f"not a number: {bad[:40]!r}") from None
         raise RecordingError(path, None, "numbers that cannot be parsed") from None
     finite = np.isfinite(values).all(axis=1)
     if not finite.all():
         raise RecordingError(path, linenos[int(np.argmin(finite))], "not a finite number")
-    back = np.flatnonzero(np.diff(values[:, 0]) < 0)
+    return values
+
+
+def _check_times(path: Path, t: np.ndarray, lines: np.ndarray) -> None:
+    """Time must increase and stay within what the 60 Hz resampler can be asked for: two rows
+    at t = 0 and t = 1e7 would otherwise ask for 6e8 frames (13.8 GB)."""
+    step = np.diff(t)
+    back = np.flatnonzero(step < 0)
     if len(back):
         k = int(back[0]) + 1
-        raise RecordingError(path, linenos[k], f"time goes backwards ({values[k, 0]} after {values[k - 1, 0]})")
-    n = len(values)
-    return Recording(values[:, 0], values[:, 1:].reshape(n, sensors, 3), labels, meta)
+        raise RecordingError(path, int(lines[k]), f"time goes backwards ({t[k]} after {t[k - 1]})")
+    if len(t) > 1 and t[-1] == t[0]:
+        raise RecordingError(path, None, f"every sample has the same time t = {t[0]}")
+    if t[-1] - t[0] > MAX_DURATION_S:
+        raise RecordingError(path, None, f"lasts {t[-1] - t[0]:.6g} s, over the {MAX_DURATION_S / 3600:g} h limit for a recording")
+    if len(step) and step.max() > MAX_GAP_S:
+        k = int(np.argmax(step)) + 1
+        raise RecordingError(path, int(lines[k]), f"a gap of {step[k - 1]:.6g} s since the sample before (at most {MAX_GAP_S:g} s)")
 
 
 def _is_float(s: str) -> bool:

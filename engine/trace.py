@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import json
 import os
+import stat
 from pathlib import Path
 
 import numpy as np
@@ -105,11 +106,69 @@ def write_chrome_trace(budget: FrameBudget, path: str | os.PathLike) -> None:
     Path(path).write_text(json.dumps(chrome_trace(budget)), encoding="utf-8")
 
 
+MAX_TRACE_BYTES = 256 * 2**20  # over an hour of play; parsed JSON takes ~10x its text
+_MAX_COUNT = 10**9  # steps or dropped steps in one frame: anything above is not a count
+_FRAME_ARGS_NUMBERS = ("wait_us", "unaccounted_us")
+_FRAME_ARGS_COUNTS = ("steps", "dropped")
+
+
+def _number(x: object) -> bool:
+    """A finite JSON number (bools are not numbers here)."""
+    return isinstance(x, (int, float)) and not isinstance(x, bool) and bool(np.isfinite(x))
+
+
+def _bad_event(ev: object) -> str | None:
+    """Why one trace event cannot be summarized, or None. Checks every field `quickjab
+    profile` reads, so that the summary never meets a wrong type."""
+    if not isinstance(ev, dict) or not isinstance(ev.get("ph"), str) or not isinstance(ev.get("name"), str):
+        return "has no string 'ph' and 'name'"
+    args = ev.get("args")
+    if args is not None and not isinstance(args, dict):
+        return "has args that are not an object"
+    if ev["ph"] != "X":
+        return None
+    ts, dur = ev.get("ts"), ev.get("dur")
+    if not (_number(ts) and _number(dur) and dur >= 0 and abs(ts) < 1e15 and dur < 1e15):
+        return f"({ev['name']!r}) needs finite numeric ts and dur >= 0"
+    args = args or {}
+    if "depth" in args and not (_number(args["depth"]) and args["depth"] >= 0):
+        return f"({ev['name']!r}) has a depth that is not a count"
+    if ev["name"] == "frame":
+        for k in _FRAME_ARGS_NUMBERS:
+            if k in args and not (_number(args[k]) and 0 <= args[k] < 1e15):
+                return f"(frame) has args.{k} that is not a time"
+        for k in _FRAME_ARGS_COUNTS:
+            if k in args and not (_number(args[k]) and 0 <= args[k] <= _MAX_COUNT):
+                return f"(frame) has args.{k} that is not a count"
+    return None
+
+
+def _bad_other(other: object) -> str | None:
+    """Why otherData cannot be used (budgets must be positive finite numbers), or None."""
+    if not isinstance(other, dict):
+        return "otherData is not an object"
+    for k in ("frame_budget_ms", "frame_period_ms"):
+        if other.get(k) is not None and not (_number(other[k]) and other[k] > 0):
+            return f"otherData.{k} is not a positive number of milliseconds"
+    stages = other.get("stages")
+    if stages is not None and not isinstance(stages, dict):
+        return "otherData.stages is not an object"
+    for name, v in (stages or {}).items():
+        if isinstance(v, dict) and v.get("budget_ms") is not None and not (_number(v["budget_ms"]) and v["budget_ms"] >= 0):
+            return f"otherData.stages[{name!r}].budget_ms is not a number of milliseconds"
+    return None
+
+
 def read_chrome_trace(path: str | os.PathLike) -> dict:
-    """Load a trace (object or bare-array form) and check the keys the profile relies on.
+    """Load a trace (object or bare-array form) and check every field the profile relies on.
     Raises TraceError naming the file on anything else."""
     path = Path(path)
     try:
+        st = os.stat(path)
+        if not stat.S_ISREG(st.st_mode):
+            raise TraceError(f"{path}: cannot read: not a regular file")
+        if st.st_size > MAX_TRACE_BYTES:
+            raise TraceError(f"{path}: {st.st_size / 2**20:.0f} MiB is over the {MAX_TRACE_BYTES // 2**20} MiB limit for a trace")
         data = json.loads(path.read_text(encoding="utf-8"))
     except FileNotFoundError:
         raise TraceError(f"{path}: no such file") from None
@@ -117,18 +176,23 @@ def read_chrome_trace(path: str | os.PathLike) -> dict:
         raise TraceError(f"{path}: cannot read: {exc}") from None
     except json.JSONDecodeError as exc:
         raise TraceError(f"{path}: not JSON (line {exc.lineno}: {exc.msg})") from None
+    except RecursionError:
+        raise TraceError(f"{path}: not a Chrome trace (nested too deeply)") from None
+    except ValueError as exc:  # e.g. an integer of more than 4300 digits
+        raise TraceError(f"{path}: not JSON ({exc})") from None
     if isinstance(data, list):
         data = {"traceEvents": data}
     if not isinstance(data, dict) or not isinstance(data.get("traceEvents"), list):
         raise TraceError(f"{path}: not a Chrome trace (no traceEvents list)")
     for i, ev in enumerate(data["traceEvents"]):
-        if not isinstance(ev, dict) or "ph" not in ev or "name" not in ev:
-            raise TraceError(f"{path}: event {i} has no 'ph' or 'name'")
-        if ev["ph"] == "X":
-            ts, dur = ev.get("ts"), ev.get("dur")
-            if not isinstance(ts, (int, float)) or not isinstance(dur, (int, float)) or dur < 0:
-                raise TraceError(f"{path}: event {i} ({ev['name']!r}) needs numeric ts and dur >= 0")
+        why = _bad_event(ev)
+        if why:
+            raise TraceError(f"{path}: event {i} {why}")
     if not any(ev["ph"] == "X" and ev["name"] == "frame" for ev in data["traceEvents"]):
         raise TraceError(f"{path}: no 'frame' events (not written by a QuickJab loop?)")
-    data.setdefault("otherData", {})
+    if data.get("otherData") is None:
+        data["otherData"] = {}
+    why = _bad_other(data["otherData"])
+    if why:
+        raise TraceError(f"{path}: {why}")
     return data

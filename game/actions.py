@@ -14,6 +14,8 @@ kinematics along the interpolated bone directions), so limbs never stretch.
 from __future__ import annotations
 
 import json
+import os
+import stat
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
@@ -30,6 +32,8 @@ ACTION_NAMES: tuple[str, ...] = (
 
 KINDS = ("attack", "defense", "step", "reaction", "idle")
 FPS = 60
+MAX_FRAMES = 3600  # one minute: the longest shipped action is under 2 s
+MAX_FILE_BYTES = 16 * 2**20  # an action file is ~10 KB
 
 # Hit reactions: hit_<where>_<side>_<strength>; side is where the blow comes FROM as seen by
 # the boxer who is hit (a right hook from the opponent lands on the left: "left").
@@ -206,6 +210,8 @@ def action_from_json(data: dict, source: str = "") -> Action:
         key_poses = np.array([k["pose"] for k in keys], dtype=np.float64)
         if key_poses.shape[1:] != (len(JOINTS), 3) or not np.all(np.isfinite(key_poses)):
             raise ActionError(f"{where}: every keyframe pose must be {len(JOINTS)} finite [x, y, z]")
+        if frames > MAX_FRAMES:
+            raise ActionError(f"{where}: {frames} frames, at most {MAX_FRAMES}")
         if frames < 2 or key_frames[0] != 0 or key_frames[-1] != frames - 1 or np.any(np.diff(key_frames) <= 0):
             raise ActionError(f"{where}: keyframes must increase from frame 0 to frames-1 ({frames - 1})")
         root = np.array(data.get("root", []), dtype=np.float64).reshape(-1, 4)
@@ -218,6 +224,8 @@ def action_from_json(data: dict, source: str = "") -> Action:
             GuardWindow(int(g["start"]), int(g["end"]), tuple(g["covers"]), g["kind"])
             for g in data.get("guards", [])
         ]
+        if not (np.isfinite(root).all() and all(np.isfinite([w.damage, w.reach]).all() for w in attacks)):
+            raise ActionError(f"{where}: root keys, damage and reach must be finite numbers")
         for w in attacks:
             if w.hand not in ("l", "r") or not 0 <= w.start <= w.end < frames:
                 raise ActionError(f"{where}: bad attack window {w}")
@@ -236,9 +244,12 @@ def action_from_json(data: dict, source: str = "") -> Action:
 def load_action(path: str | Path) -> Action:
     path = Path(path)
     try:
+        st = os.stat(path)
+        if not stat.S_ISREG(st.st_mode) or st.st_size > MAX_FILE_BYTES:
+            raise ActionError(f"{path}: cannot read action (not a regular file of at most {MAX_FILE_BYTES // 2**20} MiB)")
         data = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise ActionError(f"{path}: cannot read action ({exc})") from None
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError, RecursionError, ValueError) as exc:
+        raise ActionError(f"{path}: cannot read action ({type(exc).__name__}: {exc})") from None
     return action_from_json(data, str(path))
 
 

@@ -19,6 +19,7 @@ back.
 from __future__ import annotations
 
 import os
+import stat
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -36,6 +37,13 @@ from game.skeleton import (
     local_to_world,
     world_to_local,
 )
+
+# What a BVH file may hold; beyond these it is refused with a message, not resampled into
+# gigabytes or exported as NaN poses.
+MAX_FILE_BYTES = 256 * 2**20
+MIN_FRAME_TIME, MAX_FRAME_TIME = 1e-4, 1.0  # 10 kHz to 1 Hz
+MAX_DURATION_S = 4 * 3600.0
+MAX_VALUE = 1e6  # |channel or offset value|: centimetres or degrees
 
 
 class BVHError(InputError):
@@ -79,6 +87,11 @@ class BVH:
 def read_bvh(path: str | os.PathLike) -> BVH:
     path = Path(path)
     try:
+        st = os.stat(path)
+        if not stat.S_ISREG(st.st_mode):
+            raise BVHError(f"{path}: cannot read (not a regular file)")
+        if st.st_size > MAX_FILE_BYTES:
+            raise BVHError(f"{path}: {st.st_size / 2**20:.0f} MiB is over the {MAX_FILE_BYTES // 2**20} MiB limit for a BVH file")
         text = path.read_text(encoding="utf-8", errors="replace")
     except OSError as exc:
         raise BVHError(f"{path}: cannot read ({exc})") from None
@@ -165,15 +178,24 @@ def parse_bvh(text: str, name: str = "<bvh>") -> BVH:
     frames = frame_time = None
     while i < len(lines) and (frames is None or frame_time is None):
         t = lines[i].strip()
-        if t.lower().startswith("frames:"):
-            frames = int(t.split(":", 1)[1])
-        elif t.lower().startswith("frame time:"):
-            frame_time = float(t.split(":", 1)[1])
-        elif t:
-            raise BVHError(f"{name}:{i + 1}: expected 'Frames:' and 'Frame Time:'")
+        try:
+            if t.lower().startswith("frames:"):
+                frames = int(t.split(":", 1)[1])
+            elif t.lower().startswith("frame time:"):
+                frame_time = float(t.split(":", 1)[1])
+            elif t:
+                raise BVHError(f"{name}:{i + 1}: expected 'Frames:' and 'Frame Time:'")
+        except ValueError:
+            raise BVHError(f"{name}:{i + 1}: {t[:40]!r} is not a number") from None
         i += 1
-    if frames is None or frame_time is None or frame_time <= 0:
-        raise BVHError(f"{name}: missing or bad 'Frames:'/'Frame Time:'")
+    if frames is None or frame_time is None:
+        raise BVHError(f"{name}: missing 'Frames:'/'Frame Time:'")
+    if frames < 1:
+        raise BVHError(f"{name}: 'Frames: {frames}' (at least 1)")
+    if not MIN_FRAME_TIME <= frame_time <= MAX_FRAME_TIME:  # also refuses nan
+        raise BVHError(f"{name}: 'Frame Time: {frame_time}' (from {MIN_FRAME_TIME} to {MAX_FRAME_TIME} s)")
+    if frames * frame_time > MAX_DURATION_S:
+        raise BVHError(f"{name}: {frames * frame_time:.6g} s of motion, over the {MAX_DURATION_S / 3600:g} h limit")
     total = sum(len(j.channels) for j in joints)
     rows = [ln for ln in lines[i:] if ln.strip()]
     if len(rows) < frames:
@@ -184,6 +206,12 @@ def parse_bvh(text: str, name: str = "<bvh>") -> BVH:
         raise BVHError(f"{name}: a motion line is not numbers") from None
     if motion.ndim != 2 or motion.shape[1] != total:
         raise BVHError(f"{name}: motion lines need {total} values each")
+    if not (np.abs(motion) <= MAX_VALUE).all():  # also refuses nan
+        row = int(np.argmin((np.abs(motion) <= MAX_VALUE).all(axis=1)))
+        raise BVHError(f"{name}: motion frame {row} has a value that is not a finite number up to {MAX_VALUE:g}")
+    if not all((np.abs(j.offset) <= MAX_VALUE).all() and (j.end_site is None or (np.abs(j.end_site) <= MAX_VALUE).all())
+               for j in joints):
+        raise BVHError(f"{name}: an OFFSET that is not a finite number up to {MAX_VALUE:g}")
     return BVH(joints, motion.reshape(frames, total), frame_time, name)
 
 
@@ -312,6 +340,8 @@ def retarget(bvh: BVH, table: dict[str, tuple[str, ...]] = NAME_TABLE) -> Retarg
         np.linalg.norm(pos[:, joint_index("hip_l")] - pos[:, joint_index("knee_l")], axis=-1)
         + np.linalg.norm(pos[:, joint_index("knee_l")] - pos[:, joint_index("ankle_l")], axis=-1)
     )
+    if not theirs > 1e-9 or not np.isfinite(theirs):
+        raise BVHError(f"{bvh.path}: the legs have no length (every OFFSET zero?)")
     pos = pos * (ours / theirs)
     # resample to 60 Hz
     src_t = np.arange(bvh.frames) * bvh.frame_time
@@ -324,6 +354,8 @@ def retarget(bvh: BVH, table: dict[str, tuple[str, ...]] = NAME_TABLE) -> Retarg
     # ankle joints sit ~8 cm up: put the lower foot of the first frame there
     lift = 0.08 - local[0, [joint_index("ankle_l"), joint_index("ankle_r")], 1].min()
     local[..., 1] += lift
+    if not (np.isfinite(local).all() and np.isfinite(roots).all()):
+        raise BVHError(f"{bvh.path}: retargeting gives non-finite positions (a degenerate skeleton?)")
     return Retargeted(impose_bone_lengths(local), roots, source)
 
 

@@ -25,6 +25,7 @@ from engine.sensors.source import (
     SourceState,
     parse_source_url,
     register_scheme,
+    url_number,
 )
 
 HZ = 60
@@ -149,10 +150,7 @@ def open_keyboard(url: str, clock: Clock) -> KeyboardSource:
 
     _, _, params = parse_source_url(url)
     profile = params.get("profile", "experienced")
-    try:
-        seed = int(params.get("seed", "0"))
-    except ValueError:
-        raise SourceError(f"{url}: seed must be an integer") from None
+    seed = int(url_number(url, params, "seed", 0, 0, 2**63 - 1, integer=True))
     from game.virtual_player import PROFILES
 
     if profile not in PROFILES:

@@ -16,6 +16,7 @@ import argparse
 import os
 import sys
 
+from engine import arguments
 from engine.errors import InputError
 
 DEFAULT_SOURCE = "wiimote://"
@@ -28,11 +29,9 @@ INVISIBLE_DRIVERS = ("offscreen", "dummy")  # SDL video drivers that open no win
 
 def parse_size(text: str) -> tuple[int, int]:
     try:
-        w, h = (int(v) for v in text.lower().split("x"))
-    except ValueError:
-        raise InputError(f"--size {text!r}: expected WIDTHxHEIGHT, e.g. 1280x720") from None
-    if w < 160 or h < 120:
-        raise InputError(f"--size {text!r}: at least 160x120")
+        w, h = (int(v) for v in arguments.window_size(text).lower().split("x"))
+    except argparse.ArgumentTypeError as exc:  # one line naming --size, as before
+        raise InputError(f"--size {text!r}: {exc}") from None
     return w, h
 
 
@@ -42,12 +41,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--source", default=None, help=f"source URL (default: {DEFAULT_SOURCE}, else {KEYBOARD_SOURCE})")
     p.add_argument("--demo", action="store_true", help="attract mode: a synthesized session from the virtual player")
     p.add_argument("--headless", action="store_true", help="no window: SDL dummy driver and a virtual clock (reproducible)")
-    p.add_argument("--frames", type=int, default=None,
+    p.add_argument("--frames", type=arguments.positive_int, default=None,
                    help=f"stop after N rendered frames (default: until the window closes; {HEADLESS_FRAMES} with --headless)")
     p.add_argument("--screenshot", metavar="PNG", help="save the last frame to this PNG")
     p.add_argument("--trace", metavar="JSON", help="write the loop's Chrome trace here on exit")
     p.add_argument("--virtual-clock", action="store_true", help="a virtual clock in a real window: the same frames as --headless (tests)")
-    p.add_argument("--seed", type=int, default=0, help="seed for the virtual player and anything random (default 0)")
+    p.add_argument("--seed", type=arguments.seed, default=0, help="seed for the virtual player and anything random (default 0)")
     p.add_argument("--size", default="1280x720", help="window size WxH (default 1280x720)")
     p.add_argument("--fullscreen", action="store_true", help="start fullscreen (F11 toggles)")
     p.add_argument("--low-power", action="store_true", help="render at 30 Hz on a half-size surface, flat shading, no antialiasing, fewer solver iterations (docs/performance.md)")

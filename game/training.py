@@ -25,6 +25,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from engine import arguments
 from engine.errors import InputError
 
 if TYPE_CHECKING:  # pygame loads only when the screen opens (the CLI imports this module)
@@ -305,9 +306,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("-o", "--output", default=None, help="where to save the templates (default: your data directory)")
     p.add_argument("--profile", default=None, metavar="NAME", help="save as this player's templates (`play --profile NAME`; default: your default set)")
     p.add_argument("--headless", action="store_true", help="no window: SDL dummy driver, virtual clock")
-    p.add_argument("--frames", type=int, default=None, help="stop after N rendered frames")
+    p.add_argument("--frames", type=arguments.positive_int, default=None, help="stop after N rendered frames")
     p.add_argument("--screenshot", metavar="PNG", help="save the last frame to this PNG")
-    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--seed", type=arguments.seed, default=0)
     p.add_argument("--size", default="1280x720", help="window size WxH (default 1280x720)")
     p.set_defaults(func=run)
 

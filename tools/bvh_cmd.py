@@ -16,6 +16,7 @@ import argparse
 import json
 from pathlib import Path
 
+from engine import arguments
 from engine.errors import InputError
 from game.actions import KINDS, load_library
 from game.bvh import (
@@ -38,8 +39,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     info.set_defaults(func=run_info)
     cut = cmds.add_parser("cut", help="retarget a BVH and cut an action from a frame range")
     cut.add_argument("file")
-    cut.add_argument("--start", type=int, required=True, help="first frame (60 Hz, after resampling)")
-    cut.add_argument("--end", type=int, required=True, help="last frame (inclusive)")
+    cut.add_argument("--start", type=arguments.non_negative_int, required=True, help="first frame (60 Hz, after resampling)")
+    cut.add_argument("--end", type=arguments.non_negative_int, required=True, help="last frame (inclusive)")
     cut.add_argument("--name", required=True, help="action name")
     cut.add_argument("--kind", default="attack", choices=KINDS)
     cut.add_argument("--no-guard-blend", action="store_true", help="do not blend the ends into the guard")
@@ -49,7 +50,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     exp.add_argument("--play", required=True, help="comma-separated action names, played in order")
     exp.add_argument("--opponent", default=None,
                      help="actions of a second boxer: simulate both in the physics world (a bout)")
-    exp.add_argument("--gap", type=float, default=0.85, help="distance between the boxers in a bout (m)")
+    exp.add_argument("--gap", type=arguments.float_range(0.0, 100.0, lo_open=True), default=0.85, help="distance between the boxers in a bout (m)")
     exp.add_argument("-o", "--output", required=True, help="BVH file to write")
     exp.set_defaults(func=run_export)
 

@@ -7,6 +7,7 @@ import json
 import time
 from pathlib import Path
 
+from engine import arguments
 from engine.errors import InputError
 
 
@@ -28,10 +29,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                         description="Sample bouts in the bout model, merge states, expand every "
                         "action from every state, solve by value iteration, save the .npz.")
     b.add_argument("-o", "--output", required=True, help="where to write the .npz")
-    b.add_argument("--seed", type=int, default=0, help="random seed (the build is deterministic for it)")
-    b.add_argument("--states", type=int, default=60000, help="states to keep (most visited cells)")
-    b.add_argument("--bouts", type=int, default=None, help="sampling bouts run at once")
-    b.add_argument("--opponent-max", type=float, default=None,
+    b.add_argument("--seed", type=arguments.seed, default=0, help="random seed (the build is deterministic for it)")
+    b.add_argument("--states", type=arguments.int_range(10, 1_000_000), default=60000, help="states to keep (most visited cells)")
+    b.add_argument("--bouts", type=arguments.int_range(1, 65_536), default=None, help="sampling bouts run at once")
+    b.add_argument("--opponent-max", type=arguments.positive_float, default=None,
                    help="1 = min-max (opponent's best response), 0 = its expectation; blends between")
     b.add_argument("--quiet", action="store_true", help="no progress lines")
     b.set_defaults(func=cmd_build)
@@ -49,17 +50,17 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "--difficulty against the virtual player through the real recognizer; print the "
                         "player's round win rate and rounds per match (tools/virtual_duel.py).")
     d.add_argument("--graph", default=None, help="the .npz (default: the shipped graph)")
-    d.add_argument("--bouts", type=int, default=200, help="bouts per opponent")
+    d.add_argument("--bouts", type=arguments.int_range(1, 1_000_000), default=200, help="bouts per opponent")
     d.add_argument("--opponent", choices=["random", "greedy", "both", "virtual", "experienced", "novice"], default="both",
                    help="bout-model policies (random, greedy, both), or the virtual player in the game (virtual: experienced and novice)")
     d.add_argument("--difficulty", default="easy,normal,hard",
                    help="with a virtual opponent: comma-separated difficulties (easy, normal, hard, adaptive; default easy,normal,hard)")
-    d.add_argument("--matches", type=int, default=3, help="with a virtual opponent: matches per difficulty and player (default 3)")
-    d.add_argument("--jobs", type=int, default=2, help="with a virtual opponent: processes (default 2)")
+    d.add_argument("--matches", type=arguments.int_range(1, 1000), default=3, help="with a virtual opponent: matches per difficulty and player (default 3)")
+    d.add_argument("--jobs", type=arguments.int_range(1, 64), default=2, help="with a virtual opponent: processes (default 2)")
     d.add_argument("--player", choices=["graph", "random", "greedy"], default="graph",
                    help="who plays boxer 0 (a baseline other than the graph, for comparison)")
-    d.add_argument("--seconds", type=float, default=60.0, help="bout length (ends earlier by knockout)")
-    d.add_argument("--seed", type=int, default=1)
+    d.add_argument("--seconds", type=arguments.float_range(0.0, 3600.0, lo_open=True), default=60.0, help="bout length (ends earlier by knockout)")
+    d.add_argument("--seed", type=arguments.seed, default=1)
     d.add_argument("--json", action="store_true", help="machine-readable output")
     d.set_defaults(func=cmd_duel)
 

@@ -8,6 +8,7 @@ import json
 import sys
 from pathlib import Path
 
+from engine import arguments
 from engine.errors import InputError
 from engine.frames import recording_frames
 from engine.recognition import DualBufferRecognizer, Templates
@@ -15,6 +16,10 @@ from engine.recognition.templates import FEATURES, METHODS
 from engine.recording import read_recording
 from tools import evaluate_recognition as ev
 from tools.trial_files import load_trials_dir
+
+MAX_BUFFER = 6000  # frames (100 s at 60 Hz): any recognizer buffer or count of frames
+MAX_FOLDS = 50  # contiguous folds of one labelled stream; each needs intervals to learn from
+MAX_MAINS = 120  # main-buffer sizes in one sweep
 
 
 def _main_arg(text: str) -> int | str:
@@ -24,8 +29,8 @@ def _main_arg(text: str) -> int | str:
         v = int(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected a positive int or 'auto', not {text!r}") from None
-    if v < 1:
-        raise argparse.ArgumentTypeError("main must be >= 1")
+    if not 1 <= v <= MAX_BUFFER:
+        raise argparse.ArgumentTypeError(f"main must be between 1 and {MAX_BUFFER}, not {v}")
     return v
 
 
@@ -36,8 +41,8 @@ def _noise_arg(text: str) -> float | str:
         v = float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected a number of g or 'auto', not {text!r}") from None
-    if not v >= 0:
-        raise argparse.ArgumentTypeError("the noise gate must be >= 0 g")
+    if not 0 <= v <= 100:
+        raise argparse.ArgumentTypeError(f"the noise gate must be between 0 and 100 g, not {text}")
     return v
 
 
@@ -45,22 +50,33 @@ def _mains(text: str) -> list[int | str]:
     out: list[int | str] = []
     for part in text.split(","):
         if "-" in part:
-            a, b = part.split("-", 1)
+            a, b = (_main_arg(x) for x in part.split("-", 1))
+            if a == "auto" or b == "auto" or b < a:  # type: ignore[operator]
+                raise argparse.ArgumentTypeError(f"expected a range like 1-12, not {part!r}")
             out += list(range(int(a), int(b) + 1))
         else:
             out.append(_main_arg(part))
+        if len(out) > MAX_MAINS:
+            raise argparse.ArgumentTypeError(f"at most {MAX_MAINS} sizes in one sweep")
     return out
+
+
+def _users(text: str) -> str:
+    """uWave users as `1-6` or `1,3`: checked here, expanded by _mains when the command runs."""
+    if "auto" in _mains(text):
+        raise argparse.ArgumentTypeError(f"expected user numbers such as 1-6 or 1,3, not {text!r}")
+    return text
 
 
 def _recognizer_args(p: argparse.ArgumentParser, main_default: str = "6") -> None:
     g = p.add_argument_group("recognizer")
     g.add_argument("--noise-g", type=_noise_arg, default="auto",
                    help="noise gate in g, or 'auto' (default): learned from the sensor's resting noise")
-    g.add_argument("--supplementary", type=int, default=60, help="supplementary buffer in frames (default 60)")
-    g.add_argument("--null-frames", type=int, default=6, help="quiet frames that end a motion (default 6)")
-    g.add_argument("--discard-frames", type=int, default=20, help="frames discarded after the character finishes (default 20)")
+    g.add_argument("--supplementary", type=arguments.int_range(1, MAX_BUFFER), default=60, help="supplementary buffer in frames (default 60)")
+    g.add_argument("--null-frames", type=arguments.int_range(1, MAX_BUFFER), default=6, help="quiet frames that end a motion (default 6)")
+    g.add_argument("--discard-frames", type=arguments.int_range(0, MAX_BUFFER), default=20, help="frames discarded after the character finishes (default 20)")
     g.add_argument("--no-reject", action="store_true", help="never reject (ignore the learned thresholds)")
-    g.add_argument("--complete", type=float, default=0.9, metavar="F",
+    g.add_argument("--complete", type=arguments.float_range(0.0, 1.0), default=0.9, metavar="F",
                    help="also end a motion once its template is matched past this fraction and the hand "
                         "calms down: splits back-to-back punches (default 0.9; 0 = the paper's null signal only)")
 
@@ -113,22 +129,22 @@ def register(sub: argparse._SubParsersAction) -> None:
     e.add_argument("--templates", default=None, metavar="T.npz")
     e.add_argument("--train", default=None, metavar="TRIALS_DIR", help="build templates from these trials")
     e.add_argument("--uwave", default=None, metavar="DIR", help="the uWave protocol on DIR/U<n>/gesture<k>/d<day>-r<rep>.csv")
-    e.add_argument("--users", default="1-6", help="uWave users (default 1-6)")
+    e.add_argument("--users", type=_users, default="1-6", help="uWave users (default 1-6)")
     e.add_argument("--fresh", action="store_true",
                    help="trials: a fresh recognizer for every trial (forget the adaptation); default: one player's session")
     e.add_argument("--phone-punches", default=None, metavar="DIR",
                    help="cross-session: DIR/<hand>_<punch>_<fast|slow>.csv; per hand, templates from the first "
                         "--trials punches of each kind in one set, tested on every punch of the other set")
-    e.add_argument("--trials", type=int, default=3, help="--phone-punches: training trials per punch (default 3)")
-    e.add_argument("--keep", type=int, default=None,
+    e.add_argument("--trials", type=arguments.int_range(1, 1000), default=3, help="--phone-punches: training trials per punch (default 3)")
+    e.add_argument("--keep", type=arguments.int_range(1, 1000), default=None,
                    help="templates: keep each action's KEEP most representative trials (e.g. --trials 5 --keep 3)")
-    e.add_argument("--every", type=int, default=1, help="use every k-th test trial (quicker sweeps)")
-    e.add_argument("--folds", type=int, default=2, help="labelled CSV without templates: K contiguous folds (default 2)")
+    e.add_argument("--every", type=arguments.int_range(1, 1_000_000), default=1, help="use every k-th test trial (quicker sweeps)")
+    e.add_argument("--folds", type=arguments.int_range(2, MAX_FOLDS), default=2, help="labelled CSV without templates: K contiguous folds (default 2)")
     e.add_argument("--mains", type=_mains, default=_mains("1-12"), help="main-buffer sizes (default 1-12; e.g. 6 or 1-12,auto)")
     e.add_argument("--method", choices=METHODS, default=None, help="template method when building")
     e.add_argument("--feature", choices=FEATURES, default=None, help="template feature when building (default log)")
     e.add_argument("--plot", default=None, metavar="PNG", help="draw Figs. 8-9 style bars")
-    e.add_argument("--clip-frames", type=int, default=ev.CLIP_FRAMES,
+    e.add_argument("--clip-frames", type=arguments.int_range(0, MAX_BUFFER), default=ev.CLIP_FRAMES,
                    help=f"streams: the simulated character's clip length, then character_finished() (default {ev.CLIP_FRAMES}; 0 = never)")
     e.add_argument("--json", action="store_true", help="print the rows as JSON lines instead of a table")
     _recognizer_args(e)

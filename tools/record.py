@@ -8,6 +8,7 @@ import sys
 import time
 from pathlib import Path
 
+from engine import arguments
 from engine.errors import InputError
 from engine.recording import RecordingWriter
 from engine.sensors import SourceState, open_source
@@ -20,9 +21,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("record", help="record a source to a CSV file", description=__doc__)
     p.add_argument("--source", required=True, help="source URL: wiimote://, serial:///dev/ttyACM0, replay://f.csv, ...")
     p.add_argument("-o", "--output", required=True, help="CSV file to write")
-    p.add_argument("--seconds", type=float, default=None, help="stop after this many seconds (default: Ctrl-C)")
+    p.add_argument("--seconds", type=arguments.positive_float, default=None, help="stop after this many seconds (default: Ctrl-C)")
     p.add_argument("--label", default="", help="label every row with this action name (for trials)")
-    p.add_argument("--connect-timeout", type=float, default=CONNECT_TIMEOUT_S, metavar="S",
+    p.add_argument("--connect-timeout", type=arguments.positive_float, default=CONNECT_TIMEOUT_S, metavar="S",
                    help=f"give up with an error when the source has not connected after S seconds (default {CONNECT_TIMEOUT_S:g})")
     p.set_defaults(func=run)
 

@@ -19,6 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from engine import arguments
 from engine.clock import RealClock, VirtualClock
 from engine.errors import InputError
 from engine.loop import FixedStepLoop
@@ -327,20 +328,20 @@ def headless_env() -> None:
 
 def add_view_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--headless", action="store_true", help="no window: SDL dummy driver and a virtual clock (reproducible)")
-    p.add_argument("--frames", type=int, default=None, help="stop after N frames (default: until the window closes)")
+    p.add_argument("--frames", type=arguments.positive_int, default=None, help="stop after N frames (default: until the window closes)")
     p.add_argument("--screenshot", metavar="PNG", help="save the last frame to this PNG")
     p.add_argument("--trace", metavar="JSON", help="write the loop's Chrome trace here on exit (read it with `quickjab profile`)")
-    p.add_argument("--seconds", type=float, default=5.0, help="seconds shown across the window (default 5)")
+    p.add_argument("--seconds", type=arguments.float_range(0.0, 3600.0, lo_open=True), default=5.0, help="seconds shown across the window (default 5)")
     p.add_argument("--size", default="960x600", help="window size WxH (default 960x600)")
-    p.add_argument("--range", type=float, default=None, metavar="G",
+    p.add_argument("--range", type=arguments.float_range(0.1, 1000.0), default=None, metavar="G",
                    help="fixed scale of -G..+G g (default: 4 g, growing to 8, 16, 32 g when a signal would clip)")
 
 
 def view_from_args(args: argparse.Namespace) -> ScopeView:
     try:
-        w, h = (int(v) for v in args.size.lower().split("x"))
-    except ValueError:
-        raise InputError(f"--size {args.size!r}: expected WxH, e.g. 960x600") from None
+        w, h = (int(v) for v in arguments.window_size(args.size).lower().split("x"))
+    except argparse.ArgumentTypeError as exc:
+        raise InputError(f"--size {args.size!r}: {exc}") from None
     if w < 200 or h < 150 or not args.seconds > 0:
         raise InputError("--size must be at least 200x150 and --seconds positive")
     g_range = getattr(args, "range", None)

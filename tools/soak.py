@@ -25,6 +25,7 @@ import traceback
 from collections import Counter
 from itertools import islice
 
+from engine import arguments
 from engine.errors import InputError
 
 HZ = 60
@@ -35,14 +36,14 @@ WARMUP_SECONDS = 60.0  # caches (text, static layers, hand motions, the graph) f
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("soak", help="an hour of simulated play headless: memory, events, no exception",
                        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("--steps", type=int, default=None, help=f"60 Hz steps to play (default {HOUR_STEPS}: one hour)")
-    p.add_argument("--minutes", type=float, default=None, help="simulated minutes to play instead of --steps")
-    p.add_argument("--seed", type=int, default=0, help="seed of the scripted play (default 0)")
-    p.add_argument("--render-every", type=int, default=60, help="render one frame every N steps (default 60; 0: never)")
-    p.add_argument("--sample-seconds", type=float, default=10.0, help="simulated seconds between memory samples (default 10)")
-    p.add_argument("--warmup-seconds", type=float, default=WARMUP_SECONDS,
+    p.add_argument("--steps", type=arguments.positive_int, default=None, help=f"60 Hz steps to play (default {HOUR_STEPS}: one hour)")
+    p.add_argument("--minutes", type=arguments.positive_float, default=None, help="simulated minutes to play instead of --steps")
+    p.add_argument("--seed", type=arguments.seed, default=0, help="seed of the scripted play (default 0)")
+    p.add_argument("--render-every", type=arguments.non_negative_int, default=60, help="render one frame every N steps (default 60; 0: never)")
+    p.add_argument("--sample-seconds", type=arguments.positive_float, default=10.0, help="simulated seconds between memory samples (default 10)")
+    p.add_argument("--warmup-seconds", type=arguments.non_negative_float, default=WARMUP_SECONDS,
                    help=f"simulated seconds before the memory baseline (default {WARMUP_SECONDS:g})")
-    p.add_argument("--max-growth-mb", type=float, default=10.0, help="RSS growth after warm-up that fails the soak (default 10)")
+    p.add_argument("--max-growth-mb", type=arguments.positive_float, default=10.0, help="RSS growth after warm-up that fails the soak (default 10)")
     p.add_argument("--tracemalloc", action="store_true", help="also trace Python allocations (slower)")
     p.add_argument("--graph", metavar="NPZ", help="Interaction Graph table (default: the shipped one)")
     p.add_argument("--templates", metavar="NPZ", help="recognition templates (default: shipped, else synthesized)")

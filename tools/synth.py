@@ -16,8 +16,9 @@ from pathlib import Path
 
 import numpy as np
 
+from engine import arguments
 from engine.errors import InputError
-from engine.recording import Recording, write_recording
+from engine.recording import MAX_DURATION_S, Recording, write_recording
 from game.actions import ACTION_NAMES, Action, load_library
 from game.virtual_player import FPS, PROFILES, synthesize_action, synthesize_rest
 
@@ -123,16 +124,16 @@ def register(sub: argparse._SubParsersAction) -> None:
                        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)  # fmt: skip
     p.add_argument("--player", default="experienced", choices=sorted(PROFILES), help="player profile")
     mode = p.add_mutually_exclusive_group(required=True)
-    mode.add_argument("--trials", type=int, help="trials per action, written to DIR/<action>/<n>.csv")
-    mode.add_argument("--session", type=float, metavar="SECONDS", help="length of a continuous recording")
+    mode.add_argument("--trials", type=arguments.int_range(1, 1000), help="trials per action, written to DIR/<action>/<n>.csv")
+    mode.add_argument("--session", type=arguments.float_range(0.0, MAX_DURATION_S, lo_open=True), metavar="SECONDS", help="length of a continuous recording")
     mode.add_argument("--templates", action="store_true",
                       help="build recognition templates (-o NPZ) from 3 synthesized trials per action")
     p.add_argument("-o", "--output", required=True,
                    help="DIR for --trials, a .csv file for --session, an .npz for --templates")
-    p.add_argument("--seed", type=int, default=None,
+    p.add_argument("--seed", type=arguments.seed, default=None,
                    help=f"random seed (default 0; {DEFAULT_TEMPLATE_SEED} for --templates)")
     p.add_argument("--actions", default=None, help="comma-separated subset of actions (default: all 13)")
-    p.add_argument("--rest", type=int, default=0, help="frames of still guard before and after each trial")
+    p.add_argument("--rest", type=arguments.int_range(0, 600), default=0, help="frames of still guard before and after each trial")
     p.set_defaults(func=run)
 
 

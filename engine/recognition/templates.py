@@ -27,6 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from engine.errors import InputError
+from engine.npz_files import NpzFileError, read_npz
 from engine.recognition.dtw import IncrementalDTW, dtw_distance
 
 FORMAT_VERSION = 1
@@ -45,6 +46,7 @@ REJECT_FLOOR_G = 0.05  # and never below this (g): identical trials must not rej
 CUT_OFF_FRACTION = 0.5  # representative_trials(): shorter or fainter than this x the median: cut off
 REST_NOISE_QUANTILE = 90  # resting_noise(): this percentile of the resting activity ...
 REST_NOISE_MIN_FRAMES = 6  # ... over at least this many resting frames
+MAX_FILE_BYTES = 256 * 2**20  # uncompressed; the shipped set is under 1 MB
 
 
 class TemplateFileError(InputError):
@@ -412,10 +414,11 @@ class Templates:
     def load(cls, path: str | os.PathLike) -> Templates:
         path = Path(path)
         try:
-            with np.load(path, allow_pickle=False) as z:
-                data = {k: z[k] for k in z.files}
+            data = read_npz(path, MAX_FILE_BYTES)
         except FileNotFoundError:
             raise TemplateFileError(path, "no such file") from None
+        except NpzFileError as exc:
+            raise TemplateFileError(path, f"not a template file ({exc})") from None
         except (OSError, ValueError, EOFError) as exc:
             raise TemplateFileError(path, f"not a template file ({exc.__class__.__name__}: {exc})") from None
         except Exception as exc:  # zipfile.BadZipFile and friends: still a bad file, not a crash
@@ -426,12 +429,16 @@ class Templates:
             version = int(data["version"])
             if version != FORMAT_VERSION:
                 raise TemplateFileError(path, f"template format version {version}, expected {FORMAT_VERSION}")
+            if data["lengths"].dtype.kind not in "iu" or str(data["method"]) not in METHODS:
+                raise ValueError("lengths must be integers and method one of " + ", ".join(METHODS))
             lengths = data["lengths"].astype(np.int64)
             signals = data["signals"].astype(np.float64)
             if lengths.ndim != 1 or lengths.min() < 1 or lengths.sum() != len(signals) or signals.ndim != 2:
                 raise ValueError("signal lengths do not match the signal data")
             if not np.all(np.isfinite(signals)):
                 raise ValueError("non-finite values in the signals")
+            if not np.isfinite(data["gravity"]).all() or not (data["thresholds"] >= 0).all():  # inf: never reject
+                raise ValueError("gravity must be finite and thresholds >= 0")
             cuts = np.cumsum(lengths)[:-1]
             meta = dict(zip(data["meta_keys"].tolist(), data["meta_values"].tolist(), strict=True))
             t = cls(
@@ -445,6 +452,8 @@ class Templates:
                 meta,
                 float(data["rest_noise"]) if "rest_noise" in data else float("nan"),  # absent in older files
             )
+            if not (np.isnan(t.rest_noise) or 0 <= t.rest_noise <= 100):  # nan: not measured
+                raise ValueError(f"rest_noise {t.rest_noise} g out of range")
             if t.feature not in FEATURES:
                 raise ValueError(f"unknown feature {t.feature!r}")
             if np.any(t.onsets < 0) or np.any(t.onsets >= lengths):

@@ -18,11 +18,14 @@ from engine.sensors.source import (
     SourceState,
     parse_source_url,
     register_scheme,
+    url_number,
 )
 
 PUNCH_EVERY_S = 0.75
 PUNCH_S = 0.3
 PUNCH_G = 2.5
+MIN_RATE_HZ = 1.0  # slower than any sensor (gloves send 25 Hz)
+MAX_RATE_HZ = 10_000.0  # faster than any sensor; 1e9 made a poll build a billion samples
 
 
 def demo_accel(t: np.ndarray) -> np.ndarray:
@@ -71,10 +74,7 @@ class DemoSource(Source):
 
 def open_demo(url: str, clock: Clock) -> DemoSource:
     _, _, params = parse_source_url(url)
-    try:
-        rate = float(params.get("rate", "100"))
-    except ValueError:
-        raise SourceError(f"{url}: rate must be a number") from None
+    rate = url_number(url, params, "rate", 100.0, MIN_RATE_HZ, MAX_RATE_HZ)
     return DemoSource(url=url, clock=clock, rate_hz=rate)
 
 

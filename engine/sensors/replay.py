@@ -14,7 +14,10 @@ from engine.sensors.source import (
     SourceState,
     parse_source_url,
     register_scheme,
+    url_number,
 )
+
+MIN_SPEED, MAX_SPEED = 0.01, 1000.0  # replay speed factors
 
 
 class ReplaySource(Source):
@@ -62,11 +65,8 @@ def open_replay(url: str, clock: Clock) -> ReplaySource:
     _, path, params = parse_source_url(url)
     if not path:
         raise SourceError(f"{url}: no file (expected replay://path/to/recording.csv)")
-    try:
-        speed = float(params.get("speed", "1"))
-        loop = params.get("loop", "0").lower() in ("1", "true", "yes")
-    except ValueError:
-        raise SourceError(f"{url}: speed must be a number") from None
+    speed = url_number(url, params, "speed", 1.0, MIN_SPEED, MAX_SPEED)
+    loop = params.get("loop", "0").lower() in ("1", "true", "yes")
     return ReplaySource(read_recording(path), url=url, clock=clock, speed=speed, loop=loop)
 
 

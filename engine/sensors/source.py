@@ -9,6 +9,7 @@ package outside `engine` adds its own with `register_scheme` (the game registers
 from __future__ import annotations
 
 import importlib
+import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -114,6 +115,36 @@ def parse_source_url(url: str) -> tuple[str, str, dict[str, str]]:
 def url_flag(params: dict[str, str], key: str, default: str = "0") -> bool:
     """A yes/no URL parameter: 1, true, yes or on (any case) is yes."""
     return params.get(key, default).lower() in ("1", "true", "yes", "on")
+
+
+def url_number(
+    url: str,
+    params: dict[str, str],
+    key: str,
+    default: float,
+    lo: float | None = None,
+    hi: float | None = None,
+    *,
+    integer: bool = False,
+    lo_open: bool = False,
+) -> float:
+    """A numeric URL parameter, finite and in [lo, hi] ((lo, hi] with lo_open); an int when
+    `integer`. Raises SourceError naming the URL, the key and the range otherwise."""
+    text = params.get(key)
+    if text is None:
+        return default
+    kind = "an integer" if integer else "a number"
+    if lo is not None and hi is not None:
+        kind += f" {'above' if lo_open else 'from'} {lo:g} {'up ' if lo_open else ''}to {hi:g}"
+    elif lo is not None:
+        kind += f" {'above' if lo_open else 'from'} {lo:g}"
+    try:
+        v: float = int(text) if integer else float(text)
+    except ValueError:
+        raise SourceError(f"{url}: {key} must be {kind}, not {text!r}") from None
+    if not math.isfinite(v) or (lo is not None and (v <= lo if lo_open else v < lo)) or (hi is not None and v > hi):
+        raise SourceError(f"{url}: {key} must be {kind}, not {text!r}")
+    return v
 
 
 def open_source(url: str, *, clock: Clock | None = None) -> Source:

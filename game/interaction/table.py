@@ -45,6 +45,7 @@ from pathlib import Path
 import numpy as np
 
 from engine.errors import InputError
+from engine.npz_files import read_npz
 
 from .bout import BoutRules, Rewards
 from .state import StateGrid
@@ -53,6 +54,53 @@ FORMAT = "quickjab-interaction-graph"
 VERSION = 3
 READS = (2, 3)
 FEATURE_SCALE = 65536      # feature_pos units per grid cell
+MAX_FILE_BYTES = 512 * 2**20  # uncompressed, checked before reading; the shipped graph is 13 MB
+
+# What each array must hold (numpy dtype kinds): integers, numbers, flags, names.
+_INTS = ("key_steps", "keys", "other_action", "other_frame", "visits", "best_action", "edge_count",
+         "edge_ptr", "edge_dst", "edge_dst_steps", "edge_dst_steps_big", "edge_action", "edge_steps",
+         "fill_key_steps", "fill_state", "fill_state_offset", "fill_state_offset_big", "feature_pos")
+_NUMBERS = ("value", "edge_reward", "features")
+
+
+def _bad_kinds(a: dict) -> str | None:
+    """Why the arrays' dtypes or ranks are wrong, or None."""
+    for k in _INTS:
+        if k in a and a[k].dtype.kind not in "iu":
+            return f"{k} must hold integers, not {a[k].dtype}"
+    for k in _NUMBERS:
+        if k in a and a[k].dtype.kind not in "iuf":
+            return f"{k} must hold numbers, not {a[k].dtype}"
+    if a["edge_flip"].dtype.kind not in "biu" or ((a["edge_flip"] != 0) & (a["edge_flip"] != 1)).any():
+        return "edge_flip must hold 0 or 1"
+    if a["action_names"].dtype.kind != "U" or a["action_names"].ndim != 1:
+        return "action_names must be a list of names"
+    return None
+
+
+def _bad_meta(meta: dict, grid: StateGrid, rules: BoutRules, rewards: Rewards) -> str | None:
+    """Why the numbers in meta are unusable (not finite, out of range), or None."""
+    numbers = {**{f"grid {k}": v for k, v in grid.as_dict().items()},
+               **{f"rules {k}": v for k, v in rules.as_dict().items()},
+               **{f"rewards {k}": v for k, v in rewards.as_dict().items()}}
+    for name, v in numbers.items():
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not np.isfinite(v):
+            return f"{name} is {v!r}, not a finite number"
+        if v < 0:
+            return f"{name} is negative"
+    n = meta.get("n_choices")
+    if isinstance(n, bool) or not isinstance(n, int) or n < 1:
+        return f"n_choices is {n!r}"
+    if not (grid.distance_step > 0 and 0 < grid.angle_step_deg <= 360 and grid.distance_max > 0
+            and isinstance(grid.phase_step, int) and isinstance(grid.max_frames, int)
+            and grid.phase_step >= 1 and grid.max_frames >= 1):
+        return "grid steps must be positive"
+    if grid.n_distance > 1_000_000 or grid.n_angle > 100_000 or grid.n_phase > 100_000:
+        return "grid too fine"
+    if not (isinstance(rules.wait_frames, int) and rules.wait_frames >= 1 and rules.hp > 0
+            and 0 < rewards.discount <= 1):
+        return "wait_frames, hp and discount must be positive (discount at most 1)"
+    return None
 
 
 def action_major(edge_action: np.ndarray) -> np.ndarray:
@@ -211,9 +259,7 @@ class GraphTable:
         start-up saves their decoding (~40 MB of peak memory, ~0.1 s)."""
         path = Path(path)
         try:
-            with np.load(path, allow_pickle=False) as z:
-                names = z.files if edges else [k for k in z.files if not k.startswith("edge_")]
-                arrays = {k: z[k] for k in names}
+            arrays = read_npz(path, MAX_FILE_BYTES, keep=None if edges else lambda k: not k.startswith("edge_"))
             if not edges:
                 arrays.update(_no_edges(arrays))
         except FileNotFoundError:
@@ -264,6 +310,9 @@ class GraphTable:
             grid = StateGrid(**meta["grid"])
             rules = BoutRules(**meta["rules"])
             rewards = Rewards(**meta["rewards"])
+            why = _bad_meta(meta, grid, rules, rewards)
+            if why:
+                raise bad(why)
         except GraphFileError:
             raise
         except (ValueError, TypeError, KeyError, AttributeError) as exc:
@@ -277,6 +326,9 @@ class GraphTable:
         missing = [k for k in common + own if k not in a]
         if missing:
             raise bad(f"missing {', '.join(missing)}")
+        why = _bad_kinds(a)
+        if why:
+            raise bad(why)
         if version == 3:
             a = cls._decode_v3(a, grid, bad)
         S = len(a["keys"])
@@ -310,8 +362,16 @@ class GraphTable:
             raise bad("keys not strictly ascending")
         if len(a["fill_state"]) and (a["fill_state"].min() < 0 or a["fill_state"].max() >= S):
             raise bad("the look-up fill points outside the states")
-        if not (np.isfinite(a["value"]).all() and np.isfinite(a["features"]).all()):
+        if not (np.isfinite(a["value"]).all() and np.isfinite(a["features"]).all()
+                and np.isfinite(a["edge_reward"]).all()):
             raise bad("non-finite numbers")
+        if meta["n_choices"] > A or (a["other_action"] < 0).any() or a["other_action"].max() >= A or \
+                (E and a["edge_action"].min() < 0):
+            raise bad("an action id outside action_names")
+        if (a["other_frame"] < 0).any() or (a["visits"] < 0).any():
+            raise bad("negative frames or visits")
+        if len(set(a["action_names"].tolist())) != A:
+            raise bad("action_names repeat")
         return cls(
             action_names=[str(x) for x in a["action_names"]], n_choices=int(meta["n_choices"]),
             keys=a["keys"].astype(np.int64), features=a["features"],

@@ -15,7 +15,14 @@ URLs:
 
 from __future__ import annotations
 
-from engine.sensors.source import Clock, SourceError, parse_source_url, register_scheme, url_flag
+from engine.sensors.source import (
+    Clock,
+    SourceError,
+    parse_source_url,
+    register_scheme,
+    url_flag,
+    url_number,
+)
 from engine.sensors.wiimote.driver import WiimoteSource
 from engine.sensors.wiimote.protocol import (
     Calibration,
@@ -63,10 +70,7 @@ def open_wiimote(url: str, clock: Clock) -> WiimoteSource:
         backend = hid_backend()
     except BackendMissing as exc:
         raise SourceError(f"{url}: {exc}") from None
-    try:
-        player = int(params.get("player", "1"))
-    except ValueError:
-        raise SourceError(f"{url}: player must be 1-4") from None
+    player = int(url_number(url, params, "player", 1, 1, 4, integer=True))
     source = WiimoteSource(
         url=url,
         clock=clock,

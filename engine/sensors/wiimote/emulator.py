@@ -48,8 +48,8 @@ from typing import Any
 
 import numpy as np
 
-from engine.recording import Recording, read_recording
-from engine.sensors.source import SourceError, parse_source_url, url_flag
+from engine.recording import MAX_DURATION_S, Recording, read_recording
+from engine.sensors.source import SourceError, parse_source_url, url_flag, url_number
 from engine.sensors.wiimote import protocol as p
 from engine.sensors.wiimote.driver import WiimoteSource
 
@@ -58,6 +58,7 @@ EXT_SLAVE = 0x52  # the extension's i2c address (0xA4 >> 1)
 HOST_BUFFER = 64  # Linux hidraw keeps 64 reports per reader
 PERIOD_S = 0.01
 CHUNK_GAP_S = 0.005  # between successive 0x21 replies of one read
+MAX_PAD = 64  # input reports are at most 22 bytes; Windows pads them to 22
 
 # A genuine-looking calibration, deliberately not the typical values and with low bits set,
 # so that a driver ignoring the block or its low bits decodes wrongly.
@@ -130,6 +131,8 @@ class EmulatedWiimote:
         self._rel = rec.t - rec.t[0]
         period = float(np.median(np.diff(self._rel))) if len(rec) > 1 else PERIOD_S
         self._length = float(self._rel[-1]) + period
+        # (n, sensors*3) contiguous: a report looks up two rows, never copies a whole column
+        self._values = np.ascontiguousarray(rec.accel.reshape(len(rec), -1), dtype=np.float64)
         self._events = sorted(events or [])
 
         # The truth the emulator encodes with. A clone's Nunchuk block is unreadable, so what
@@ -293,7 +296,17 @@ class EmulatedWiimote:
     def _values_at(self, k: int) -> tuple[float, np.ndarray]:
         rel = self.start + k * PERIOD_S
         rel = rel % self._length if self.loop else min(rel, float(self._rel[-1]))
-        g = np.array([np.interp(rel, self._rel, self.rec.accel[:, s, a]) for s in range(self.rec.sensors) for a in range(3)])
+        # np.interp's arithmetic on the two samples around rel, found by one binary search:
+        # O(log n) per report (interp on the recording's columns copied them: O(n))
+        xp, fp = self._rel, self._values
+        j = int(np.searchsorted(xp, rel, side="right")) - 1
+        if j < 0:
+            g = fp[0].copy()
+        elif j >= len(xp) - 1:
+            g = fp[-1].copy()
+        else:
+            slope = (fp[j + 1] - fp[j]) / (xp[j + 1] - xp[j])
+            g = slope * (rel - xp[j]) + fp[j]
         return rel, g.reshape(self.rec.sensors, 3)
 
     def _data_report(self, k: int) -> tuple[bytes, SentData]:
@@ -594,9 +607,12 @@ class EmulatedBus:
 
 def _times(params: dict[str, str], key: str, url: str) -> list[float]:
     try:
-        return [float(x) for x in params.get(key, "").split(",") if x.strip()]
+        times = [float(x) for x in params.get(key, "").split(",") if x.strip()]
     except ValueError:
         raise SourceError(f"{url}: {key} must be seconds (comma-separated)") from None
+    if not all(0 <= t <= MAX_DURATION_S for t in times):  # also refuses nan
+        raise SourceError(f"{url}: {key} must be seconds from 0 to {MAX_DURATION_S:g}")
+    return times
 
 
 def emulator_from_url(url: str, clock: Callable[[], float]) -> tuple[EmulatedBus, EmulatedWiimote, dict[str, str]]:
@@ -613,14 +629,20 @@ def emulator_from_url(url: str, clock: Callable[[], float]) -> tuple[EmulatedBus
     loss = params.get("loss", "error")
     if loss not in ("error", "silent"):
         raise SourceError(f"{url}: loss must be 'error' or 'silent'")
+    def num(key: str, default: float, lo: float, hi: float, integer: bool = False) -> float:
+        try:
+            return url_number(url, params, key, default, lo, hi, integer=integer)
+        except SourceError as exc:  # worded as before: "bad option (drop must be ...)"
+            raise SourceError(f"{url}: bad option ({str(exc).removeprefix(f'{url}: ')})") from None
+
     try:
         remote = EmulatedWiimote(
             rec, clock,
-            jitter_ms=float(params.get("jitter_ms", "2")), latency_ms=float(params.get("latency_ms", "4")),
-            pad=int(params.get("pad", "0")), drop=float(params.get("drop", "0")), clone=clone,
-            nunchuk=url_flag(params, "nunchuk", "1"), seed=int(params.get("seed", "0")),
+            jitter_ms=num("jitter_ms", 2.0, 0, 1000), latency_ms=num("latency_ms", 4.0, 0, 1000),
+            pad=int(num("pad", 0, 0, MAX_PAD, integer=True)), drop=num("drop", 0.0, 0, 1), clone=clone,
+            nunchuk=url_flag(params, "nunchuk", "1"), seed=int(num("seed", 0, 0, 2**63 - 1, integer=True)),
             loop=url_flag(params, "loop", "1"), loss=loss, kernel_driver=url_flag(params, "kernel_driver"),
-            start=float(params.get("start", "0")), status_stops=url_flag(params, "status_stops"), events=events,
+            start=num("start", 0.0, 0, MAX_DURATION_S), status_stops=url_flag(params, "status_stops"), events=events,
         )  # fmt: skip
     except ValueError as exc:
         raise SourceError(f"{url}: bad option ({exc})") from None
@@ -630,10 +652,7 @@ def emulator_from_url(url: str, clock: Callable[[], float]) -> tuple[EmulatedBus
 def open_emulated(url: str, clock: Callable[[], float]) -> WiimoteSource:
     """`wiimote-emu://recording.csv?options`: the real driver on an emulated remote."""
     bus, remote, params = emulator_from_url(url, clock)
-    try:
-        player = int(params.get("player", "1"))
-    except ValueError:
-        raise SourceError(f"{url}: player must be 1-4") from None
+    player = int(url_number(url, params, "player", 1, 1, 4, integer=True))
     source = WiimoteSource(url=url, clock=clock, backend=bus, player=player)
     source.description = f"wiimote-emu {remote.rec.meta.get('source', '')}".strip()
     source.emulator = remote  # type: ignore[attr-defined]  # for tests and the HUD

@@ -1,0 +1,74 @@
+"""Reading the project's .npz files (templates, the Interaction Graph) without trusting them.
+
+`np.load` believes what an archive says: a 4.7 MB file whose member declares a 9 GB array
+is decompressed into 9 GB before anything can object. `read_npz` looks first: it refuses what
+is not a regular file, a bare `.npy`, an archive whose members declare more than the caller's
+limit in total, and a member whose array header asks for more bytes than the member holds;
+then it loads with `allow_pickle=False`, so object arrays are refused too.
+"""
+
+from __future__ import annotations
+
+import os
+import stat
+import zipfile
+import zlib
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+
+MAX_MEMBERS = 256
+
+
+class NpzFileError(ValueError):
+    """An .npz that is unreadable or over its limits; the message does not name the file (the
+    loaders add the path and what the file should have been)."""
+
+
+def _npy_bytes(zf: zipfile.ZipFile, info: zipfile.ZipInfo) -> int:
+    """The array bytes a member's .npy header declares (from its first bytes only)."""
+    with zf.open(info) as f:
+        version = np.lib.format.read_magic(f)
+        if version == (1, 0):
+            shape, _, dtype = np.lib.format.read_array_header_1_0(f)
+        else:
+            shape, _, dtype = np.lib.format.read_array_header_2_0(f)
+    if dtype.hasobject:
+        raise NpzFileError(f"member {info.filename!r} holds Python objects (never loaded)")
+    return int(np.prod(shape, dtype=object)) * dtype.itemsize
+
+
+def read_npz(path: str | os.PathLike, max_bytes: int, keep: Callable[[str], bool] | None = None) -> dict[str, np.ndarray]:
+    """Every array of an .npz (those whose name `keep` accepts, when given), after checking the
+    whole file fits in `max_bytes` uncompressed. Raises FileNotFoundError for a missing file,
+    NpzFileError for everything else that is wrong."""
+    path = Path(path)
+    st = os.stat(path)  # FileNotFoundError passes through: the loaders word it themselves
+    if not stat.S_ISREG(st.st_mode):
+        raise NpzFileError("a directory" if stat.S_ISDIR(st.st_mode) else "not a regular file (a pipe or a device?)")
+    try:
+        with open(path, "rb") as fh:
+            head = fh.read(6)
+            if head == b"\x93NUMPY":
+                raise NpzFileError("a single .npy array, not an .npz archive")
+            fh.seek(0)
+            with zipfile.ZipFile(fh) as zf:
+                infos = zf.infolist()
+                if len(infos) > MAX_MEMBERS:
+                    raise NpzFileError(f"{len(infos)} members, at most {MAX_MEMBERS}")
+                declared = sum(i.file_size for i in infos)
+                if declared > max_bytes:
+                    raise NpzFileError(f"{declared / 2**20:.1f} MiB uncompressed, over the {max_bytes / 2**20:.0f} MiB limit")
+                for info in infos:
+                    if not info.filename.endswith(".npy"):
+                        raise NpzFileError(f"member {info.filename!r} is not an array")
+                    if _npy_bytes(zf, info) > info.file_size:
+                        raise NpzFileError(f"member {info.filename!r} declares more data than it holds")
+            fh.seek(0)
+            with np.load(fh, allow_pickle=False) as z:
+                return {k: z[k] for k in z.files if keep is None or keep(k)}
+    except NpzFileError:
+        raise
+    except (OSError, ValueError, EOFError, KeyError, zipfile.BadZipFile, zlib.error, NotImplementedError) as exc:
+        raise NpzFileError(f"{exc.__class__.__name__}: {exc}") from None

@@ -1,0 +1,653 @@
+"""A hostile-input campaign: run `quickjab` commands as subprocesses on generated bad files,
+URLs and arguments, and count what each run ends in.
+
+    python -m tools.input_campaign [--only WORD] [--timeout 60] [--json] [--keep DIR]
+
+Every case expects either a clean refusal (exit 2, one line on stderr, no traceback) or a
+clean run (exit 0). A run is a *traceback* when stderr holds one, a *hang* when it outlives
+the timeout, a *blow-up* when its peak RSS passes --max-rss-mb, a *silent accept* when it
+exits 0 where a refusal was expected, and a *refusal* of a valid input when it exits non-zero
+where a clean run was expected. Each run gets an address-space limit (--limit-mb) so that a
+blow-up cannot take the machine down; its peak RSS is its VmHWM, polled from /proc every
+20 ms (growth in a run's last 20 ms can be missed). Prints one line per failing run and the totals; exit
+code 1 when anything failed.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import resource
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+import zipfile
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parent.parent
+ASSETS = ROOT / "game" / "assets"
+GOOD_REC = "# rate_hz: 60\nt,rx,ry,rz,lx,ly,lz,label\n" + "".join(
+    f"{i / 60:.6f},0.01,0.02,1.0,0.0,0.01,0.99,\n" for i in range(120)
+)
+
+
+@dataclass
+class Case:
+    name: str
+    argv: list[str]
+    expect: str = "error"  # "error": exit 2, one line; "ok": exit 0
+    stdin_none: bool = True
+
+
+@dataclass
+class Outcome:
+    case: Case
+    rc: int | None
+    seconds: float
+    rss_mb: float
+    stderr: str
+    verdict: str = field(default="")
+
+
+def _write(d: Path, name: str, text: str | bytes) -> str:
+    p = d / name
+    p.parent.mkdir(parents=True, exist_ok=True)
+    if isinstance(text, bytes):
+        p.write_bytes(text)
+    else:
+        p.write_text(text, encoding="utf-8")
+    return str(p)
+
+
+def _rec(rows: list[str], header: str = "t,rx,ry,rz,lx,ly,lz,label") -> str:
+    return "# rate_hz: 60\n" + header + "\n" + "".join(r + "\n" for r in rows)
+
+
+def bad_recordings(d: Path, big_mb: int) -> dict[str, str]:
+    """name -> path of a recording that must be refused."""
+    row = "0.01,0.02,1.0,0.0,0.01,0.99,"
+    out = {
+        "gap-1e7": _write(d, "rec/gap.csv", _rec([f"0,{row}", f"10000000,{row}"])),
+        "equal-t": _write(d, "rec/equal.csv", _rec([f"1.5,{row}"] * 5)),
+        "nan": _write(d, "rec/nan.csv", _rec([f"0,{row}", "0.1,nan,0,1,0,0,1,"])),
+        "inf-t": _write(d, "rec/inf.csv", _rec([f"0,{row}", f"inf,{row}"])),
+        "huge-t": _write(d, "rec/huge_t.csv", _rec([f"1e300,{row}", f"1.0000001e300,{row}"])),
+        "backwards": _write(d, "rec/back.csv", _rec([f"1,{row}", f"0.5,{row}"])),
+        "text": _write(d, "rec/text.csv", _rec([f"0,{row}", f"abc,{row}"])),
+        "long-field": _write(d, "rec/long.csv", _rec([f"0,{row}", "0.1," + "1" * 200_000 + ",0,1,0,0,1,"])),
+        "long-label": _write(d, "rec/longlab.csv", _rec([f"0,{row}", "0.1,0,0,1,0,0,1," + "x" * 200_000])),
+        "quote": _write(d, "rec/quote.csv", _rec([f"0,{row}", '0.1,"0,0,1,0,0,1,'])),
+        "empty": _write(d, "rec/empty.csv", ""),
+        "header-only": _write(d, "rec/header.csv", _rec([])),
+        "no-columns": _write(d, "rec/nocol.csv", _rec(["0,1"], header="t,a")),
+        "binary": _write(d, "rec/binary.csv", bytes(range(256)) * 64),
+        "nul": _write(d, "rec/nul.csv", "t,rx,ry,rz\n0,1,\0,1\n"),
+        "dir": str(d),
+        "dev-zero": "/dev/zero",
+        "missing": str(d / "rec" / "nope.csv"),
+    }
+    fifo = d / "rec" / "fifo.csv"
+    if not fifo.exists():
+        os.mkfifo(fifo)
+    out["fifo"] = str(fifo)
+    if big_mb:
+        p = d / "rec" / f"big{big_mb}.csv"
+        if not p.exists():  # a valid phone-rate recording (430 Hz, 1.5 h for 100 MB)
+            line = "0.01,0.02,1.0,0.0,0.01,0.99,jab\n"
+            n = big_mb * 1024 * 1024 // (len(line) + 10)
+            with open(p, "w") as f:
+                f.write("t,rx,ry,rz,lx,ly,lz,label\n")
+                for start in range(0, n, 100_000):
+                    f.write("".join(f"{i / 430:.6f},{line}" for i in range(start, min(n, start + 100_000))))
+        out[f"big-{big_mb}mb"] = str(p)
+    return out
+
+
+def _npz(path: Path, arrays: dict[str, np.ndarray]) -> str:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with open(path, "wb") as f:
+        np.savez_compressed(f, **arrays)
+    return str(path)
+
+
+def _zip_bomb(path: Path, member: str, declared_gb: float) -> str:
+    """An npz whose one member is a .npy header for a huge float64 array, then zeros."""
+    if path.exists():
+        return str(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    n = int(declared_gb * 2**30 // 8)
+    header = np.lib.format.header_data_from_array_1_0(np.zeros(1))
+    header["shape"] = (n,)
+    import io
+
+    buf = io.BytesIO()
+    np.lib.format.write_array_header_1_0(buf, header)
+    with zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED, compresslevel=1) as z, z.open(member + ".npy", "w", force_zip64=True) as f:
+        f.write(buf.getvalue())
+        chunk = bytes(2**24)
+        left = n * 8
+        while left > 0:
+            f.write(chunk[: min(left, len(chunk))])
+            left -= len(chunk)
+    return str(path)
+
+
+def bad_templates(d: Path, bomb_gb: float = 1.5) -> dict[str, str]:
+    with np.load(ASSETS / "templates.npz", allow_pickle=False) as z:
+        good = {k: z[k] for k in z.files}
+    out = {}
+
+    def variant(name: str, **changes: np.ndarray | None) -> None:
+        a = dict(good)
+        for k, v in changes.items():
+            if v is None:
+                a.pop(k, None)
+            else:
+                a[k] = v
+        out[name] = _npz(d / "tpl" / f"{name}.npz", a)
+
+    g = good["gravity"]
+    variant("nan-gravity", gravity=np.full_like(g, np.nan))
+    variant("nan-threshold", thresholds=np.full_like(good["thresholds"], np.nan))
+    variant("neg-threshold", thresholds=-np.ones_like(good["thresholds"]))
+    variant("gravity-shape", gravity=g[:, :3])
+    variant("onsets-shape", onsets=good["onsets"][:2])
+    variant("lengths-neg", lengths=-good["lengths"])
+    variant("no-signals", signals=None)
+    variant("signals-3d", signals=good["signals"][None])
+    variant("actions-2d", actions=good["actions"][None])
+    variant("meta-mismatch", meta_keys=np.array(["a", "b"]), meta_values=np.array(["x"]))
+    variant("version-text", version=np.array("x"))
+    variant("method-bad", method=np.array("nope"))
+    variant("float-lengths", lengths=good["lengths"].astype(float) + 0.5)
+    out["npy"] = str(d / "tpl" / "arr.npy")
+    np.save(out["npy"], good["signals"])
+    out["truncated"] = _write(d, "tpl/trunc.npz", (ASSETS / "templates.npz").read_bytes()[:2000])
+    out["text"] = _write(d, "tpl/text.npz", "hello")
+    out["zip-bomb"] = _zip_bomb(d / "tpl" / "bomb.npz", "signals", bomb_gb)
+    return out
+
+
+def bad_graphs(d: Path, bomb_gb: float = 1.5) -> dict[str, str]:
+    with np.load(ASSETS / "graph.npz", allow_pickle=False) as z:
+        good = {k: z[k] for k in z.files}
+    meta = json.loads(str(good["meta"]))
+    out = {}
+
+    def variant(name: str, meta_change: dict | None = None, **changes: np.ndarray | None) -> None:
+        a = dict(good)
+        if meta_change is not None:
+            m = json.loads(json.dumps(meta))
+            for k, v in meta_change.items():
+                node = m
+                *path, last = k.split(".")
+                for p in path:
+                    node = node[p]
+                node[last] = v
+            a["meta"] = np.array(json.dumps(m))
+        for k, v in changes.items():
+            if v is None:
+                a.pop(k, None)
+            else:
+                a[k] = v
+        out[name] = _npz(d / "graph" / f"{name}.npz", a)
+
+    S = len(good["key_steps"])
+    E = len(good["edge_action"])
+    variant("nan-reward", edge_reward=np.full(E, np.nan, np.float32))
+    variant("inf-reward", edge_reward=np.full(E, np.inf, np.float32))
+    variant("neg-visits", visits=-np.ones(S, np.int32))
+    variant("other-action-range", other_action=np.full(S, 999, np.int16))
+    variant("other-action-neg", other_action=np.full(S, -5, np.int16))
+    variant("other-frame-neg", other_frame=np.full(S, -5, np.int16))
+    variant("edge-flip-int", edge_flip=np.full(E, 7, np.int64))
+    variant("edge-action-neg", edge_action=np.full(E, -1, np.int64))
+    variant("value-text", value=np.array(["x"] * S))
+    variant("action-names-int", action_names=np.arange(len(good["action_names"])))
+    variant("action-names-2d", action_names=good["action_names"][None])
+    variant("n-choices-neg", {"n_choices": -3})
+    variant("n-choices-huge", {"n_choices": 10**6})
+    variant("n-choices-text", {"n_choices": "x"})
+    for k, v in meta["grid"].items():
+        if isinstance(v, (int, float)) and not isinstance(v, bool):
+            variant(f"grid-{k}-nan", {f"grid.{k}": float("nan")})
+            variant(f"grid-{k}-zero", {f"grid.{k}": 0})
+            variant(f"grid-{k}-neg", {f"grid.{k}": -1})
+    for k, v in meta["rules"].items():
+        if isinstance(v, (int, float)) and not isinstance(v, bool):
+            variant(f"rules-{k}-nan", {f"rules.{k}": float("nan")})
+            variant(f"rules-{k}-neg", {f"rules.{k}": -1})
+    for k, v in meta["rewards"].items():
+        if isinstance(v, (int, float)) and not isinstance(v, bool):
+            variant(f"rewards-{k}-nan", {f"rewards.{k}": float("nan")})
+    variant("meta-list", meta=np.array("[1, 2]"))
+    variant("meta-2d", meta=np.array([[json.dumps(meta)]]))
+    variant("key-steps-neg", key_steps=-good["key_steps"].astype(np.int64))
+    variant("feature-pos-float", feature_pos=np.full((S, 3), np.nan))
+    variant("edge-count-neg", edge_count=-good["edge_count"].astype(np.int64))
+    out["npy"] = str(d / "graph" / "arr.npy")
+    np.save(out["npy"], good["visits"])
+    out["truncated"] = _write(d, "graph/trunc.npz", (ASSETS / "graph.npz").read_bytes()[:5000])
+    out["zip-bomb"] = _zip_bomb(d / "graph" / "bomb.npz", "edge_reward", bomb_gb)
+    return out
+
+
+def bad_traces(d: Path) -> dict[str, str]:
+    frame = {"ph": "X", "name": "frame", "ts": 0, "dur": 100, "args": {"steps": 1}}
+    stage = {"ph": "X", "name": "physics", "ts": 1, "dur": 10}
+
+    def tr(name: str, obj: object) -> tuple[str, str]:
+        text = obj if isinstance(obj, str) else json.dumps(obj)
+        return name, _write(d, f"trace/{name}.json", text)
+
+    def ev(**kw: object) -> dict:
+        return {"traceEvents": [{**frame, **kw}, stage]}
+
+    cases = [
+        tr("args-int", ev(args=5)),
+        tr("args-list", ev(args=[1])),
+        tr("steps-text", ev(args={"steps": "x"})),
+        tr("steps-inf", '{"traceEvents": [{"ph": "X", "name": "frame", "ts": 0, "dur": 1, "args": {"steps": Infinity}}]}'),
+        tr("steps-nan", '{"traceEvents": [{"ph": "X", "name": "frame", "ts": 0, "dur": 1, "args": {"steps": NaN}}]}'),
+        tr("dur-nan", '{"traceEvents": [{"ph": "X", "name": "frame", "ts": 0, "dur": NaN}]}'),
+        tr("dur-inf", '{"traceEvents": [{"ph": "X", "name": "frame", "ts": 0, "dur": Infinity}]}'),
+        tr("ts-nan", '{"traceEvents": [{"ph": "X", "name": "frame", "ts": NaN, "dur": 1}]}'),
+        tr("ts-huge", ev(ts=1e308, dur=1e308)),
+        tr("wait-text", ev(args={"wait_us": "x"})),
+        tr("wait-list", ev(args={"wait_us": [1]})),
+        tr("dropped-text", ev(args={"dropped": "x"})),
+        tr("depth-text", {"traceEvents": [frame, {**stage, "args": {"depth": [1]}}]}),
+        tr("name-list", {"traceEvents": [frame, {**stage, "name": ["a"]}]}),
+        tr("name-int", {"traceEvents": [frame, {**stage, "name": 5}]}),
+        tr("ph-list", {"traceEvents": [frame, {**stage, "ph": ["X"]}]}),
+        tr("other-list", {"traceEvents": [frame], "otherData": [1]}),
+        tr("budget-text", {"traceEvents": [frame], "otherData": {"frame_budget_ms": "x"}}),
+        tr("budget-zero", {"traceEvents": [frame], "otherData": {"frame_budget_ms": 0, "frame_period_ms": -1}}),
+        tr("budget-inf", '{"traceEvents": [{"ph": "X", "name": "frame", "ts": 0, "dur": 1}], "otherData": {"frame_budget_ms": Infinity}}'),
+        tr("stages-list", {"traceEvents": [frame], "otherData": {"stages": [1]}}),
+        tr("stage-budget-text", {"traceEvents": [frame, stage], "otherData": {"stages": {"physics": {"budget_ms": "x"}}}}),
+        tr("deep", "[" * 100_000 + "]" * 100_000),
+        tr("deep-obj", '{"traceEvents": ' + "[" * 50_000 + "]" * 50_000 + "}"),
+        tr("bool-ts", ev(ts=True, dur=False)),
+        tr("empty", ""),
+        tr("number", "5"),
+        tr("no-frame", {"traceEvents": [stage]}),
+        tr("bad-utf8", b"\xff\xfe{}".decode("latin-1")),
+    ]
+    out = dict(cases)
+    out["bad-bytes"] = _write(d, "trace/bytes.json", b"\xff\xfe\x00{")
+    fifo = d / "trace" / "fifo.json"
+    if not fifo.exists():
+        os.mkfifo(fifo)
+    out["fifo"] = str(fifo)
+    return out
+
+
+BVH_HEAD = """HIERARCHY
+ROOT Hips
+{
+  OFFSET 0 0 0
+  CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation
+  JOINT Chest
+  {
+    OFFSET 0 5 0
+    CHANNELS 3 Zrotation Xrotation Yrotation
+    End Site
+    {
+      OFFSET 0 5 0
+    }
+  }
+}
+MOTION
+"""
+
+
+def bad_bvh(d: Path) -> dict[str, str]:
+    row = "0 90 0 0 0 0 0 0 0"
+
+    def bvh(name: str, frames: str, ftime: str, rows: list[str]) -> tuple[str, str]:
+        text = BVH_HEAD + f"Frames: {frames}\nFrame Time: {ftime}\n" + "\n".join(rows) + "\n"
+        return name, _write(d, f"bvh/{name}.bvh", text)
+
+    cases = [
+        bvh("frames-text", "abc", "0.0166667", [row] * 3),
+        bvh("frames-neg", "-5", "0.0166667", [row] * 3),
+        bvh("frames-huge", "1000000000", "0.0166667", [row] * 3),
+        bvh("ftime-nan", "3", "nan", [row] * 3),
+        bvh("ftime-inf", "3", "inf", [row] * 3),
+        bvh("ftime-1e9", "3", "1e9", [row] * 3),
+        bvh("ftime-zero", "3", "0", [row] * 3),
+        bvh("ftime-neg", "3", "-0.01", [row] * 3),
+        bvh("ftime-tiny", "3", "1e-300", [row] * 3),
+        bvh("pose-nan", "3", "0.0166667", [row, "0 nan 0 0 0 0 0 0 0", row]),
+        bvh("pose-inf", "3", "0.0166667", [row, "0 inf 0 0 0 0 0 0 0", row]),
+        bvh("pose-text", "3", "0.0166667", [row, "0 x 0 0 0 0 0 0 0", row]),
+        bvh("pose-short", "3", "0.0166667", [row, "0 0", row]),
+        bvh("pose-huge", "3", "0.0166667", [row, "0 1e308 0 0 0 1e308 0 0 0", row]),
+    ]
+    out = dict(cases)
+    out["empty"] = _write(d, "bvh/empty.bvh", "")
+    out["no-motion"] = _write(d, "bvh/nomotion.bvh", BVH_HEAD.replace("MOTION\n", ""))
+    out["deep"] = _write(d, "bvh/deep.bvh", "HIERARCHY\nROOT a\n" + "{\nJOINT b\n" * 20000 + "}\n" * 20000)
+    out["channels-huge"] = _write(d, "bvh/chan.bvh", BVH_HEAD.replace("CHANNELS 3", "CHANNELS 100000000"))
+    out["binary"] = _write(d, "bvh/binary.bvh", bytes(range(256)) * 16)
+    fifo = d / "bvh" / "fifo.bvh"
+    if not fifo.exists():
+        os.mkfifo(fifo)
+    out["fifo"] = str(fifo)
+    return out
+
+
+def bad_action_dirs(d: Path) -> dict[str, str]:
+    """Copies of the shipped action library with one file made bad."""
+    import shutil
+
+    out = {}
+    good = json.loads((ASSETS / "actions" / "hook_r.json").read_text())
+    for name, change in (("nan-root", {"root": [[0, float("nan"), 0, 0]]}), ("frames-huge", {"frames": 10**9}),
+                         ("damage-inf", {"attacks": [{**good["attacks"][0], "damage": float("inf")}]}),
+                         ("deep", None), ("fifo", None)):
+        folder = d / "actions" / name
+        if folder.exists():
+            shutil.rmtree(folder)
+        shutil.copytree(ASSETS / "actions", folder)
+        target = folder / "hook_r.json"
+        if name == "deep":
+            target.write_text("[" * 100_000 + "]" * 100_000)
+        elif name == "fifo":
+            target.unlink()
+            os.mkfifo(target)
+        else:
+            target.write_text(json.dumps({**good, **change}))
+        out[name] = str(folder)
+    return out
+
+
+def bad_mocap(d: Path, mocap: Path) -> dict[str, str]:
+    """A real, mappable BVH with its header or one pose made bad: these reach retargeting."""
+    lines = mocap.read_text(encoding="utf-8", errors="replace").splitlines()
+    at = next(i for i, ln in enumerate(lines) if ln.strip().lower().startswith("frames:"))
+    out = {}
+    for name, frames, ftime, pose in (
+        ("frames-text", "abc", None, None), ("frames-neg", "-5", None, None), ("frames-zero", "0", None, None),
+        ("ftime-nan", None, "nan", None), ("ftime-inf", None, "inf", None), ("ftime-1e9", None, "1e9", None),
+        ("ftime-zero", None, "0", None), ("pose-nan", None, None, "nan"), ("pose-inf", None, None, "inf"),
+        ("pose-1e300", None, None, "1e300"), ("pose-1e30", None, None, "1e30"),
+    ):
+        new = list(lines)
+        if frames is not None:
+            new[at] = f"Frames: {frames}"
+        if ftime is not None:
+            new[at + 1] = f"Frame Time: {ftime}"
+        if pose is not None:
+            vals = new[at + 10].split()
+            vals[3:6] = [pose] * 3
+            new[at + 10] = " ".join(vals)
+        out[name] = _write(d, f"mocap/{name}.bvh", "\n".join(new) + "\n")
+    return out
+
+
+def build_cases(d: Path, big_mb: int, bomb_gb: float = 1.5) -> list[Case]:
+    q = ["-m", "game.cli"]
+    good_rec = _write(d, "good.csv", GOOD_REC)
+    tpl = str(ASSETS / "templates.npz")
+    out = d / "out"
+    out.mkdir(exist_ok=True)
+    cases: list[Case] = []
+    recs, tpls, graphs = bad_recordings(d, big_mb), bad_templates(d, bomb_gb), bad_graphs(d, bomb_gb)
+    for name, path in recs.items():
+        if name.startswith("big"):  # valid: read whole (memory is the figure), replayed briefly
+            cases.append(Case(f"ok/{name}/record-replay", q + ["record", "--source", f"replay://{path}?speed=1000", "--seconds", "0.5", "-o", str(out / "b.csv")], expect="ok"))
+            continue
+        cases.append(Case(f"rec/{name}/recognize", q + ["recognize", path, "--templates", tpl]))
+        cases.append(Case(f"rec/{name}/record-replay", q + ["record", "--source", f"replay://{path}", "--seconds", "0.3", "-o", str(out / "r.csv")]))
+        cases.append(Case(f"rec/{name}/evaluate", q + ["evaluate", path, "--mains", "6"]))
+    for name in ("gap-1e7", "equal-t", "fifo", "long-field"):
+        path = recs[name]
+        cases.append(Case(f"rec/{name}/wiimote-emu", q + ["record", "--source", f"wiimote-emu://{path}", "--seconds", "0.3", "-o", str(out / "r.csv")]))
+        cases.append(Case(f"rec/{name}/scope", q + ["scope", "--headless", "--frames", "3", "--source", f"replay://{path}"]))
+    trials = d / "trials" / "jab"
+    trials.mkdir(parents=True, exist_ok=True)
+    (trials / "1.csv").write_text(_rec(["0,0,0,1,0,0,1,", "10000000,0,0,1,0,0,1,"]))
+    cases.append(Case("rec/gap/templates-build", q + ["templates", "build", str(d / "trials"), "-o", str(out / "t.npz")]))
+    for name, path in tpls.items():
+        cases.append(Case(f"tpl/{name}/recognize", q + ["recognize", good_rec, "--templates", path]))
+    for name in ("nan-gravity", "zip-bomb", "npy"):
+        cases.append(Case(f"tpl/{name}/play", q + ["play", "--headless", "--frames", "2", "--templates", tpls[name]]))
+    for name, path in graphs.items():
+        cases.append(Case(f"graph/{name}/info", q + ["graph", "info", path]))
+    for name in ("nan-reward", "zip-bomb", "npy", "other-action-range"):
+        cases.append(Case(f"graph/{name}/duel", q + ["graph", "duel", "--graph", graphs[name], "--bouts", "1", "--seconds", "2"]))
+    for name, path in bad_traces(d).items():
+        cases.append(Case(f"trace/{name}/profile", q + ["profile", path]))
+    for name, path in bad_bvh(d).items():
+        cases.append(Case(f"bvh/{name}/info", q + ["bvh", "info", path]))
+        if name.startswith(("pose", "ftime")):
+            cases.append(Case(f"bvh/{name}/cut", q + ["bvh", "cut", path, "--start", "0", "--end", "2", "--name", "x", "-o", str(out / "a.json")]))
+    mocap = ROOT.parent / "shared" / "data" / "mocap" / "cmu_02_05_punch_strike.bvh"
+    if mocap.exists():
+        for name, path in bad_mocap(d, mocap).items():
+            cases.append(Case(f"mocap/{name}/info", q + ["bvh", "info", path]))
+            cases.append(Case(f"mocap/{name}/cut", q + ["bvh", "cut", path, "--start", "0", "--end", "20", "--name", "x", "-o", str(out / "m.json")]))
+    for name, folder in bad_action_dirs(d).items():
+        cases.append(Case(f"actions/{name}/list", q + ["actions", "list", "--dir", folder]))
+    emu = f"wiimote-emu://{good_rec}"
+    urls = {
+        "demo-rate-1e9": "demo://?rate=1e9",
+        "demo-rate-nan": "demo://?rate=nan",
+        "demo-rate-inf": "demo://?rate=inf",
+        "demo-rate-tiny": "demo://?rate=1e-300",
+        "emu-drop-2": emu + "?drop=2",
+        "emu-drop-nan": emu + "?drop=nan",
+        "emu-latency-1e9": emu + "?latency_ms=1e9",
+        "emu-latency-neg": emu + "?latency_ms=-5",
+        "emu-jitter-nan": emu + "?jitter_ms=nan",
+        "emu-jitter-1e9": emu + "?jitter_ms=1e9",
+        "emu-pad-neg": emu + "?pad=-1",
+        "emu-pad-huge": emu + "?pad=100000000",
+        "emu-seed-neg": emu + "?seed=-1",
+        "emu-start-nan": emu + "?start=nan",
+        "emu-start-inf": emu + "?start=inf",
+        "emu-player-9": emu + "?player=9",
+        "emu-unplug-nan": emu + "?unplug_at=nan",
+        "keyboard-seed-neg": "keyboard://?seed=-1",
+        "keyboard-seed-text": "keyboard://?seed=x",
+        "keyboard-profile": "keyboard://?profile=nope",
+        "replay-speed-nan": f"replay://{good_rec}?speed=nan",
+        "replay-speed-inf": f"replay://{good_rec}?speed=inf",
+        "replay-speed-tiny": f"replay://{good_rec}?speed=1e-300",
+        "replay-speed-huge": f"replay://{good_rec}?speed=1e300",
+        "unknown": "nope://x",
+        "no-scheme": "x.csv",
+    }
+    for name, url in urls.items():
+        cases.append(Case(f"url/{name}/record", q + ["record", "--source", url, "--seconds", "0.3", "-o", str(out / "u.csv")]))
+    for name in ("demo-rate-1e9", "emu-drop-2", "keyboard-seed-neg"):
+        cases.append(Case(f"url/{name}/scope", q + ["scope", "--headless", "--frames", "3", "--source", urls[name]]))
+    ev_base = q + ["evaluate", good_rec]
+    args = {
+        "play-seed-neg": q + ["play", "--headless", "--frames", "2", "--seed", "-1"],
+        "play-size-huge": q + ["play", "--headless", "--frames", "2", "--size", "20000x20000"],
+        "play-size-text": q + ["play", "--headless", "--frames", "2", "--size", "abc"],
+        "play-size-zero": q + ["play", "--headless", "--frames", "2", "--size", "0x0"],
+        "play-frames-neg": q + ["play", "--headless", "--frames", "-1"],
+        "train-seed-neg": q + ["train", "--headless", "--frames", "2", "--seed", "-1"],
+        "train-size-huge": q + ["train", "--headless", "--frames", "2", "--size", "20000x20000"],
+        "scope-size-huge": q + ["scope", "--headless", "--frames", "2", "--size", "20000x20000"],
+        "scope-seconds-nan": q + ["scope", "--headless", "--frames", "2", "--seconds", "nan"],
+        "scope-seconds-zero": q + ["scope", "--headless", "--frames", "2", "--seconds", "0"],
+        "eval-folds-1": ev_base + ["--folds", "1"],
+        "eval-folds-huge": ev_base + ["--folds", "100000"],
+        "eval-every-0": q + ["evaluate", str(d / "trials"), "--templates", tpl, "--every", "0"],
+        "eval-supp-0": ev_base + ["--supplementary", "0"],
+        "eval-noise-neg": ev_base + ["--noise-g", "-1"],
+        "eval-noise-nan": ev_base + ["--noise-g", "nan"],
+        "eval-null-0": ev_base + ["--null-frames", "0"],
+        "eval-discard-neg": ev_base + ["--discard-frames", "-1"],
+        "eval-complete-nan": ev_base + ["--complete", "nan"],
+        "eval-mains-0": ev_base + ["--mains", "0"],
+        "eval-mains-text": ev_base + ["--mains", "a-b"],
+        "eval-mains-huge": ev_base + ["--mains", "1-100000000"],
+        "eval-clip-0": ev_base + ["--clip-frames", "0"],
+        "eval-users-text": q + ["evaluate", "--uwave", str(d), "--users", "x"],
+        "recognize-main-huge": q + ["recognize", good_rec, "--templates", tpl, "--main", "100000000"],
+        "synth-session-nan": q + ["synth", "--session", "nan", "-o", str(out / "s.csv")],
+        "synth-session-neg": q + ["synth", "--session", "-1", "-o", str(out / "s.csv")],
+        "synth-session-huge": q + ["synth", "--session", "1e12", "-o", str(out / "s.csv")],
+        "synth-trials-0": q + ["synth", "--trials", "0", "-o", str(out / "st")],
+        "synth-trials-neg": q + ["synth", "--trials", "-1", "-o", str(out / "st")],
+        "synth-rest-neg": q + ["synth", "--trials", "1", "--rest", "-1", "-o", str(out / "st")],
+        "synth-seed-neg": q + ["synth", "--trials", "1", "--seed", "-1", "-o", str(out / "st")],
+        "soak-steps-neg": q + ["soak", "--steps", "-1", "--quiet"],
+        "soak-minutes-nan": q + ["soak", "--minutes", "nan", "--quiet"],
+        "soak-render-neg": q + ["soak", "--steps", "10", "--render-every", "-1", "--quiet"],
+        "soak-sample-0": q + ["soak", "--steps", "10", "--sample-seconds", "0", "--quiet"],
+        "soak-seed-neg": q + ["soak", "--steps", "10", "--seed", "-1", "--quiet"],
+        "graph-build-states-0": q + ["graph", "build", "-o", str(out / "g.npz"), "--states", "0", "--quiet"],
+        "graph-build-seed-neg": q + ["graph", "build", "-o", str(out / "g.npz"), "--seed", "-1", "--quiet"],
+        "graph-build-bouts-0": q + ["graph", "build", "-o", str(out / "g.npz"), "--bouts", "0", "--quiet"],
+        "graph-duel-bouts-0": q + ["graph", "duel", "--bouts", "0"],
+        "graph-duel-bouts-neg": q + ["graph", "duel", "--bouts", "-1"],
+        "graph-duel-seconds-nan": q + ["graph", "duel", "--bouts", "1", "--seconds", "nan"],
+        "graph-duel-seconds-huge": q + ["graph", "duel", "--bouts", "1", "--seconds", "1e12"],
+        "graph-duel-seed-neg": q + ["graph", "duel", "--bouts", "1", "--seconds", "2", "--seed", "-1"],
+        "record-seconds-nan": q + ["record", "--source", "demo://", "--seconds", "nan", "-o", str(out / "x.csv")],
+        "record-seconds-neg": q + ["record", "--source", "demo://", "--seconds", "-1", "-o", str(out / "x.csv")],
+        "bvh-export-gap-nan": q + ["bvh", "export", "--play", "guard", "--gap", "nan", "-o", str(out / "x.bvh")],
+        "bvh-cut-start-neg": q + ["bvh", "cut", _write(d, "bvh/ok.bvh", BVH_HEAD + "Frames: 3\nFrame Time: 0.0166667\n" + "0 90 0 0 0 0 0 0 0\n" * 3), "--start", "-5", "--end", "1", "--name", "x", "-o", str(out / "a.json")],
+    }
+    for name, argv in args.items():
+        cases.append(Case(f"arg/{name}", argv))
+    # valid inputs that must keep working
+    cases.append(Case("ok/recognize-good", q + ["recognize", good_rec, "--templates", tpl], expect="ok"))
+    cases.append(Case("ok/graph-info-shipped", q + ["graph", "info"], expect="ok"))
+    cases.append(Case("ok/record-demo", q + ["record", "--source", "demo://?rate=100", "--seconds", "0.3", "-o", str(out / "d.csv")], expect="ok"))
+    cases.append(Case("ok/record-emu", q + ["record", "--source", emu, "--seconds", "0.5", "-o", str(out / "e.csv")], expect="ok"))
+    long_rec = d / "rec" / "long400k.csv"
+    if not long_rec.exists():  # 400k rows at 100 Hz: wiimote-emu's poll must not depend on the length
+        long_rec.write_text("t,rx,ry,rz,lx,ly,lz\n" + "".join(f"{i / 100:.2f},0.1,0,1,0,0.1,1\n" for i in range(400_000)))
+    cases.append(Case("ok/record-emu-400k", q + ["record", "--source", f"wiimote-emu://{long_rec}", "--seconds", "1", "-o", str(out / "e.csv")], expect="ok"))
+    data = ROOT.parent / "shared" / "data"
+    if (data / "phone-boxing" / "train.csv").exists():
+        cases.append(Case("ok/replay-phone", q + ["record", "--source", f"replay://{data / 'phone-boxing' / 'train.csv'}?speed=100", "--seconds", "0.3", "-o", str(out / "p.csv")], expect="ok"))
+    if (data / "mocap").is_dir():
+        for bvh in sorted((data / "mocap").glob("*.bvh")):
+            cases.append(Case(f"ok/bvh-info-{bvh.stem}", q + ["bvh", "info", str(bvh)], expect="ok"))
+    return cases
+
+
+def _limit(limit_mb: int):
+    def apply() -> None:
+        os.setpgrp()
+        if limit_mb:
+            resource.setrlimit(resource.RLIMIT_AS, (limit_mb * 2**20, limit_mb * 2**20))
+        os.nice(10)
+
+    return apply
+
+
+def _peak_rss_mb(pid: int, marker: str) -> float | None:
+    """The child's high-water RSS from /proc, once it runs our command (before its exec the
+    child is a copy of this process, whose size says nothing; ru_maxrss keeps that copy's)."""
+    try:
+        if marker not in Path(f"/proc/{pid}/cmdline").read_bytes().decode("utf-8", "replace"):
+            return None
+        for line in Path(f"/proc/{pid}/status").read_text().splitlines():
+            if line.startswith("VmHWM:"):
+                return int(line.split()[1]) / 1024
+    except OSError:
+        pass
+    return None
+
+
+def run_case(case: Case, timeout: float, limit_mb: int, env: dict) -> Outcome:
+    with tempfile.TemporaryFile() as err, tempfile.TemporaryFile() as so:
+        start = time.monotonic()
+        p = subprocess.Popen([sys.executable, *case.argv], stdin=subprocess.DEVNULL, stdout=so, stderr=err,
+                             cwd=ROOT, env=env, preexec_fn=_limit(limit_mb))
+        rc = None
+        rss = 0.0
+        marker = case.argv[1] if len(case.argv) > 1 else sys.executable
+        while True:
+            rss = max(rss, _peak_rss_mb(p.pid, marker) or 0.0)
+            pid, status, _ = os.wait4(p.pid, os.WNOHANG)
+            if pid:
+                rc = os.waitstatus_to_exitcode(status)
+                break
+            if time.monotonic() - start > timeout:
+                os.killpg(p.pid, signal.SIGKILL)
+                os.wait4(p.pid, 0)
+                break
+            time.sleep(0.02)
+        p.returncode = rc if rc is not None else -9  # reaped by wait4 already
+        seconds = time.monotonic() - start
+        err.seek(0)
+        text = err.read().decode("utf-8", "replace")
+    return Outcome(case, rc, seconds, rss, text)
+
+
+def judge(o: Outcome, max_rss_mb: float) -> str:
+    if o.rc is None:
+        return "hang"
+    if "Traceback" in o.stderr:
+        return "memory" if "MemoryError" in o.stderr else "traceback"
+    if o.rss_mb > max_rss_mb:
+        return "memory"
+    if o.case.expect == "ok":
+        return "ok" if o.rc == 0 else "refused-valid"
+    if o.rc == 0:
+        return "silent-accept"
+    lines = [ln for ln in o.stderr.splitlines() if ln.strip()]
+    if o.rc != 2:
+        return f"exit-{o.rc}"
+    # the refusal is the last line: "quickjab CMD: ..." or argparse's "quickjab CMD: error: ..."
+    # (status lines such as "no Wiimote found: playing from the keyboard" may come before it)
+    return "ok" if lines and lines[-1].startswith("quickjab") else "no-message"
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--only", action="append", default=[], help="run the cases whose name contains this (repeatable)")
+    ap.add_argument("--timeout", type=float, default=120.0, help="seconds before a run counts as a hang (default 120)")
+    ap.add_argument("--limit-mb", type=int, default=3072, help="address-space limit per run (default 3072)")
+    ap.add_argument("--max-rss-mb", type=float, default=600.0, help="peak RSS that counts as a blow-up (default 600)")
+    ap.add_argument("--big-mb", type=int, default=100, help="size of the big-CSV case (0: none)")
+    ap.add_argument("--keep", default=None, help="build the inputs here (default: a temporary directory)")
+    ap.add_argument("--json", action="store_true", help="one JSON line per run")
+    args = ap.parse_args(argv)
+    env = {**os.environ, "PYTHONPATH": str(ROOT), "SDL_VIDEODRIVER": "dummy", "SDL_AUDIODRIVER": "dummy",
+           "XDG_DATA_HOME": tempfile.mkdtemp(prefix="qj-campaign-data-")}
+    tmp = tempfile.TemporaryDirectory() if args.keep is None else None
+    d = Path(args.keep or tmp.name)  # type: ignore[union-attr]
+    d.mkdir(parents=True, exist_ok=True)
+    cases = build_cases(d, args.big_mb)
+    if args.only:
+        cases = [c for c in cases if any(w in c.name for w in args.only)]
+    counts: dict[str, int] = {}
+    peak = 0.0
+    for c in cases:
+        o = run_case(c, args.timeout, args.limit_mb, env)
+        o.verdict = judge(o, args.max_rss_mb)
+        counts[o.verdict] = counts.get(o.verdict, 0) + 1
+        peak = max(peak, o.rss_mb)
+        last = (o.stderr.strip().splitlines() or [""])[-1][:160]
+        if args.json:
+            print(json.dumps({"case": c.name, "verdict": o.verdict, "rc": o.rc, "s": round(o.seconds, 2),
+                              "rss_mb": round(o.rss_mb, 1), "stderr": last}), flush=True)
+        elif o.verdict != "ok":
+            print(f"{o.verdict:<14} {c.name:<44} rc={o.rc} {o.seconds:6.1f}s {o.rss_mb:7.0f}MB  {last}", flush=True)
+    bad = sum(v for k, v in counts.items() if k != "ok")
+    print(f"{len(cases)} runs: " + ", ".join(f"{k} {v}" for k, v in sorted(counts.items())) + f"; peak RSS {peak:.0f} MB")
+    if tmp is not None:
+        tmp.cleanup()
+    return 1 if bad else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
