@@ -118,23 +118,40 @@ def test_back_to_back_motions_each_start_once_the_template_is_consumed(templates
     assert [e["action"] for e in without if e["event"] == "start"] == ["jab"]
 
 
-def test_discard_after_character_finished_until_discard_frames(templates):
+def _discard_states(templates, swing_g: float) -> tuple[list, list, DualBufferRecognizer]:
     rec = DualBufferRecognizer(templates, discard_frames=20, null_frames=6)
     events = run(rec, np.vstack([rest(10), bump(0, 3.0)[:12]]))
     assert [e["event"] for e in events] == ["start"]
     rec.character_finished()
-    # keep moving hard: frames are discarded, no new action for exactly discard_frames frames
-    busy = np.tile(G + np.array([2.0, 0.0, 0.0]), (40, 1))
-    busy[::2, 0] -= 4.0
+    # keep moving: `swing_g` away from rest every frame, never a quiet frame
+    busy = np.tile(G + np.array([swing_g, 0.0, 0.0]), (50, 1))
+    busy[::2, 0] -= 2 * swing_g
     got, states = [], []
     for i, f in enumerate(busy):
         for e in rec.push(f):
             got.append((i, e))
         states.append(rec.state)
     assert got[0][1]["event"] == "end" and got[0][1]["reason"] == "character_finished" and got[0][0] == 0
+    return got, states, rec
+
+
+def test_discard_after_character_finished_until_discard_frames(templates):
+    # a hand that has calmed under half the motion's peak, but still over the gate: exactly
+    # discard_frames frames are discarded, then the next frame is an onset
+    got, states, rec = _discard_states(templates, 0.6)
+    assert rec.noise_g < 0.6
     assert states[:19] == ["discard"] * 19 and states[19] == "idle"  # 20 frames discarded
-    assert states[20] == "active" and rec.onset_frame == rec.frame - 19  # the next frame is an onset
+    assert states[20] == "active"
     assert all(i >= 20 for i, e in got[1:])
+
+
+def test_discard_holds_while_the_hand_moves_like_the_discarded_motion(templates):
+    # still moving as hard as the punch itself (a full blow's rest or its return): the discard
+    # holds past discard_frames, up to DISCARD_HOLD x discard_frames = 30 frames
+    got, states, rec = _discard_states(templates, 2.0)
+    assert states[:29] == ["discard"] * 29 and states[29] == "idle"
+    assert states[30] == "active" and rec.onset_frame == rec.frame - (49 - 30)  # the next frame is an onset
+    assert all(i >= 30 for i, e in got[1:])
 
 
 def test_discard_ends_at_null_signal(templates):
