@@ -1,6 +1,6 @@
 """The boxer's skeleton: 17 joints, the bones between them and their lengths.
 
-Coordinates (CONTRACTS.md): metres, y up. A boxer's LOCAL frame has its origin on the ground
+Coordinates (docs/motion.md): metres, y up. A boxer's LOCAL frame has its origin on the ground
 under the pelvis, +z forward (the way the boxer faces), +x the boxer's right. A boxer is
 placed in the world by a root transform (x, z, yaw); yaw = 0 faces +z and a positive yaw
 turns the boxer towards its right (+x): local forward (0, 0, 1) becomes (sin yaw, 0, cos yaw)

@@ -143,7 +143,7 @@ def grid_distance2(a, b, n_angle: int):
 
 @dataclass
 class Situation:
-    """A live situation, from the point of view of the boxer asking (the CONTRACTS.md API).
+    """A live situation, from the point of view of the boxer asking (the run-time API of docs/interaction_graph.md).
 
     Angles are radians (see the module docstring); phases are clip frames at 60 Hz, as
     `PlayerController.frame` reports them. Actions are names; "guard" means idle.
