@@ -132,7 +132,7 @@ def test_quickjab_scope_runs_an_installed_plugin(tmp_path):
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(REPO), str(site)]),
            "SDL_VIDEODRIVER": "dummy", "SDL_AUDIODRIVER": "dummy"}
     out = tmp_path / "scope.png"
-    r = subprocess.run([sys.executable, "-m", "game.cli", "scope", "--headless", "--frames", "20",
+    r = subprocess.run([sys.executable, "-m", "tools.cli", "scope", "--headless", "--frames", "20",
                         "--source", "myimu://?rate=100&sensors=2", "--screenshot", str(out)],
                        cwd=tmp_path, env=env, capture_output=True, text=True, timeout=120)
     assert r.returncode == 0, r.stderr
