@@ -94,13 +94,6 @@ def impose_bone_lengths(posture: np.ndarray, lengths: np.ndarray | None = None) 
     return out
 
 
-def yaw_matrix(yaw: float) -> np.ndarray:
-    """3x3 rotation about y taking local to world for a boxer with this yaw (see module doc)."""
-    c, s = np.cos(yaw), np.sin(yaw)
-    # columns: where local x, y, z go
-    return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
-
-
 def local_to_world(points: np.ndarray, root: tuple[float, float, float]) -> np.ndarray:
     """Points (..., 3) in a boxer's local frame -> world, for root = (x, z, yaw)."""
     # written out rather than `@`: matmul goes to BLAS, whose kernels round differently on

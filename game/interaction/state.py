@@ -37,11 +37,6 @@ def wrap_angle(a):
     return (np.asarray(a) + math.pi) % TWO_PI - math.pi
 
 
-def heading_vector(yaw):
-    """Unit forward (x, z) of a boxer with this yaw: yaw 0 faces +z, positive yaw turns to +x."""
-    return np.stack([np.sin(yaw), np.cos(yaw)], axis=-1)
-
-
 def bearing(from_xz, from_yaw, to_xz):
     """Angle of `to` seen from a boxer at `from_xz` facing `from_yaw` (vectorized)."""
     d = np.asarray(to_xz) - np.asarray(from_xz)
