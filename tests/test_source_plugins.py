@@ -106,6 +106,13 @@ def test_a_plugin_whose_module_is_missing_is_a_source_error(tmp_path, monkeypatc
         open_source("myimu://")
 
 
+def test_a_plugin_naming_a_missing_factory_is_a_source_error(tmp_path, monkeypatch, registry):
+    site = install(tmp_path / "site", schemes={"myimu": "myimu_source:open_nothing"})
+    monkeypatch.syspath_prepend(str(site))
+    with pytest.raises(SourceError, match="myimu_source:open_nothing cannot be loaded"):
+        open_source("myimu://")
+
+
 def test_known_schemes_never_scan_the_installed_packages(monkeypatch, registry):
     def no_scan():
         raise AssertionError("entry points scanned for a known scheme")

@@ -136,7 +136,7 @@ def _load_plugin(scheme: str) -> None:
     (ep,) = declared.values()
     try:
         factory = ep.load()
-    except ImportError as exc:
+    except (ImportError, AttributeError) as exc:  # the package, or the name in it, is missing
         raise SourceError(f"{scheme}:// is not available here: {ep.value} cannot be loaded ({exc})") from None
     if not callable(factory):
         raise SourceError(f"{scheme}://: entry point {ep.value} is not a source factory (url, clock) -> Source")
