@@ -1,4 +1,4 @@
-"""The source contract (ARCHITECTURE.md) and the URL scheme registry.
+"""The source contract (docs/sources.md) and the URL scheme registry.
 
 A source is opened from a URL, as pyserial opens ports. Built-in schemes are imported
 lazily by module name so that opening `replay://` never loads hidapi or pyserial; a
