@@ -1,4 +1,4 @@
-"""The layering, as the issue and the design state it: tools -> game -> engine -> firmware_bridge, never the other way.
+"""The layering: tools -> game -> engine -> firmware_bridge, never the other way.
 Every module's imports are read from its source (ast), wherever they sit: at the top, inside a
 function (the lazy imports that keep start-up light) or under TYPE_CHECKING. A string that names
 a module of a forbidden package exactly (an importlib.import_module table) counts too."""
