@@ -63,7 +63,6 @@ class FrameBudget:
         self.frame_overruns = 0
         self.steps_per_frame: Counter[int] = Counter()
         self._frame_start = 0
-        self._frame_span0 = 0
         self._accounted = 0
         self.register(WAIT, 0.0)
         self.register(UNACCOUNTED, 0.0)
@@ -84,7 +83,6 @@ class FrameBudget:
     # -- recording -----------------------------------------------------------------------
     def begin_frame(self, start_ns: int) -> None:
         self._frame_start = start_ns
-        self._frame_span0 = self.spans
         self._accounted = 0
 
     def add_span(self, stage: int, step: int, start_ns: int, dur_ns: int, depth: int = 0) -> None:

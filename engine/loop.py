@@ -79,7 +79,7 @@ class FixedStepLoop:
     def set_render(self, fn: RenderFn, budget_ms: float, name: str = "render") -> None:
         """Run fn(alpha) once per rendered frame. The name must start with 'render'."""
         if not name.startswith("render"):
-            raise ValueError("the render stage's name starts with 'render' (FORMATS.md)")
+            raise ValueError("the render stage's name starts with 'render' (docs/formats.md)")
         self._render = (self.budget.register(name, budget_ms), fn)
 
     def wrap_stages(self, wrap: Callable[[str, Callable], Callable]) -> None:

@@ -1,4 +1,4 @@
-"""The recording CSV of FORMATS.md: a reader, a whole-file writer and a streaming writer.
+"""The recording CSV of docs/formats.md: a reader, a whole-file writer and a streaming writer.
 
 Readers accept any `# key: value` metadata, one- or two-hand columns, an optional label and
 extra columns (ignored). A bad file raises RecordingError naming the file and line; the CLI
@@ -243,7 +243,7 @@ def _file_head(sensors: int, meta: dict[str, str]) -> str:
 
 
 def write_recording(path: str | os.PathLike, rec: Recording) -> None:
-    """Write a whole recording (FORMATS.md layout, label column always present)."""
+    """Write a whole recording (docs/formats.md layout, label column always present)."""
     buf = io.StringIO()
     buf.write(_file_head(rec.sensors, rec.meta))
     for t, a, lab in zip(rec.t, rec.accel, rec.labels, strict=True):

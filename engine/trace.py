@@ -1,4 +1,4 @@
-"""Export a FrameBudget to the Chrome Trace Event Format (FORMATS.md), and read one back.
+"""Export a FrameBudget to the Chrome Trace Event Format (docs/formats.md), and read one back.
 
 One `frame` X event per rendered frame; inside it one X event per stage per step, the render
 stage (its name starts with `render`) and `wait`; spans inside a stage nest in it. A stage

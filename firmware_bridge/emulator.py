@@ -19,6 +19,7 @@ import tty
 from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Protocol
 
 import numpy as np
 
@@ -73,11 +74,16 @@ def synthetic_motion(sensors: int = 2, seed: int = 0) -> Signal:
     return signal
 
 
-def recording_motion(path: str | os.PathLike) -> tuple[Signal, int]:
-    """A recording (engine.recording) played in a loop, interpolated at any instant."""
-    from engine.recording import read_recording
+class RecordingLike(Protocol):
+    t: np.ndarray  # (n,) seconds, increasing
+    accel: np.ndarray  # (n, sensors, 3) in g
+    sensors: int
 
-    rec = read_recording(path)
+
+def recording_motion(path: str | os.PathLike, read: Callable[[str | os.PathLike], RecordingLike]) -> tuple[Signal, int]:
+    """A recording played in a loop, interpolated at any instant. `read` reads the file (the
+    host passes engine.recording.read_recording): the bridge never imports the engine."""
+    rec = read(path)
     t = rec.t - rec.t[0]
     period = float(np.median(np.diff(t))) if len(t) > 1 else 1 / 60
     length = float(t[-1]) + period

@@ -1,5 +1,5 @@
 """The boxing game: actions and motion graph, controllers, the Interaction Graph at run time,
-match rules, rendering, and the `quickjab` command."""
+match rules, rendering (the `quickjab` command is tools/cli.py)."""
 
 # The game's own source scheme, keyboard://, is registered when the package loads (it needs the
 # action library and the virtual player, so it lives here rather than in engine.sensors). Its

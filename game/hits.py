@@ -7,7 +7,7 @@ that meets B's gloves or forearms while B's GuardWindow covers the target is rep
 blocked hit; a fist that reaches the head or body through an active guard window (a parry
 or block that was too late to stop it physically) is reported with blocked=True as well.
 
-Event (CONTRACTS.md): {"attacker": 0|1, "target": "head"|"body", "hand": "l"|"r",
+Event (docs/motion.md, "Boxers and hits"): {"attacker": 0|1, "target": "head"|"body", "hand": "l"|"r",
 "speed": m/s, "direction": (3,), "blocked": bool}; extras: "damage" from the window,
 "point" (3,) where it landed.
 """

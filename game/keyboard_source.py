@@ -24,7 +24,6 @@ from engine.sensors.source import (
     SourceError,
     SourceState,
     parse_source_url,
-    register_scheme,
     url_number,
 )
 
@@ -162,4 +161,5 @@ def open_keyboard(url: str, clock: Clock) -> KeyboardSource:
     return KeyboardSource(url, clock, load_library(), profile=profile, seed=seed, auto=auto, keys=keys)
 
 
-register_scheme("keyboard", open_keyboard)
+# keyboard:// is registered once, by game/__init__.py (which imports this module lazily):
+# a scheme has one owner.

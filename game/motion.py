@@ -73,7 +73,7 @@ class PlayerController:
         self._from_event = False
 
     def on_event(self, event: dict) -> None:
-        """Apply one recognizer event (FORMATS.md keys)."""
+        """Apply one recognizer event (docs/formats.md keys)."""
         kind = event.get("event")
         name = event.get("action")
         if kind in ("start", "switch"):

@@ -3,8 +3,7 @@
 The static part (arena, apron, canvas, the ropes behind the boxers) is drawn once per window
 size into a cached surface; each frame blits it, draws shadows, both bodies as shaded limbs,
 torso and head, sorted far to near, then the ropes in front and the hit flashes. Bodies come in
-as (17, 3) world joints, already interpolated with the loop's alpha by the caller
-(`lerp_joints`).
+as (17, 3) world joints, already interpolated with the loop's alpha by the caller.
 """
 
 from __future__ import annotations
@@ -73,11 +72,6 @@ def _aacircle(surf: pygame.Surface, color, x: float, y: float, r: float) -> None
     """An antialiased circle outline: gfxdraw's (2-6 us a call) rather than pygame.draw's
     (11-36 us), on integer pixels as gfxdraw takes them."""
     gfxdraw.aacircle(surf, int(round(x)), int(round(y)), max(1, int(round(r))), color)
-
-
-def lerp_joints(prev: np.ndarray, curr: np.ndarray, alpha: float) -> np.ndarray:
-    """The pose between two steps: prev + alpha (curr - prev)."""
-    return prev + (curr - prev) * alpha
 
 
 def _shifted(kind: int, args: tuple, offset: np.ndarray) -> tuple:

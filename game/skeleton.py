@@ -1,6 +1,6 @@
 """The boxer's skeleton: 17 joints, the bones between them and their lengths.
 
-Coordinates (CONTRACTS.md): metres, y up. A boxer's LOCAL frame has its origin on the ground
+Coordinates (docs/motion.md): metres, y up. A boxer's LOCAL frame has its origin on the ground
 under the pelvis, +z forward (the way the boxer faces), +x the boxer's right. A boxer is
 placed in the world by a root transform (x, z, yaw); yaw = 0 faces +z and a positive yaw
 turns the boxer towards its right (+x): local forward (0, 0, 1) becomes (sin yaw, 0, cos yaw)
@@ -92,13 +92,6 @@ def impose_bone_lengths(posture: np.ndarray, lengths: np.ndarray | None = None) 
         d *= (length / np.maximum(norm, 1e-9))
         out[..., level, :] = out[..., parents, :] + d
     return out
-
-
-def yaw_matrix(yaw: float) -> np.ndarray:
-    """3x3 rotation about y taking local to world for a boxer with this yaw (see module doc)."""
-    c, s = np.cos(yaw), np.sin(yaw)
-    # columns: where local x, y, z go
-    return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
 
 
 def local_to_world(points: np.ndarray, root: tuple[float, float, float]) -> np.ndarray:

@@ -74,7 +74,7 @@ class NaiveReader:
 
 
 def start_emulator(seconds: float, rate: int, link: str) -> subprocess.Popen:
-    cmd = [sys.executable, "-m", "game.cli", "bridge", "emulate", "--quiet", "--seconds", str(seconds),
+    cmd = [sys.executable, "-m", "tools.cli", "bridge", "emulate", "--quiet", "--seconds", str(seconds),
            "--rate", str(rate), "--link", link]
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, text=True)
     line = proc.stdout.readline()

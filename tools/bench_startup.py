@@ -29,7 +29,7 @@ MARK = "STARTUP-PEAK-KB "
 # Each child reports its own peak resident memory when it exits, on stderr.
 REPORT = (f"\ndef _peak():\n    for line in open('/proc/self/status'):\n        if line.startswith('VmHWM:'):\n"
           f"            import sys; sys.stderr.write('{MARK}' + line.split()[1] + '\\n')\n")
-PLAY_CODE = REPORT + f"import sys\nsys.argv = ['quickjab', *{PLAY!r}]\nfrom game.cli import main\ntry:\n    code = main()\nfinally:\n    _peak()\nsys.exit(code)\n"
+PLAY_CODE = REPORT + f"import sys\nsys.argv = ['quickjab', *{PLAY!r}]\nfrom tools.cli import main\ntry:\n    code = main()\nfinally:\n    _peak()\nsys.exit(code)\n"
 PEER_CODE = REPORT + "import numpy, pygame\n_peak()\n"
 
 

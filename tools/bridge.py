@@ -93,11 +93,12 @@ def check_emulate_args(args: argparse.Namespace) -> None:
 
 
 def run_emulate(args: argparse.Namespace) -> int:
+    from engine.recording import read_recording
     from firmware_bridge.emulator import Emulator, Faults, recording_motion, synthetic_motion
 
     check_emulate_args(args)
     if args.replay:
-        signal, sensors = recording_motion(args.replay)  # RecordingError names the file
+        signal, sensors = recording_motion(args.replay, read_recording)  # RecordingError names the file
     else:
         signal, sensors = synthetic_motion(args.sensors or 2, args.seed or 0), args.sensors or 2
     sensors = min(args.sensors or sensors, sensors)

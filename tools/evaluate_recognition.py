@@ -158,7 +158,7 @@ def _decisions(events: Iterable[dict]) -> tuple[str | None, str | None, int, int
         elif kind == "end" and first is not None:
             break
         elif kind == "reject" and first is not None:
-            final = None  # the start was called off (FORMATS.md): no action in the end
+            final = None  # the start was called off (docs/formats.md): no action in the end
             break
     return first, final, last_np, at
 

@@ -394,7 +394,7 @@ def bad_mocap(d: Path, mocap: Path) -> dict[str, str]:
 
 
 def build_cases(d: Path, big_mb: int, bomb_gb: float = 1.5) -> list[Case]:
-    q = ["-m", "game.cli"]
+    q = ["-m", "tools.cli"]
     good_rec = _write(d, "good.csv", GOOD_REC)
     tpl = str(ASSETS / "templates.npz")
     out = d / "out"

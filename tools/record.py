@@ -1,5 +1,5 @@
 """`quickjab record --source URL -o file.csv [--seconds S] [--label NAME]`: record any source
-to the recording CSV of FORMATS.md, flushed at least every 0.25 s."""
+to the recording CSV of docs/formats.md, flushed at least every 0.25 s."""
 
 from __future__ import annotations
 
@@ -62,7 +62,7 @@ def record(url: str, output: str, seconds: float | None, label: str = "", poll_s
 
     A source whose sensor count changes mid-run (a board rebooting with one IMU fewer or more)
     continues in a new file, out.2.csv and so on, whose header has the new columns: a row never
-    has another width than its file's header (FORMATS.md), so every file reads back."""
+    has another width than its file's header (docs/formats.md), so every file reads back."""
     source = open_source(url)
     meta = {"source": source.description or url, "recorded_from": url}
     writer: RecordingWriter | None = None

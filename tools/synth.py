@@ -6,7 +6,7 @@
   quickjab synth --templates -o game/assets/templates.npz  the shipped default templates, built
                                                            with engine.recognition from 3
                                                            synthesized experienced trials/action
-Both are written in the recording CSV of FORMATS.md; `--seed` makes them reproducible.
+Both are written in the recording CSV of docs/formats.md; `--seed` makes them reproducible.
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Trials on disk (FORMATS.md): `<root>/<action>/<anything>.csv`, each resampled to 60 Hz frames."""
+"""Trials on disk (docs/formats.md): `<root>/<action>/<anything>.csv`, each resampled to 60 Hz frames."""
 
 from __future__ import annotations
 

@@ -1,9 +1,12 @@
-"""The source contract (ARCHITECTURE.md) and the URL scheme registry.
+"""The source contract (docs/sources.md) and the URL scheme registry.
 
 A source is opened from a URL, as pyserial opens ports. Built-in schemes are imported
 lazily by module name so that opening `replay://` never loads hidapi or pyserial; a
 package outside `engine` adds its own with `register_scheme` (the game registers
-`keyboard://`).
+`keyboard://`), or, installed on its own, declares it as an entry point of the
+`quickjab.sources` group (`myimu = "myimu_pkg:open_myimu"`), loaded the first time a URL
+names a scheme nobody registered (docs/sources.md). A scheme has one owner: registering it
+twice is an error, not a silent overwrite.
 """
 
 from __future__ import annotations
@@ -94,13 +97,59 @@ _builtin_modules: dict[str, str] = {
 }
 
 
+ENTRY_POINT_GROUP = "quickjab.sources"
+
+
 def register_scheme(scheme: str, factory: SourceFactory) -> None:
-    """Make `scheme://...` URLs open with `factory(url, clock)`."""
-    _factories[scheme.lower()] = factory
+    """Make `scheme://...` URLs open with `factory(url, clock)`. Raises ValueError when another
+    factory already owns the scheme (registering the same factory again is harmless)."""
+    scheme = scheme.lower()
+    owner = _factories.get(scheme)
+    if owner is not None and owner is not factory:
+        raise ValueError(
+            f"source scheme {scheme!r} is already registered by {_name_of(owner)}; "
+            f"{_name_of(factory)} cannot register it too"
+        )
+    _factories[scheme] = factory
 
 
-def registered_schemes() -> list[str]:
-    return sorted(set(_factories) | set(_builtin_modules))
+def _name_of(factory: object) -> str:
+    return f"{getattr(factory, '__module__', '?')}.{getattr(factory, '__qualname__', repr(factory))}"
+
+
+def _plugin_entry_points() -> list:
+    """The installed `quickjab.sources` entry points. Read only when a URL names a scheme nobody
+    registered, so that start-up never scans the installed packages."""
+    from importlib.metadata import entry_points
+
+    return list(entry_points(group=ENTRY_POINT_GROUP))
+
+
+def _load_plugin(scheme: str) -> None:
+    """Register `scheme` from its entry point, if an installed package declares one."""
+    declared = {ep.value: ep for ep in _plugin_entry_points() if ep.name.lower() == scheme}
+    if not declared:
+        return
+    if len(declared) > 1:
+        raise SourceError(f"source scheme {scheme!r} is declared by more than one installed package: "
+                          f"{', '.join(sorted(declared))}")
+    (ep,) = declared.values()
+    try:
+        factory = ep.load()
+    except (ImportError, AttributeError) as exc:  # the package, or the name in it, is missing
+        raise SourceError(f"{scheme}:// is not available here: {ep.value} cannot be loaded ({exc})") from None
+    if not callable(factory):
+        raise SourceError(f"{scheme}://: entry point {ep.value} is not a source factory (url, clock) -> Source")
+    if _factories.get(scheme) is None:  # the module may have registered it on import
+        register_scheme(scheme, factory)
+
+
+def registered_schemes(*, plugins: bool = False) -> list[str]:
+    """Known schemes; with `plugins`, also those installed packages declare (scans them)."""
+    names = set(_factories) | set(_builtin_modules)
+    if plugins:
+        names |= {ep.name.lower() for ep in _plugin_entry_points()}
+    return sorted(names)
 
 
 def parse_source_url(url: str) -> tuple[str, str, dict[str, str]]:
@@ -156,9 +205,11 @@ def open_source(url: str, *, clock: Clock | None = None) -> Source:
         except ModuleNotFoundError as exc:
             # a scheme whose module (or the library it needs, e.g. hidapi) is not installed
             raise SourceError(f"{scheme}:// is not available here: module {exc.name!r} is missing") from None
+    if scheme not in _factories and scheme not in _builtin_modules:
+        _load_plugin(scheme)
     factory = _factories.get(scheme)
     if factory is None:
         raise SourceError(
-            f"unknown source scheme {scheme!r} in {url!r}; known: {', '.join(registered_schemes())}"
+            f"unknown source scheme {scheme!r} in {url!r}; known: {', '.join(registered_schemes(plugins=True))}"
         )
     return factory(url, clock or time.perf_counter)

@@ -290,7 +290,6 @@ def step(b: Bouts, rules: BoutRules, rewards: Rewards) -> StepResult:
     """Advance every bout by one 60 Hz step (call `start` for choosing boxers first)."""
     t = b.table
     n = b.n
-    rows = np.arange(n)
     prev_pos = b.pos.copy()
     prev_f = np.clip(b.frame, 0, None)
     # every step each boxer turns part of the way to face the other (the game does the same)
@@ -376,7 +375,6 @@ def step(b: Bouts, rules: BoutRules, rewards: Rewards) -> StepResult:
                     r = np.flatnonzero(parried[:, i])
                     if len(r):
                         _interrupt(b, r, i, t.react_stagger)
-    del rows
     return StepResult(gain=gain, landed=landed, blocked=blocked, damage=damage)
 
 

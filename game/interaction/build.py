@@ -29,7 +29,7 @@ from .solve import solve
 from .state import StateGrid, wrap_angle
 from .table import GraphTable
 
-# the 13 controllable actions of CONTRACTS.md, in its order
+# the 13 controllable actions (docs/interaction_graph.md)
 CHOOSABLE = ["straight_l", "straight_r", "uppercut_l", "uppercut_r", "hook_l", "hook_r",
              "parry_l", "parry_r", "block", "step_forward", "step_back", "step_left", "step_right"]
 

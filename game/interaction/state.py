@@ -37,11 +37,6 @@ def wrap_angle(a):
     return (np.asarray(a) + math.pi) % TWO_PI - math.pi
 
 
-def heading_vector(yaw):
-    """Unit forward (x, z) of a boxer with this yaw: yaw 0 faces +z, positive yaw turns to +x."""
-    return np.stack([np.sin(yaw), np.cos(yaw)], axis=-1)
-
-
 def bearing(from_xz, from_yaw, to_xz):
     """Angle of `to` seen from a boxer at `from_xz` facing `from_yaw` (vectorized)."""
     d = np.asarray(to_xz) - np.asarray(from_xz)
@@ -143,7 +138,7 @@ def grid_distance2(a, b, n_angle: int):
 
 @dataclass
 class Situation:
-    """A live situation, from the point of view of the boxer asking (the CONTRACTS.md API).
+    """A live situation, from the point of view of the boxer asking (the run-time API of docs/interaction_graph.md).
 
     Angles are radians (see the module docstring); phases are clip frames at 60 Hz, as
     `PlayerController.frame` reports them. Actions are names; "guard" means idle.

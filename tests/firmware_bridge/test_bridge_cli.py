@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from engine.recording import Recording, read_recording, write_recording
-from game.cli import main
+from tools.cli import main
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -49,12 +49,12 @@ def test_emulate_replay_then_record_end_to_end(tmp_path):
     rec_in = tmp_path / "in.csv"
     write_recording(rec_in, Recording(t, accel))
     link = tmp_path / "port"
-    emu = subprocess.Popen([sys.executable, "-m", "game.cli", "bridge", "emulate", "--replay", str(rec_in), "--seconds", "5",
+    emu = subprocess.Popen([sys.executable, "-m", "tools.cli", "bridge", "emulate", "--replay", str(rec_in), "--seconds", "5",
                             "--link", str(link), "--quiet"], cwd=REPO, stdout=subprocess.PIPE, text=True)
     try:
         assert emu.stdout.readline().startswith("port: /dev/pts/")
         out = tmp_path / "out.csv"
-        rec = subprocess.run([sys.executable, "-m", "game.cli", "record", "--source", f"serial://{link}", "-o", str(out),
+        rec = subprocess.run([sys.executable, "-m", "tools.cli", "record", "--source", f"serial://{link}", "-o", str(out),
                               "--seconds", "3"], cwd=REPO, capture_output=True, text=True, timeout=30)
         assert rec.returncode == 0, rec.stderr
     finally:
@@ -73,7 +73,7 @@ def test_emulate_replay_then_record_end_to_end(tmp_path):
 def test_emulate_prints_a_port_that_opens(tmp_path):
     import serial
 
-    proc = subprocess.Popen([sys.executable, "-m", "game.cli", "bridge", "emulate", "--seconds", "2", "--quiet"],
+    proc = subprocess.Popen([sys.executable, "-m", "tools.cli", "bridge", "emulate", "--seconds", "2", "--quiet"],
                             cwd=REPO, stdout=subprocess.PIPE, text=True)
     try:
         path = proc.stdout.readline().split()[1]

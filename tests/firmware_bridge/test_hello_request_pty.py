@@ -61,7 +61,7 @@ def read_for(fd: int, dec: protocol.Decoder, frames: list, seconds: float) -> No
 
 def measure(attempt: int) -> tuple[int, int, int]:
     """One run of 100 requests: (requests measured, late SAMPLEs, requests left out)."""
-    emu = subprocess.Popen([sys.executable, "-m", "game.cli", "bridge", "emulate", "--seconds", "60", "--seed",
+    emu = subprocess.Popen([sys.executable, "-m", "tools.cli", "bridge", "emulate", "--seconds", "60", "--seed",
                             str(attempt + 1), "--quiet"], cwd=REPO, stdout=subprocess.PIPE, text=True,
                            env={**os.environ, "PYTHONPATH": str(REPO)})
     try:

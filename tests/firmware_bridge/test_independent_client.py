@@ -109,7 +109,7 @@ class Client:
 
 def run_emulator(tmp_path: Path, *options: str) -> tuple[Client, dict[str, int]]:
     link = tmp_path / "bridge"
-    emu = subprocess.Popen([sys.executable, "-m", "game.cli", "bridge", "emulate", "--link", str(link), *options],
+    emu = subprocess.Popen([sys.executable, "-m", "tools.cli", "bridge", "emulate", "--link", str(link), *options],
                            cwd=REPO, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                            env={**os.environ, "PYTHONPATH": str(REPO)})
     client = Client()

@@ -12,7 +12,7 @@ def graph_path(tmp_path_factory) -> str:
 
     if DEFAULT_GRAPH.exists():
         return str(DEFAULT_GRAPH)
-    from game.cli import main
+    from tools.cli import main
 
     out = tmp_path_factory.mktemp("graph") / "graph.npz"
     assert main(["graph", "build", "-o", str(out), "--states", "3000", "--bouts", "256", "--quiet"]) == 0

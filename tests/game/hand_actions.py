@@ -1,5 +1,5 @@
 """A small hand-made action table for unit tests of the interaction graph (not game data):
-objects with the CONTRACTS.md Action attributes the bout model reads."""
+objects with the game.actions.Action attributes the bout model reads."""
 
 from __future__ import annotations
 

@@ -165,7 +165,7 @@ def test_bad_action_file_names_itself(tmp_path):
 def test_contact_sheet_command_draws_every_action(tmp_path):
     import pygame
 
-    from game.cli import main
+    from tools.cli import main
 
     out = tmp_path / "sheet.png"
     assert main(["actions", "sheet", "-o", str(out)]) == 0

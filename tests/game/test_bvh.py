@@ -18,8 +18,8 @@ from game.bvh import (
     retarget,
     write_bvh,
 )
-from game.cli import main
 from game.skeleton import BONE_LENGTHS, JOINTS, bone_lengths, joint_index
+from tools.cli import main
 
 LIB = load_library()
 CMU = "mocap/cmu_02_05_punch_strike.bvh"

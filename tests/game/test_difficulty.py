@@ -112,7 +112,7 @@ def test_virtual_duel_plays_the_real_session(graph_path):  # noqa: F811
 
 
 def test_graph_duel_virtual_bad_difficulty_exits_2(capsys):
-    from game.cli import main
+    from tools.cli import main
 
     assert main(["graph", "duel", "--opponent", "virtual", "--difficulty", "brutal"]) == 2
     assert "--difficulty" in capsys.readouterr().err

@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from game.cli import main
+from tools.cli import main
 
 sys.path.insert(0, str(Path(__file__).parent))
 from game_graph import graph_path  # noqa: E402,F401 - the fixture
@@ -111,7 +111,7 @@ def test_no_display_is_a_clear_error_not_an_invisible_window(command):
     env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY", "SDL_VIDEODRIVER")}
     env.update(PYTHONPATH=str(REPO), SDL_AUDIODRIVER="dummy")
     source = "demo://" if command == "scope" else "keyboard://"
-    r = subprocess.run([sys.executable, "-m", "game.cli", command, "--source", source, "--frames", "100000"],
+    r = subprocess.run([sys.executable, "-m", "tools.cli", command, "--source", source, "--frames", "100000"],
                        cwd=REPO, env=env, capture_output=True, text=True, timeout=120)
     assert r.returncode == 2, r.stderr
     assert "no display" in r.stderr and "--headless" in r.stderr

@@ -255,7 +255,7 @@ def test_a_corrupt_file_is_a_clear_error(small_table, tmp_path):
 def test_cli_reports_a_corrupt_file_in_one_line(tmp_path):
     path = tmp_path / "bad.npz"
     path.write_bytes(b"\x00" * 100)
-    r = subprocess.run([sys.executable, "-m", "game.cli", "graph", "info", str(path)],
+    r = subprocess.run([sys.executable, "-m", "tools.cli", "graph", "info", str(path)],
                        cwd=REPO, capture_output=True, text=True)
     assert r.returncode == 2
     assert str(path) in r.stderr and len(r.stderr.strip().splitlines()) == 1
@@ -264,7 +264,7 @@ def test_cli_reports_a_corrupt_file_in_one_line(tmp_path):
 def test_cli_info_json(small_table, tmp_path):
     path = tmp_path / "g.npz"
     small_table.save(path)
-    r = subprocess.run([sys.executable, "-m", "game.cli", "graph", "info", str(path), "--json"],
+    r = subprocess.run([sys.executable, "-m", "tools.cli", "graph", "info", str(path), "--json"],
                        cwd=REPO, capture_output=True, text=True)
     assert r.returncode == 0, r.stderr
     info = json.loads(r.stdout)

@@ -83,7 +83,7 @@ def test_shipped_graph_beats_random_and_greedy_in_a_short_duel(lib, shipped):
 
 
 def test_cli_duel_runs(tmp_path):
-    r = subprocess.run([sys.executable, "-m", "game.cli", "graph", "duel", "--bouts", "4",
+    r = subprocess.run([sys.executable, "-m", "tools.cli", "graph", "duel", "--bouts", "4",
                         "--seconds", "5", "--json"], cwd=REPO, capture_output=True, text=True)
     assert r.returncode == 0, r.stderr
     import json
@@ -94,7 +94,7 @@ def test_cli_duel_runs(tmp_path):
 
 def test_cli_build_writes_a_loadable_graph(tmp_path):
     out = tmp_path / "g.npz"
-    r = subprocess.run([sys.executable, "-m", "game.cli", "graph", "build", "-o", str(out),
+    r = subprocess.run([sys.executable, "-m", "tools.cli", "graph", "build", "-o", str(out),
                         "--states", "200", "--bouts", "64", "--quiet"],
                        cwd=REPO, capture_output=True, text=True)
     assert r.returncode == 0, r.stderr
@@ -127,7 +127,7 @@ def test_opponent_controller_drives_the_motion_controller(lib, shipped):
 
 
 def test_bench_graph_on_the_shipped_graph_agrees_with_brute_force():
-    r = subprocess.run([sys.executable, "-m", "game.cli", "bench", "graph", "--graph", str(DEFAULT_GRAPH),
+    r = subprocess.run([sys.executable, "-m", "tools.cli", "bench", "graph", "--graph", str(DEFAULT_GRAPH),
                         "--lookups", "300", "--loads", "1", "--json"],
                        cwd=REPO, capture_output=True, text=True)
     assert r.returncode == 0, r.stderr

@@ -11,8 +11,8 @@ import pygame
 
 import engine.sensors.source as source_mod
 from engine.sensors import SourceError
-from game.cli import main
 from game.hud import SWITCH_COLOR
+from tools.cli import main
 
 sys.path.insert(0, str(Path(__file__).parent))
 from game_graph import graph_path  # noqa: E402,F401 - the fixture

@@ -10,7 +10,7 @@ import tty
 from pathlib import Path
 
 from firmware_bridge import protocol
-from game.cli import main
+from tools.cli import main
 
 sys.path.insert(0, str(Path(__file__).parent))
 from game_graph import graph_path  # noqa: E402,F401 - the fixture

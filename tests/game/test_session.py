@@ -162,7 +162,7 @@ def test_a_replayed_recording_drives_the_player_through_the_wiimote_emulator(tmp
     from collections import Counter
 
     from engine.recording import read_recording
-    from game.cli import main
+    from tools.cli import main
 
     rec = tmp_path / "session.csv"
     assert main(["synth", "--session", "8", "--seed", "2", "-o", str(rec)]) == 0

@@ -109,7 +109,7 @@ def test_keys_of_each_half_drive_only_their_own_boxer() -> None:
 
 
 def test_player_two_unplugged_mid_round_pauses_both_and_resumes(tmp_path) -> None:
-    from game.cli import main
+    from tools.cli import main
 
     rec = tmp_path / "p2.csv"
     assert main(["synth", "--session", "8", "--seed", "2", "-o", str(rec)]) == 0
@@ -141,7 +141,7 @@ def test_player_two_unplugged_mid_round_pauses_both_and_resumes(tmp_path) -> Non
 
 
 def test_demo_renders_two_panels_side_on(tmp_path) -> None:
-    from game.cli import main
+    from tools.cli import main
 
     out = tmp_path / "two.png"
     assert main(["play", "--players", "2", "--demo", "--headless", "--frames", "240", "--size", "640x360",
@@ -196,8 +196,8 @@ def test_default_sources_are_two_wiimotes_else_the_keyboard_halves() -> None:
 
 
 def test_train_profile_saves_beside_the_default_set_and_play_uses_it(tmp_path, capsys) -> None:
-    from game.cli import main
     from game.userdata import profile_templates_path, user_templates_path
+    from tools.cli import main
 
     assert main(["train", "--headless", "--demo", "--source", "keyboard://?seed=3", "--actions", "straight_r",
                  "--size", "640x360", "--profile", "ana"]) == 0
@@ -218,7 +218,7 @@ def test_train_profile_saves_beside_the_default_set_and_play_uses_it(tmp_path, c
 
 
 def test_two_player_bad_input_is_one_line_and_exit_2(capsys) -> None:
-    from game.cli import main
+    from tools.cli import main
 
     assert main(["play", "--players", "2", "--headless", "--frames", "1", "--source", "replay://x.csv",
                  "--source2", "replay://x.csv"]) == 2

@@ -7,8 +7,8 @@ import pytest
 
 from engine.recording import read_recording
 from game.actions import ACTION_NAMES, load_library
-from game.cli import main
 from game.virtual_player import PROFILES, QUANTUM_G, RANGE_G, synthesize_action, synthesize_rest
+from tools.cli import main
 
 LIB = load_library()
 

@@ -26,7 +26,7 @@ XVFB = shutil.which("Xvfb")
 
 def play(tmp: Path, out: Path, env_extra: dict[str, str], graph: str, headless: bool) -> None:
     env = {**os.environ, "XDG_DATA_HOME": str(tmp / "xdg"), "SDL_AUDIODRIVER": "dummy", **env_extra}
-    cmd = [sys.executable, "-m", "game.cli", "play", "--source", "keyboard://?seed=2", "--demo", "--seed", "2",
+    cmd = [sys.executable, "-m", "tools.cli", "play", "--source", "keyboard://?seed=2", "--demo", "--seed", "2",
            "--frames", "40", "--size", "640x360", "--no-sound", "--graph", graph, "--screenshot", str(out)]
     cmd.append("--headless" if headless else "--virtual-clock")
     r = subprocess.run(cmd, cwd=REPO, env=env, capture_output=True, text=True, timeout=120)

@@ -18,7 +18,7 @@ REPO = Path(__file__).resolve().parents[2]
 
 def run_cli(args: list[str], tmp_path) -> subprocess.CompletedProcess:
     env = {"XDG_DATA_HOME": str(tmp_path), "PATH": "/usr/bin:/bin", "SDL_VIDEODRIVER": "dummy", "SDL_AUDIODRIVER": "dummy"}
-    return subprocess.run([sys.executable, "-m", "game.cli", "bench", "frame", *args], cwd=REPO,
+    return subprocess.run([sys.executable, "-m", "tools.cli", "bench", "frame", *args], cwd=REPO,
                           capture_output=True, text=True, env=env, timeout=300)
 
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import json
 
-from game.cli import main
+from tools.cli import main
 
 
 def test_bench_loop_json(capsys):

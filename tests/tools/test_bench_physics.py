@@ -7,7 +7,7 @@ import json
 import pytest
 
 from engine.errors import InputError
-from game.cli import main
+from tools.cli import main
 
 
 def test_bench_physics_json(capsys):

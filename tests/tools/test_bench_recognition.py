@@ -6,7 +6,7 @@ from __future__ import annotations
 import re
 
 from engine.recognition import dtw
-from game.cli import main
+from tools.cli import main
 
 
 def test_bench_recognition_table_and_targets(capsys):

@@ -13,14 +13,14 @@ import pytest
 
 from engine import __version__
 from engine.recording import read_recording
-from game.cli import COMMAND_MODULES, build_parser, main
+from tools.cli import COMMAND_MODULES, build_parser, main
 
 REPO = Path(__file__).resolve().parents[2]
 
 
 def quickjab(*args: str, cwd: Path | None = None) -> subprocess.CompletedProcess:
     env = {**os.environ, "PYTHONPATH": str(REPO), "SDL_VIDEODRIVER": "dummy", "SDL_AUDIODRIVER": "dummy"}
-    return subprocess.run([sys.executable, "-m", "game.cli", *args], cwd=cwd or REPO, env=env,
+    return subprocess.run([sys.executable, "-m", "tools.cli", *args], cwd=cwd or REPO, env=env,
                           capture_output=True, text=True, timeout=120)
 
 

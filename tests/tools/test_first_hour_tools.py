@@ -9,7 +9,7 @@ import sys
 import numpy as np
 import pytest
 
-from game.cli import main
+from tools.cli import main
 
 
 def test_evaluate_plot_without_matplotlib_is_one_line_and_exit_2(tmp_path, monkeypatch, capsys):

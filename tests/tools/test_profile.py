@@ -12,7 +12,7 @@ import pytest
 from engine.clock import VirtualClock
 from engine.loop import FixedStepLoop
 from engine.trace import read_chrome_trace, write_chrome_trace
-from game.cli import main
+from tools.cli import main
 from tools.profile import profile_summary
 
 

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from engine.recording import Recording, write_recording
-from game.cli import main
+from tools.cli import main
 
 G = np.array([0.0, 0.0, 1.0])
 

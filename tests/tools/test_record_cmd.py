@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import time
 
-from game.cli import main
+from tools.cli import main
 
 
 def test_record_from_a_missing_serial_port_exits_2(tmp_path, capsys):

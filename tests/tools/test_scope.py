@@ -14,7 +14,7 @@ import pytest
 import engine.sensors.source as source_mod
 from engine.sensors import SourceError, SourceState
 from engine.sensors.demo import DemoSource
-from game.cli import main
+from tools.cli import main
 from tools.scope import AXIS_COLORS, STATE_COLORS, ScopeView, open_with_fallback
 
 REPO = Path(__file__).resolve().parents[2]
@@ -81,7 +81,7 @@ def test_scope_scrolls(tmp_path):
 
 def run_headless(*args: str) -> str:
     env = {**os.environ, "PYTHONPATH": str(REPO), "SDL_VIDEODRIVER": "dummy", "SDL_AUDIODRIVER": "dummy"}
-    r = subprocess.run([sys.executable, "-m", "game.cli", "scope", "--headless", *args],
+    r = subprocess.run([sys.executable, "-m", "tools.cli", "scope", "--headless", *args],
                        cwd=REPO, env=env, capture_output=True, text=True, timeout=120)
     assert r.returncode == 0, r.stderr
     line = [x for x in r.stdout.splitlines() if x.startswith("state ")]

@@ -50,7 +50,7 @@ def test_history_keeps_the_recent_items_and_hashes_all() -> None:
 
 def test_soak_cli_json_and_bad_input(tmp_path) -> None:
     env = {"XDG_DATA_HOME": str(tmp_path), "PATH": "/usr/bin:/bin", "SDL_VIDEODRIVER": "dummy", "SDL_AUDIODRIVER": "dummy"}
-    r = subprocess.run([sys.executable, "-m", "game.cli", "soak", "--steps", "600", "--json", "--warmup-seconds", "2",
+    r = subprocess.run([sys.executable, "-m", "tools.cli", "soak", "--steps", "600", "--json", "--warmup-seconds", "2",
                         "--sample-seconds", "2"], cwd=REPO, capture_output=True, text=True, env=env, timeout=300)
     assert r.returncode == 0, r.stderr
     fig = json.loads(r.stdout)
@@ -58,6 +58,6 @@ def test_soak_cli_json_and_bad_input(tmp_path) -> None:
     for key in ("memory", "recognizer_events", "blows", "knockdowns", "rounds", "matches", "wall_seconds"):
         assert key in fig
     assert fig["memory"]["samples"] == 6
-    bad = subprocess.run([sys.executable, "-m", "game.cli", "soak", "--steps", "10", "--minutes", "1"],
+    bad = subprocess.run([sys.executable, "-m", "tools.cli", "soak", "--steps", "10", "--minutes", "1"],
                          cwd=REPO, capture_output=True, text=True, env=env, timeout=120)
     assert bad.returncode == 2 and bad.stderr.count("\n") == 1 and "not both" in bad.stderr

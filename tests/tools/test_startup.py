@@ -14,7 +14,7 @@ from pathlib import Path
 
 import pytest
 
-from game.cli import COMMAND_MODULES, COMMANDS, build_parser, main
+from tools.cli import COMMAND_MODULES, COMMANDS, build_parser, main
 
 REPO = Path(__file__).resolve().parents[2]
 HEAVY = ("numba", "matplotlib")
@@ -43,20 +43,20 @@ def test_import_engine_recognition_loads_no_numba_or_matplotlib():
 
 def test_help_loads_no_command_module_no_numpy_no_numba():
     mods = loaded_after("""
-        from game.cli import main
+        from tools.cli import main
         try:
             main(["--help"])
         except SystemExit as exc:
             assert exc.code == 0
     """)
-    assert "game.cli" in mods
+    assert "tools.cli" in mods
     assert not top_level(mods) & {*HEAVY, "numpy", "pygame"}
     assert not mods & set(COMMAND_MODULES)
 
 
 def test_a_command_imports_its_module_only():
     mods = loaded_after("""
-        from game.cli import main
+        from tools.cli import main
         assert main(["bench", "startup", "--runs", "0"]) == 2  # a clear error before any run
     """)
     assert "tools.bench" in mods and "tools.bench_startup" in mods
@@ -66,7 +66,7 @@ def test_a_command_imports_its_module_only():
 
 def test_play_loads_no_numba_or_matplotlib():
     mods = loaded_after("""
-        from game.cli import main
+        from tools.cli import main
         assert main(["play", "--demo", "--headless", "--frames", "2", "--no-sound"]) == 0
     """)
     assert {"game.play", "game.session", "engine.recognition.dual_buffer"} <= mods

@@ -1,0 +1,32 @@
+"""`python -m game`: the game's own commands (play, train) without the tools' ones, since game
+never imports tools; errors are one line and exit 2, as with quickjab."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[2]
+
+
+def run(*args: str) -> subprocess.CompletedProcess:
+    env = {**os.environ, "PYTHONPATH": str(REPO), "SDL_VIDEODRIVER": "dummy", "SDL_AUDIODRIVER": "dummy"}
+    return subprocess.run([sys.executable, "-m", "game", *args], cwd=REPO, env=env,
+                          capture_output=True, text=True, timeout=120)
+
+
+def test_python_m_game_offers_play_and_train_only():
+    r = run("--help")
+    commands = [line.split()[0] for line in r.stdout.splitlines() if line[:4] == "    " and line[4:5].isalpha()]
+    assert r.returncode == 0 and commands == ["play", "train"], r.stdout
+    assert run("record", "--help").returncode == 2  # a tools command is not here
+
+
+def test_python_m_game_reports_bad_input_in_one_line():
+    r = run("play", "--headless", "--frames", "5", "--source", "nosuch://x")
+    assert r.returncode == 2 and "Traceback" not in r.stderr
+    assert [line for line in r.stderr.splitlines() if line.startswith("quickjab play:")] == [
+        "quickjab play: unknown source scheme 'nosuch' in 'nosuch://x'; known: demo, keyboard, replay, serial, wiimote, wiimote-emu"
+    ]
