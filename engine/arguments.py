@@ -16,12 +16,16 @@ SIZE_MIN = (160, 120)
 SIZE_MAX = (7680, 4320)  # 8K: a 20000x20000 window asked for 7.3 GB of surfaces
 
 
+def _number(v: float) -> str:
+    return str(v) if isinstance(v, int) else f"{v:g}"  # an int bound exactly (a seed's 2**63 - 1)
+
+
 def _describe(lo: float | None, hi: float | None) -> str:
     if lo is not None and hi is not None:
-        return f"between {lo:g} and {hi:g}"
+        return f"between {_number(lo)} and {_number(hi)}"
     if lo is not None:
-        return f">= {lo:g}"
-    return f"<= {hi:g}"
+        return f">= {_number(lo)}"
+    return f"<= {_number(hi)}"
 
 
 def int_range(lo: int | None = None, hi: int | None = None) -> Callable[[str], int]:

@@ -11,6 +11,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import sys
+from typing import NoReturn
 
 from engine import __version__
 from engine.errors import InputError
@@ -40,8 +41,17 @@ COMMANDS: dict[str, tuple[str, str]] = {
 COMMAND_MODULES = list(dict.fromkeys(module for module, _ in COMMANDS.values()))
 
 
+class OneLineErrorParser(argparse.ArgumentParser):
+    """A bad argument is one line on stderr and exit 2, like every other input error (issue 16);
+    argparse's usage block is for `--help`. Subcommands' parsers are of this class too
+    (add_subparsers makes its parsers of the parent's class)."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f"{self.prog}: {message} (see {self.prog} --help)\n")
+
+
 def _base_parser() -> tuple[argparse.ArgumentParser, argparse._SubParsersAction]:
-    parser = argparse.ArgumentParser(
+    parser = OneLineErrorParser(
         prog="quickjab",
         description="QuickJab: motion-controlled boxing with a Wiimote + Nunchuk or serial IMUs.",
     )

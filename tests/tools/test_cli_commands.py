@@ -58,6 +58,20 @@ def test_help_on_every_subcommand(capsys):
         assert out.startswith("usage: quickjab") and (not path or path[-1] in out), path
 
 
+@pytest.mark.parametrize("argv", [
+    ["play", "--seed", "-1"],
+    ["evaluate", "--folds", "1", "x.csv"],
+    ["bench", "loop", "--no-such-option"],
+    ["templates", "build"],
+])
+def test_a_bad_argument_is_one_line_and_exit_2(capsys, argv):
+    with pytest.raises(SystemExit) as exit_:
+        main(argv)
+    assert exit_.value.code == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith("quickjab") and "usage" not in err, err
+
+
 def test_no_command_prints_help(capsys):
     assert main([]) == 0
     assert "COMMAND" in capsys.readouterr().out
