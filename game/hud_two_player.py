@@ -81,6 +81,8 @@ class TwoPlayerHud(Hud):
                              (body.left + 3, body.top + 3, int((body.width - 6) * b), body.height - 6))
             x = body.left - 12 * u
         r = self.blit(surf, f"{st.source_url}  {st.source_state}", int(22 * u), (x, y), DIM, "topright")
+        if st.templates:
+            self.blit(surf, st.templates, int(18 * u), (right.right, y + 22 * u), DIM, "topright")
         pygame.draw.circle(surf, state_col, (int(r.left - 11 * u), int(y + 8 * u)), int(6 * u))
 
     def _legends(self, surf: pygame.Surface, one: HudState, two: HudState, u: float) -> None:

@@ -257,6 +257,10 @@ class Session:
             self.loop.set_render(self.render, LOW_POWER_RENDER_BUDGET_MS if cfg.low_power else RENDER_BUDGET_MS)
         self.sounds.play("bell")
 
+    def templates_lines(self) -> list[str]:
+        """Which template set is in use, for the console (the HUD shows it under the source)."""
+        return [self.hud_state.templates]
+
     # -- surfaces ------------------------------------------------------------------------
     def target_surface(self) -> pygame.Surface:
         if self._surface_provider is not None:

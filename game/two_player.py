@@ -55,6 +55,7 @@ from game.session import (
     SessionConfig,
     _event_key,
     load_templates,
+    templates_in_use,
 )
 
 # Two recognizers, two sources, two resamplers: those stages get more than the one-player budget
@@ -129,7 +130,8 @@ class TwoPlayerSession(Session):
                                  f"templates need {t.dim // 3} (a Wiimote + Nunchuk, or two IMUs)")
             rec = build_recognizer(t)
             hud = HudState(keys=[], source_url=f"{NAMES[i]} {source.url}", demo=cfg.demo,
-                           main_size=int(rec.main) if rec.main != "auto" else 6, supp_size=rec.supplementary)
+                           main_size=int(rec.main) if rec.main != "auto" else 6, supp_size=rec.supplementary,
+                           templates=templates_in_use(tmpl))
             if hasattr(source, "keymap"):
                 from game.keyboard_source import key_help
 
@@ -172,6 +174,9 @@ class TwoPlayerSession(Session):
         if cfg.render:
             self.loop.set_render(self.render, LOW_POWER_RENDER_BUDGET_MS if cfg.low_power else RENDER_BUDGET_MS)
         self.sounds.play("bell")
+
+    def templates_lines(self) -> list[str]:
+        return [f"{NAMES[seat.index]} {seat.hud.templates}" for seat in self.seats]
 
     # -- stages --------------------------------------------------------------------------
     def _input(self, step: int, dt: float) -> None:
@@ -413,21 +418,13 @@ def seat_templates(profile: str | None, templates: str | None) -> tuple[Path | s
 
 
 def run_match(args) -> int:
-    """`quickjab play --players 2`: open both sources, build the session, play (see play.run)."""
+    """`quickjab play --players 2`: both seats' templates and sources, then play as one
+    player does (game.play.run_session: headless frames, window check, screenshot, trace)."""
     import sys
 
     from engine.sensors import open_source
-    from game.play import headless_env, parse_size
+    from game.play import run_session
 
-    size = parse_size(args.size)
-    if args.frames is not None and args.frames < 1:
-        raise InputError("--frames must be at least 1")
-    if args.headless:
-        headless_env()
-    import game.keyboard_source  # noqa: F401 - registers keyboard://
-    from engine.trace import write_chrome_trace
-
-    clock = VirtualClock() if args.headless or args.virtual_clock else RealClock()
     templates, notes = [], []
     for profile in (args.profile, args.profile2):
         path, note = seat_templates(profile, args.templates)
@@ -437,31 +434,23 @@ def run_match(args) -> int:
     urls, url_notes = source_urls(args.source, args.source2, args.demo, args.seed)
     for note in url_notes + notes:
         print(f"quickjab play: {note}", file=sys.stderr)
-    sources: list[Source] = []
-    try:
-        for url in urls:
-            sources.append(open_source(url, clock=clock.seconds))
-        pygame.init()
-        flags = pygame.RESIZABLE | (pygame.FULLSCREEN if args.fullscreen and not args.headless else 0)
-        pygame.display.set_mode(size, flags)
-        pygame.display.set_caption("QuickJab - two players")
+
+    def sources(clock) -> list[Source]:
+        import game.keyboard_source  # noqa: F401 - registers keyboard://
+
+        opened: list[Source] = []
+        try:
+            for url in urls:
+                opened.append(open_source(url, clock=clock.seconds))
+        except BaseException:
+            for source in opened:
+                source.close()
+            raise
+        return opened
+
+    def session(sources: list[Source], clock, size: tuple[int, int], surface_provider) -> TwoPlayerSession:
         config = SessionConfig(seed=args.seed, size=size, low_power=args.low_power, demo=args.demo,
                                sound=not args.no_sound and not args.headless, left_handed=args.left_handed)
-        session = TwoPlayerSession(sources, config, clock=clock, surface_provider=pygame.display.get_surface,
-                                   templates=templates)
-        session.hud_state.show_budget = args.budget
-        session.on_toggle_fullscreen = pygame.display.toggle_fullscreen
-        try:
-            session.loop.run(frames=args.frames)
-        finally:
-            if args.screenshot:
-                pygame.image.save(pygame.display.get_surface(), args.screenshot)
-                print(f"quickjab play: wrote {args.screenshot}", file=sys.stderr)
-            if args.trace:
-                write_chrome_trace(session.loop.budget, args.trace)
-                print(f"quickjab play: wrote {args.trace}", file=sys.stderr)
-    finally:
-        for source in sources:
-            source.close()
-        pygame.quit()
-    return 0
+        return TwoPlayerSession(sources, config, clock=clock, surface_provider=surface_provider, templates=templates)
+
+    return run_session(args, "QuickJab - two players", sources, session)

@@ -1,0 +1,46 @@
+"""Where issue 17 (the first hour) and issue 19 (two players) meet: `play --players 2` keeps
+the first hour's fixes, and the two modes share their code rather than copy it."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from game.cli import main
+
+REPO = Path(__file__).resolve().parents[2]
+
+
+@pytest.fixture(autouse=True)
+def own_data_dir(tmp_path, monkeypatch):
+    """Never read (or write) the real user's trained templates."""
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "xdg"))
+
+
+def test_two_player_headless_without_frames_ends_and_names_the_templates(tmp_path, monkeypatch, capsys) -> None:
+    import game.play
+
+    monkeypatch.setattr(game.play, "HEADLESS_FRAMES", 40)  # the one-player default, shortened
+    trace = tmp_path / "t.json"
+    assert main(["play", "--players", "2", "--demo", "--headless", "--size", "320x180", "--trace", str(trace)]) == 0
+    frames = [e for e in json.loads(trace.read_text())["traceEvents"] if e.get("name") == "frame"]
+    assert len(frames) == 40
+    err = capsys.readouterr().err
+    assert "stopping after 40 frames" in err
+    assert "quickjab play: P1 default templates" in err and "quickjab play: P2 default templates" in err
+
+
+def test_two_player_without_a_display_is_a_clear_error() -> None:
+    env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY", "SDL_VIDEODRIVER")}
+    env.update(PYTHONPATH=str(REPO), SDL_AUDIODRIVER="dummy", XDG_DATA_HOME=os.environ["XDG_DATA_HOME"])
+    r = subprocess.run([sys.executable, "-m", "game.cli", "play", "--players", "2", "--source", "keyboard://",
+                        "--source2", "keyboard://", "--frames", "100000"],
+                       cwd=REPO, env=env, capture_output=True, text=True, timeout=120)
+    assert r.returncode == 2, r.stderr
+    assert "no display" in r.stderr and "--headless" in r.stderr
+    assert "Traceback" not in r.stderr
