@@ -31,13 +31,10 @@ from engine.frames import FrameResampler
 from engine.loop import FixedStepLoop
 from engine.sensors.source import Source, SourceState
 from game.history import History
-from game.hits import hits_from_contacts
 from game.hud import HudState
 from game.hud_two_player import TwoPlayerHud
 from game.match import Match
 from game.session import (
-    BLOCKED_SHARE,
-    DEMO_RESTART_STEPS,
     HOME_BUTTON,
     HZ,
     LOG_KEPT,
@@ -45,7 +42,6 @@ from game.session import (
     PILOT_ATTACKS,
     PILOT_REACH,
     PILOT_SETTLE_STEPS,
-    REFERENCE_SPEED,
     RENDER_BUDGET_MS,
     RING_LIMIT,
     RUMBLE_MS,
@@ -54,6 +50,7 @@ from game.session import (
     Session,
     SessionConfig,
     _event_key,
+    blow_damage,
     load_templates,
     templates_in_use,
 )
@@ -280,61 +277,24 @@ class TwoPlayerSession(Session):
     def _opponent(self, step: int, dt: float) -> None:
         self._step_boxer(1, dt)
 
-    def _hits(self, step: int, dt: float) -> None:
-        for hit in hits_from_contacts(self.contacts, list(self.boxers)):
-            self.apply_hit(step, hit)
-
     def apply_hit(self, step: int, hit: dict) -> None:
-        """As the one-player session's, but a fair fight: no CPU handicap; the player who was
-        hit feels it in their own controller."""
-        target = 1 - hit["attacker"]
-        scale = float(np.clip(hit["speed"] / REFERENCE_SPEED, 0.5, 1.5))
-        damage = float(hit.get("damage", 8.0)) * scale * (BLOCKED_SHARE if hit["blocked"] else 1.0)
-        if not self.match.hit(target, damage):
-            return
-        self.blows_log.append((step, hit["attacker"], hit["target"], hit["blocked"], round(damage, 4)))
-        point = hit.get("point")
-        if point is None:
-            point = self.boxers[target].joint_positions()[4]
-        self.renderer.add_flash(point, strong=damage >= 8, blocked=hit["blocked"])
-        if hit["blocked"]:
-            self.sounds.play("block")
-        else:
-            self.sounds.play("hit" if damage >= 8 else "hit_light")
-            if self.match.down != target:
-                self.boxers[target].react(hit)
+        """The one-player session's blow (blow_damage, land_blow), but a fair fight: no CPU
+        difficulty on top."""
+        self.land_blow(step, hit, blow_damage(hit))
+
+    def rumble(self, target: int) -> None:
+        """The player who was hit feels it in their own controller."""
         self.seats[target].source.rumble(RUMBLE_MS)
 
-    def _match(self, step: int, dt: float) -> None:
-        m = self.match
-        m.step()
-        for kind, who in m.drain_events():
-            if kind == "bell":
-                self.sounds.play("bell")
-                if m.phase == "fight":
-                    self.hud_state.message, self.hud_state.message_age = f"ROUND {m.round}", 0
-                    self._to_corners()
-            elif kind == "knockdown":
-                self.boxers[who].controller.play("knockdown")
-            elif kind == "rise":
-                self.boxers[who].controller.play("guard")
-        if m.over:
-            self._over_steps += 1
-            if self.config.demo and self._over_steps >= DEMO_RESTART_STEPS:
-                self.new_match()
-        h = self.hud_state
-        h.health = list(m.health)
-        h.round, h.rounds = m.round, m.rounds
-        h.seconds_left = m.seconds_left()
-        h.phase, h.count, h.down = m.phase, m.count, m.down
-        h.knockdowns = list(m.knockdowns)
-        h.winner, h.result, h.paused = m.winner, m.result, m.paused
-        for seat in self.seats:  # (the source line's URL is set once, at the seat's making)
+    def _rounds_over(self, m: Match) -> None:
+        """No CPU whose difficulty follows the rounds: two people box."""
+
+    def _show_sources(self) -> None:
+        # each seat's source line (its URL is set once, at the seat's making)
+        for seat in self.seats:
             seat.hud.source_state = seat.source.state.value
             seat.hud.battery = seat.source.battery
-        self.seats[1].hud.tick()
-        h.tick()
-        self._step = step
+        self.seats[1].hud.tick()  # player 2's marks age as player 1's (hud_state.tick)
 
     def new_match(self) -> None:
         """A fresh match (Enter after the last bell; by itself in the demo)."""

@@ -44,3 +44,50 @@ def test_two_player_without_a_display_is_a_clear_error() -> None:
     assert r.returncode == 2, r.stderr
     assert "no display" in r.stderr and "--headless" in r.stderr
     assert "Traceback" not in r.stderr
+
+
+def two_player_session(urls=("keyboard://?seed=1&keys=left", "keyboard://?seed=2&keys=right"), **cfg):
+    import pygame
+
+    import game.keyboard_source  # noqa: F401 - registers keyboard://
+    from engine.clock import VirtualClock
+    from engine.sensors import open_source
+    from game.session import SessionConfig
+    from game.two_player import TwoPlayerSession
+
+    pygame.init()
+    clock = VirtualClock()
+    sources = [open_source(u, clock=clock.seconds) for u in urls]
+    config = SessionConfig(size=(320, 180), sound=False, **{"render": False, **cfg})
+    return TwoPlayerSession(sources, config, clock=clock)
+
+
+def one_player_session(**cfg):
+    import pygame
+
+    import game.keyboard_source  # noqa: F401 - registers keyboard://
+    from engine.clock import VirtualClock
+    from engine.sensors import open_source
+    from game.session import Session, SessionConfig
+
+    pygame.init()
+    clock = VirtualClock()
+    source = open_source(cfg.pop("url", "keyboard://?seed=1"), clock=clock.seconds)
+    return Session(source, SessionConfig(size=(320, 180), sound=False, render=False, **cfg), clock=clock)
+
+
+def test_a_blow_does_the_same_damage_in_both_modes() -> None:
+    """Issue 17 scaled every blow by BLOW_SCALE; the two-player copy of apply_hit did not."""
+    from game.session import BLOCKED_SHARE, BLOW_SCALE, REFERENCE_SPEED
+
+    hit = {"attacker": 0, "target": "head", "hand": "l", "speed": REFERENCE_SPEED, "damage": 10.0, "blocked": False,
+           "direction": (0.0, 0.0, 1.0)}
+    one, two = one_player_session(), two_player_session()
+    for s in (one, two):
+        s.apply_hit(5, dict(hit))
+        s.apply_hit(6, {**hit, "attacker": 1, "blocked": True})
+    assert two.match.health[1] == pytest.approx(100 - 10.0 * BLOW_SCALE)
+    assert one.match.health[1] == two.match.health[1]  # the player's blow: no difficulty in it
+    assert two.match.health[0] == pytest.approx(100 - 10.0 * BLOW_SCALE * BLOCKED_SHARE)  # no CPU handicap
+    assert [b[1:] for b in two.blows_log] == [(0, "head", False, 6.0),
+                                              (1, "head", True, round(10.0 * BLOW_SCALE * BLOCKED_SHARE, 4))]
