@@ -30,6 +30,7 @@ from engine.errors import InputError
 from engine.frames import FrameResampler
 from engine.loop import FixedStepLoop
 from engine.sensors.source import Source, SourceState
+from game.difficulty import DifficultySetting
 from game.history import History
 from game.hud import HudState
 from game.hud_two_player import TwoPlayerHud
@@ -140,6 +141,12 @@ class TwoPlayerSession(Session):
         self.templates = self.seats[0].templates
         self.recognizer = self.seats[0].recognizer
         self.resampler = self.seats[0].resampler
+        # what the one-player methods it inherits read (cycle_difficulty, _pilot, _input...):
+        # no CPU here, so no opponent_ai and a difficulty that sets nothing (_apply_difficulty)
+        self.difficulty = DifficultySetting(cfg.difficulty)
+        self.opponent_ai = None
+        self._rounds_seen = self._cpu_rest = self._rest_next = self._buttons = 0
+        self._pilot_wait, self._pilot_seen, self._pilot_rng = PILOT_SETTLE_STEPS, True, self.seats[0].pilot_rng
         self.match = Match()
         self.hud_state = self.seats[0].hud  # player 1's panel carries the match state
         self.hud_state.names = NAMES
@@ -288,6 +295,9 @@ class TwoPlayerSession(Session):
 
     def _rounds_over(self, m: Match) -> None:
         """No CPU whose difficulty follows the rounds: two people box."""
+
+    def _apply_difficulty(self) -> None:
+        """No CPU to set (the pause menu's D, cycle_difficulty, changes nothing here)."""
 
     def _show_sources(self) -> None:
         # each seat's source line (its URL is set once, at the seat's making)

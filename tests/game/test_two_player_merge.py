@@ -91,3 +91,19 @@ def test_a_blow_does_the_same_damage_in_both_modes() -> None:
     assert two.match.health[0] == pytest.approx(100 - 10.0 * BLOW_SCALE * BLOCKED_SHARE)  # no CPU handicap
     assert [b[1:] for b in two.blows_log] == [(0, "head", False, 6.0),
                                               (1, "head", True, round(10.0 * BLOW_SCALE * BLOCKED_SHARE, 4))]
+
+
+def test_two_player_session_has_what_the_inherited_methods_read() -> None:
+    """TwoPlayerSession(Session) never ran Session.__init__: the pause menu's D
+    (cycle_difficulty) and the round bookkeeping met missing attributes."""
+    import pygame
+
+    one, two = one_player_session(), two_player_session(difficulty="adaptive")
+    assert set(vars(one)) <= set(vars(two)), sorted(set(vars(one)) - set(vars(two)))
+    two.match.toggle_pause()
+    two.cycle_difficulty()  # the pause menu's D: nothing to set, no CPU, and no error
+    two.handle_event(pygame.event.Event(pygame.KEYDOWN, key=pygame.K_d, mod=0, unicode="d", scancode=0))
+    assert two.hud_state.difficulty == ""  # the pause menu offers no difficulty: two people box
+    two.match.toggle_pause()
+    two.match.round_winners.append(0)  # a round decided: the one-player bookkeeping is safe
+    two.loop.run(steps=2)
