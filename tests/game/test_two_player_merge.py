@@ -107,3 +107,35 @@ def test_two_player_session_has_what_the_inherited_methods_read() -> None:
     two.match.toggle_pause()
     two.match.round_winners.append(0)  # a round decided: the one-player bookkeeping is safe
     two.loop.run(steps=2)
+
+
+def test_the_side_on_view_draws_neither_boxer_see_through(monkeypatch) -> None:
+    """Side-on, "near" is arbitrary: issue 17's translucent near boxer is the one-player view's."""
+    import numpy as np
+    import pygame
+
+    from game.render import Renderer
+    from game.render_two_player import SideOnLowPowerRenderer, SideOnRenderer
+
+    pygame.init()
+    assert Renderer.see_through  # the one-player view keeps it
+    s = two_player_session()
+    bodies = [j.copy() for j in s.curr_joints]
+    bodies[1][:, 0] += 0.05  # nearly on top of each other: the one-player view would blend
+    for cls in (SideOnRenderer, SideOnLowPowerRenderer):
+        r = cls((320, 180))
+        assert r.see_through is False
+        monkeypatch.setattr(r, "_overlap", lambda b: pytest.fail("side-on drew a see-through boxer"))
+        r.draw(pygame.Surface((320, 180)), bodies)
+    assert np.isfinite(bodies[0]).all()
+
+
+def test_shifted_primitives_stay_plain_float_pairs() -> None:
+    """The see-through pass moved capsules and spheres by list - ndarray: numpy per limb."""
+    from game.render import _shifted
+
+    capsule = _shifted(0, ([10.0, 20.0], (30.0, 40.0), 3.0, 2.0, (1, 2, 3)), (4.0, 5.0))
+    assert capsule == ((6.0, 15.0), (26.0, 35.0), 3.0, 2.0, (1, 2, 3))
+    assert all(type(p) is tuple and all(type(v) is float for v in p) for p in capsule[:2])
+    sphere = _shifted(1, ([10.0, 20.0], 3.0, (1, 2, 3)), (4.0, 5.0))
+    assert sphere == ((6.0, 15.0), 3.0, (1, 2, 3)) and type(sphere[0]) is tuple
