@@ -139,3 +139,37 @@ def test_shifted_primitives_stay_plain_float_pairs() -> None:
     assert all(type(p) is tuple and all(type(v) is float for v in p) for p in capsule[:2])
     sphere = _shifted(1, ([10.0, 20.0], 3.0, (1, 2, 3)), (4.0, 5.0))
     assert sphere == ((6.0, 15.0), 3.0, (1, 2, 3)) and type(sphere[0]) is tuple
+
+
+@pytest.mark.parametrize("size", [(1280, 720), (640, 360)])
+def test_two_player_key_legends_sit_on_dark_panels_with_hand_labels(size) -> None:
+    """Issue 17's readable legend (a dark panel, "L"/"R") for each of the two keyboard players."""
+    import numpy as np
+    import pygame
+
+    from game.hud import HudState
+    from game.hud_two_player import TwoPlayerHud, compact_keys
+    from game.keyboard_source import KEYMAP_LEFT, KEYMAP_RIGHT, key_help
+
+    lines = compact_keys(key_help(KEYMAP_LEFT))
+    assert lines[0].startswith("L hand: Q straight") and lines[1].startswith("R hand: A straight")
+    assert "_l" not in " ".join(lines) and " l/" not in " ".join(lines)
+    pygame.init()
+    surf = pygame.Surface(size)
+    surf.fill((235, 235, 235))  # a bright scene (the canvas, a white rope) under the legends
+    one, two = HudState(keys=key_help(KEYMAP_LEFT)), HudState(keys=key_help(KEYMAP_RIGHT))
+    hud = TwoPlayerHud(two)
+    hud.draw(surf, one)
+    assert len(hud.key_panels) == 2
+    left, right = hud.key_panels
+    assert left.right < right.left and left.centerx < size[0] // 2 < right.centerx
+    px = pygame.surfarray.array3d(surf).astype(int).sum(axis=2) / 3
+    for panel in hud.key_panels:
+        assert surf.get_rect().contains(panel)
+        a = px[panel.left:panel.right, panel.top:panel.bottom]
+        assert np.median(a) < 70  # the panel hides what is behind it
+        assert (a > 180).sum() > 100  # and the legend's text is bright on it
+    # the recognition panels sit above the legends, not under them
+    w, h = size
+    above = px[left.left + 4:left.right - 4, left.top - int(12 * h / 720):left.top - 2]
+    assert np.median(above) < 90
