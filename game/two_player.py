@@ -25,6 +25,7 @@ from pathlib import Path
 import numpy as np
 import pygame
 
+from engine.arguments import SEED_MAX
 from engine.clock import RealClock, VirtualClock
 from engine.errors import InputError
 from engine.frames import FrameResampler
@@ -328,6 +329,11 @@ def _with_param(url: str, key: str, value: str) -> str:
     return url + ("&" if "?" in url else "?") + f"{key}={value}"
 
 
+def seat_seed(seed: int, i: int) -> int:
+    """Seat i's keyboard seed: seed + i, wrapped into the seeds a URL takes (0..SEED_MAX)."""
+    return (seed + i) % (SEED_MAX + 1)
+
+
 def source_urls(url1: str | None, url2: str | None, demo: bool, seed: int,
                 wiimotes: Callable[[], list[str]] | None = None) -> tuple[list[str], list[str]]:
     """The two seats' source URLs and notes for the player. Default: the first two Wiimotes
@@ -337,7 +343,7 @@ def source_urls(url1: str | None, url2: str | None, demo: bool, seed: int,
 
     notes: list[str] = []
     if demo:
-        return [f"{DEMO_SOURCE}&seed={seed + i}&keys={half}" for i, half in enumerate(("left", "right"))], notes
+        return [f"{DEMO_SOURCE}&seed={seat_seed(seed, i)}&keys={half}" for i, half in enumerate(("left", "right"))], notes
     urls = [url1, url2]
     if any(u is None or u.rstrip("/") == "wiimote:" for u in urls):
         # `wiimote://` would open the first remote found for both seats: give each its own
@@ -356,7 +362,7 @@ def source_urls(url1: str | None, url2: str | None, demo: bool, seed: int,
         raise InputError(f"--source and --source2 are the same device ({urls[0]}): each player needs their own")
     keyboards = [i for i, u in enumerate(urls) if u.startswith("keyboard://")]
     for i in keyboards:
-        urls[i] = _with_param(urls[i], "seed", str(seed + i))
+        urls[i] = _with_param(urls[i], "seed", str(seat_seed(seed, i)))
         if len(keyboards) == 2:
             urls[i] = _with_param(urls[i], "keys", ("left", "right")[i])
     return urls, notes

@@ -173,3 +173,22 @@ def test_two_player_key_legends_sit_on_dark_panels_with_hand_labels(size) -> Non
     w, h = size
     above = px[left.left + 4:left.right - 4, left.top - int(12 * h / 720):left.top - 2]
     assert np.median(above) < 90
+
+
+def test_the_largest_seed_plays_two_players_and_duels(capsys) -> None:
+    """Seat and duel seeds were seed + i: past SEED_MAX, a keyboard URL the source refused."""
+    from engine.arguments import SEED_MAX
+    from engine.sensors import SourceError, open_source
+    from game.two_player import source_urls
+    from tools.virtual_duel import duel_jobs
+
+    assert main(["play", "--players", "2", "--demo", "--headless", "--frames", "2", "--size", "320x180",
+                 "--seed", str(SEED_MAX)]) == 0
+    urls, _ = source_urls("keyboard://", "keyboard://", demo=False, seed=SEED_MAX)
+    assert f"seed={SEED_MAX}" in urls[0] and "seed=0" in urls[1]
+    assert [job[2] for job in duel_jobs(["normal"], ["novice", "experienced"], 2, SEED_MAX)] == [SEED_MAX, 0] * 2
+    import game.keyboard_source  # noqa: F401 - registers keyboard://
+
+    with pytest.raises(SourceError) as err:
+        open_source(f"keyboard://?seed={SEED_MAX + 1}")
+    assert f"from 0 to {SEED_MAX}" in str(err.value) and "e+" not in str(err.value)  # the bound as an integer
