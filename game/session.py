@@ -234,7 +234,7 @@ class Session:
         if hasattr(source, "press_key"):
             from game.keyboard_source import key_help
 
-            self.hud_state.keys = key_help()
+            self.hud_state.keys = key_help(getattr(source, "keymap", None))  # keyboard://?keys=left: that half
         self.hud = Hud()
         self.sounds = Sounds(enabled=cfg.sound, seed=cfg.seed)
         # low power: flat shading (game/render_low_power.py: half the render time of detailed=False)

@@ -192,3 +192,11 @@ def test_the_largest_seed_plays_two_players_and_duels(capsys) -> None:
     with pytest.raises(SourceError) as err:
         open_source(f"keyboard://?seed={SEED_MAX + 1}")
     assert f"from 0 to {SEED_MAX}" in str(err.value) and "e+" not in str(err.value)  # the bound as an integer
+
+
+def test_the_one_player_legend_shows_the_keys_the_source_answers() -> None:
+    """`keyboard://?keys=left` answers only the left half; the legend showed the whole keyboard."""
+    from game.keyboard_source import KEYMAP, KEYMAP_LEFT, key_help
+
+    assert one_player_session(url="keyboard://?seed=1&keys=left").hud_state.keys == key_help(KEYMAP_LEFT)
+    assert one_player_session(url="keyboard://?seed=1").hud_state.keys == key_help(KEYMAP)
