@@ -53,7 +53,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--low-power", action="store_true", help="render at 30 Hz on a half-size surface, flat shading, no antialiasing, fewer solver iterations (docs/performance.md)")
     p.add_argument("--templates", metavar="NPZ", help="recognition templates (default: yours from `quickjab train`, else the shipped set)")
     p.add_argument("--graph", metavar="NPZ", help="Interaction Graph table (default: the shipped one)")
-    p.add_argument("--difficulty", choices=("easy", "normal", "hard", "adaptive"), default="normal",
+    p.add_argument("--difficulty", choices=("easy", "normal", "hard", "adaptive"), default=None,
                    help="the CPU: how often it takes its best action, how late it reacts, its rest between moves, how "
                         "much its blows hurt; adaptive follows you to about half the rounds won (default normal; "
                         "D in the pause menu changes it)")
@@ -142,7 +142,7 @@ def run(args: argparse.Namespace) -> int:
         config = SessionConfig(seed=args.seed, size=size, low_power=args.low_power, demo=args.demo,
                                keyboard_banner=fallback, templates=args.templates, graph=args.graph,
                                sound=not args.no_sound and not args.headless,
-                               left_handed=args.left_handed, difficulty=args.difficulty)
+                               left_handed=args.left_handed, difficulty=args.difficulty or "normal")
         return Session(sources[0], config, clock=clock, surface_provider=surface_provider)
 
     return run_session(args, "QuickJab", sources, session)

@@ -365,7 +365,21 @@ def source_urls(url1: str | None, url2: str | None, demo: bool, seed: int,
         urls[i] = _with_param(urls[i], "seed", str(seat_seed(seed, i)))
         if len(keyboards) == 2:
             urls[i] = _with_param(urls[i], "keys", ("left", "right")[i])
+    if len(keyboards) == 2:
+        _check_own_keys(urls)
     return urls, notes
+
+
+def _check_own_keys(urls: list[str]) -> None:
+    """Two keyboard players must not answer the same keys (both keys=left: one key, two boxers)."""
+    from engine.sensors.source import parse_source_url
+    from game.keyboard_source import KEYMAPS
+
+    halves = [parse_source_url(u)[2].get("keys", "all") for u in urls]
+    if all(h in KEYMAPS for h in halves) and set(KEYMAPS[halves[0]]) & set(KEYMAPS[halves[1]]):
+        # (an unknown half is the source's own error, naming the choices)
+        raise InputError(f"--source and --source2 share keys of the keyboard (keys={halves[0]}, keys={halves[1]}): "
+                         "give each player their own half, keys=left and keys=right")
 
 
 def _wiimote_paths() -> list[str]:
@@ -408,6 +422,9 @@ def run_match(args) -> int:
         if note:
             notes.append(note)
     urls, url_notes = source_urls(args.source, args.source2, args.demo, args.seed)
+    cpu_options = [opt for opt, value in (("--difficulty", args.difficulty), ("--graph", args.graph)) if value is not None]
+    if cpu_options:
+        notes.append(f"{' and '.join(cpu_options)} ignored with --players 2: they set the CPU, and two people box")
     for note in url_notes + notes:
         print(f"quickjab play: {note}", file=sys.stderr)
 

@@ -200,3 +200,19 @@ def test_the_one_player_legend_shows_the_keys_the_source_answers() -> None:
 
     assert one_player_session(url="keyboard://?seed=1&keys=left").hud_state.keys == key_help(KEYMAP_LEFT)
     assert one_player_session(url="keyboard://?seed=1").hud_state.keys == key_help(KEYMAP)
+
+
+def test_two_player_options_for_the_cpu_are_noted_and_one_keyboard_half_twice_is_an_error(capsys) -> None:
+    assert main(["play", "--players", "2", "--demo", "--headless", "--frames", "1", "--size", "320x180",
+                 "--difficulty", "hard", "--graph", "no-such.npz"]) == 0
+    notes = [line for line in capsys.readouterr().err.splitlines() if "ignored" in line]
+    assert len(notes) == 1 and "--difficulty" in notes[0] and "--graph" in notes[0]
+    assert main(["play", "--players", "2", "--demo", "--headless", "--frames", "1", "--size", "320x180"]) == 0
+    assert "ignored" not in capsys.readouterr().err  # not given: nothing to say
+    for a, b in (("left", "left"), ("right", "right"), ("all", "left")):
+        assert main(["play", "--players", "2", "--headless", "--frames", "1", "--source", f"keyboard://?keys={a}",
+                     "--source2", f"keyboard://?keys={b}"]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and f"keys={a}" in err[0] and "their own half" in err[0], err
+    assert main(["play", "--players", "2", "--headless", "--frames", "1", "--size", "320x180",
+                 "--source", "keyboard://?keys=right", "--source2", "keyboard://?keys=left"]) == 0  # swapped is fine
