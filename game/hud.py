@@ -312,15 +312,19 @@ class Hud:
         if img.get_width() > w - 40:  # two lines on narrow windows
             half = (len(parts) + 1) // 2
             lines = ["   ".join(parts[:half]), "   ".join(parts[half:])]
-        # on a dark panel of its own: the ring's ropes run behind the bottom of the screen
+        self.key_panel = self.key_legend_panel(surf, lines, size, "midbottom", (w // 2, h - int(2 * u)), u)
+
+    def key_legend_panel(self, surf: pygame.Surface, lines: list[str], size: int, anchor: str, pos, u: float) -> pygame.Rect:
+        """Key legend lines on a dark panel of their own (the ring's ropes run behind the
+        bottom of the screen), the panel's `anchor` point at `pos`; returns the panel."""
         line_h = int(20 * u)
         widest = max(self.text.render(t, size, KEY_TEXT).get_width() for t in lines)
         panel = pygame.Rect(0, 0, widest + int(24 * u), line_h * len(lines) + int(8 * u))
-        panel.midbottom = (w // 2, h - int(2 * u))
+        setattr(panel, anchor, (int(pos[0]), int(pos[1])))
         surf.blit(self._translucent(panel.size, (8, 8, 12, 215)), panel)
-        self.key_panel = panel
         for n, text in enumerate(lines):
-            self.blit(surf, text, size, (w // 2, panel.top + int(4 * u) + n * line_h), KEY_TEXT, "midtop")
+            self.blit(surf, text, size, (panel.centerx, panel.top + int(4 * u) + n * line_h), KEY_TEXT, "midtop")
+        return panel
 
     def _centre(self, surf: pygame.Surface, st: HudState, u: float) -> None:
         w, h = surf.get_size()

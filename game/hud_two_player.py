@@ -14,25 +14,28 @@ from engine.budget import FrameBudget
 from game.hud import DIM, OK_COLOR, REJECT_COLOR, SWITCH_COLOR, TEXT, Hud, HudState
 
 PANEL_W, PANEL_MARGIN = 330, 16  # the recognition panel's width and margin (game.hud, at 720 p)
+LEGEND_LIFT = 20  # the recognition panel moves up this much (720 p) over a three-line key legend
 
 
 def compact_keys(keys: list[tuple[str, str]]) -> list[str]:
-    """A player's key legend in two short lines: each punch with its left/right keys, then
-    the block and the footwork (the one-player legend's one key per action is too wide for
-    half a screen)."""
+    """A player's key legend in three short lines (the one-player legend's one line is too
+    wide for half a screen): each hand's punches and parry, "L"/"R" for the hand (a lower-case
+    "l" reads as "I"), then the block and the footwork."""
     by_action = {a: k for k, a in keys}
-    punches = []
-    for base in ("straight", "hook", "uppercut", "parry"):
-        left, right = by_action.get(f"{base}_l"), by_action.get(f"{base}_r")
-        if left or right:
-            punches.append(f"{base} {left or '-'}/{right or '-'}")
-    moves = []
-    if "block" in by_action:
-        moves.append(f"block {by_action['block']}")
-    steps = [f"{by_action[f'step_{d}']}" for d in ("forward", "back", "left", "right") if f"step_{d}" in by_action]
+    lines = []
+    for hand in ("L", "R"):
+        moves = [f"{by_action[f'{base}_{hand.lower()}']} {base}" for base in ("straight", "hook", "uppercut", "parry")
+                 if f"{base}_{hand.lower()}" in by_action]
+        if moves:
+            lines.append(f"{hand} hand: " + "  ".join(moves))
+    moves = [f"{by_action['block']} block"] if "block" in by_action else []
+    steps = [f"{d} {by_action[f'step_{name}']}" for d, name in (("fwd", "forward"), ("back", "back"), ("left", "left"),
+                                                                 ("right", "right")) if f"step_{name}" in by_action]
     if steps:
-        moves.append("step fwd/back/left/right " + " ".join(steps))
-    return ["  ".join(punches) + " (left/right hand)", "   ".join(moves)]
+        moves.append("step " + "  ".join(steps))
+    if moves:
+        lines.append("   ".join(moves))
+    return lines
 
 
 class TwoPlayerHud(Hud):
@@ -42,6 +45,7 @@ class TwoPlayerHud(Hud):
     def __init__(self, second: HudState) -> None:
         super().__init__()
         self.second = second
+        self.key_panels: list[pygame.Rect] = []  # where the players' key legends were drawn last (tests)
 
     def draw(self, surf: pygame.Surface, st: HudState, budget: FrameBudget | None = None) -> None:
         w, h = surf.get_size()
@@ -51,11 +55,14 @@ class TwoPlayerHud(Hud):
         self._clock(surf, st, u)
         self._source(surf, st, u)
         self._source_right(surf, two, u)
-        self._recognition(surf, st, u)
+        # each recognition panel lifted over its player's key legend (when they have one): the
+        # one-player drawing on a shorter surface
+        lift = [int(LEGEND_LIFT * u) if s.keys else 0 for s in (st, two)]
+        self._recognition(surf.subsurface(pygame.Rect(0, 0, w, h - lift[0])), st, u)
         # player 2's panel: the same drawing on a strip of the screen's right edge, so the
         # panel sits mirrored at the bottom right
         strip_w = min(w, int((PANEL_W + 2 * PANEL_MARGIN) * u))
-        self._recognition(surf.subsurface(pygame.Rect(w - strip_w, 0, strip_w, h)), two, u)
+        self._recognition(surf.subsurface(pygame.Rect(w - strip_w, 0, strip_w, h - lift[1])), two, u)
         self._legends(surf, st, two, u)
         self._centre_two(surf, st, u)
         if st.show_budget and budget is not None:
@@ -81,17 +88,19 @@ class TwoPlayerHud(Hud):
                              (body.left + 3, body.top + 3, int((body.width - 6) * b), body.height - 6))
             x = body.left - 12 * u
         r = self.blit(surf, f"{st.source_url}  {st.source_state}", int(22 * u), (x, y), DIM, "topright")
+        if st.templates:
+            self.blit(surf, st.templates, int(18 * u), (right.right, y + 22 * u), DIM, "topright")
         pygame.draw.circle(surf, state_col, (int(r.left - 11 * u), int(y + 8 * u)), int(6 * u))
 
     def _legends(self, surf: pygame.Surface, one: HudState, two: HudState, u: float) -> None:
-        """Each keyboard player's keys under their own panel; the shared keys in the middle."""
+        """Each keyboard player's keys under their own panel, on the one-player legend's dark
+        panel; the shared keys in the middle."""
         w, h = surf.get_size()
-        size = int(19 * u)
-        for st, x, anchor in ((one, PANEL_MARGIN * u, "topleft"), (two, w - PANEL_MARGIN * u, "topright")):
-            if not st.keys:
-                continue
-            for n, line in enumerate(compact_keys(st.keys)):
-                self.blit(surf, line, size, (x, h - 46 * u + n * 20 * u), DIM, anchor)
+        self.key_panels = []
+        for st, x, anchor in ((one, PANEL_MARGIN * u, "bottomleft"), (two, w - PANEL_MARGIN * u, "bottomright")):
+            if st.keys:
+                self.key_panels.append(self.key_legend_panel(surf, compact_keys(st.keys), int(19 * u), anchor,
+                                                             (x, h - 2 * u), u))
         # the shared keys under the round clock (the bottom corners are the players')
         self.blit(surf, "Esc pause  F3 budget  F11 fullscreen", int(18 * u), (w // 2, 118 * u), DIM, "midtop")
 

@@ -15,6 +15,7 @@ from __future__ import annotations
 import argparse
 import os
 import sys
+from collections.abc import Callable
 
 from engine import arguments
 from engine.errors import InputError
@@ -52,7 +53,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--low-power", action="store_true", help="render at 30 Hz on a half-size surface, flat shading, no antialiasing, fewer solver iterations (docs/performance.md)")
     p.add_argument("--templates", metavar="NPZ", help="recognition templates (default: yours from `quickjab train`, else the shipped set)")
     p.add_argument("--graph", metavar="NPZ", help="Interaction Graph table (default: the shipped one)")
-    p.add_argument("--difficulty", choices=("easy", "normal", "hard", "adaptive"), default="normal",
+    p.add_argument("--difficulty", choices=("easy", "normal", "hard", "adaptive"), default=None,
                    help="the CPU: how often it takes its best action, how late it reacts, its rest between moves, how "
                         "much its blows hurt; adaptive follows you to about half the rounds won (default normal; "
                         "D in the pause menu changes it)")
@@ -119,6 +120,42 @@ def run(args: argparse.Namespace) -> int:
         from game.two_player import run_match
 
         return run_match(args)
+    if getattr(args, "profile", None) is not None and args.templates is None:
+        from game.two_player import seat_templates
+
+        args.templates, note = seat_templates(args.profile, None)
+        if note:
+            print(f"quickjab play: {note}", file=sys.stderr)
+
+    fallback = False
+
+    def sources(clock) -> list:
+        nonlocal fallback
+        source, fallback = open_player_source(args.source, args.demo, args.seed, clock.seconds)
+        if fallback:
+            print(f"quickjab play: {KEYBOARD_BANNER}", file=sys.stderr)
+        return [source]
+
+    def session(sources: list, clock, size: tuple[int, int], surface_provider):
+        from game.session import Session, SessionConfig
+
+        config = SessionConfig(seed=args.seed, size=size, low_power=args.low_power, demo=args.demo,
+                               keyboard_banner=fallback, templates=args.templates, graph=args.graph,
+                               sound=not args.no_sound and not args.headless,
+                               left_handed=args.left_handed, difficulty=args.difficulty or "normal")
+        return Session(sources[0], config, clock=clock, surface_provider=surface_provider)
+
+    return run_session(args, "QuickJab", sources, session)
+
+
+def run_session(args: argparse.Namespace, caption: str, open_sources: Callable[[object], list],
+                make_session: Callable[..., object]) -> int:
+    """What one- and two-player play share: the window (or none: --headless, which stops after
+    HEADLESS_FRAMES without --frames), a clear error when SDL shows no window, the clock, the
+    templates line, the loop, then the screenshot and trace, and the sources closed.
+    `open_sources(clock)` returns the sources (opened before the window: a bad URL is an
+    error, not a window that opens and closes); `make_session(sources, clock, size,
+    surface_provider)` builds the session."""
     size = parse_size(args.size)
     if args.frames is not None and args.frames < 1:
         raise InputError("--frames must be at least 1")
@@ -129,31 +166,20 @@ def run(args: argparse.Namespace) -> int:
 
     from engine.clock import RealClock, VirtualClock
     from engine.trace import write_chrome_trace
-    from game.session import Session, SessionConfig
 
-    if getattr(args, "profile", None) is not None and args.templates is None:
-        from game.two_player import seat_templates
-
-        args.templates, note = seat_templates(args.profile, None)
-        if note:
-            print(f"quickjab play: {note}", file=sys.stderr)
     clock = VirtualClock() if args.headless or args.virtual_clock else RealClock()
-    source, fallback = open_player_source(args.source, args.demo, args.seed, clock.seconds)
-    if fallback:
-        print(f"quickjab play: {KEYBOARD_BANNER}", file=sys.stderr)
-    pygame.init()
+    sources: list = []
     try:
+        sources.extend(open_sources(clock))
+        pygame.init()
         flags = pygame.RESIZABLE | (pygame.FULLSCREEN if args.fullscreen and not args.headless else 0)
         pygame.display.set_mode(size, flags)
         if not args.headless:
             check_visible_window("play")
-        pygame.display.set_caption("QuickJab")
-        config = SessionConfig(seed=args.seed, size=size, low_power=args.low_power, demo=args.demo,
-                               keyboard_banner=fallback, templates=args.templates, graph=args.graph,
-                               sound=not args.no_sound and not args.headless,
-                               left_handed=args.left_handed, difficulty=args.difficulty)
-        session = Session(source, config, clock=clock, surface_provider=pygame.display.get_surface)
-        print(f"quickjab play: {session.hud_state.templates}", file=sys.stderr)
+        pygame.display.set_caption(caption)
+        session = make_session(sources, clock, size, pygame.display.get_surface)
+        for line in session.templates_lines():
+            print(f"quickjab play: {line}", file=sys.stderr)
         session.hud_state.show_budget = args.budget
         session.on_toggle_fullscreen = pygame.display.toggle_fullscreen
         try:
@@ -166,6 +192,7 @@ def run(args: argparse.Namespace) -> int:
                 write_chrome_trace(session.loop.budget, args.trace)
                 print(f"quickjab play: wrote {args.trace}", file=sys.stderr)
     finally:
-        source.close()
+        for source in sources:
+            source.close()
         pygame.quit()
     return 0

@@ -74,11 +74,18 @@ def _aacircle(surf: pygame.Surface, color, x: float, y: float, r: float) -> None
     gfxdraw.aacircle(surf, int(round(x)), int(round(y)), max(1, int(round(r))), color)
 
 
-def _shifted(kind: int, args: tuple, offset: np.ndarray) -> tuple:
-    """A primitive's arguments moved by -offset pixels (its points come first, or first two)."""
+def _shifted(kind: int, args: tuple, offset: tuple[float, float]) -> tuple:
+    """A primitive's arguments moved by -offset pixels (its points come first, or first two).
+    Capsules and spheres stay plain float pairs (no numpy per limb: issue 14); the torso's and
+    the eyes' points are already an array per body."""
+    ox, oy = offset
     if kind == 0:
-        return (args[0] - offset, args[1] - offset, *args[2:])
-    return (args[0] - offset, *args[1:])
+        (ax, ay), (bx, by) = args[0], args[1]
+        return ((ax - ox, ay - oy), (bx - ox, by - oy), *args[2:])
+    if kind == 1:
+        (cx, cy) = args[0]
+        return ((cx - ox, cy - oy), *args[1:])
+    return (args[0] - np.array(offset), *args[1:])
 
 
 def shade(c: tuple[int, int, int], k: float) -> tuple[int, int, int]:
@@ -243,7 +250,7 @@ class Renderer:
             box, far = see_through
             # the same region without the near boxer (background + the far boxer), blended over
             # it: the near boxer drawn at NEAR_OPACITY, so who hits whom stays visible
-            self._draw_prims(behind, sorted(per_body[far], key=lambda p: -p[0]), offset=np.array(box.topleft, float))
+            self._draw_prims(behind, sorted(per_body[far], key=lambda p: -p[0]), offset=(float(box.left), float(box.top)))
             behind.set_alpha(int(255 * (1.0 - NEAR_OPACITY)))
             surf.blit(behind, box.topleft)
         surf.blit(self._front, (0, 0))
@@ -266,7 +273,7 @@ class Renderer:
     def screen_rect(self) -> pygame.Rect:
         return pygame.Rect((0, 0), self.camera.size)
 
-    def _draw_prims(self, surf: pygame.Surface, prims: list, offset: np.ndarray | None = None) -> None:
+    def _draw_prims(self, surf: pygame.Surface, prims: list, offset: tuple[float, float] | None = None) -> None:
         """Draw depth-sorted primitives; `offset` (pixels) is subtracted (drawing into a region)."""
         for _, kind, args in prims:
             if offset is not None:

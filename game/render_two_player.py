@@ -24,6 +24,9 @@ class SideOnFraming:
     its camera and cached static layers."""
 
     heading: int | None = None
+    # side-on, neither boxer stands in front of the other: which one is "near" is arbitrary,
+    # so neither is drawn translucent (the one-player view's see-through near boxer)
+    see_through = False
 
     def draw(self, surf: pygame.Surface, bodies: list[np.ndarray]) -> None:
         size = surf.get_size()

@@ -168,6 +168,13 @@ def load_graph(path: str | Path | None = None):
     return InteractionGraph.load(cached, edges=False)
 
 
+def blow_damage(hit: dict) -> float:
+    """A blow's damage, the same in both modes: its window's damage, scaled by the closing
+    speed and BLOW_SCALE, a fifth through a block (the CPU's difficulty comes on top)."""
+    scale = float(np.clip(hit["speed"] / REFERENCE_SPEED, 0.5, 1.5))
+    return float(hit.get("damage", 8.0)) * scale * BLOW_SCALE * (BLOCKED_SHARE if hit["blocked"] else 1.0)
+
+
 LOG_KEPT = 1024  # recent recognizer events / blows kept in memory (an hour makes ~7,000-12,000 events)
 
 
@@ -227,7 +234,7 @@ class Session:
         if hasattr(source, "press_key"):
             from game.keyboard_source import key_help
 
-            self.hud_state.keys = key_help()
+            self.hud_state.keys = key_help(getattr(source, "keymap", None))  # keyboard://?keys=left: that half
         self.hud = Hud()
         self.sounds = Sounds(enabled=cfg.sound, seed=cfg.seed)
         # low power: flat shading (game/render_low_power.py: half the render time of detailed=False)
@@ -256,6 +263,10 @@ class Session:
         if cfg.render:
             self.loop.set_render(self.render, LOW_POWER_RENDER_BUDGET_MS if cfg.low_power else RENDER_BUDGET_MS)
         self.sounds.play("bell")
+
+    def templates_lines(self) -> list[str]:
+        """Which template set is in use, for the console (the HUD shows it under the source)."""
+        return [self.hud_state.templates]
 
     # -- surfaces ------------------------------------------------------------------------
     def target_surface(self) -> pygame.Surface:
@@ -428,13 +439,16 @@ class Session:
             self.apply_hit(step, hit)
 
     def apply_hit(self, step: int, hit: dict) -> None:
-        """A hit event (CONTRACTS.md keys, plus the window's damage and the point): damage
-        scaled by the closing speed, a fifth through a block; reaction, flash, sound, rumble."""
-        target = 1 - hit["attacker"]
-        scale = float(np.clip(hit["speed"] / REFERENCE_SPEED, 0.5, 1.5))
-        damage = float(hit.get("damage", 8.0)) * scale * BLOW_SCALE * (BLOCKED_SHARE if hit["blocked"] else 1.0)
+        """A hit event (CONTRACTS.md keys, plus the window's damage and the point): the blow's
+        damage (blow_damage), the CPU's scaled by its difficulty, then land it."""
+        damage = blow_damage(hit)
         if hit["attacker"] == 1:
             damage *= self.difficulty.current.damage
+        self.land_blow(step, hit, damage)
+
+    def land_blow(self, step: int, hit: dict, damage: float) -> None:
+        """The referee counts the blow; reaction, flash, sound, rumble (both modes)."""
+        target = 1 - hit["attacker"]
         if not self.match.hit(target, damage):
             return
         self.blows_log.append((step, hit["attacker"], hit["target"], hit["blocked"], round(damage, 4)))
@@ -448,6 +462,10 @@ class Session:
             self.sounds.play("hit" if damage >= 8 else "hit_light")
             if self.match.down != target:
                 self.boxers[target].react(hit)
+        self.rumble(target)
+
+    def rumble(self, target: int) -> None:
+        """The boxer who was hit: its player feels it (the CPU has no controller)."""
         if target == 0:
             self.source.rumble(RUMBLE_MS)
 
@@ -464,11 +482,7 @@ class Session:
                 self.boxers[who].controller.play("knockdown")
             elif kind == "rise":
                 self.boxers[who].controller.play("guard")
-        while self._rounds_seen < len(m.round_winners):
-            winner = m.round_winners[self._rounds_seen]
-            self._rounds_seen += 1
-            self.difficulty.round_over(0 if winner is None else (1 if winner == 0 else -1))
-            self._apply_difficulty()
+        self._rounds_over(m)
         if m.over:
             self._over_steps += 1
             if self.config.demo and self._over_steps >= DEMO_RESTART_STEPS:
@@ -480,10 +494,23 @@ class Session:
         h.phase, h.count, h.down = m.phase, m.count, m.down
         h.knockdowns = list(m.knockdowns)
         h.winner, h.result, h.paused = m.winner, m.result, m.paused
-        h.source_url, h.source_state = self.source.url, self.source.state.value
-        h.battery = self.source.battery
+        self._show_sources()
         h.tick()
         self._step = step
+
+    def _rounds_over(self, m: Match) -> None:
+        """Each round decided since the last step: the adaptive difficulty follows the player."""
+        while self._rounds_seen < len(m.round_winners):
+            winner = m.round_winners[self._rounds_seen]
+            self._rounds_seen += 1
+            self.difficulty.round_over(0 if winner is None else (1 if winner == 0 else -1))
+            self._apply_difficulty()
+
+    def _show_sources(self) -> None:
+        """The source line's fields of the HUD: URL, state, battery."""
+        h = self.hud_state
+        h.source_url, h.source_state = self.source.url, self.source.state.value
+        h.battery = self.source.battery
 
     def _to_corners(self) -> None:
         """Both boxers back to their marks, at the guard (a new round)."""

@@ -25,19 +25,18 @@ from pathlib import Path
 import numpy as np
 import pygame
 
+from engine.arguments import SEED_MAX
 from engine.clock import RealClock, VirtualClock
 from engine.errors import InputError
 from engine.frames import FrameResampler
 from engine.loop import FixedStepLoop
 from engine.sensors.source import Source, SourceState
+from game.difficulty import DifficultySetting
 from game.history import History
-from game.hits import hits_from_contacts
 from game.hud import HudState
 from game.hud_two_player import TwoPlayerHud
 from game.match import Match
 from game.session import (
-    BLOCKED_SHARE,
-    DEMO_RESTART_STEPS,
     HOME_BUTTON,
     HZ,
     LOG_KEPT,
@@ -45,7 +44,6 @@ from game.session import (
     PILOT_ATTACKS,
     PILOT_REACH,
     PILOT_SETTLE_STEPS,
-    REFERENCE_SPEED,
     RENDER_BUDGET_MS,
     RING_LIMIT,
     RUMBLE_MS,
@@ -54,7 +52,9 @@ from game.session import (
     Session,
     SessionConfig,
     _event_key,
+    blow_damage,
     load_templates,
+    templates_in_use,
 )
 
 # Two recognizers, two sources, two resamplers: those stages get more than the one-player budget
@@ -129,7 +129,8 @@ class TwoPlayerSession(Session):
                                  f"templates need {t.dim // 3} (a Wiimote + Nunchuk, or two IMUs)")
             rec = build_recognizer(t)
             hud = HudState(keys=[], source_url=f"{NAMES[i]} {source.url}", demo=cfg.demo,
-                           main_size=int(rec.main) if rec.main != "auto" else 6, supp_size=rec.supplementary)
+                           main_size=int(rec.main) if rec.main != "auto" else 6, supp_size=rec.supplementary,
+                           templates=templates_in_use(tmpl))
             if hasattr(source, "keymap"):
                 from game.keyboard_source import key_help
 
@@ -141,6 +142,12 @@ class TwoPlayerSession(Session):
         self.templates = self.seats[0].templates
         self.recognizer = self.seats[0].recognizer
         self.resampler = self.seats[0].resampler
+        # what the one-player methods it inherits read (cycle_difficulty, _pilot, _input...):
+        # no CPU here, so no opponent_ai and a difficulty that sets nothing (_apply_difficulty)
+        self.difficulty = DifficultySetting(cfg.difficulty)
+        self.opponent_ai = None
+        self._rounds_seen = self._cpu_rest = self._rest_next = self._buttons = 0
+        self._pilot_wait, self._pilot_seen, self._pilot_rng = PILOT_SETTLE_STEPS, True, self.seats[0].pilot_rng
         self.match = Match()
         self.hud_state = self.seats[0].hud  # player 1's panel carries the match state
         self.hud_state.names = NAMES
@@ -172,6 +179,9 @@ class TwoPlayerSession(Session):
         if cfg.render:
             self.loop.set_render(self.render, LOW_POWER_RENDER_BUDGET_MS if cfg.low_power else RENDER_BUDGET_MS)
         self.sounds.play("bell")
+
+    def templates_lines(self) -> list[str]:
+        return [f"{NAMES[seat.index]} {seat.hud.templates}" for seat in self.seats]
 
     # -- stages --------------------------------------------------------------------------
     def _input(self, step: int, dt: float) -> None:
@@ -275,61 +285,27 @@ class TwoPlayerSession(Session):
     def _opponent(self, step: int, dt: float) -> None:
         self._step_boxer(1, dt)
 
-    def _hits(self, step: int, dt: float) -> None:
-        for hit in hits_from_contacts(self.contacts, list(self.boxers)):
-            self.apply_hit(step, hit)
-
     def apply_hit(self, step: int, hit: dict) -> None:
-        """As the one-player session's, but a fair fight: no CPU handicap; the player who was
-        hit feels it in their own controller."""
-        target = 1 - hit["attacker"]
-        scale = float(np.clip(hit["speed"] / REFERENCE_SPEED, 0.5, 1.5))
-        damage = float(hit.get("damage", 8.0)) * scale * (BLOCKED_SHARE if hit["blocked"] else 1.0)
-        if not self.match.hit(target, damage):
-            return
-        self.blows_log.append((step, hit["attacker"], hit["target"], hit["blocked"], round(damage, 4)))
-        point = hit.get("point")
-        if point is None:
-            point = self.boxers[target].joint_positions()[4]
-        self.renderer.add_flash(point, strong=damage >= 8, blocked=hit["blocked"])
-        if hit["blocked"]:
-            self.sounds.play("block")
-        else:
-            self.sounds.play("hit" if damage >= 8 else "hit_light")
-            if self.match.down != target:
-                self.boxers[target].react(hit)
+        """The one-player session's blow (blow_damage, land_blow), but a fair fight: no CPU
+        difficulty on top."""
+        self.land_blow(step, hit, blow_damage(hit))
+
+    def rumble(self, target: int) -> None:
+        """The player who was hit feels it in their own controller."""
         self.seats[target].source.rumble(RUMBLE_MS)
 
-    def _match(self, step: int, dt: float) -> None:
-        m = self.match
-        m.step()
-        for kind, who in m.drain_events():
-            if kind == "bell":
-                self.sounds.play("bell")
-                if m.phase == "fight":
-                    self.hud_state.message, self.hud_state.message_age = f"ROUND {m.round}", 0
-                    self._to_corners()
-            elif kind == "knockdown":
-                self.boxers[who].controller.play("knockdown")
-            elif kind == "rise":
-                self.boxers[who].controller.play("guard")
-        if m.over:
-            self._over_steps += 1
-            if self.config.demo and self._over_steps >= DEMO_RESTART_STEPS:
-                self.new_match()
-        h = self.hud_state
-        h.health = list(m.health)
-        h.round, h.rounds = m.round, m.rounds
-        h.seconds_left = m.seconds_left()
-        h.phase, h.count, h.down = m.phase, m.count, m.down
-        h.knockdowns = list(m.knockdowns)
-        h.winner, h.result, h.paused = m.winner, m.result, m.paused
-        for seat in self.seats:  # (the source line's URL is set once, at the seat's making)
+    def _rounds_over(self, m: Match) -> None:
+        """No CPU whose difficulty follows the rounds: two people box."""
+
+    def _apply_difficulty(self) -> None:
+        """No CPU to set (the pause menu's D, cycle_difficulty, changes nothing here)."""
+
+    def _show_sources(self) -> None:
+        # each seat's source line (its URL is set once, at the seat's making)
+        for seat in self.seats:
             seat.hud.source_state = seat.source.state.value
             seat.hud.battery = seat.source.battery
-        self.seats[1].hud.tick()
-        h.tick()
-        self._step = step
+        self.seats[1].hud.tick()  # player 2's marks age as player 1's (hud_state.tick)
 
     def new_match(self) -> None:
         """A fresh match (Enter after the last bell; by itself in the demo)."""
@@ -353,6 +329,11 @@ def _with_param(url: str, key: str, value: str) -> str:
     return url + ("&" if "?" in url else "?") + f"{key}={value}"
 
 
+def seat_seed(seed: int, i: int) -> int:
+    """Seat i's keyboard seed: seed + i, wrapped into the seeds a URL takes (0..SEED_MAX)."""
+    return (seed + i) % (SEED_MAX + 1)
+
+
 def source_urls(url1: str | None, url2: str | None, demo: bool, seed: int,
                 wiimotes: Callable[[], list[str]] | None = None) -> tuple[list[str], list[str]]:
     """The two seats' source URLs and notes for the player. Default: the first two Wiimotes
@@ -362,7 +343,7 @@ def source_urls(url1: str | None, url2: str | None, demo: bool, seed: int,
 
     notes: list[str] = []
     if demo:
-        return [f"{DEMO_SOURCE}&seed={seed + i}&keys={half}" for i, half in enumerate(("left", "right"))], notes
+        return [f"{DEMO_SOURCE}&seed={seat_seed(seed, i)}&keys={half}" for i, half in enumerate(("left", "right"))], notes
     urls = [url1, url2]
     if any(u is None or u.rstrip("/") == "wiimote:" for u in urls):
         # `wiimote://` would open the first remote found for both seats: give each its own
@@ -381,10 +362,24 @@ def source_urls(url1: str | None, url2: str | None, demo: bool, seed: int,
         raise InputError(f"--source and --source2 are the same device ({urls[0]}): each player needs their own")
     keyboards = [i for i, u in enumerate(urls) if u.startswith("keyboard://")]
     for i in keyboards:
-        urls[i] = _with_param(urls[i], "seed", str(seed + i))
+        urls[i] = _with_param(urls[i], "seed", str(seat_seed(seed, i)))
         if len(keyboards) == 2:
             urls[i] = _with_param(urls[i], "keys", ("left", "right")[i])
+    if len(keyboards) == 2:
+        _check_own_keys(urls)
     return urls, notes
+
+
+def _check_own_keys(urls: list[str]) -> None:
+    """Two keyboard players must not answer the same keys (both keys=left: one key, two boxers)."""
+    from engine.sensors.source import parse_source_url
+    from game.keyboard_source import KEYMAPS
+
+    halves = [parse_source_url(u)[2].get("keys", "all") for u in urls]
+    if all(h in KEYMAPS for h in halves) and set(KEYMAPS[halves[0]]) & set(KEYMAPS[halves[1]]):
+        # (an unknown half is the source's own error, naming the choices)
+        raise InputError(f"--source and --source2 share keys of the keyboard (keys={halves[0]}, keys={halves[1]}): "
+                         "give each player their own half, keys=left and keys=right")
 
 
 def _wiimote_paths() -> list[str]:
@@ -413,21 +408,13 @@ def seat_templates(profile: str | None, templates: str | None) -> tuple[Path | s
 
 
 def run_match(args) -> int:
-    """`quickjab play --players 2`: open both sources, build the session, play (see play.run)."""
+    """`quickjab play --players 2`: both seats' templates and sources, then play as one
+    player does (game.play.run_session: headless frames, window check, screenshot, trace)."""
     import sys
 
     from engine.sensors import open_source
-    from game.play import headless_env, parse_size
+    from game.play import run_session
 
-    size = parse_size(args.size)
-    if args.frames is not None and args.frames < 1:
-        raise InputError("--frames must be at least 1")
-    if args.headless:
-        headless_env()
-    import game.keyboard_source  # noqa: F401 - registers keyboard://
-    from engine.trace import write_chrome_trace
-
-    clock = VirtualClock() if args.headless or args.virtual_clock else RealClock()
     templates, notes = [], []
     for profile in (args.profile, args.profile2):
         path, note = seat_templates(profile, args.templates)
@@ -435,33 +422,28 @@ def run_match(args) -> int:
         if note:
             notes.append(note)
     urls, url_notes = source_urls(args.source, args.source2, args.demo, args.seed)
+    cpu_options = [opt for opt, value in (("--difficulty", args.difficulty), ("--graph", args.graph)) if value is not None]
+    if cpu_options:
+        notes.append(f"{' and '.join(cpu_options)} ignored with --players 2: they set the CPU, and two people box")
     for note in url_notes + notes:
         print(f"quickjab play: {note}", file=sys.stderr)
-    sources: list[Source] = []
-    try:
-        for url in urls:
-            sources.append(open_source(url, clock=clock.seconds))
-        pygame.init()
-        flags = pygame.RESIZABLE | (pygame.FULLSCREEN if args.fullscreen and not args.headless else 0)
-        pygame.display.set_mode(size, flags)
-        pygame.display.set_caption("QuickJab - two players")
+
+    def sources(clock) -> list[Source]:
+        import game.keyboard_source  # noqa: F401 - registers keyboard://
+
+        opened: list[Source] = []
+        try:
+            for url in urls:
+                opened.append(open_source(url, clock=clock.seconds))
+        except BaseException:
+            for source in opened:
+                source.close()
+            raise
+        return opened
+
+    def session(sources: list[Source], clock, size: tuple[int, int], surface_provider) -> TwoPlayerSession:
         config = SessionConfig(seed=args.seed, size=size, low_power=args.low_power, demo=args.demo,
                                sound=not args.no_sound and not args.headless, left_handed=args.left_handed)
-        session = TwoPlayerSession(sources, config, clock=clock, surface_provider=pygame.display.get_surface,
-                                   templates=templates)
-        session.hud_state.show_budget = args.budget
-        session.on_toggle_fullscreen = pygame.display.toggle_fullscreen
-        try:
-            session.loop.run(frames=args.frames)
-        finally:
-            if args.screenshot:
-                pygame.image.save(pygame.display.get_surface(), args.screenshot)
-                print(f"quickjab play: wrote {args.screenshot}", file=sys.stderr)
-            if args.trace:
-                write_chrome_trace(session.loop.budget, args.trace)
-                print(f"quickjab play: wrote {args.trace}", file=sys.stderr)
-    finally:
-        for source in sources:
-            source.close()
-        pygame.quit()
-    return 0
+        return TwoPlayerSession(sources, config, clock=clock, surface_provider=surface_provider, templates=templates)
+
+    return run_session(args, "QuickJab - two players", sources, session)

@@ -95,10 +95,20 @@ def _play(job: tuple) -> MatchResult:
     return play_match(*job)
 
 
+def duel_jobs(difficulties: list[str], profiles: list[str], matches: int, seed: int,
+              graph: str | None = None, templates: str | None = None) -> list[tuple]:
+    """The matches to play: (difficulty, profile, seed, graph, templates), seeds seed, seed+1,
+    ... wrapped into the seeds a URL takes (0..SEED_MAX)."""
+    from engine.arguments import SEED_MAX
+
+    return [(d, p, (seed + k) % (SEED_MAX + 1), graph, templates)
+            for d in difficulties for p in profiles for k in range(matches)]
+
+
 def virtual_duel(difficulties: list[str], profiles: list[str], matches: int, seed: int = 1, jobs: int = 2,
                  graph: str | None = None, templates: str | None = None) -> list[DuelSummary]:
     """`matches` matches per (difficulty, profile), seeds seed, seed+1, ...; `jobs` processes."""
-    work = [(d, p, seed + k, graph, templates) for d in difficulties for p in profiles for k in range(matches)]
+    work = duel_jobs(difficulties, profiles, matches, seed, graph, templates)
     if jobs > 1 and len(work) > 1:
         with ProcessPoolExecutor(max_workers=jobs) as pool:
             results = list(pool.map(_play, work))

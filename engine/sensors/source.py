@@ -183,10 +183,14 @@ def url_number(
     if text is None:
         return default
     kind = "an integer" if integer else "a number"
+
+    def bound(x: float) -> str:  # an int bound as written: 2**63 - 1, not 9.22337e+18
+        return str(x) if isinstance(x, int) else f"{x:g}"
+
     if lo is not None and hi is not None:
-        kind += f" {'above' if lo_open else 'from'} {lo:g} {'up ' if lo_open else ''}to {hi:g}"
+        kind += f" {'above' if lo_open else 'from'} {bound(lo)} {'up ' if lo_open else ''}to {bound(hi)}"
     elif lo is not None:
-        kind += f" {'above' if lo_open else 'from'} {lo:g}"
+        kind += f" {'above' if lo_open else 'from'} {bound(lo)}"
     try:
         v: float = int(text) if integer else float(text)
     except ValueError:
