@@ -342,6 +342,17 @@ def test_broken_kernels_fall_back_cleanly_with_the_same_state(case, tmp_path, mo
         assert any((tmp_path / f"quickjab-{os.getuid()}").glob("contacts-*.so"))
 
 
+def test_the_world_loads_its_kernels_when_built_not_in_a_step(monkeypatch):
+    """The contact kernel's first build (a compiler run) happens when the World is built, as
+    IncrementalDTW does at construction, never inside the first 60 Hz step with a contact."""
+    from engine.physics import collision, constraints
+
+    monkeypatch.setattr(collision, "_kernels", [])
+    monkeypatch.setattr(constraints, "_kernel", [])
+    World()
+    assert len(collision._kernels) == 1 and len(constraints._kernel) == 1
+
+
 def test_damping_is_per_second_not_per_step():
     def speed_after_1s(dt: float) -> float:
         w = World(gravity=(0, 0, 0), ground_y=-100.0, damping=0.05)
