@@ -255,6 +255,8 @@ def load_library(stem: str, source: str, symbols: tuple[str, ...] = ()) -> ctype
                 _prune(d, stem, path, markers)
                 _status[stem] = f"native: built {path}"
                 return lib
+            if not path.exists():  # pruned by another kernel version's build meanwhile: not a failure
+                return _numpy(stem, f"{path} was removed while loading it; the next start builds it again")
             _remove(path)
             reason = f"{cc} built a library that does not load or lacks {', '.join(symbols)}"
         try:

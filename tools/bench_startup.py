@@ -6,7 +6,7 @@ Each run starts a fresh interpreter; play and peer alternate so both see the sam
 load. Reported: min and median over the runs of the wall time and of the child's peak RSS
 (its VmHWM from /proc at exit: rusage's maxrss would carry the forking parent's peak across
 exec), the ratio play / peer, and issue 14's targets (wall <= 3x the peer's, peak RSS <= 120 MB). One untimed play run first builds what is built once per machine (the
-native DTW kernel, Python's bytecode cache when it is on).
+C kernels, Python's bytecode cache when it is on), and it prints whether those run native or numpy.
 """
 
 from __future__ import annotations
