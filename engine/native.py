@@ -271,13 +271,14 @@ def status() -> dict[str, str]:
     return dict(_status)
 
 
-def describe() -> str:
-    """One line: whether the kernels loaded so far run native or numpy, and why."""
-    if not _status:
+def describe(stems: tuple[str, ...] | None = None) -> str:
+    """One line: whether the kernels loaded so far (or those of `stems`) run native or numpy, and why."""
+    loaded = {k: v for k, v in sorted(_status.items()) if stems is None or k in stems}
+    if not loaded:
         return "C kernels: none loaded"
-    numpy = {k: v for k, v in sorted(_status.items()) if v.startswith("numpy")}
+    numpy = {k: v for k, v in loaded.items() if v.startswith("numpy")}
     if not numpy:
-        return f"C kernels: native ({', '.join(sorted(_status))})"
+        return f"C kernels: native ({', '.join(loaded)})"
     why = sorted(set(v[len("numpy: "):] for v in numpy.values()))
     return f"C kernels: numpy for {', '.join(numpy)} ({'; '.join(why)})" + (
-        f"; native: {', '.join(k for k in sorted(_status) if k not in numpy)}" if len(numpy) < len(_status) else "")
+        f"; native: {', '.join(k for k in loaded if k not in numpy)}" if len(numpy) < len(loaded) else "")
