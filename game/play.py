@@ -37,7 +37,7 @@ def parse_size(text: str) -> tuple[int, int]:
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("play", help="box: a match against the CPU (Wiimote, serial IMUs or the keyboard)",
+    p = sub.add_parser("play", help="box: a match against the CPU, or two players with --players 2 (Wiimote, serial IMUs or the keyboard)",
                        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--source", default=None, help=f"source URL (default: {DEFAULT_SOURCE}, else {KEYBOARD_SOURCE})")
     p.add_argument("--demo", action="store_true", help="attract mode: a synthesized session from the virtual player")

@@ -210,7 +210,6 @@ class Session:
         self._rest_next = self.difficulty.current.rest_steps  # its rest after the move it plays
         self.opponent_ai = OpponentController(graph, self.lib, controller=self.opponent.controller,
                                               rng=np.random.default_rng(cfg.seed + 2))
-        self._apply_difficulty()
         self._pilot_wait = PILOT_SETTLE_STEPS
         self._cpu_rest = 0
         self._over_steps = 0

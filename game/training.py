@@ -160,6 +160,7 @@ def merge_templates(base, new, left_handed: bool = False):
         new.method,
         new.feature,
         {**base.meta, **new.meta},
+        rest_noise=new.rest_noise,  # the gate noise measured during this training's rests
     )
 
 
@@ -345,7 +346,10 @@ def run(args: argparse.Namespace) -> int:
     from game.actions import ACTION_NAMES, load_library
 
     if args.reset:
-        return reset_templates(Path(args.output) if args.output else None)
+        from game.userdata import profile_templates_path
+
+        # --profile NAME resets NAME's set (profile_templates_path(None) is the default player's)
+        return reset_templates(Path(args.output) if args.output else profile_templates_path(args.profile))
     actions = list(ACTION_NAMES)
     if args.actions:
         actions = [a.strip() for a in args.actions.split(",") if a.strip()]

@@ -265,9 +265,12 @@ def run(args: argparse.Namespace) -> int:
     if getattr(args, "players", 1) == 2 and not args.no_naive:
         modes.append("one_player")  # the one-player match as shipped: what the second player adds
     configs = {m: measure(m, args, size) for m in modes}
+    from tools.bench_startup import kernel_report
+
+    kernels, per_kernel = kernel_report()  # already loaded by the sessions: says which and why
     out: dict = {"players": getattr(args, "players", 1), "steps": args.steps, "seed": args.seed, "size": list(size), "budget_ms": BUDGET_MS,
                  "clock": "virtual (stage timings real: wall perf_counter_ns and thread CPU time)",
-                 "configs": configs}
+                 "kernels_summary": kernels, "kernels": per_kernel, "configs": configs}
     if "naive" in configs:
         ref = configs["full" if "full" in configs else "low_power"]
         out["naive_over_game"] = naive_ratios(configs["naive"], ref)
@@ -339,6 +342,8 @@ def format_report(out: dict) -> str:
              "virtual clock. ms per call; 'least' = per-step minimum over the repeated runs (the loop's wall "
              "timer, least disturbed), 'run 1' = the first run as it came (wall, and thread CPU); "
              "share = p99 / 16.7 ms"]
+    if "kernels_summary" in out:
+        lines.append(out["kernels_summary"])
     for mode, c in out["configs"].items():
         lines += ["", f"[{mode}] render {c['render_hz']} Hz on {c['surface'][0]}x{c['surface'][1]}, "
                   f"{c['physics_iterations']} solver iterations, antialias {c['antialias']}; "

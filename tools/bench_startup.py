@@ -6,7 +6,7 @@ Each run starts a fresh interpreter; play and peer alternate so both see the sam
 load. Reported: min and median over the runs of the wall time and of the child's peak RSS
 (its VmHWM from /proc at exit: rusage's maxrss would carry the forking parent's peak across
 exec), the ratio play / peer, and issue 14's targets (wall <= 3x the peer's, peak RSS <= 120 MB). One untimed play run first builds what is built once per machine (the
-native DTW kernel, Python's bytecode cache when it is on).
+C kernels, Python's bytecode cache when it is on), and it prints whether those run native or numpy.
 """
 
 from __future__ import annotations
@@ -33,6 +33,20 @@ PLAY_CODE = REPORT + f"import sys\nsys.argv = ['quickjab', *{PLAY!r}]\nfrom tool
 PEER_CODE = REPORT + "import numpy, pygame\n_peak()\n"
 
 
+def kernel_report() -> tuple[str, dict]:
+    """Whether the C kernels (engine/native.py) run native or numpy here, and why: one line,
+    and per kernel. Loads them in this process (the children share its cache and environment)."""
+    from engine import native
+    from engine.physics import collision, constraints
+    from engine.recognition import dtw_native
+
+    collision.kernels()
+    constraints.project_kernel()
+    dtw_native.push_row_native()
+    stems = ("contacts", "stick_project", "dtw_push_row")
+    return native.describe(stems), {k: v for k, v in native.status().items() if k in stems}
+
+
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--runs", type=int, default=5, help="runs of each (default 5)")
     p.add_argument("--json", action="store_true", help="print the figures as JSON")
@@ -56,6 +70,7 @@ def run(args: argparse.Namespace) -> int:
     if args.runs < 1:
         raise InputError("--runs must be at least 1")
     run_once(PLAY_CODE)  # warm-up: one-time builds and caches, not start-up
+    kernels, per_kernel = kernel_report()
     play, peer = [], []
     for _ in range(args.runs):
         play.append(run_once(PLAY_CODE))
@@ -70,6 +85,7 @@ def run(args: argparse.Namespace) -> int:
     ratio_min, ratio_median = p["wall_min_s"] / q["wall_min_s"], p["wall_median_s"] / q["wall_median_s"]
     result = {"runs": args.runs, "play": p, "import_numpy_pygame": q,
               "ratio_min": ratio_min, "ratio_median": ratio_median,
+              "kernels": per_kernel,
               "bytecode_cache": not sys.dont_write_bytecode and not os.environ.get("PYTHONDONTWRITEBYTECODE"),
               "targets": {"ratio_median_le_3": ratio_median <= MAX_RATIO, "rss_le_120mb": p["rss_max_mb"] <= MAX_RSS_MB}}
     if args.json:
@@ -78,6 +94,7 @@ def run(args: argparse.Namespace) -> int:
         print(json.dumps(result, indent=2))
         return 0
     print(f"start-up, {args.runs} runs each, fresh interpreters, alternating (quickjab {' '.join(PLAY)})")
+    print(kernels)
     if not result["bytecode_cache"]:
         print("note: PYTHONDONTWRITEBYTECODE is set: every run compiles the game's sources (an install would not)")
     print(f"{'':28} | {'wall min s':>10} | {'wall median s':>13} | {'peak RSS MB (min / median / max)':>32}")

@@ -14,6 +14,7 @@ import time
 
 import numpy as np
 
+from engine import arguments
 from engine.clock import VirtualClock
 from engine.recording import Recording
 from engine.sensors.wiimote import WiimoteSource, decode_report
@@ -23,7 +24,7 @@ STEP_NS = 16_666_667
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--seconds", type=float, default=20.0, help="virtual seconds per session")
+    p.add_argument("--seconds", type=arguments.positive_float, default=20.0, help="virtual seconds per session")
     p.add_argument("--json", action="store_true", help="print JSON instead of a table")
 
 

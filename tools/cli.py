@@ -19,7 +19,7 @@ from engine.errors import InputError
 # command -> (module whose register() adds it, the one line `--help` shows), in `--help` order.
 # A module may add several commands (tools.recognition_commands: templates, recognize, evaluate).
 COMMANDS: dict[str, tuple[str, str]] = {
-    "play": ("game.play", "box: a match against the CPU (Wiimote, serial IMUs or the keyboard)"),
+    "play": ("game.play", "box: a match against the CPU, or two players with --players 2 (Wiimote, serial IMUs or the keyboard)"),
     "train": ("game.training", "Train your moves: record 5 trials of each action, build your templates from the 3 most representative"),
     "record": ("tools.record", "record a source to a CSV file"),
     "devices": ("tools.devices", "list Wiimotes and serial ports"),

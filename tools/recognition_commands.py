@@ -68,7 +68,7 @@ def _users(text: str) -> str:
     return text
 
 
-def _recognizer_args(p: argparse.ArgumentParser, main_default: str = "6") -> None:
+def _recognizer_args(p: argparse.ArgumentParser) -> None:
     g = p.add_argument_group("recognizer")
     g.add_argument("--noise-g", type=_noise_arg, default="auto",
                    help="noise gate in g, or 'auto' (default): learned from the sensor's resting noise")

@@ -355,7 +355,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                        formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--source", default="demo://", help="source URL: wiimote://, serial:///dev/ttyACM0, replay://f.csv?loop=1, demo:// (default)")
     add_view_arguments(p)
-    p.add_argument("--connect-timeout", type=float, default=CONNECT_TIMEOUT_S, metavar="S",
+    p.add_argument("--connect-timeout", type=arguments.positive_float, default=CONNECT_TIMEOUT_S, metavar="S",
                    help=f"exit with an error when the source has not connected after S seconds (default {CONNECT_TIMEOUT_S:g})")
     p.set_defaults(func=run)
 

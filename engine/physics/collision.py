@@ -117,7 +117,7 @@ _kernels: list = []
 def kernels():
     """(narrow, contact_project) as ctypes functions, or None without a C compiler."""
     if not _kernels:
-        lib = native.load_library("contacts", KERNEL_SOURCE)
+        lib = native.load_library("contacts", KERNEL_SOURCE, ("narrow", "contact_project", "candidates"))
         if lib is None:
             _kernels.append(None)
         else:

@@ -69,7 +69,7 @@ _kernel: list = []
 def project_kernel():
     """The C projection (a ctypes function), or None without a compiler (numpy then)."""
     if not _kernel:
-        lib = native.load_library("stick_project", PROJECT_SOURCE)
+        lib = native.load_library("stick_project", PROJECT_SOURCE, ("project",))  # None: no such symbol either
         fn = None
         if lib is not None:
             fn = lib.project

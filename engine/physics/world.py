@@ -6,8 +6,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from engine.physics.collision import CapsulePairs, Contact
-from engine.physics.constraints import DistanceConstraints
+from engine.physics.collision import CapsulePairs, Contact, kernels
+from engine.physics.constraints import DistanceConstraints, project_kernel
 from engine.state_hash import state_hash as _hash
 
 
@@ -88,6 +88,10 @@ class World:
         self._cap_local = np.zeros(0, dtype=np.int64)
         self._cap_tags: list[str] = []
         self._rebuild()
+        # The C kernels now, not in the first step with a contact: their first build on a
+        # machine (a compiler run, seconds on a slow board) must not stall a match's opening.
+        kernels()
+        project_kernel()
 
     # ---- building -------------------------------------------------------------------------
 

@@ -6,11 +6,12 @@ The same loop nest in C is ~40 lines, built once with the system's C compiler in
 shared library in the user's cache directory, and afterwards costs a dlopen (~1 ms, <1 MB).
 
 The arithmetic is the numba kernel's, operation for operation (no fused multiply-add:
--ffp-contract=off; sqrt correctly rounded), so "native", "jit" and the exact-cost numpy scan give
-the same scores, and the recognizer the same events.
+-ffp-contract=off; sqrt correctly rounded), so "native" and "jit" give the same scores bit for
+bit. The numpy scan sums in another order: its scores differ in the last bits (equal to ~1e-14:
+1.5e-14 at most on the shipped templates, measured), and the recognizer gives the same events.
 
 `push_row_native()` is None when there is no C compiler (cc, or $CC) and no library built
-earlier, or when QUICKJAB_NO_NATIVE=1 (or QUICKJAB_NO_JIT=1: no compiled kernel at all) is set;
+earlier (a failed build is remembered: engine/native.py), or when QUICKJAB_NO_NATIVE=1 (or QUICKJAB_NO_JIT=1: no compiled kernel at all) is set;
 IncrementalDTW then uses numba for hundreds of templates, else numpy.
 """
 
@@ -83,7 +84,7 @@ def library_path() -> Path:
 
 
 def _load() -> Callable | None:
-    lib = native.load_library("dtw_push_row", SOURCE)
+    lib = native.load_library("dtw_push_row", SOURCE, ("push_row",))  # None: missing symbol too
     if lib is None:
         return None
     fn = lib.push_row
@@ -95,7 +96,7 @@ def _load() -> Callable | None:
 
 def push_row_native() -> Callable | None:
     """The C kernel (a ctypes function taking array addresses), or None when it cannot be had.
-    Built on the first call in a machine's life (~0.3 s), loaded from the cache afterwards."""
+    Built on the first call in a machine's life (docs/performance.md), loaded from the cache afterwards."""
     if not _loaded:
         _loaded.append(_load())
     return _loaded[0]

@@ -248,7 +248,7 @@ class DualBufferRecognizer:
         self._dtw_method = dtw_method
         self._base = (cut, self._tmpl_action.copy(), self.thresholds.copy(), self._peak_act.copy())
         self._base_starts = self._action_starts.copy()
-        self._adapted: dict[int, list[tuple[np.ndarray, float]]] = {}
+        self._adapted: dict[int, list[tuple[np.ndarray, tuple[float, float]]]] = {}  # (motion, (early, window) peaks)
         self._motion = np.empty((max(self.window, self._extend_to), self.dim))  # features since the onset
         self._acts = np.empty(len(self._motion))  # the gate's activity since the onset
         self._recent = np.empty((BACKDATE_MAX, self.dim))  # the last idle frames (ring), for back-dating

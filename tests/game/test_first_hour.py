@@ -69,6 +69,33 @@ def test_train_reset_goes_back_to_the_default_templates(tmp_path, monkeypatch, c
     assert templates_in_use() == "default templates"
 
 
+def test_train_reset_with_a_profile_removes_that_players_set_only(tmp_path, monkeypatch, capsys):
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "xdg"))
+    from game.session import synthesized_templates
+    from game.userdata import profile_templates_path, user_templates_path
+
+    t = synthesized_templates(trials=1)
+    for path in (user_templates_path(), profile_templates_path("ana")):
+        path.parent.mkdir(parents=True, exist_ok=True)
+        t.save(path)
+    assert main(["train", "--reset", "--profile", "ana"]) == 0
+    assert not profile_templates_path("ana").exists()
+    assert user_templates_path().exists()  # the default player's set is not ana's
+    assert str(profile_templates_path("ana")) in capsys.readouterr().err
+
+
+def test_a_trained_set_keeps_the_rest_noise_of_its_trials(tmp_path, monkeypatch):
+    """merge_templates keeps the new trials' rest noise: the automatic gate starts from the
+    noise measured during training, not from its fallback."""
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "xdg"))
+    from engine.recognition import Templates
+    from game.userdata import user_templates_path
+
+    assert train("--actions", "straight_l") == 0
+    noise = Templates.load(user_templates_path()).rest_noise
+    assert np.isfinite(noise) and 0 <= noise < 1.0
+
+
 def test_play_says_which_templates_it_uses_on_screen_and_console(tmp_path, monkeypatch, capsys, graph_path):  # noqa: F811
     monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "xdg"))
     import pygame

@@ -44,6 +44,21 @@ def test_bench_frame_json(tmp_path) -> None:
     assert any(k.startswith("full_sim_p99") for k in out["targets"])
     # issue 14's low-power-board targets, on the least-disturbed p99s
     assert {"full_sim_p99_le_1.2ms", "full_render_p99_le_6ms"} <= set(out["targets"])
+    # whether the C kernels ran native or numpy, per kernel
+    assert set(out["kernels"]) == {"contacts", "stick_project", "dtw_push_row"}
+    assert all(v.startswith(("native: ", "numpy: ")) for v in out["kernels"].values())
+
+
+def test_bench_frame_says_the_kernels_run_numpy_and_why(tmp_path) -> None:
+    env_extra = {"QUICKJAB_NO_NATIVE": "1"}
+    env = {"XDG_DATA_HOME": str(tmp_path), "PATH": "/usr/bin:/bin", "SDL_VIDEODRIVER": "dummy",
+           "SDL_AUDIODRIVER": "dummy", **env_extra}
+    r = subprocess.run([sys.executable, "-m", "game.cli", "bench", "frame", "--steps", "30", "--repeats", "1",
+                        "--no-naive", "--realtime-seconds", "0", "--size", "320x180"], cwd=REPO,
+                       capture_output=True, text=True, env=env, timeout=300)
+    assert r.returncode == 0, r.stderr
+    line = next(x for x in r.stdout.splitlines() if x.startswith("C kernels:"))
+    assert "numpy" in line and "QUICKJAB_NO_NATIVE" in line and "contacts" in line
 
 
 def test_naive_peer_swaps_in_and_keeps_the_decisions() -> None:

@@ -97,3 +97,4 @@ def test_bench_startup_prints_figures_and_verdicts(capsys):
     assert out["play"]["wall_min_s"] > 0 and out["import_numpy_pygame"]["rss_max_mb"] > 10
     assert out["play"]["rss_max_mb"] > out["import_numpy_pygame"]["rss_max_mb"]
     assert set(out["targets"]) == {"ratio_median_le_3", "rss_le_120mb"}
+    assert set(out["kernels"]) == {"contacts", "stick_project", "dtw_push_row"}  # native or numpy, and why

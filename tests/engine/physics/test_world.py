@@ -3,9 +3,13 @@ and the add_body checks."""
 
 from __future__ import annotations
 
+import os
+from pathlib import Path
+
 import numpy as np
 import pytest
 
+from engine import native
 from engine.physics import World
 from tests.engine.physics.humanoid import GUARD, MASSES, J, add_humanoid
 
@@ -238,7 +242,9 @@ def test_three_bodies_collide_pairwise():
 
 
 _HASH_RUN = """
+import json
 import numpy as np
+from engine import native
 from engine.physics import World
 from tests.engine.physics.humanoid import GUARD, add_humanoid, place
 w = World()
@@ -249,30 +255,102 @@ for i in range(150):
     w.set_targets(a, place(GUARD, 0.0, z, 0.0), 5.0)
     w.set_targets(b, place(GUARD, 0.05, -z, np.pi), 5.0)
     w.step(1 / 60)
-print(w.state_hash())
+print(json.dumps({"hash": w.state_hash(), "kernels": native.status()}))
 """
+PHYSICS_KERNELS = ("contacts", "stick_project")
 
 
-def test_state_hash_does_not_depend_on_the_cpu_kernels():
+def _hash_run(extra: dict, cache: Path) -> dict:
+    """The scene above in a fresh interpreter -> {"hash", "kernels": native.status()}; the
+    kernels built into (or read from) `cache`, never the user's cache."""
+    import json
+    import subprocess
+    import sys
+
+    root = Path(__file__).resolve().parents[3]
+    env = {k: v for k, v in os.environ.items() if k not in (native.NO_NATIVE_ENV, native.NO_JIT_ENV, "CC")}
+    env.update({native.CACHE_ENV: str(cache), "TMPDIR": str(cache.parent), **extra})
+    out = subprocess.run([sys.executable, "-c", _HASH_RUN], cwd=root, env=env, capture_output=True,
+                         text=True, timeout=120)
+    assert out.returncode == 0 and "Traceback" not in out.stderr, out.stderr
+    return json.loads(out.stdout)
+
+
+needs_cc = pytest.mark.skipif(os.name != "posix" or native.compiler() is None,
+                              reason="no C compiler: the kernels cannot be built here")
+
+
+@needs_cc
+def test_state_hash_does_not_depend_on_the_cpu_kernels(tmp_path):
     """The step uses no BLAS (whose kernels OpenBLAS picks per CPU and which round
     differently), so forcing another kernel set, or numpy without its AVX paths, must give
     the same bits: two bodies walking into each other, contacts included. The same with and
-    without the C stick projection (engine/native.py: QUICKJAB_NO_NATIVE=1 runs numpy)."""
-    import os
-    import subprocess
-    import sys
-    from pathlib import Path
+    without the C kernels (engine/native.py: QUICKJAB_NO_NATIVE=1 runs numpy); the native
+    runs really ran them."""
+    runs = [_hash_run(extra, tmp_path / "cache") for extra in (
+        {}, {"OPENBLAS_CORETYPE": "Prescott", "NPY_DISABLE_CPU_FEATURES": "X86_V3 X86_V4"},
+        {native.NO_NATIVE_ENV: "1"})]
+    for run in runs[:2]:
+        assert all(run["kernels"][k].startswith("native") for k in PHYSICS_KERNELS), run["kernels"]
+    assert all(runs[2]["kernels"][k].startswith("numpy") for k in PHYSICS_KERNELS)
+    assert len({r["hash"] for r in runs}) == 1
 
-    root = Path(__file__).resolve().parents[3]
-    hashes = set()
-    for extra in ({}, {"OPENBLAS_CORETYPE": "Prescott", "NPY_DISABLE_CPU_FEATURES": "X86_V3 X86_V4"},
-                  {"QUICKJAB_NO_NATIVE": "1"}):
-        env = {**os.environ, **extra}
-        out = subprocess.run([sys.executable, "-c", _HASH_RUN], cwd=root, env=env, capture_output=True,
-                             text=True, timeout=120)
-        assert out.returncode == 0, out.stderr
-        hashes.add(out.stdout.strip())
-    assert len(hashes) == 1
+
+def _plant(cache: Path, what: str) -> None:
+    """Break the cached physics kernels: garbage, or a library lacking their symbols."""
+    from engine.physics import collision, constraints
+
+    cache.mkdir(parents=True, exist_ok=True)
+    if what == "garbage":
+        data = b"\x7fELF but not really"
+    else:
+        other = native.load_library("unrelated", "int unrelated(void) { return 1; }\n", ("unrelated",))
+        assert other is not None
+        data = native.library_path("unrelated", "int unrelated(void) { return 1; }\n").read_bytes()
+    for stem, source in (("contacts", collision.KERNEL_SOURCE), ("stick_project", constraints.PROJECT_SOURCE)):
+        native.library_path(stem, source, directory=cache).write_bytes(data)
+
+
+@needs_cc
+@pytest.mark.parametrize("case", ["corrupt", "missing_symbol", "missing_symbol_no_cc", "failing_cc",
+                                  "unwritable_cache"])
+def test_broken_kernels_fall_back_cleanly_with_the_same_state(case, tmp_path, monkeypatch):
+    """Each breakage ends in the C kernels (rebuilt) or numpy, never a traceback, and the world
+    steps to the numpy run's bits either way."""
+    monkeypatch.setenv(native.CACHE_ENV, str(tmp_path / "planted"))
+    reference = _hash_run({native.NO_NATIVE_ENV: "1"}, tmp_path / "ref")["hash"]
+    cache, extra, expect = tmp_path / "cache", {}, "native"
+    if case == "corrupt":
+        _plant(cache, "garbage")
+    elif case.startswith("missing_symbol"):
+        _plant(cache, "unrelated")
+        if case.endswith("no_cc"):
+            extra, expect = {"CC": "/bin/false"}, "numpy"
+    elif case == "failing_cc":
+        extra, expect = {"CC": "/bin/false"}, "numpy"
+    else:
+        (tmp_path / "file").write_text("")
+        cache = tmp_path / "file" / "cache"  # cannot be created, even by root: the temp dir is used
+        extra = {"TMPDIR": str(tmp_path)}
+    run = _hash_run(extra, cache)
+    assert all(run["kernels"][k].startswith(expect) for k in PHYSICS_KERNELS), run["kernels"]
+    assert run["hash"] == reference
+    if case == "failing_cc":  # remembered: the next start runs no compiler
+        again = _hash_run(extra, cache)
+        assert all("remembered" in again["kernels"][k] for k in PHYSICS_KERNELS), again["kernels"]
+    if case == "unwritable_cache":
+        assert any((tmp_path / f"quickjab-{os.getuid()}").glob("contacts-*.so"))
+
+
+def test_the_world_loads_its_kernels_when_built_not_in_a_step(monkeypatch):
+    """The contact kernel's first build (a compiler run) happens when the World is built, as
+    IncrementalDTW does at construction, never inside the first 60 Hz step with a contact."""
+    from engine.physics import collision, constraints
+
+    monkeypatch.setattr(collision, "_kernels", [])
+    monkeypatch.setattr(constraints, "_kernel", [])
+    World()
+    assert len(collision._kernels) == 1 and len(constraints._kernel) == 1
 
 
 def test_damping_is_per_second_not_per_step():

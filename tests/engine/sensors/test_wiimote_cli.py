@@ -10,6 +10,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 from engine.recording import Recording, read_recording, write_recording
 from engine.sensors.wiimote import list_wiimotes
@@ -69,6 +70,18 @@ def test_bench_wiimote_prints_figures():
     fig = json.loads(r.stdout)
     assert 80 <= fig["samples_per_s"] <= 110  # (2 s minus the set-up) at ~100 Hz
     assert fig["poll_median_us"] > 0 and fig["decode_report_us"] > 0
+
+
+@pytest.mark.parametrize("args", [("bench", "wiimote", "--seconds", "nan"), ("bench", "wiimote", "--seconds", "-1"),
+                                  ("scope", "--headless", "--frames", "1", "--connect-timeout", "inf")])
+def test_bad_seconds_are_an_argparse_error(args, capsys):
+    from game.cli import main
+
+    with pytest.raises(SystemExit) as exit_:
+        main(list(args))
+    assert exit_.value.code == 2
+    err = capsys.readouterr().err
+    assert args[-2] in err and "Traceback" not in err
 
 
 def test_emulator_bad_input_names_itself(tmp_path):

@@ -1,0 +1,160 @@
+"""engine/native.py when things go wrong: a corrupt or foreign cached library, one without the
+expected symbol, a compiler that fails or rejects -march=native, an unwritable cache. Each
+ends in the kernel or in numpy, never a traceback, and a failure is not retried on every start."""
+
+from __future__ import annotations
+
+import ctypes
+import os
+import stat
+import tempfile
+import time
+from pathlib import Path
+
+import pytest
+
+from engine import native
+
+SRC = "double twice(double x) { return 2.0 * x; }\n"
+OTHER = "double thrice(double x) { return 3.0 * x; }\n"
+needs_cc = pytest.mark.skipif(os.name != "posix" or native.compiler() is None, reason="no C compiler here")
+
+
+def twice(lib: ctypes.CDLL) -> float:
+    lib.twice.restype, lib.twice.argtypes = ctypes.c_double, [ctypes.c_double]
+    return lib.twice(2.5)
+
+
+def script(path: Path, body: str) -> str:
+    """An executable shell script standing in for the C compiler."""
+    path.write_text("#!/bin/sh\n" + body)
+    path.chmod(0o755)
+    return str(path)
+
+
+@pytest.fixture
+def cache(tmp_path, monkeypatch) -> Path:
+    """A fresh cache dir, a private temp dir (the fallback), the real compiler."""
+    for name in (native.NO_NATIVE_ENV, native.NO_JIT_ENV, "CC"):
+        monkeypatch.delenv(name, raising=False)
+    monkeypatch.setenv(native.CACHE_ENV, str(tmp_path / "cache"))
+    (tmp_path / "tmp").mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path / "tmp"))
+    return tmp_path / "cache"
+
+
+@needs_cc
+def test_built_once_then_loaded_without_the_compiler(cache, tmp_path, monkeypatch):
+    assert twice(native.load_library("k", SRC, ("twice",))) == 5.0
+    assert native.status()["k"].startswith("native: built")
+    calls = tmp_path / "calls"
+    monkeypatch.setenv("CC", script(tmp_path / "cc", f"echo x >> {calls}\nexit 1\n"))
+    assert twice(native.load_library("k", SRC, ("twice",))) == 5.0
+    assert native.status()["k"] == f"native: {native.library_path('k', SRC)}"
+    assert not calls.exists()
+
+
+# A library this process has opened is never rewritten in place here: the dynamic loader keeps
+# it mapped (and hands the same handle back for the same path).
+@needs_cc
+def test_a_corrupt_library_is_deleted_and_built_again(cache):
+    path = native.library_path("k", SRC)
+    cache.mkdir()
+    path.write_bytes(b"not an ELF file at all")
+    assert twice(native.load_library("k", SRC, ("twice",))) == 5.0
+    assert native.status()["k"].startswith("native: built")
+
+
+@needs_cc
+def test_a_library_without_the_symbol_is_rebuilt(cache):
+    native.load_library("other", OTHER, ("thrice",))
+    native.library_path("k", SRC).write_bytes(native.library_path("other", OTHER).read_bytes())
+    assert twice(native.load_library("k", SRC, ("twice",))) == 5.0
+    assert native.status()["k"].startswith("native: built")
+
+
+@needs_cc
+def test_a_library_without_the_symbol_and_no_compiler_is_numpy(cache, monkeypatch):
+    native.load_library("other", OTHER, ("thrice",))
+    path = native.library_path("k", SRC)
+    path.write_bytes(native.library_path("other", OTHER).read_bytes())
+    monkeypatch.setenv("CC", "/bin/false")
+    assert native.load_library("k", SRC, ("twice",)) is None  # no traceback: numpy
+    assert not path.exists()
+    assert native.status()["k"].startswith("numpy: /bin/false exit 1")
+
+
+def test_a_failed_build_is_remembered_per_compiler(cache, tmp_path, monkeypatch):
+    calls = tmp_path / "calls"
+    monkeypatch.setenv("CC", script(tmp_path / "cc", f"echo x >> {calls}\necho 'kernel.c:1: error: no' >&2\nexit 3\n"))
+    assert native.load_library("k", SRC, ("twice",)) is None
+    tried = len(calls.read_text().splitlines())
+    assert tried == 2  # with -march=native, then once without
+    assert native.status()["k"] == f"numpy: {tmp_path / 'cc'} exit 3: kernel.c:1: error: no"
+    for _ in range(3):
+        assert native.load_library("k", SRC, ("twice",)) is None
+    assert len(calls.read_text().splitlines()) == tried  # not retried on every start
+    assert "remembered" in native.status()["k"] and "exit 3" in native.status()["k"]
+    # another compiler is tried afresh
+    monkeypatch.setenv("CC", script(tmp_path / "cc2", f"echo y >> {calls}\nexit 1\n"))
+    native.load_library("k", SRC, ("twice",))
+    assert calls.read_text().count("y") == 2
+
+
+@needs_cc
+def test_a_rejected_march_native_is_retried_without_it(cache, tmp_path, monkeypatch):
+    cc = native.compiler()
+    monkeypatch.setenv("CC", script(tmp_path / "cc", 'case "$*" in *-march=native*) '
+                                    "echo \"error: unrecognized command-line option '-march=native'\" >&2; exit 1;; esac\n"
+                                    f'exec {cc} "$@"\n'))
+    assert twice(native.load_library("k", SRC, ("twice",))) == 5.0
+    assert native.library_path("k", SRC, native.PORTABLE_FLAGS).exists()
+    assert not native.library_path("k", SRC).exists()
+    monkeypatch.setenv("CC", "/bin/false")  # and the next start loads it without building
+    assert twice(native.load_library("k", SRC, ("twice",))) == 5.0
+
+
+@needs_cc
+def test_an_unwritable_cache_falls_back_to_a_private_temp_dir_then_numpy(cache, tmp_path, monkeypatch):
+    (tmp_path / "file").write_text("")
+    monkeypatch.setenv(native.CACHE_ENV, str(tmp_path / "file" / "cache"))  # unwritable, even for root
+    assert twice(native.load_library("k", SRC, ("twice",))) == 5.0
+    assert native.fallback_dir() == tmp_path / "tmp" / f"quickjab-{os.getuid()}"
+    assert native.library_path("k", SRC, directory=native.fallback_dir()).exists()
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path / "file"))  # neither can be written
+    assert native.load_library("k2", SRC, ("twice",)) is None
+    assert native.status()["k2"].startswith("numpy: no writable cache directory")
+
+
+@needs_cc
+def test_a_temp_dir_others_can_write_is_never_used(cache, tmp_path, monkeypatch):
+    (tmp_path / "file").write_text("")
+    monkeypatch.setenv(native.CACHE_ENV, str(tmp_path / "file" / "cache"))
+    fb = native.fallback_dir()
+    fb.mkdir()
+    fb.chmod(0o777)  # someone could have planted a library there
+    assert native.load_library("k", SRC, ("twice",)) is None
+    assert stat.S_IMODE(fb.stat().st_mode) == 0o777 and not any(fb.iterdir())
+
+
+@needs_cc
+def test_a_build_prunes_older_builds_and_stale_temp_dirs(cache):
+    cache.mkdir()
+    old_build, other_stem = cache / "k-0123456789abcdef.so", cache / "kk-0123456789abcdef.so"
+    old_build.write_bytes(b"old")
+    other_stem.write_bytes(b"other kernel")
+    stale, fresh = cache / "tmpstale", cache / "tmpfresh"
+    for d in (stale, fresh):
+        d.mkdir()
+        (d / "kernel.c").write_text("")
+    past = time.time() - 2 * native.STALE_TMP_SECONDS
+    os.utime(stale, (past, past))
+    native.load_library("k", SRC, ("twice",))
+    assert not old_build.exists() and not stale.exists()
+    assert other_stem.exists() and fresh.exists() and native.library_path("k", SRC).exists()
+
+
+def test_disabled_says_so(cache, monkeypatch):
+    monkeypatch.setenv(native.NO_NATIVE_ENV, "1")
+    assert native.load_library("k", SRC, ("twice",)) is None
+    assert "QUICKJAB_NO_NATIVE" in native.status()["k"]
