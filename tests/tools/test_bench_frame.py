@@ -53,7 +53,7 @@ def test_bench_frame_says_the_kernels_run_numpy_and_why(tmp_path) -> None:
     env_extra = {"QUICKJAB_NO_NATIVE": "1"}
     env = {"XDG_DATA_HOME": str(tmp_path), "PATH": "/usr/bin:/bin", "SDL_VIDEODRIVER": "dummy",
            "SDL_AUDIODRIVER": "dummy", **env_extra}
-    r = subprocess.run([sys.executable, "-m", "game.cli", "bench", "frame", "--steps", "30", "--repeats", "1",
+    r = subprocess.run([sys.executable, "-m", "tools.cli", "bench", "frame", "--steps", "30", "--repeats", "1",
                         "--no-naive", "--realtime-seconds", "0", "--size", "320x180"], cwd=REPO,
                        capture_output=True, text=True, env=env, timeout=300)
     assert r.returncode == 0, r.stderr

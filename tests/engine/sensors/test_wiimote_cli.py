@@ -75,7 +75,7 @@ def test_bench_wiimote_prints_figures():
 @pytest.mark.parametrize("args", [("bench", "wiimote", "--seconds", "nan"), ("bench", "wiimote", "--seconds", "-1"),
                                   ("scope", "--headless", "--frames", "1", "--connect-timeout", "inf")])
 def test_bad_seconds_are_an_argparse_error(args, capsys):
-    from game.cli import main
+    from tools.cli import main
 
     with pytest.raises(SystemExit) as exit_:
         main(list(args))
