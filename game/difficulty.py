@@ -28,9 +28,9 @@ import numpy as np
 LEVELS = ("easy", "normal", "hard")
 CHOICES = (*LEVELS, "adaptive")
 ADAPT_STEP = 0.15  # level change per round won or lost (a third of easy -> normal)
-EASE_BEST = 0.6  # fully eased, the CPU takes its best action 60 % less often ...
-EASE_REST = 2.0  # ... and rests three times as long between moves
-PRESS_REST = 0.5  # trailing by ease_lead, it rests half as long
+EASE_BEST = 0.9  # fully eased, the CPU takes its best action 90 % less often ...
+EASE_REST = 5.0  # ... and rests six times as long between moves (what lets the novice back in)
+PRESS_REST = 1.0  # trailing by ease_lead, it does not rest between moves at all
 
 
 @dataclass(frozen=True)
@@ -54,8 +54,8 @@ class Difficulty:
 
 # Tuned with `quickjab graph duel --opponent virtual` (docs/game.md has the figures).
 PRESETS = {
-    "easy": Difficulty("easy", best_share=0.6, reaction_steps=10, rest_steps=32, damage=0.6, ease_lead=4.0),
-    "normal": Difficulty("normal", best_share=1.0, reaction_steps=0, rest_steps=22, damage=0.92, ease_lead=8.0),
+    "easy": Difficulty("easy", best_share=0.6, reaction_steps=10, rest_steps=32, damage=0.6, ease_lead=2.0),
+    "normal": Difficulty("normal", best_share=1.0, reaction_steps=0, rest_steps=14, damage=0.92, ease_lead=3.0),
     "hard": Difficulty("hard", best_share=1.0, reaction_steps=0, rest_steps=12, damage=1.0),
 }
 
