@@ -254,14 +254,20 @@ class Session:
         self.curr_joints = [j.copy() for j in self.prev_joints]
         self.frame_vec: np.ndarray | None = None
 
-        self.loop = FixedStepLoop(self.clock, hz=HZ, render_hz=HZ // 2 if cfg.low_power else HZ)
+        self.loop = self._build_loop(STAGE_BUDGETS_MS)
+        self.sounds.play("bell")
+
+    def _build_loop(self, budgets_ms: dict[str, float]) -> FixedStepLoop:
+        """The fixed-step loop with the stages in their order, each against its budget."""
+        cfg = self.config
+        loop = FixedStepLoop(self.clock, hz=HZ, render_hz=HZ // 2 if cfg.low_power else HZ)
         for name, fn in (("input", self._input), ("frames", self._frames), ("recognize", self._recognize),
                          ("player", self._player), ("opponent", self._opponent), ("physics", self._physics),
                          ("hits", self._hits), ("match", self._match)):
-            self.loop.add_stage(name, fn, STAGE_BUDGETS_MS[name])
+            loop.add_stage(name, fn, budgets_ms[name])
         if cfg.render:
-            self.loop.set_render(self.render, LOW_POWER_RENDER_BUDGET_MS if cfg.low_power else RENDER_BUDGET_MS)
-        self.sounds.play("bell")
+            loop.set_render(self.render, LOW_POWER_RENDER_BUDGET_MS if cfg.low_power else RENDER_BUDGET_MS)
+        return loop
 
     def templates_lines(self) -> list[str]:
         """Which template set is in use, for the console (the HUD shows it under the source)."""

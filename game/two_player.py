@@ -29,7 +29,6 @@ from engine.arguments import SEED_MAX
 from engine.clock import RealClock, VirtualClock
 from engine.errors import InputError
 from engine.frames import FrameResampler
-from engine.loop import FixedStepLoop
 from engine.sensors.source import Source, SourceState
 from game.difficulty import DifficultySetting
 from game.history import History
@@ -38,13 +37,10 @@ from game.hud_two_player import TwoPlayerHud
 from game.match import Match
 from game.session import (
     HOME_BUTTON,
-    HZ,
     LOG_KEPT,
-    LOW_POWER_RENDER_BUDGET_MS,
     PILOT_ATTACKS,
     PILOT_REACH,
     PILOT_SETTLE_STEPS,
-    RENDER_BUDGET_MS,
     RING_LIMIT,
     RUMBLE_MS,
     STAGE_BUDGETS_MS,
@@ -171,13 +167,7 @@ class TwoPlayerSession(Session):
         self.curr_joints = [j.copy() for j in self.prev_joints]
         self.frame_vec = None
 
-        self.loop = FixedStepLoop(self.clock, hz=HZ, render_hz=HZ // 2 if cfg.low_power else HZ)
-        for name, fn in (("input", self._input), ("frames", self._frames), ("recognize", self._recognize),
-                         ("player", self._player), ("opponent", self._opponent), ("physics", self._physics),
-                         ("hits", self._hits), ("match", self._match)):
-            self.loop.add_stage(name, fn, TWO_PLAYER_BUDGETS_MS[name])
-        if cfg.render:
-            self.loop.set_render(self.render, LOW_POWER_RENDER_BUDGET_MS if cfg.low_power else RENDER_BUDGET_MS)
+        self.loop = self._build_loop(TWO_PLAYER_BUDGETS_MS)
         self.sounds.play("bell")
 
     def templates_lines(self) -> list[str]:
