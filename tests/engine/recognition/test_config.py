@@ -131,3 +131,60 @@ def test_layers_later_wins_and_changed_lists_only_what_differs():
     assert RecognizerConfig().changed() == {}
     with pytest.raises(RecognizerConfigError, match="^file: unknown"):
         layered({}, {"x": 1}, where=["saved", "file"])
+
+
+# -- saved beside the templates: the optional `recognizer` key of the templates npz ------------
+
+
+def small_templates() -> Templates:
+    rng = np.random.default_rng(0)
+    g = np.array([0.0, 0.0, 1.0])
+
+    def trial(axis):
+        x = np.tile(g, (40, 1))
+        x[6:30, axis] += 3.0 * np.sin(np.linspace(0, 2 * np.pi, 24)) + rng.normal(0, 0.02, 24)
+        return x
+
+    return Templates.from_trials({"jab": [trial(0) for _ in range(3)], "upper": [trial(2) for _ in range(3)]})
+
+
+def test_settings_round_trip_through_the_npz(tmp_path):
+    t = small_templates()
+    t.recognizer = {"noise_g": 0.45, "main": "auto", "reject": False}
+    t.save(tmp_path / "t.npz")
+    u = Templates.load(tmp_path / "t.npz")
+    assert u.recognizer == {"noise_g": 0.45, "main": "auto", "reject": False}
+    assert u.mirrored().recognizer == u.recognizer  # a left-handed player keeps the tuned gate
+    assert layered(u.recognizer).noise_g == 0.45
+
+
+def test_no_settings_saved_is_the_defaults(tmp_path):
+    t = small_templates()
+    t.save(tmp_path / "t.npz")
+    assert Templates.load(tmp_path / "t.npz").recognizer == {}
+
+
+def test_an_older_file_without_the_key_loads(tmp_path):
+    small_templates().save(tmp_path / "t.npz")
+    data = dict(np.load(tmp_path / "t.npz"))
+    del data["recognizer"]
+    with open(tmp_path / "old.npz", "wb") as f:
+        np.savez_compressed(f, **data)
+    assert Templates.load(tmp_path / "old.npz").recognizer == {}
+
+
+@pytest.mark.parametrize("saved, says", [
+    ('{"gate": 0.5}', "unknown recognizer setting 'gate'"),
+    ('{"noise_g": "loud"}', "recognizer setting noise_g must be"),
+    ('[1, 2]', "must be a table"),
+    ('{not json', "not JSON"),
+])
+def test_bad_saved_settings_are_an_error_naming_the_file(tmp_path, saved, says):
+    small_templates().save(tmp_path / "t.npz")
+    data = dict(np.load(tmp_path / "t.npz"))
+    data["recognizer"] = np.array(saved)
+    with open(tmp_path / "bad.npz", "wb") as f:
+        np.savez_compressed(f, **data)
+    with pytest.raises(InputError) as err:
+        Templates.load(tmp_path / "bad.npz")
+    assert str(err.value).startswith(f"{tmp_path / 'bad.npz'}: ") and says in str(err.value)
