@@ -399,6 +399,8 @@ class Templates:
         lengths = np.array([len(s) for s in self.signals], dtype=np.int64)
         keys = np.array(list(self.meta.keys()), dtype=str)
         vals = np.array(list(self.meta.values()), dtype=str)
+        # only when set: a file without settings has the keys it always had
+        settings = {"recognizer": np.array(json.dumps(self.recognizer, sort_keys=True))} if self.recognizer else {}
         with open(path, "wb") as f:  # np.savez would append .npz to a name without it
             np.savez_compressed(
                 f,
@@ -415,7 +417,7 @@ class Templates:
                 meta_keys=keys,
                 meta_values=vals,
                 rest_noise=np.array(self.rest_noise),
-                recognizer=np.array(json.dumps(self.recognizer, sort_keys=True)),
+                **settings,
             )
 
     @classmethod

@@ -141,3 +141,23 @@ def test_train_saves_the_settings_and_keeps_those_already_saved(tmp_path, graph_
     # and play decides with them
     rec = session_recognizer(recognizer_settings(), out, graph_path)
     assert (rec.noise_g, rec.main) == (0.7, "auto")
+
+
+def test_two_players_each_over_their_own_templates_settings(tmp_path):
+    import game.keyboard_source  # noqa: F401 - registers keyboard://
+    from engine.sensors import open_source
+    from game.session import SessionConfig, synthesized_templates
+    from game.two_player import TwoPlayerSession
+
+    t = synthesized_templates(trials=1)
+    t.recognizer = {"null_frames": 9, "noise_g": 0.4}
+    saved = tmp_path / "ann.npz"
+    t.save(saved)
+    pygame.init()
+    clock = VirtualClock()
+    sources = [open_source(u, clock=clock.seconds) for u in ("keyboard://?seed=1", "keyboard://?seed=2")]
+    cfg = SessionConfig(size=(320, 180), sound=False, render=False, recognizer={"noise_g": 0.9})
+    s = TwoPlayerSession(sources, cfg, clock=clock, templates=(saved, None))
+    ann, other = (seat.recognizer for seat in s.seats)
+    assert (ann.noise_g, ann.null_frames) == (0.9, 9)  # the shared command line over her saved gate
+    assert (other.noise_g, other.null_frames) == (0.9, 6)
