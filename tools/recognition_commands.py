@@ -95,12 +95,14 @@ def _cli_settings(args: argparse.Namespace) -> dict:
     """The recognizer settings given on the command line: `--recognizer NAME=VALUE`, then the
     dedicated flags (`--noise-g 0.5`); the same setting given both ways is an error."""
     settings = parse_assignments(args.recognizer)
-    flags = {name: getattr(args, flag) for flag, name in _FLAGS.items() if getattr(args, flag, None) is not None}
+    given = {flag: name for flag, name in _FLAGS.items() if getattr(args, flag, None) is not None}
+    flags = {name: getattr(args, flag) for flag, name in given.items()}
     if args.no_reject:
+        given["no_reject"] = "reject"
         flags["reject"] = False
-    both = sorted(set(settings) & set(flags))
-    if both:
-        raise InputError(f"--recognizer {both[0]}=... and its own flag both given: use one")
+    for flag, name in given.items():
+        if name in settings:
+            raise InputError(f"--recognizer {name}=... and --{flag.replace('_', '-')} set the same setting: give one")
     return {**settings, **flags}
 
 
