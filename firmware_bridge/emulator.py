@@ -214,14 +214,44 @@ class EmulatorStats:
     unplugs: int = 0
 
 
+@dataclass(frozen=True)
+class EmulatorDef:
+    """The emulated board's settings as data (`Emulator.from_def`); the faults to inject are
+    `Faults`, the motion a `Signal`, the port a `link`."""
+
+    # IMUs on the board (1 or 2): two, a Wiimote + Nunchuk's layout (right hand, then left).
+    sensors: int = 2
+    # Sampling rate (Hz) the firmware's loop runs at: 200, the boards' (firmware/main.py RATE_HZ),
+    # well above the game's 60 Hz, so resampling hides the link's jitter.
+    rate_hz: int = 200
+    # Gaussian noise on each simulated axis (g): 0.002 g, a quiet MEMS accelerometer at rest.
+    noise_g: float = 0.002
+    # Width of the board's microsecond tick counter (bits): 30, as MicroPython's ticks_us on
+    # rp2 and esp32, so hosts meet the wrap they meet on a real board.
+    ts_bits: int = TS_BITS
+    # The first boot's tick counter (us), e.g. just before the wrap; None: the host's monotonic clock.
+    ticks_start: int | None = None
+    # Seed of boot ids, faults and noise; None: they differ on every run (as real boots do).
+    seed: int | None = None
+
+    def __post_init__(self) -> None:
+        if self.sensors not in (1, 2):
+            raise ValueError(f"sensors must be 1 or 2, not {self.sensors}")
+        if self.rate_hz < 1 or self.noise_g < 0 or not 8 <= self.ts_bits <= 62:
+            raise ValueError("rate_hz must be >= 1, noise_g >= 0 and ts_bits from 8 to 62")
+
+
 class Emulator:
     """Runs Sampler.run against SimIMUs on a PtyPort until `seconds` pass or stop() is called.
-    `on_port(path)` is told the port path at start and after every replug."""
+    `on_port(path)` is told the port path at start and after every replug. The keyword defaults
+    are EmulatorDef's."""
 
     def __init__(self, signal: Signal, sensors: int = 2, *, rate_hz: int = 200, faults: Faults | None = None,
                  link: str | None = None, ticks_start: int | None = None, seed: int | None = None,
-                 on_port: Callable[[str], None] | None = None, on_event: Callable[[str], None] | None = None):
+                 on_port: Callable[[str], None] | None = None, on_event: Callable[[str], None] | None = None,
+                 noise_g: float = 0.002, ts_bits: int = TS_BITS):
         self.signal, self.sensors, self.rate_hz = signal, sensors, rate_hz
+        self.noise_g, self.ts_bits = noise_g, ts_bits
         self.faults = faults or Faults()
         self.rng = random.Random(seed)  # seed None: boot ids and faults differ on every run
         self.seed = seed
@@ -245,6 +275,20 @@ class Emulator:
         # frames written to the port, not yet known to be read: (end byte offset, type, broken)
         self._in_flight: deque[tuple[int, int, bool]] = deque()
         self._written = 0  # bytes written to the current port
+
+    @classmethod
+    def from_def(cls, signal: Signal, emulator_def: EmulatorDef | None = None, *, faults: Faults | None = None,
+                 link: str | None = None, on_port: Callable[[str], None] | None = None,
+                 on_event: Callable[[str], None] | None = None) -> Emulator:
+        """The board `emulator_def` describes (None: the defaults); the same as its fields as keywords."""
+        d = emulator_def or EmulatorDef()
+        return cls(signal, d.sensors, rate_hz=d.rate_hz, faults=faults, link=link, ticks_start=d.ticks_start,
+                   seed=d.seed, on_port=on_port, on_event=on_event, noise_g=d.noise_g, ts_bits=d.ts_bits)
+
+    @property
+    def definition(self) -> EmulatorDef:
+        """This emulator's settings as an EmulatorDef."""
+        return EmulatorDef(self.sensors, self.rate_hz, self.noise_g, self.ts_bits, self.ticks_start, self.seed)
 
     @property
     def path(self) -> str:
@@ -355,11 +399,11 @@ class Emulator:
 
     def _sampler(self, boot: int) -> Sampler:
         start = self.ticks_start
-        ticks = HostTicks(TS_BITS, None if start is None else (start if boot == 0 else 0))
-        imus = [SimIMU(self.signal, i, self.elapsed, seed=self.seed or 0) for i in range(self.sensors)]
+        ticks = HostTicks(self.ts_bits, None if start is None else (start if boot == 0 else 0))
+        imus = [SimIMU(self.signal, i, self.elapsed, noise_g=self.noise_g, seed=self.seed or 0) for i in range(self.sensors)]
         imus += [None] * (2 - len(imus))
         return Sampler(imus, self._write, ticks, rate_hz=self.rate_hz,
-                       boot_id=self.rng.getrandbits(32), ts_bits=TS_BITS)
+                       boot_id=self.rng.getrandbits(32), ts_bits=self.ts_bits)
 
     def run(self, seconds: float | None = None) -> EmulatorStats:
         self.seconds = seconds

@@ -64,6 +64,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--source2", default=None, help="player 2's source URL with --players 2 (default: the second Wiimote found, else the keyboard's right half)")
     p.add_argument("--profile", default=None, metavar="NAME", help="play with the templates `quickjab train --profile NAME` saved (default: your default set)")
     p.add_argument("--profile2", default=None, metavar="NAME", help="player 2's profile with --players 2")
+    p.add_argument("--recognizer", action="append", default=[], metavar="NAME=VALUE",
+                   help="a recognizer setting, e.g. noise_g=0.5 or main=auto (repeatable; docs/recognition.md lists them). "
+                        "Over your config file's [recognizer] table ($XDG_CONFIG_HOME/quickjab/config.toml), over "
+                        "the settings saved with the templates")
     p.set_defaults(func=run)
 
 
@@ -120,6 +124,9 @@ def run(args: argparse.Namespace) -> int:
         from game.two_player import run_match
 
         return run_match(args)
+    from game.user_config import recognizer_settings
+
+    settings = recognizer_settings(getattr(args, "recognizer", None) or ())  # a bad file or value: before any window
     if getattr(args, "profile", None) is not None and args.templates is None:
         from game.two_player import seat_templates
 
@@ -142,7 +149,8 @@ def run(args: argparse.Namespace) -> int:
         config = SessionConfig(seed=args.seed, size=size, low_power=args.low_power, demo=args.demo,
                                keyboard_banner=fallback, templates=args.templates, graph=args.graph,
                                sound=not args.no_sound and not args.headless,
-                               left_handed=args.left_handed, difficulty=args.difficulty or "normal")
+                               left_handed=args.left_handed, difficulty=args.difficulty or "normal",
+                               recognizer=settings)
         return Session(sources[0], config, clock=clock, surface_provider=surface_provider)
 
     return run_session(args, "QuickJab", sources, session)

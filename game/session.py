@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -87,6 +87,9 @@ class SessionConfig:
     left_handed: bool = False
     difficulty: str = "normal"  # easy | normal | hard | adaptive (game/difficulty.py)
     render: bool = True  # False: no render stage (headless benchmarks and reproducibility tests)
+    # recognizer settings over those saved with the templates: the user's config file's, then
+    # the command line's (game/user_config.py); {}: the templates' own, else the defaults
+    recognizer: dict = field(default_factory=dict)
 
 
 def synthesized_templates(seed: int = 0, trials: int = 3):
@@ -191,6 +194,7 @@ class Session:
                  surface_provider: Callable[[], pygame.Surface] | None = None):
         from engine.physics import World
         from engine.recognition import DualBufferRecognizer
+        from engine.recognition.config import layered
         from game.actions import load_library
         from game.boxer import Boxer
         from game.sound import Sounds
@@ -219,7 +223,7 @@ class Session:
         if source.sensors * 3 != self.templates.dim:
             raise InputError(f"{source.url}: the source has {source.sensors} sensor(s), the templates need "
                              f"{self.templates.dim // 3} (a Wiimote + Nunchuk, or two IMUs)")
-        self.recognizer = DualBufferRecognizer(self.templates)
+        self.recognizer = DualBufferRecognizer.from_config(self.templates, layered(self.templates.recognizer, cfg.recognizer))
         self.resampler = FrameResampler(sensors=self.templates.dim // 3)
         self.match = Match()
         self.hud_state = HudState(keys=[], source_url=source.url, keyboard_banner=cfg.keyboard_banner,

@@ -122,10 +122,11 @@ class Trainer:
         self.phase = phase
         self.phase_step = 0
 
-    def templates(self, left_handed: bool = False, base=None):
+    def templates(self, left_handed: bool = False, base=None, recognizer: dict | None = None):
         """The player's templates from the recorded trials. With `base` (the set in use: the
         player's file, else the defaults) only the actions trained now are replaced; the
-        others are kept, so training one move never loses the rest."""
+        others are kept, so training one move never loses the rest. The recognizer settings
+        saved with `base` are kept too, `recognizer`'s (`train --recognizer`) set over them."""
         from engine.recognition import Templates
 
         templates = Templates.from_trials(self.recorded, keep=KEEP)
@@ -137,6 +138,7 @@ class Trainer:
         templates.meta["trained"] = ",".join(sorted(trained))  # the actions that are the player's own
         templates.meta["source"] = "quickjab train"
         templates.meta["left_handed"] = "1" if left_handed else "0"
+        templates.recognizer = {**(base.recognizer if base is not None else {}), **(recognizer or {})}
         return templates
 
 
@@ -311,6 +313,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--screenshot", metavar="PNG", help="save the last frame to this PNG")
     p.add_argument("--seed", type=arguments.seed, default=0)
     p.add_argument("--size", default="1280x720", help="window size WxH (default 1280x720)")
+    p.add_argument("--recognizer", action="append", default=[], metavar="NAME=VALUE",
+                   help="a recognizer setting to save with your templates, e.g. noise_g=0.5 (repeatable; "
+                        "docs/recognition.md); the settings your file already holds are kept")
     p.set_defaults(func=run)
 
 
@@ -343,7 +348,10 @@ def run(args: argparse.Namespace) -> int:
     from game.play import check_visible_window, headless_env, open_player_source, parse_size
 
     size = parse_size(args.size)
+    from engine.recognition.config import parse_assignments
     from game.actions import ACTION_NAMES, load_library
+
+    settings = parse_assignments(getattr(args, "recognizer", None) or ())
 
     if args.reset:
         from game.userdata import profile_templates_path
@@ -415,7 +423,7 @@ def run(args: argparse.Namespace) -> int:
         if trainer.go and auto:
             perform()
         if trainer.done and not was_done:
-            templates = trainer.templates(args.left_handed, base=base_templates(output))
+            templates = trainer.templates(args.left_handed, base=base_templates(output), recognizer=settings)
             output.parent.mkdir(parents=True, exist_ok=True)
             templates.save(output)
             screen_view.saved_to = str(output)

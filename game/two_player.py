@@ -85,10 +85,13 @@ def _seat_event_key(item: tuple[int, dict]) -> tuple:
     return (seat, *_event_key(ev))
 
 
-def build_recognizer(templates):
+def build_recognizer(templates, settings: dict | None = None):
+    """A seat's recognizer: the settings saved with its templates, then `settings` (the config
+    file's and the command line's, shared by both seats) over them."""
     from engine.recognition import DualBufferRecognizer
+    from engine.recognition.config import layered
 
-    return DualBufferRecognizer(templates)
+    return DualBufferRecognizer.from_config(templates, layered(templates.recognizer, settings or {}))
 
 
 class TwoPlayerSession(Session):
@@ -123,7 +126,7 @@ class TwoPlayerSession(Session):
             if source.sensors * 3 != t.dim:
                 raise InputError(f"{source.url}: the source has {source.sensors} sensor(s), player {i + 1}'s "
                                  f"templates need {t.dim // 3} (a Wiimote + Nunchuk, or two IMUs)")
-            rec = build_recognizer(t)
+            rec = build_recognizer(t, cfg.recognizer)
             hud = HudState(keys=[], source_url=f"{NAMES[i]} {source.url}", demo=cfg.demo,
                            main_size=int(rec.main) if rec.main != "auto" else 6, supp_size=rec.supplementary,
                            templates=templates_in_use(tmpl))
@@ -404,7 +407,9 @@ def run_match(args) -> int:
 
     from engine.sensors import open_source
     from game.play import run_session
+    from game.user_config import recognizer_settings
 
+    settings = recognizer_settings(getattr(args, "recognizer", None) or ())  # a bad file or value: before any window
     templates, notes = [], []
     for profile in (args.profile, args.profile2):
         path, note = seat_templates(profile, args.templates)
@@ -433,7 +438,8 @@ def run_match(args) -> int:
 
     def session(sources: list[Source], clock, size: tuple[int, int], surface_provider) -> TwoPlayerSession:
         config = SessionConfig(seed=args.seed, size=size, low_power=args.low_power, demo=args.demo,
-                               sound=not args.no_sound and not args.headless, left_handed=args.left_handed)
+                               sound=not args.no_sound and not args.headless, left_handed=args.left_handed,
+                               recognizer=settings)
         return TwoPlayerSession(sources, config, clock=clock, surface_provider=surface_provider, templates=templates)
 
     return run_session(args, "QuickJab - two players", sources, session)

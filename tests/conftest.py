@@ -4,12 +4,15 @@ tests that need them skip cleanly when that folder is absent."""
 from __future__ import annotations
 
 import os
+import tempfile
 from pathlib import Path
 
 import pytest
 
 os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
 os.environ.setdefault("SDL_AUDIODRIVER", "dummy")
+# No test reads the real user's config file (game/user_config.py); subprocesses inherit this.
+os.environ["XDG_CONFIG_HOME"] = tempfile.mkdtemp(prefix="quickjab-test-config-")
 
 REPO = Path(__file__).resolve().parent.parent
 SHARED_DATA = Path(os.environ.get("QUICKJAB_SHARED_DATA", REPO.parent / "shared" / "data"))

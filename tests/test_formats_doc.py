@@ -50,7 +50,8 @@ def of_kind(kind: str) -> list[str]:
 
 def test_the_doc_has_the_examples_this_test_reads():
     assert len(of_kind("Recording")) == 2 and len(of_kind("event")) == 2 and len(of_kind("trace")) == 1
-    assert len(blocks()) == 5  # a new example needs a check here
+    assert len(of_kind("config")) == 1
+    assert len(blocks()) == 6  # a new example needs a check here
 
 
 def test_the_contract_part_is_the_agreed_text():
@@ -135,3 +136,13 @@ def test_trace_example_reads_back_and_has_the_shape_engine_trace_writes(tmp_path
     for e in example["traceEvents"]:  # every stage and span nests inside its frame
         if e["ph"] == "X":
             assert frame["ts"] <= e["ts"] and e["ts"] + e["dur"] <= frame["ts"] + frame["dur"]
+
+
+def test_config_file_example_reads_back(tmp_path):
+    from engine.recognition import RecognizerConfig
+    from engine.recognition.config import layered
+    from game.user_config import read_config
+
+    (path := tmp_path / "config.toml").write_text(of_kind("config")[0], encoding="utf-8")
+    settings = read_config(path)["recognizer"]
+    assert settings and layered(settings) != RecognizerConfig()

@@ -94,7 +94,13 @@ def check_emulate_args(args: argparse.Namespace) -> None:
 
 def run_emulate(args: argparse.Namespace) -> int:
     from engine.recording import read_recording
-    from firmware_bridge.emulator import Emulator, Faults, recording_motion, synthetic_motion
+    from firmware_bridge.emulator import (
+        Emulator,
+        EmulatorDef,
+        Faults,
+        recording_motion,
+        synthetic_motion,
+    )
 
     check_emulate_args(args)
     if args.replay:
@@ -117,8 +123,8 @@ def run_emulate(args: argparse.Namespace) -> int:
         if not args.quiet:
             print(f"[{time.strftime('%H:%M:%S')}] {what}", file=sys.stderr, flush=True)
 
-    emu = Emulator(signal, sensors, rate_hz=args.rate, faults=faults, link=args.link,
-                   ticks_start=args.ticks_start, seed=args.seed, on_port=on_port, on_event=on_event)
+    board = EmulatorDef(sensors, rate_hz=args.rate, ticks_start=args.ticks_start, seed=args.seed)
+    emu = Emulator.from_def(signal, board, faults=faults, link=args.link, on_port=on_port, on_event=on_event)
     try:
         stats = emu.run(args.seconds)
     except KeyboardInterrupt:

@@ -43,6 +43,7 @@ class Case:
     argv: list[str]
     expect: str = "error"  # "error": exit 2, one line; "ok": exit 0
     stdin_none: bool = True
+    env: dict[str, str] | None = None  # set over the campaign's environment (e.g. XDG_CONFIG_HOME)
 
 
 @dataclass
@@ -166,6 +167,10 @@ def bad_templates(d: Path, bomb_gb: float = 1.5) -> dict[str, str]:
     variant("version-text", version=np.array("x"))
     variant("method-bad", method=np.array("nope"))
     variant("float-lengths", lengths=good["lengths"].astype(float) + 0.5)
+    variant("recognizer-unknown", recognizer=np.array('{"gate": 0.5}'))
+    variant("recognizer-type", recognizer=np.array('{"supplementary": 1e12}'))
+    variant("recognizer-not-json", recognizer=np.array("{noise_g: 0.5"))
+    variant("recognizer-list", recognizer=np.array("[1, 2, 3]"))
     out["npy"] = str(d / "tpl" / "arr.npy")
     np.save(out["npy"], good["signals"])
     out["truncated"] = _write(d, "tpl/trunc.npz", (ASSETS / "templates.npz").read_bytes()[:2000])
@@ -393,6 +398,33 @@ def bad_mocap(d: Path, mocap: Path) -> dict[str, str]:
     return out
 
 
+def bad_config_files(d: Path) -> dict[str, str]:
+    """XDG_CONFIG_HOME directories whose quickjab/config.toml is bad (game/user_config.py)."""
+    files: dict[str, str | bytes | None] = {
+        "not-toml": "[recognizer\nnoise_g = 0.5\n",
+        "unknown-key": "[recognizer]\ngate = 0.5\n",
+        "unknown-table": "[recogniser]\nnoise_g = 0.5\n",
+        "wrong-type": "[recognizer]\nnoise_g = true\n",
+        "huge-buffer": "[recognizer]\nsupplementary = 100000000000\n",
+        "nan": "[recognizer]\nnoise_g = nan\n",
+        "binary": b"\xff\xfe\x00[recognizer]",
+        "big": "# " + "x" * (2 << 20) + "\n",
+        "directory": None,
+    }
+    out = {}
+    for name, content in files.items():
+        path = d / "config" / name / "quickjab" / "config.toml"
+        path.parent.mkdir(parents=True, exist_ok=True)
+        if content is None:
+            path.mkdir(exist_ok=True)
+        elif isinstance(content, bytes):
+            path.write_bytes(content)
+        else:
+            path.write_text(content, encoding="utf-8")
+        out[name] = str(d / "config" / name)
+    return out
+
+
 def build_cases(d: Path, big_mb: int, bomb_gb: float = 1.5) -> list[Case]:
     q = ["-m", "tools.cli"]
     good_rec = _write(d, "good.csv", GOOD_REC)
@@ -418,8 +450,11 @@ def build_cases(d: Path, big_mb: int, bomb_gb: float = 1.5) -> list[Case]:
     cases.append(Case("rec/gap/templates-build", q + ["templates", "build", str(d / "trials"), "-o", str(out / "t.npz")]))
     for name, path in tpls.items():
         cases.append(Case(f"tpl/{name}/recognize", q + ["recognize", good_rec, "--templates", path]))
-    for name in ("nan-gravity", "zip-bomb", "npy"):
+    for name in ("nan-gravity", "zip-bomb", "npy", "recognizer-unknown"):
         cases.append(Case(f"tpl/{name}/play", q + ["play", "--headless", "--frames", "2", "--templates", tpls[name]]))
+    for name, home in bad_config_files(d).items():
+        cases.append(Case(f"config/{name}/play", q + ["play", "--headless", "--frames", "2"], env={"XDG_CONFIG_HOME": home}))
+        cases.append(Case(f"config/{name}/recognize", q + ["recognize", good_rec, "--templates", tpl], env={"XDG_CONFIG_HOME": home}))
     for name, path in graphs.items():
         cases.append(Case(f"graph/{name}/info", q + ["graph", "info", path]))
     for name in ("nan-reward", "zip-bomb", "npy", "other-action-range"):
@@ -497,6 +532,14 @@ def build_cases(d: Path, big_mb: int, bomb_gb: float = 1.5) -> list[Case]:
         "eval-clip-0": ev_base + ["--clip-frames", "0"],
         "eval-users-text": q + ["evaluate", "--uwave", str(d), "--users", "x"],
         "recognize-main-huge": q + ["recognize", good_rec, "--templates", tpl, "--main", "100000000"],
+        "recognize-recognizer-huge": q + ["recognize", good_rec, "--templates", tpl, "--recognizer", "supplementary=100000000"],
+        "recognize-recognizer-nan": q + ["recognize", good_rec, "--templates", tpl, "--recognizer", "noise_g=nan"],
+        "recognize-recognizer-twice": q + ["recognize", good_rec, "--templates", tpl, "--main", "3", "--recognizer", "main=4"],
+        "play-recognizer-unknown": q + ["play", "--headless", "--frames", "2", "--recognizer", "gate=0.5"],
+        "play-recognizer-no-value": q + ["play", "--headless", "--frames", "2", "--recognizer", "noise_g"],
+        "train-recognizer-type": q + ["train", "--headless", "--frames", "2", "--recognizer", "reject=maybe"],
+        "templates-build-recognizer-bad": q + ["templates", "build", str(d / "trials"), "-o", str(out / "t.npz"), "--recognizer", "adapt=-1"],
+        "evaluate-recognizer-unknown": ev_base + ["--recognizer", "x=1"],
         "synth-session-nan": q + ["synth", "--session", "nan", "-o", str(out / "s.csv")],
         "synth-session-neg": q + ["synth", "--session", "-1", "-o", str(out / "s.csv")],
         "synth-session-huge": q + ["synth", "--session", "1e12", "-o", str(out / "s.csv")],
@@ -570,7 +613,7 @@ def run_case(case: Case, timeout: float, limit_mb: int, env: dict) -> Outcome:
     with tempfile.TemporaryFile() as err, tempfile.TemporaryFile() as so:
         start = time.monotonic()
         p = subprocess.Popen([sys.executable, *case.argv], stdin=subprocess.DEVNULL, stdout=so, stderr=err,
-                             cwd=ROOT, env=env, preexec_fn=_limit(limit_mb))
+                             cwd=ROOT, env={**env, **(case.env or {})}, preexec_fn=_limit(limit_mb))
         rc = None
         rss = 0.0
         marker = case.argv[1] if len(case.argv) > 1 else sys.executable
@@ -622,7 +665,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--json", action="store_true", help="one JSON line per run")
     args = ap.parse_args(argv)
     env = {**os.environ, "PYTHONPATH": str(ROOT), "SDL_VIDEODRIVER": "dummy", "SDL_AUDIODRIVER": "dummy",
-           "XDG_DATA_HOME": tempfile.mkdtemp(prefix="qj-campaign-data-")}
+           "XDG_DATA_HOME": tempfile.mkdtemp(prefix="qj-campaign-data-"),
+           "XDG_CONFIG_HOME": tempfile.mkdtemp(prefix="qj-campaign-config-")}  # never the user's own file
     tmp = tempfile.TemporaryDirectory() if args.keep is None else None
     d = Path(args.keep or tmp.name)  # type: ignore[union-attr]
     d.mkdir(parents=True, exist_ok=True)

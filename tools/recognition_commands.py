@@ -12,6 +12,7 @@ from engine import arguments
 from engine.errors import InputError
 from engine.frames import recording_frames
 from engine.recognition import DualBufferRecognizer, Templates
+from engine.recognition.config import layered, parse_assignments
 from engine.recognition.templates import FEATURES, METHODS
 from engine.recording import read_recording
 from tools import evaluate_recognition as ev
@@ -69,27 +70,49 @@ def _users(text: str) -> str:
 
 
 def _recognizer_args(p: argparse.ArgumentParser) -> None:
+    # Defaults None: a flag not given leaves the setting to the lower layers (the templates'
+    # saved settings, then RecognizerConfig's defaults, which the help texts quote).
     g = p.add_argument_group("recognizer")
-    g.add_argument("--noise-g", type=_noise_arg, default="auto",
+    g.add_argument("--recognizer", action="append", default=[], metavar="NAME=VALUE",
+                   help="any recognizer setting, e.g. noise_g=0.5 or adapt=0 (repeatable; docs/recognition.md lists them)")
+    g.add_argument("--noise-g", type=_noise_arg, default=None,
                    help="noise gate in g, or 'auto' (default): learned from the sensor's resting noise")
-    g.add_argument("--supplementary", type=arguments.int_range(1, MAX_BUFFER), default=60, help="supplementary buffer in frames (default 60)")
-    g.add_argument("--null-frames", type=arguments.int_range(1, MAX_BUFFER), default=6, help="quiet frames that end a motion (default 6)")
-    g.add_argument("--discard-frames", type=arguments.int_range(0, MAX_BUFFER), default=20, help="frames discarded after the character finishes (default 20)")
+    g.add_argument("--supplementary", type=arguments.int_range(1, MAX_BUFFER), default=None, help="supplementary buffer in frames (default 60)")
+    g.add_argument("--null-frames", type=arguments.int_range(1, MAX_BUFFER), default=None, help="quiet frames that end a motion (default 6)")
+    g.add_argument("--discard-frames", type=arguments.int_range(0, MAX_BUFFER), default=None, help="frames discarded after the character finishes (default 20)")
     g.add_argument("--no-reject", action="store_true", help="never reject (ignore the learned thresholds)")
-    g.add_argument("--complete", type=arguments.float_range(0.0, 1.0), default=0.9, metavar="F",
+    g.add_argument("--complete", type=arguments.float_range(0.0, 1.0), default=None, metavar="F",
                    help="also end a motion once its template is matched past this fraction and the hand "
                         "calms down: splits back-to-back punches (default 0.9; 0 = the paper's null signal only)")
 
 
-def _rec_kwargs(args: argparse.Namespace) -> dict:
-    return {
-        "noise_g": args.noise_g,
-        "supplementary": args.supplementary,
-        "null_frames": args.null_frames,
-        "discard_frames": args.discard_frames,
-        "reject": not args.no_reject,
-        "complete_fraction": args.complete,
-    }
+# the dedicated flags -> the setting each one sets
+_FLAGS = {"main": "main", "noise_g": "noise_g", "supplementary": "supplementary", "null_frames": "null_frames",
+          "discard_frames": "discard_frames", "complete": "complete_fraction"}
+
+
+def _cli_settings(args: argparse.Namespace) -> dict:
+    """The recognizer settings given on the command line: `--recognizer NAME=VALUE`, then the
+    dedicated flags (`--noise-g 0.5`); the same setting given both ways is an error."""
+    settings = parse_assignments(args.recognizer)
+    given = {flag: name for flag, name in _FLAGS.items() if getattr(args, flag, None) is not None}
+    flags = {name: getattr(args, flag) for flag, name in given.items()}
+    if args.no_reject:
+        given["no_reject"] = "reject"
+        flags["reject"] = False
+    for flag, name in given.items():
+        if name in settings:
+            raise InputError(f"--recognizer {name}=... and --{flag.replace('_', '-')} set the same setting: give one")
+    return {**settings, **flags}
+
+
+def _rec_kwargs(args: argparse.Namespace, saved: dict | None = None) -> dict:
+    """DualBufferRecognizer keywords for evaluate's sweeps (without `main`, which --mains sets):
+    the defaults, `saved` (the --templates file's settings), then the command line. evaluate
+    does not read the user's config file: its figures must not depend on a file on this machine."""
+    kwargs = layered(saved or {}, _cli_settings(args), where=["templates", "command line"]).kwargs()
+    del kwargs["main"]
+    return kwargs
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -102,13 +125,15 @@ def register(sub: argparse._SubParsersAction) -> None:
     b.add_argument("--feature", choices=FEATURES, default=None, help="what DTW compares (default log)")
     b.add_argument("--mirror", action="store_true", help="mirror for a left-handed player (swap hands, flip x, swap _l/_r)")
     b.add_argument("--glob", default="*.csv", help="which trial files to use in each action folder (default *.csv)")
+    b.add_argument("--recognizer", action="append", default=[], metavar="NAME=VALUE",
+                   help="a recognizer setting to save with the templates, e.g. noise_g=0.5 (repeatable)")
     b.set_defaults(func=cmd_build)
 
     r = sub.add_parser("recognize", help="replay a recording through the recognizer; events as JSON lines")
     r.add_argument("recording", metavar="REC.csv")
     r.add_argument("--templates", required=True, metavar="T.npz")
     r.add_argument("-o", "--output", default=None, help="write the JSON lines here instead of stdout")
-    r.add_argument("--main", type=_main_arg, default=6, help="main buffer in frames or 'auto' (default 6)")
+    r.add_argument("--main", type=_main_arg, default=None, help="main buffer in frames or 'auto' (default 6)")
     _recognizer_args(r)
     r.set_defaults(func=cmd_recognize)
 
@@ -152,6 +177,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def cmd_build(args: argparse.Namespace) -> int:
+    settings = parse_assignments(args.recognizer)
     trials = load_trials_dir(args.trials_dir, args.glob)
     kwargs = {k: v for k, v in (("method", args.method), ("feature", args.feature)) if v}
     try:
@@ -160,6 +186,7 @@ def cmd_build(args: argparse.Namespace) -> int:
         raise InputError(f"{args.trials_dir}: {exc}") from None
     if args.mirror:
         templates = templates.mirrored()
+    templates.recognizer = settings
     templates.save(args.output)
     n = sum(len(v) for v in trials.values())
     print(f"{args.output}: {len(templates)} templates of {len(templates.action_names)} actions from {n} trials "
@@ -173,7 +200,12 @@ def cmd_recognize(args: argparse.Namespace) -> int:
     times, frames, _ = recording_frames(rec_file)
     if frames.shape[1] != templates.dim:
         raise InputError(f"{args.recording}: {frames.shape[1]} values per frame, templates {args.templates} have D = {templates.dim}")
-    rec = DualBufferRecognizer(templates, main=args.main, **_rec_kwargs(args))
+    from game.user_config import recognizer_settings
+
+    # as `play` decides: the templates' saved settings, the config file, then the command line
+    config = layered(templates.recognizer, recognizer_settings(), _cli_settings(args),
+                     where=["templates", "config file", "command line"])
+    rec = DualBufferRecognizer.from_config(templates, config)
     out = open(args.output, "w", encoding="utf-8") if args.output else sys.stdout
     try:
         for t, f in zip(times, frames, strict=True):
@@ -208,7 +240,7 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
                 for p, r in zip(pooled, res, strict=True):
                     p.outcomes += r.outcomes
         order = "fresh recognizer per trial" if args.fresh else "session order"
-        results[f"uWave users {args.users}, noise_g {args.noise_g}, {order}"] = [s.row() for s in pooled]
+        results[f"uWave users {args.users}, noise_g {kw['noise_g']}, {order}"] = [s.row() for s in pooled]
     if args.phone_punches:
         res = ev.evaluate_phone_punches(
             args.phone_punches, args.mains, trials=args.trials, template_kwargs=tk, clip_frames=args.clip_frames, **kw
@@ -219,6 +251,8 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     templates = Templates.load(args.templates) if args.templates else None
     if args.train:
         templates = Templates.from_trials(load_trials_dir(args.train), **tk)
+    if templates is not None:
+        kw = _rec_kwargs(args, templates.recognizer)  # a --templates file's saved settings under the command line's
     for inp in args.inputs:
         path = Path(inp)
         if path.is_dir():

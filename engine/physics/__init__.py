@@ -3,6 +3,7 @@ GDC 2001).
 
     from engine.physics import World, Contact
     world = World(gravity=(0, -9.81, 0), ground_y=0.0, damping=0.01, iterations=4)
+    world = World.from_def(WorldDef(iterations=4))        # the same, settings as data (world_def.py)
     bid = world.add_body(positions, masses, sticks, capsules, radii, capsule_tags, limits=None)
     world.set_targets(bid, targets, stiffness_hz, damping_ratio=1.0)
     contacts = world.step(1 / 60)
@@ -43,5 +44,6 @@ Design (details in docs/physics.md):
 
 from engine.physics.collision import Contact
 from engine.physics.world import Body, World
+from engine.physics.world_def import WorldDef, default_world_def
 
-__all__ = ["World", "Contact", "Body"]
+__all__ = ["World", "WorldDef", "default_world_def", "Contact", "Body"]

@@ -8,6 +8,7 @@ import numpy as np
 
 from engine.physics.collision import CapsulePairs, Contact, kernels
 from engine.physics.constraints import DistanceConstraints, project_kernel
+from engine.physics.world_def import WorldDef
 from engine.state_hash import state_hash as _hash
 
 
@@ -51,15 +52,20 @@ def _parse_limits(limits, n: int) -> tuple[np.ndarray, np.ndarray]:
     return pairs, ranges
 
 
+_D = WorldDef()
+
+
 class World:
     """Jakobsen particle bodies: Verlet integration with damping and an implicit PD pull to
     each particle's target, then `iterations` rounds of stick/limit relaxation, capsule
     collision between bodies and the ground plane. See engine/physics/__init__.py."""
 
-    def __init__(self, gravity=(0.0, -9.81, 0.0), ground_y: float = 0.0, damping: float = 0.01,
-                 iterations: int = 4, solver: str = "jacobi", relaxation: float = 2.0, max_accel: float = 200.0,
-                 max_speed: float = 15.0, ground_friction: float = 0.0,
-                 collision_margin: float = 0.05) -> None:
+    # The keyword defaults are WorldDef's (engine/physics/world_def.py documents each one).
+    def __init__(self, gravity=_D.gravity, ground_y: float = _D.ground_y, damping: float = _D.damping,
+                 iterations: int = _D.iterations, solver: str = _D.solver, relaxation: float = _D.relaxation,
+                 max_accel: float = _D.max_accel, max_speed: float = _D.max_speed,
+                 ground_friction: float = _D.ground_friction, collision_margin: float = _D.collision_margin,
+                 contact_passes: int = _D.contact_passes, contact_tolerance: float = _D.contact_tolerance) -> None:
         if iterations < 1:
             raise ValueError("iterations must be >= 1")
         self.gravity = np.asarray(gravity, dtype=float).reshape(3)
@@ -74,8 +80,8 @@ class World:
         self.max_speed = float(max_speed)  # clamp on any particle's speed, m/s
         self.ground_friction = float(ground_friction)  # 0..1 of sliding removed on the ground
         self.collision_margin = float(collision_margin)
-        self.contact_passes = 3  # re-linearized contact passes after the iterations, at most
-        self.contact_tolerance = 0.001  # m of overlap those passes leave alone
+        self.contact_passes = int(contact_passes)  # re-linearized contact passes after the iterations, at most
+        self.contact_tolerance = float(contact_tolerance)  # m of overlap those passes leave alone
         self.bodies: list[Body] = []
         self._pd_key: list = []  # per body: the (stiffness, damping) last set, as bytes
         self._target_vel_on: list[bool] = []
@@ -92,6 +98,18 @@ class World:
         # machine (a compiler run, seconds on a slow board) must not stall a match's opening.
         kernels()
         project_kernel()
+
+    @classmethod
+    def from_def(cls, world_def: WorldDef | None = None) -> World:
+        """The world `world_def` describes (None: the defaults); the same as its fields as keywords."""
+        return cls(**(world_def or WorldDef()).kwargs())
+
+    @property
+    def world_def(self) -> WorldDef:
+        """This world's settings as a WorldDef."""
+        return WorldDef(tuple(self.gravity.tolist()), self.ground_y, self.damping, self.iterations, self.solver,
+                        self.relaxation, self.max_accel, self.max_speed, self.ground_friction,
+                        self.collision_margin, self.contact_passes, self.contact_tolerance)
 
     # ---- building -------------------------------------------------------------------------
 

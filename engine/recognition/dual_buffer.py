@@ -62,6 +62,7 @@ import math
 
 import numpy as np
 
+from engine.recognition.config import RecognizerConfig
 from engine.recognition.dtw import IncrementalDTW
 from engine.recognition.templates import (
     LOG_SCALE_G,
@@ -256,6 +257,12 @@ class DualBufferRecognizer:
         self._n_idle = 0
         self._moved = False  # a motion has started (a `start`) since the recognizer was built
         self.reset()
+
+    @classmethod
+    def from_config(cls, templates: Templates, config: RecognizerConfig | None = None) -> DualBufferRecognizer:
+        """The recognizer `config` describes (engine/recognition/config.py; None: the defaults),
+        the same as passing its fields as keywords."""
+        return cls(templates, **(config or RecognizerConfig()).kwargs())
 
     def _gate_start(self, templates: Templates, k: int) -> int:
         """Where this recognizer's onset would be on template k: the start of the run of

@@ -19,6 +19,7 @@ Files are plain .npz (no pickles); a corrupt or foreign file raises TemplateFile
 
 from __future__ import annotations
 
+import json
 import os
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -28,6 +29,7 @@ import numpy as np
 
 from engine.errors import InputError
 from engine.npz_files import NpzFileError, read_npz
+from engine.recognition.config import RecognizerConfigError, check_settings
 from engine.recognition.dtw import IncrementalDTW, dtw_distance
 
 FORMAT_VERSION = 1
@@ -276,6 +278,9 @@ class Templates:
     feature: str = DEFAULT_FEATURE
     meta: dict[str, str] = field(default_factory=dict)
     rest_noise: float = float("nan")  # g: the gate's activity at rest before the trials' motions (nan: unknown)
+    # Recognizer settings saved with the templates (RecognizerConfig names -> values; only those
+    # the player set): a player's tuned gate travels with their moves. Empty: the defaults.
+    recognizer: dict[str, object] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         n = len(self.actions)
@@ -285,6 +290,7 @@ class Templates:
         self.gravity = np.asarray(self.gravity, dtype=np.float64).reshape(n, -1)
         self.onsets = np.asarray(self.onsets, dtype=np.int64).reshape(n)
         self.thresholds = np.asarray(self.thresholds, dtype=np.float64).reshape(n)
+        self.recognizer = check_settings(self.recognizer, "the templates' recognizer settings")
         dims = {s.shape[1] for s in self.signals} | {self.gravity.shape[1]}
         if len(dims) != 1 or next(iter(dims)) % 3:
             raise ValueError(f"inconsistent template dimensions {sorted(dims)}")
@@ -385,6 +391,7 @@ class Templates:
             self.feature,
             {**self.meta, "mirrored": "1" if self.meta.get("mirrored") != "1" else "0"},
             self.rest_noise,
+            dict(self.recognizer),
         )
 
     # -- files -------------------------------------------------------------------------------
@@ -392,6 +399,8 @@ class Templates:
         lengths = np.array([len(s) for s in self.signals], dtype=np.int64)
         keys = np.array(list(self.meta.keys()), dtype=str)
         vals = np.array(list(self.meta.values()), dtype=str)
+        # only when set: a file without settings has the keys it always had
+        settings = {"recognizer": np.array(json.dumps(self.recognizer, sort_keys=True))} if self.recognizer else {}
         with open(path, "wb") as f:  # np.savez would append .npz to a name without it
             np.savez_compressed(
                 f,
@@ -408,6 +417,7 @@ class Templates:
                 meta_keys=keys,
                 meta_values=vals,
                 rest_noise=np.array(self.rest_noise),
+                **settings,
             )
 
     @classmethod
@@ -451,6 +461,7 @@ class Templates:
                 str(data["feature"]),
                 meta,
                 float(data["rest_noise"]) if "rest_noise" in data else float("nan"),  # absent in older files
+                _saved_settings(data, path),
             )
             if not (np.isnan(t.rest_noise) or 0 <= t.rest_noise <= 100):  # nan: not measured
                 raise ValueError(f"rest_noise {t.rest_noise} g out of range")
@@ -463,6 +474,21 @@ class Templates:
         except (KeyError, ValueError, TypeError, IndexError) as exc:
             raise TemplateFileError(path, f"corrupt template file: {exc}") from None
         return t
+
+
+def _saved_settings(data: Mapping[str, np.ndarray], path: Path) -> dict[str, object]:
+    """The optional `recognizer` key: a JSON object of RecognizerConfig settings (absent in
+    older files: none). An unknown name or a wrong value is an error naming the file."""
+    if "recognizer" not in data:
+        return {}
+    try:
+        values = json.loads(str(data["recognizer"]))
+    except ValueError as exc:
+        raise ValueError(f"recognizer settings are not JSON ({exc})") from None
+    try:
+        return check_settings(values, "recognizer settings")
+    except RecognizerConfigError as exc:
+        raise TemplateFileError(path, str(exc)) from None
 
 
 def _threshold(scores: np.ndarray, k: float) -> float:

@@ -154,3 +154,48 @@ def test_evaluate_phone_punches_cross_session(capsys):
     assert [r["set"] for r in rows] == [f"phone-punches {h} {a} -> {b}" for h in ("left", "right") for a, b in (("fast", "slow"), ("slow", "fast"))]
     for r in rows:
         assert r["n"] >= 50 and r["started"] >= 0.9 and r["final_correct"] >= 0.85 and r["lag_ms"] <= 150
+
+
+def test_recognizer_settings_saved_with_templates_config_file_and_command_line(tmp_path, trials_dir, capsys, monkeypatch):
+    """Precedence on `recognize`, as `play` decides: command line > config file > templates > defaults."""
+    monkeypatch.setenv("XDG_CONFIG_HOME", str(tmp_path / "config"))
+    plain, tuned = tmp_path / "t.npz", tmp_path / "t3.npz"
+    assert main(["templates", "build", str(trials_dir), "-o", str(plain)]) == 0
+    assert main(["templates", "build", str(trials_dir), "-o", str(tuned), "--recognizer", "main=3"]) == 0
+    rec = tmp_path / "rec.csv"
+    write(rec, np.vstack([rest(20), bump(2), rest(30), bump(0), rest(30)]))
+    capsys.readouterr()
+
+    def events(templates, *options) -> list[dict]:
+        assert main(["recognize", "--templates", str(templates), str(rec), *options]) == 0
+        return [json.loads(line) for line in capsys.readouterr().out.splitlines()]
+
+    by_main = {m: events(plain, "--main", str(m)) for m in (3, 4, 6, 9)}
+    assert by_main[3] != by_main[6] and by_main[4] != by_main[9]  # main does show in the events
+    assert events(plain) == by_main[6]
+    assert events(tuned) == by_main[3]  # saved with the templates
+    conf = tmp_path / "config" / "quickjab" / "config.toml"
+    conf.parent.mkdir(parents=True)
+    conf.write_text("[recognizer]\nmain = 9\n")
+    assert events(tuned) == by_main[9]  # the config file over the templates
+    assert events(tuned, "--recognizer", "main=4") == by_main[4]  # the command line over the file
+    assert events(tuned, "--main", "4") == by_main[4]
+    assert main(["recognize", "--templates", str(tuned), str(rec), "--main", "4", "--recognizer", "main=5"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--recognizer main=... and --main set the same setting" in err[0]
+    conf.write_text("[recognizer]\nmain = 'soon'\n")
+    assert main(["recognize", "--templates", str(tuned), str(rec)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and str(conf) in err[0]
+
+
+def test_evaluate_takes_recognizer_settings_like_its_flags(tmp_path, trials_dir, capsys):
+    def rows(*options) -> str:
+        assert main(["evaluate", str(trials_dir), "--train", str(trials_dir), "--mains", "3,6", "--json", *options]) == 0
+        return capsys.readouterr().out
+
+    assert rows("--recognizer", "reject=false") == rows("--no-reject")
+    assert rows("--recognizer", "noise_g=0.7", "--recognizer", "supplementary=30") == rows("--noise-g", "0.7", "--supplementary", "30")
+    assert rows("--recognizer", "noise_g=2.5") != rows()
+    assert main(["evaluate", str(trials_dir), "--train", str(trials_dir), "--recognizer", "nope=1"]) == 2
+    assert "unknown recognizer setting 'nope'" in capsys.readouterr().err

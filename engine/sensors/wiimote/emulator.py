@@ -43,7 +43,7 @@ from __future__ import annotations
 
 import heapq
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from typing import Any
 
 import numpy as np
@@ -89,6 +89,38 @@ class _Pending:
     sent: SentData | None = field(compare=False, default=None)
 
 
+@dataclass(frozen=True)
+class WiimoteEmulatorDef:
+    """The emulated remote's settings as data (`EmulatedWiimote.from_def`); the module docstring
+    gives the matching `wiimote-emu://` URL options. The scripted events (unplug_at, ...) are
+    not settings: they go to from_def beside it."""
+
+    serial: str = "00:19:1d:00:00:01"  # its Bluetooth address, as enumerate() shows it
+    product_id: int = 0x0306  # RVL-CNT-01; 0x0330 is the -TR (Wii Remote Plus)
+    # Delivery delay per report (ms, uniform in [0, jitter_ms)): 2 ms, what Bluetooth HID adds
+    # at 100 Hz on a quiet link.
+    jitter_ms: float = 2.0
+    latency_ms: float = 4.0  # reply delay to an output report (ms): a real remote's few ms
+    pad: int = 0  # pad every input report to this many bytes: 0 as Linux reads them; 22 = Windows
+    drop: float = 0.0  # probability of losing each data report: 0, a clean link
+    # "" a genuine remote; "garbage" or "zeros": a clone's unreadable Nunchuk calibration.
+    clone: str = ""
+    nunchuk: bool = True  # a Nunchuk is plugged at power-on: the game's two-hand layout
+    seed: int = 0  # random seed of the jitter, drops and garbage: reproducible by default
+    loop: bool = True  # loop the recording (a demo runs as long as the player likes)
+    loss: str = "error"  # how an unplug looks: "error" (reads fail) or "silent"
+    kernel_driver: bool = False  # pretend Linux's hid-wiimote is bound to the device
+    battery: int = 0xB4  # the status report's battery byte: 0xB4, a full set of AAs
+    start: float = 0.0  # begin this many seconds into the recording
+    # Every status report stops data reporting (what Linux's hid-wiimote assumes); False as
+    # Dolphin's emulation, which stops it only on extension events.
+    status_stops: bool = False
+
+    def kwargs(self) -> dict[str, object]:
+        """The EmulatedWiimote keywords this definition stands for."""
+        return {f.name: getattr(self, f.name) for f in fields(self)}
+
+
 class EmulatedWiimote:
     def __init__(
         self,
@@ -114,6 +146,8 @@ class EmulatedWiimote:
     ):
         self.rec = rec
         self.clock = clock
+        self.definition = WiimoteEmulatorDef(serial, product_id, jitter_ms, latency_ms, pad, drop, clone, nunchuk,
+                                             seed, loop, loss, kernel_driver, battery, start, status_stops)
         self.serial = serial
         self.product_id = product_id
         self.jitter = jitter_ms / 1000.0
@@ -169,6 +203,12 @@ class EmulatedWiimote:
         self._reset_link()
 
     # ---- link state ---------------------------------------------------------------------
+
+    @classmethod
+    def from_def(cls, rec: Recording, clock: Callable[[], float], emulator_def: WiimoteEmulatorDef | None = None,
+                 events: list[tuple[float, str]] | None = None) -> EmulatedWiimote:
+        """The remote `emulator_def` describes (None: the defaults); the same as its fields as keywords."""
+        return cls(rec, clock, **(emulator_def or WiimoteEmulatorDef()).kwargs(), events=events)
 
     def _reset_link(self) -> None:
         """Power-on / new connection: no reporting, LEDs off, extension uninitialised."""
@@ -635,15 +675,15 @@ def emulator_from_url(url: str, clock: Callable[[], float]) -> tuple[EmulatedBus
         except SourceError as exc:  # worded as before: "bad option (drop must be ...)"
             raise SourceError(f"{url}: bad option ({str(exc).removeprefix(f'{url}: ')})") from None
 
+    d = WiimoteEmulatorDef()  # the defaults of the options not given
     try:
-        remote = EmulatedWiimote(
-            rec, clock,
-            jitter_ms=num("jitter_ms", 2.0, 0, 1000), latency_ms=num("latency_ms", 4.0, 0, 1000),
-            pad=int(num("pad", 0, 0, MAX_PAD, integer=True)), drop=num("drop", 0.0, 0, 1), clone=clone,
-            nunchuk=url_flag(params, "nunchuk", "1"), seed=int(num("seed", 0, 0, 2**63 - 1, integer=True)),
+        remote = EmulatedWiimote.from_def(rec, clock, WiimoteEmulatorDef(
+            jitter_ms=num("jitter_ms", d.jitter_ms, 0, 1000), latency_ms=num("latency_ms", d.latency_ms, 0, 1000),
+            pad=int(num("pad", d.pad, 0, MAX_PAD, integer=True)), drop=num("drop", d.drop, 0, 1), clone=clone,
+            nunchuk=url_flag(params, "nunchuk", "1"), seed=int(num("seed", d.seed, 0, 2**63 - 1, integer=True)),
             loop=url_flag(params, "loop", "1"), loss=loss, kernel_driver=url_flag(params, "kernel_driver"),
-            start=num("start", 0.0, 0, MAX_DURATION_S), status_stops=url_flag(params, "status_stops"), events=events,
-        )  # fmt: skip
+            start=num("start", d.start, 0, MAX_DURATION_S), status_stops=url_flag(params, "status_stops"),
+        ), events=events)  # fmt: skip
     except ValueError as exc:
         raise SourceError(f"{url}: bad option ({exc})") from None
     return EmulatedBus([remote]), remote, params

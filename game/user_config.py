@@ -1,0 +1,78 @@
+"""The user's config file, $XDG_CONFIG_HOME/quickjab/config.toml (else ~/.config/quickjab/...):
+settings a player keeps on this machine. Today one table, the recognizer's
+(engine/recognition/config.py names every setting):
+
+    [recognizer]
+    noise_g = 0.5      # g, or "auto"
+    main = "auto"
+
+Where the recognizer's settings come from, the later winning: the defaults, the settings saved
+with the templates (`quickjab train --recognizer ...`), this file, the command line
+(`quickjab play --recognizer noise_g=0.5`). A file that cannot be read, is not TOML or sets
+an unknown name or a wrong value is one line naming the file (exit 2), never a traceback.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Sequence
+from pathlib import Path
+
+from engine.errors import InputError
+from engine.recognition.config import check_settings, parse_assignments
+
+CONFIG_NAME = "config.toml"
+TABLES = ("recognizer",)
+MAX_CONFIG_BYTES = 1 << 20  # a settings file is a few lines; never read a huge one whole
+
+
+def config_path() -> Path:
+    base = os.environ.get("XDG_CONFIG_HOME") or str(Path.home() / ".config")
+    return Path(base) / "quickjab" / CONFIG_NAME
+
+
+def read_config(path: str | os.PathLike | None = None) -> dict[str, dict[str, object]]:
+    """{table: {name: value}} from the config file, checked; {} when there is no file."""
+    path = Path(path) if path is not None else config_path()
+    if not path.exists():
+        return {}
+    tomllib = _toml_reader(path)
+    try:
+        if path.stat().st_size > MAX_CONFIG_BYTES:
+            raise InputError(f"{path}: a config file of over {MAX_CONFIG_BYTES >> 20} MiB; expected a few lines")
+        with open(path, "rb") as f:
+            data = tomllib.load(f)
+    except tomllib.TOMLDecodeError as exc:
+        raise InputError(f"{path}: not a valid TOML file ({exc})") from None
+    except UnicodeDecodeError:
+        raise InputError(f"{path}: not a valid TOML file (not UTF-8 text)") from None
+    except OSError as exc:
+        raise InputError(f"{path}: cannot read the config file ({exc.strerror or exc})") from None
+    unknown = [k for k in data if k not in TABLES]
+    if unknown:
+        raise InputError(f"{path}: unknown setting or table {unknown[0]!r} (known tables: "
+                         + ", ".join(f"[{t}]" for t in TABLES) + ")")
+    table = data.get("recognizer", {})
+    if not isinstance(table, dict):
+        raise InputError(f"{path}: 'recognizer' must be a table ([recognizer] then name = value lines)")
+    return {"recognizer": check_settings(table, f"{path} [recognizer]")}
+
+
+def _toml_reader(path: Path):
+    """The standard library's TOML reader (Python 3.11+; the project supports 3.10, where the
+    same API may come from `tomli` if installed)."""
+    try:
+        import tomllib
+    except ImportError:
+        try:
+            import tomli as tomllib
+        except ImportError:
+            raise InputError(f"{path}: reading a config file needs Python 3.11 or newer (tomllib)") from None
+    return tomllib
+
+
+def recognizer_settings(assignments: Sequence[str] = (), path: str | os.PathLike | None = None) -> dict[str, object]:
+    """The recognizer settings set on this machine: the config file's [recognizer] table, then
+    the command line's `--recognizer NAME=VALUE` (which win). They go over the settings saved
+    with the templates (engine.recognition.config.layered)."""
+    return {**read_config(path).get("recognizer", {}), **parse_assignments(assignments)}
