@@ -101,14 +101,16 @@ def test_event_examples_are_json_lines_with_documented_keys():
 
 def small_trace() -> dict:
     clock = VirtualClock()
-    loop = FixedStepLoop(clock=clock, auto_freeze_gc=False, budget=FrameBudget(capacity_frames=60))
+    # Budgets far above any real run time: on a loaded machine a stage over a 1 ms budget would
+    # carry an "overrun" arg that the documented example (no overruns) does not have.
+    loop = FixedStepLoop(clock=clock, auto_freeze_gc=False, budget=FrameBudget(capacity_frames=60, frame_budget_ms=1e4))
 
     def sense(step: int, dt: float) -> None:
         with loop.span("sense.decode"):
             pass
 
-    loop.add_stage("sense", sense, budget_ms=1.0)
-    loop.set_render(lambda alpha: None, budget_ms=8.0, name="render")
+    loop.add_stage("sense", sense, budget_ms=1e4)
+    loop.set_render(lambda alpha: None, budget_ms=1e4, name="render")
     loop.run(frames=5)
     return chrome_trace(loop.budget)
 
