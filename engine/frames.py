@@ -11,10 +11,11 @@ from __future__ import annotations
 
 import numpy as np
 
+from engine.clock import STEP_HZ
 from engine.recording import Recording
 from engine.sensors.source import Sample
 
-FRAME_HZ = 60
+FRAME_HZ = STEP_HZ
 
 
 def frame_offsets(duration: float, hz: int = FRAME_HZ) -> np.ndarray:

@@ -25,6 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
+from engine.clock import STEP_HZ
 from engine.errors import InputError
 from game.actions import FPS, Action
 from game.skeleton import (
@@ -629,7 +630,7 @@ def simulate_bout(lib: dict[str, Action], player: list[str], opponent: list[str]
         hits_all += hits
         rec.add([b.joint_positions() for b in boxers])
         idle += 1
-        if len(rec.frames) > 60 * 120:  # a runaway script: stop after two minutes
+        if len(rec.frames) > STEP_HZ * 120:  # a runaway script: stop after two minutes
             break
     for _ in range(rest_frames):
         for b in boxers:

@@ -16,6 +16,7 @@ import numpy as np
 import pygame
 
 from engine.budget import UNACCOUNTED, WAIT, FrameBudget
+from engine.clock import STEP_HZ
 
 PLAYER_COLOR = (235, 64, 52)
 OPPONENT_COLOR = (52, 120, 235)
@@ -105,7 +106,7 @@ class HudState:
         for i in (0, 1):
             # the lost-health band drains at 40 health per second, after the fill
             if self.shown_health[i] > self.health[i]:
-                self.shown_health[i] = max(self.health[i], self.shown_health[i] - 40.0 / 60.0)
+                self.shown_health[i] = max(self.health[i], self.shown_health[i] - 40.0 / STEP_HZ)
             else:
                 self.shown_health[i] = self.health[i]
 

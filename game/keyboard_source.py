@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from engine.clock import STEP_HZ
 from engine.sensors.source import (
     Clock,
     Sample,
@@ -27,7 +28,7 @@ from engine.sensors.source import (
     url_number,
 )
 
-HZ = 60
+HZ = STEP_HZ
 
 # A key per action: left hand on the left of the keyboard, right hand on the right, guard on
 # space, footwork on the arrows. Values are pygame key names (pygame.key.key_code).

@@ -16,7 +16,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-HZ = 60
+from engine.clock import STEP_HZ
+
+HZ = STEP_HZ
 MAX_HEALTH = 100.0
 ROUNDS = 3
 ROUND_SECONDS = 60

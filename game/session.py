@@ -27,7 +27,7 @@ from pathlib import Path
 import numpy as np
 import pygame
 
-from engine.clock import RealClock, VirtualClock
+from engine.clock import STEP_HZ, RealClock, VirtualClock
 from engine.errors import InputError
 from engine.frames import FrameResampler
 from engine.loop import FixedStepLoop
@@ -42,7 +42,7 @@ from game.match import Match
 from game.render import Renderer
 from game.render_low_power import LowPowerRenderer
 
-HZ = 60
+HZ = STEP_HZ
 STAGE_BUDGETS_MS = {
     "input": 0.30, "frames": 0.10, "recognize": 1.00, "player": 0.50, "opponent": 0.50,
     "physics": 3.00, "hits": 0.20, "match": 0.10,

@@ -26,12 +26,13 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from engine import arguments
+from engine.clock import STEP_HZ
 from engine.errors import InputError
 
 if TYPE_CHECKING:  # pygame loads only when the screen opens (the CLI imports this module)
     import pygame
 
-HZ = 60
+HZ = STEP_HZ
 TRIALS = 5
 KEEP = 3  # the most representative trials of each action build its templates
 SHOW_STEPS = 90  # the animation alone before the first trial of an action
