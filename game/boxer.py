@@ -21,6 +21,7 @@ from game.actions import HEAVY_HIT_SPEED, Action, reaction_for
 from game.body import add_boxer_body
 from game.hits import hits_from_contacts
 from game.motion import PlayerController
+from game.rules import FACE_RATE
 from game.skeleton import compose_root, joint_index, local_to_world, world_to_local
 
 __all__ = ["Boxer", "hits_from_contacts"]
@@ -103,7 +104,7 @@ class Boxer:
             self.controller.play(name)
         return name
 
-    def turn_towards(self, x: float, z: float, rate: float = 0.2) -> None:
+    def turn_towards(self, x: float, z: float, rate: float = FACE_RATE) -> None:
         """Turn the root's yaw `rate` of the way towards the world point (x, z) (the game keeps
         the two boxers facing each other)."""
         rx, rz, yaw = self._root

@@ -17,9 +17,9 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from engine.clock import STEP_HZ
+from game.rules import MAX_HEALTH
 
 HZ = STEP_HZ
-MAX_HEALTH = 100.0
 ROUNDS = 3
 ROUND_SECONDS = 60
 BREAK_SECONDS = 3

@@ -42,6 +42,17 @@ from game.match import Match
 from game.render import Renderer
 from game.render_low_power import LowPowerRenderer
 
+# the shared rules (game/rules.py); BLOCKED_SHARE, BLOW_SCALE, REFERENCE_SPEED and blow_damage
+# stay importable from here
+from game.rules import (  # noqa: F401
+    BLOCKED_SHARE,
+    BLOW_SCALE,
+    REFERENCE_SPEED,
+    RING_LIMIT,
+    START_GAP,
+    blow_damage,
+)
+
 HZ = STEP_HZ
 STAGE_BUDGETS_MS = {
     "input": 0.30, "frames": 0.10, "recognize": 1.00, "player": 0.50, "opponent": 0.50,
@@ -50,13 +61,6 @@ STAGE_BUDGETS_MS = {
 RENDER_BUDGET_MS = 8.0
 LOW_POWER_RENDER_BUDGET_MS = 4.0
 LOW_POWER_SCALE = 0.5  # the low-power mode renders at half size and scales up
-START_GAP = 1.1  # metres between the two roots at the bell: just out of a straight's reach
-RING_LIMIT = 2.6  # metres from the centre a root may go (the ropes are at 3)
-REFERENCE_SPEED = 4.0  # m/s: a blow closing at this speed does its window's damage
-BLOCKED_SHARE = 0.2  # the share of the damage that goes through a block
-# Every blow counts for this share of its window's damage: at 1.0 nearly every match ended by
-# TKO in round 1 (issue 17); the CPU's blows are scaled again by its difficulty.
-BLOW_SCALE = 0.6
 # The CPU reads the situation from a solved table: how often it takes the best action, how late
 # it sees the situation, its rest between moves and how much its blows count are its difficulty
 # (game/difficulty.py), so that a human (whose moves wait for the recognizer) has a fair fight.
@@ -166,13 +170,6 @@ def load_graph(path: str | Path | None = None):
         cached.parent.mkdir(parents=True, exist_ok=True)
         build_graph(load_library(), BuildParams(states=3000, bouts=256)).save(cached)
     return InteractionGraph.load(cached, edges=False)
-
-
-def blow_damage(hit: dict) -> float:
-    """A blow's damage, the same in both modes: its window's damage, scaled by the closing
-    speed and BLOW_SCALE, a fifth through a block (the CPU's difficulty comes on top)."""
-    scale = float(np.clip(hit["speed"] / REFERENCE_SPEED, 0.5, 1.5))
-    return float(hit.get("damage", 8.0)) * scale * BLOW_SCALE * (BLOCKED_SHARE if hit["blocked"] else 1.0)
 
 
 LOG_KEPT = 1024  # recent recognizer events / blows kept in memory (an hour makes ~7,000-12,000 events)

@@ -35,20 +35,18 @@ from game.history import History
 from game.hud import HudState
 from game.hud_two_player import TwoPlayerHud
 from game.match import Match
+from game.rules import RING_LIMIT, START_GAP, blow_damage
 from game.session import (
     HOME_BUTTON,
     LOG_KEPT,
     PILOT_ATTACKS,
     PILOT_REACH,
     PILOT_SETTLE_STEPS,
-    RING_LIMIT,
     RUMBLE_MS,
     STAGE_BUDGETS_MS,
-    START_GAP,
     Session,
     SessionConfig,
     _event_key,
-    blow_damage,
     load_templates,
     templates_in_use,
 )
