@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from game.hits import Hit
+
 MAX_HEALTH = 100.0  # each boxer's health at the bell (the bout model's hp)
 BLOCKED_SHARE = 0.2  # the share of a blow's damage that goes through a block or parry
 FACE_RATE = 0.2  # every step each boxer turns this share of the way to face the other
@@ -20,9 +22,10 @@ REFERENCE_SPEED = 4.0  # m/s: a blow closing at this speed does its window's dam
 BLOW_SCALE = 0.6
 
 
-def blow_damage(hit) -> float:
+def blow_damage(hit: Hit | dict) -> float:
     """A blow's damage, the same in both modes: its window's damage, scaled by the closing
     speed and BLOW_SCALE, BLOCKED_SHARE of it through a block (the CPU's difficulty comes on
-    top). `hit` is a game.hits.Hit (or a dict with its keys)."""
-    scale = float(np.clip(hit["speed"] / REFERENCE_SPEED, 0.5, 1.5))
-    return float(hit.get("damage", 8.0)) * scale * BLOW_SCALE * (BLOCKED_SHARE if hit["blocked"] else 1.0)
+    top)."""
+    hit = Hit.of(hit)
+    scale = float(np.clip(hit.speed / REFERENCE_SPEED, 0.5, 1.5))
+    return float(hit.damage) * scale * BLOW_SCALE * (BLOCKED_SHARE if hit.blocked else 1.0)

@@ -35,7 +35,7 @@ from engine.sensors.source import Source, SourceState
 from engine.state_hash import state_hash
 from game.difficulty import DifficultySetting
 from game.history import History
-from game.hits import hits_from_contacts
+from game.hits import Hit, hits_from_contacts
 from game.hud import Hud, HudState
 from game.interaction import OpponentController, Situation
 from game.match import Match
@@ -440,25 +440,26 @@ class Session:
         for hit in hits_from_contacts(self.contacts, list(self.boxers)):
             self.apply_hit(step, hit)
 
-    def apply_hit(self, step: int, hit: dict) -> None:
-        """A hit event (CONTRACTS.md keys, plus the window's damage and the point): the blow's
-        damage (blow_damage), the CPU's scaled by its difficulty, then land it."""
+    def apply_hit(self, step: int, hit: Hit | dict) -> None:
+        """A hit (game.hits.Hit, or a dict of its keys): the blow's damage (blow_damage), the
+        CPU's scaled by its difficulty, then land it."""
+        hit = Hit.of(hit)
         damage = blow_damage(hit)
-        if hit["attacker"] == 1:
+        if hit.attacker == 1:
             damage *= self.difficulty.current.damage
         self.land_blow(step, hit, damage)
 
-    def land_blow(self, step: int, hit: dict, damage: float) -> None:
+    def land_blow(self, step: int, hit: Hit, damage: float) -> None:
         """The referee counts the blow; reaction, flash, sound, rumble (both modes)."""
-        target = 1 - hit["attacker"]
+        target = 1 - hit.attacker
         if not self.match.hit(target, damage):
             return
-        self.blows_log.append((step, hit["attacker"], hit["target"], hit["blocked"], round(damage, 4)))
-        point = hit.get("point")
+        self.blows_log.append((step, hit.attacker, hit.target, hit.blocked, round(damage, 4)))
+        point = hit.point
         if point is None:
             point = self.boxers[target].joint_positions()[4]
-        self.renderer.add_flash(point, strong=damage >= 8, blocked=hit["blocked"])
-        if hit["blocked"]:
+        self.renderer.add_flash(point, strong=damage >= 8, blocked=hit.blocked)
+        if hit.blocked:
             self.sounds.play("block")
         else:
             self.sounds.play("hit" if damage >= 8 else "hit_light")

@@ -32,6 +32,7 @@ from engine.frames import FrameResampler
 from engine.sensors.source import Source, SourceState
 from game.difficulty import DifficultySetting
 from game.history import History
+from game.hits import Hit
 from game.hud import HudState
 from game.hud_two_player import TwoPlayerHud
 from game.match import Match
@@ -273,9 +274,10 @@ class TwoPlayerSession(Session):
     def _opponent(self, step: int, dt: float) -> None:
         self._step_boxer(1, dt)
 
-    def apply_hit(self, step: int, hit: dict) -> None:
+    def apply_hit(self, step: int, hit: Hit | dict) -> None:
         """The one-player session's blow (blow_damage, land_blow), but a fair fight: no CPU
         difficulty on top."""
+        hit = Hit.of(hit)
         self.land_blow(step, hit, blow_damage(hit))
 
     def rumble(self, target: int) -> None:
