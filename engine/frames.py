@@ -1,4 +1,4 @@
-"""Samples to 60 Hz frames (ARCHITECTURE.md): a frame is one step's input vector of shape
+"""Samples to 60 Hz frames (docs/engine.md, "Frames"): a frame is one step's input vector of shape
 (3 * sensors,), the sensors' accel at the step's instant, interpolated linearly between the
 samples around it, or held from the last one when no later sample has arrived yet.
 

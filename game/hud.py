@@ -17,6 +17,9 @@ import pygame
 
 from engine.budget import UNACCOUNTED, WAIT, FrameBudget
 from engine.clock import STEP_HZ
+from engine.sensors.source import Source
+from game.match import MatchSnapshot
+from game.rules import MAX_HEALTH
 
 PLAYER_COLOR = (235, 64, 52)
 OPPONENT_COLOR = (52, 120, 235)
@@ -41,22 +44,30 @@ BUDGET_COLUMNS = (0, 110, 185, 320)  # their x in the F3 panel (720p pixels from
 HISTORY_FRAMES = 120  # the F3 overlay's chart: the last two seconds, a stacked column a frame
 
 
+@dataclass(frozen=True, slots=True)
+class SourceSnapshot:
+    """What the HUD shows of a source: the line under the health bars."""
+
+    url: str = ""
+    state: str = "connected"
+    battery: float | None = None
+
+    @classmethod
+    def of(cls, source: Source, url: str | None = None) -> SourceSnapshot:
+        """The source now; `url` to show another label (two players: "P1 wiimote://")."""
+        return cls(source.url if url is None else url, source.state.value, source.battery)
+
+
 @dataclass
 class HudState:
-    health: list[float] = field(default_factory=lambda: [100.0, 100.0])
-    shown_health: list[float] = field(default_factory=lambda: [100.0, 100.0])  # drains after hits
-    max_health: float = 100.0
+    """Everything the HUD draws. The match and the source come as typed snapshots the session
+    takes once a step; the rest is the HUD's own (marks, messages, panels)."""
+
+    match: MatchSnapshot = field(default_factory=MatchSnapshot)
+    source: SourceSnapshot = field(default_factory=SourceSnapshot)
+    shown_health: list[float] = field(default_factory=lambda: [MAX_HEALTH, MAX_HEALTH])  # drains after hits
+    max_health: float = MAX_HEALTH
     names: tuple[str, str] = ("YOU", "CPU")
-    round: int = 1
-    rounds: int = 3
-    seconds_left: float = 60.0
-    phase: str = "fight"
-    count: int = 0
-    down: int | None = None
-    knockdowns: list[int] = field(default_factory=lambda: [0, 0])
-    winner: int | None = None
-    result: str = ""
-    paused: bool = False
     # recognition
     action: str = ""
     score: float | None = None
@@ -69,9 +80,6 @@ class HudState:
     supp_fill: int = 0
     supp_size: int = 60
     # source
-    source_url: str = ""
-    source_state: str = "connected"
-    battery: float | None = None
     keyboard_banner: bool = False
     templates: str = ""  # which template set the recognizer uses (session.templates_in_use)
     difficulty: str = ""  # the CPU's (game/difficulty.py), shown in the pause menu
@@ -103,12 +111,13 @@ class HudState:
         self.switch_age = min(MARK_STEPS, self.switch_age + 1)
         self.reject_age = min(MARK_STEPS, self.reject_age + 1)
         self.message_age += 1
+        health = self.match.health
         for i in (0, 1):
             # the lost-health band drains at 40 health per second, after the fill
-            if self.shown_health[i] > self.health[i]:
-                self.shown_health[i] = max(self.health[i], self.shown_health[i] - 40.0 / STEP_HZ)
+            if self.shown_health[i] > health[i]:
+                self.shown_health[i] = max(health[i], self.shown_health[i] - 40.0 / STEP_HZ)
             else:
-                self.shown_health[i] = self.health[i]
+                self.shown_health[i] = health[i]
 
 
 def action_label(action: str) -> str:
@@ -206,7 +215,7 @@ class Hud:
         for i, (rect, color) in enumerate(zip(rects, (PLAYER_COLOR, OPPONENT_COLOR), strict=True)):
             pygame.draw.rect(surf, (0, 0, 0), rect.inflate(6, 6), border_radius=4)
             pygame.draw.rect(surf, BAR_BACK, rect)
-            frac = max(0.0, min(1.0, st.health[i] / st.max_health))
+            frac = max(0.0, min(1.0, st.match.health[i] / st.max_health))
             shown = max(frac, min(1.0, st.shown_health[i] / st.max_health))
             # the player's bar drains towards the centre of the screen (right), the CPU's to the left
             def part(f: float, rect: pygame.Rect = rect, i: int = i) -> pygame.Rect:
@@ -220,21 +229,21 @@ class Hud:
             name_pos = (rect.left, rect.bottom + 4) if i == 0 else (rect.right, rect.bottom + 4)
             self.blit(surf, st.names[i], int(30 * u), name_pos, TEXT, name_anchor)
             # knockdown pips
-            for k in range(st.knockdowns[i]):
+            for k in range(st.match.knockdowns[i]):
                 off = 70 * u + k * 18 * u
                 cx = rect.left + off if i == 0 else rect.right - off
                 pygame.draw.circle(surf, (255, 255, 255), (int(cx), int(rect.bottom + 14 * u)), int(6 * u))
 
     def _clock(self, surf: pygame.Surface, st: HudState, u: float) -> None:
         w, _ = surf.get_size()
-        secs = max(0, int(np.ceil(st.seconds_left)))
+        secs = max(0, int(np.ceil(st.match.seconds_left)))
         box = pygame.Rect(0, 0, int(120 * u), int(78 * u))
         box.midtop = (w // 2, int(12 * u))
         pygame.draw.rect(surf, (12, 12, 18), box, border_radius=int(8 * u))
         pygame.draw.rect(surf, (90, 86, 96), box, 2, border_radius=int(8 * u))
-        label = "BREAK" if st.phase == "break" else f"ROUND {st.round}/{st.rounds}"
+        label = "BREAK" if st.match.phase == "break" else f"ROUND {st.match.round}/{st.match.rounds}"
         self.blit(surf, label, int(22 * u), (w // 2, box.top + 6 * u), DIM, "midtop")
-        col = REJECT_COLOR if st.phase == "fight" and secs <= 10 else TEXT
+        col = REJECT_COLOR if st.match.phase == "fight" and secs <= 10 else TEXT
         self.blit(surf, f"{secs // 60}:{secs % 60:02d}", int(50 * u), (w // 2, box.top + 26 * u), col, "midtop")
         mode = "  ".join(m for m in (st.mode, "DEMO" if st.demo else "") if m)
         if mode:
@@ -243,17 +252,17 @@ class Hud:
     def _source(self, surf: pygame.Surface, st: HudState, u: float) -> None:
         left, _ = self.health_rects(surf.get_size())
         y = left.bottom + 32 * u
-        state_col = OK_COLOR if st.source_state == "connected" else (SWITCH_COLOR if st.source_state in ("reconnecting", "connecting") else REJECT_COLOR)
+        state_col = OK_COLOR if st.source.state == "connected" else (SWITCH_COLOR if st.source.state in ("reconnecting", "connecting") else REJECT_COLOR)
         pygame.draw.circle(surf, state_col, (int(left.left + 7 * u), int(y + 8 * u)), int(6 * u))
-        r = self.blit(surf, f"{st.source_url}  {st.source_state}", int(22 * u), (left.left + 18 * u, y), DIM)
+        r = self.blit(surf, f"{st.source.url}  {st.source.state}", int(22 * u), (left.left + 18 * u, y), DIM)
         if st.templates:
             self.blit(surf, st.templates, int(18 * u), (left.left + 18 * u, y + 22 * u), DIM)
-        if st.battery is not None:
+        if st.source.battery is not None:
             bx, by = r.right + 12 * u, y + 2 * u
             body = pygame.Rect(int(bx), int(by), int(34 * u), int(14 * u))
             pygame.draw.rect(surf, DIM, body, 2)
             pygame.draw.rect(surf, DIM, (body.right, body.top + body.height // 4, int(3 * u), body.height // 2))
-            b = max(0.0, min(1.0, st.battery))
+            b = max(0.0, min(1.0, st.source.battery))
             pygame.draw.rect(surf, OK_COLOR if b > 0.25 else REJECT_COLOR, (body.left + 3, body.top + 3, int((body.width - 6) * b), body.height - 6))
         if st.keyboard_banner:
             w, _ = surf.get_size()
@@ -330,23 +339,23 @@ class Hud:
     def _centre(self, surf: pygame.Surface, st: HudState, u: float) -> None:
         w, h = surf.get_size()
         big, mid = int(96 * u), int(40 * u)
-        if st.phase == "over":
-            if st.winner is None:
+        if st.match.phase == "over":
+            if st.match.winner is None:
                 title = "DRAW"
             else:
-                title = f"{st.result} - {'YOU WIN' if st.winner == 0 else 'CPU WINS'}"
+                title = f"{st.match.result} - {'YOU WIN' if st.match.winner == 0 else 'CPU WINS'}"
             self._banner(surf, title, big, (w // 2, h * 0.42))
             if not st.demo:
                 self.blit(surf, "Enter: a new match", mid, (w // 2, h * 0.42 + 60 * u), DIM, "midtop")
                 if st.difficulty:
                     self.blit(surf, f"D: difficulty {st.difficulty}", int(30 * u), (w // 2, h * 0.42 + 104 * u), DIM, "midtop")
-        elif st.phase == "count" and st.down is not None:
+        elif st.match.phase == "count" and st.match.down is not None:
             # left of the ring's centre line: in the middle of the screen it sat over the far
             # corner post, white on white
             cx = w * COUNT_X
-            self.count_rect = self._banner(surf, f"{st.count}", int(140 * u), (cx, h * 0.40), alpha=215)
+            self.count_rect = self._banner(surf, f"{st.match.count}", int(140 * u), (cx, h * 0.40), alpha=215)
             self.blit(surf, "KNOCKDOWN", mid, (cx, h * 0.40 + 70 * u), SWITCH_COLOR, "midtop")
-        elif st.paused and not st.disconnected:
+        elif st.match.paused and not st.disconnected:
             self._banner(surf, "PAUSED", big, (w // 2, h * 0.42))
             self.blit(surf, "Esc or Home to resume", mid, (w // 2, h * 0.42 + 56 * u), DIM, "midtop")
             if st.difficulty:
@@ -369,7 +378,7 @@ class Hud:
         pygame.draw.rect(surf, (120, 20, 24), box, border_radius=int(10 * u))
         pygame.draw.rect(surf, REJECT_COLOR, box, 3, border_radius=int(10 * u))
         self.blit(surf, "CONTROLLER DISCONNECTED", int(54 * u), (w // 2, box.top + 22 * u), TEXT, "midtop")
-        self.blit(surf, f"{st.source_url}: {st.source_state} - the match resumes when it is back",
+        self.blit(surf, f"{st.source.url}: {st.source.state} - the match resumes when it is back",
                   int(24 * u), (w // 2, box.top + 88 * u), TEXT, "midtop")
 
     def _chart_column(self, x0: int, col_w: int, ms: np.ndarray, px_per_ms: float) -> None:

@@ -19,6 +19,8 @@ import numpy as np
 
 from engine.clock import STEP_HZ
 from engine.sensors.source import (
+    KEYS,
+    PLAYABLE,
     Clock,
     Sample,
     Source,
@@ -73,6 +75,8 @@ def key_help(keymap: dict[str, str] | None = None) -> list[tuple[str, str]]:
 
 class KeyboardSource(Source):
     """Samples synthesized from key presses. `press(action)` is what a key does."""
+
+    capabilities = frozenset({PLAYABLE, KEYS})
 
     def __init__(self, url: str, clock: Clock, lib: dict, profile: str = "experienced", seed: int = 0,
                  auto: bool = False, keys: str = "all"):

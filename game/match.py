@@ -42,6 +42,23 @@ class MatchEvent(NamedTuple):
         return {"kind": self.kind, "who": self.who}
 
 
+@dataclass(frozen=True, slots=True)
+class MatchSnapshot:
+    """What the HUD shows of a match, taken once a step (`Match.snapshot()`)."""
+
+    health: tuple[float, float] = (MAX_HEALTH, MAX_HEALTH)
+    round: int = 1
+    rounds: int = ROUNDS
+    seconds_left: float = float(ROUND_SECONDS)
+    phase: str = "fight"
+    count: int = 0
+    down: int | None = None
+    knockdowns: tuple[int, int] = (0, 0)
+    winner: int | None = None
+    result: str = ""
+    paused: bool = False
+
+
 # phases
 FIGHT = "fight"
 COUNT = "count"
@@ -89,6 +106,12 @@ class Match:
 
     def seconds_left(self) -> float:
         return self.clock_steps / self.hz
+
+    def snapshot(self) -> MatchSnapshot:
+        return MatchSnapshot(
+            (self.health[0], self.health[1]), self.round, self.rounds, self.seconds_left(), self.phase,
+            self.count, self.down, (self.knockdowns[0], self.knockdowns[1]), self.winner, self.result, self.paused,
+        )
 
     def drain_events(self) -> list[MatchEvent]:
         """What happened since the last call: ("bell", -1), ("knockdown", i), ("rise", i), ("over", i)..."""

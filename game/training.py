@@ -28,6 +28,7 @@ import numpy as np
 from engine import arguments
 from engine.clock import STEP_HZ
 from engine.errors import InputError
+from engine.sensors.source import PLAYABLE
 
 if TYPE_CHECKING:  # pygame loads only when the screen opens (the CLI imports this module)
     import pygame
@@ -372,8 +373,9 @@ def run(args: argparse.Namespace) -> int:
         print("quickjab train: demo: the virtual player performs every move by itself", file=sys.stderr)
     elif fallback:
         print("quickjab train: No Wiimote found: training from the keyboard (press a key to perform)", file=sys.stderr)
-    auto = args.demo or bool(getattr(source, "auto", False))
-    if hasattr(source, "auto"):
+    playable = PLAYABLE in source.capabilities  # a virtual player performs the moves
+    auto = args.demo or (playable and bool(source.auto))
+    if playable:
         source.auto = False  # the trainer decides when the virtual player performs
     lib = load_library()
     trainer = Trainer(actions)
@@ -397,7 +399,7 @@ def run(args: argparse.Namespace) -> int:
 
     def perform() -> None:
         # the virtual player behind the keyboard has no handedness: it performs the move itself
-        if hasattr(source, "press"):
+        if playable:
             source.press(trainer.action)
 
     def input_stage(step: int, dt: float) -> None:

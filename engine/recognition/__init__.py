@@ -3,7 +3,7 @@
     from engine.recognition import Templates, DualBufferRecognizer
     templates = Templates.from_trials({"hook_r": [trial, ...]})  # (n, D) at 60 Hz in g
     rec = DualBufferRecognizer(templates)
-    events = rec.push(frame)                                      # list of FORMATS.md dicts
+    events = rec.push(frame)                                      # list of dicts, docs/formats.md
 """
 
 from engine.recognition.dual_buffer import DualBufferRecognizer
