@@ -13,7 +13,7 @@ import numpy as np
 
 from engine.clock import STEP_HZ
 from engine.recording import Recording
-from engine.sensors.source import Sample
+from engine.sample import Sample
 
 FRAME_HZ = STEP_HZ
 

@@ -19,7 +19,7 @@ import numpy as np
 
 from engine.clock import STEP_HZ
 from engine.errors import InputError
-from engine.sensors.source import Sample
+from engine.sample import Sample
 
 HAND_COLUMNS = (("rx", "ry", "rz"), ("lx", "ly", "lz"))
 FLUSH_EVERY_S = 0.25  # fsync at least this often: a crashed machine loses at most 0.25 s

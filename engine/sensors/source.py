@@ -17,20 +17,11 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from enum import Enum
-from typing import TYPE_CHECKING, ClassVar, NamedTuple
+from typing import ClassVar
 from urllib.parse import parse_qsl, urlsplit
 
 from engine.errors import InputError
-
-if TYPE_CHECKING:  # numpy only names the sample's type here: `import game` need not load it
-    import numpy as np
-
-
-class Sample(NamedTuple):
-    """One reading: host time in seconds and accel of shape (sensors, 3) in g, gravity included."""
-
-    t: float
-    accel: np.ndarray
+from engine.sample import Sample  # noqa: F401 - sources' names: engine.sensors.Sample
 
 
 class SourceState(str, Enum):
