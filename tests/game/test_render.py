@@ -228,7 +228,7 @@ def test_budget_overlay_has_a_header_over_its_columns() -> None:
     loop.run(frames=5)
     drawn = {}
     for headers in (BUDGET_HEADERS, ("", "", "", "")):
-        import game.hud as hud_mod
+        import game.hud_budget as hud_mod  # the F3 overlay draws its headers
 
         old = hud_mod.BUDGET_HEADERS
         hud_mod.BUDGET_HEADERS = headers
