@@ -15,7 +15,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-FRAME_BUDGET_MS = 1000.0 / 60.0
+from engine.clock import STEP_MS
+
+FRAME_BUDGET_MS = STEP_MS
 WAIT = "wait"
 UNACCOUNTED = "unaccounted"
 

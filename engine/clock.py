@@ -7,6 +7,11 @@ from __future__ import annotations
 import time
 
 NS_PER_S = 1_000_000_000
+# The step rate, written once: the loop runs at it and everything counted in steps (frames,
+# budgets, clip frames, the game's seconds) derives from these three.
+STEP_HZ = 60
+STEP_DT = 1.0 / STEP_HZ  # seconds per step
+STEP_MS = 1000.0 / STEP_HZ  # the frame budget at the step rate
 SPIN_NS = 2_000_000  # sleep until ~2 ms before a deadline, then spin: sleep() overshoots
 
 

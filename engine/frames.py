@@ -1,4 +1,4 @@
-"""Samples to 60 Hz frames (ARCHITECTURE.md): a frame is one step's input vector of shape
+"""Samples to 60 Hz frames (docs/engine.md, "Frames"): a frame is one step's input vector of shape
 (3 * sensors,), the sensors' accel at the step's instant, interpolated linearly between the
 samples around it, or held from the last one when no later sample has arrived yet.
 
@@ -11,10 +11,11 @@ from __future__ import annotations
 
 import numpy as np
 
+from engine.clock import STEP_HZ
 from engine.recording import Recording
-from engine.sensors.source import Sample
+from engine.sample import Sample
 
-FRAME_HZ = 60
+FRAME_HZ = STEP_HZ
 
 
 def frame_offsets(duration: float, hz: int = FRAME_HZ) -> np.ndarray:

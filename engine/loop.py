@@ -20,7 +20,7 @@ from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 
 from engine.budget import FrameBudget
-from engine.clock import NS_PER_S, RealClock, VirtualClock
+from engine.clock import NS_PER_S, STEP_HZ, RealClock, VirtualClock
 
 StageFn = Callable[[int, float], None]
 RenderFn = Callable[[float], None]
@@ -39,7 +39,7 @@ class FixedStepLoop:
     def __init__(
         self,
         clock: RealClock | VirtualClock | None = None,
-        hz: int = 60,
+        hz: int = STEP_HZ,
         render_hz: int | None = None,
         max_steps: int = MAX_STEPS_PER_FRAME,
         budget: FrameBudget | None = None,

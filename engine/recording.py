@@ -17,8 +17,9 @@ from pathlib import Path
 
 import numpy as np
 
+from engine.clock import STEP_HZ
 from engine.errors import InputError
-from engine.sensors.source import Sample
+from engine.sample import Sample
 
 HAND_COLUMNS = (("rx", "ry", "rz"), ("lx", "ly", "lz"))
 FLUSH_EVERY_S = 0.25  # fsync at least this often: a crashed machine loses at most 0.25 s
@@ -239,7 +240,7 @@ def _metadata_lines(meta: dict[str, str]) -> str:
 
 def _file_head(sensors: int, meta: dict[str, str]) -> str:
     """Metadata lines (rate_hz and units first, overridable) and the header with a label column."""
-    return _metadata_lines({"rate_hz": "60", "units": "g", **meta}) + ",".join(_header_columns(sensors) + ["label"]) + "\n"
+    return _metadata_lines({"rate_hz": str(STEP_HZ), "units": "g", **meta}) + ",".join(_header_columns(sensors) + ["label"]) + "\n"
 
 
 def write_recording(path: str | os.PathLike, rec: Recording) -> None:

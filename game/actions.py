@@ -22,6 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
+from engine.clock import STEP_HZ
 from engine.errors import InputError
 from game.skeleton import JOINTS, impose_bone_lengths, joint_index
 
@@ -31,7 +32,7 @@ ACTION_NAMES: tuple[str, ...] = (
 )  # fmt: skip
 
 KINDS = ("attack", "defense", "step", "reaction", "idle")
-FPS = 60
+FPS = STEP_HZ  # clips hold one frame per step
 MAX_FRAMES = 3600  # one minute: the longest shipped action is under 2 s
 MAX_FILE_BYTES = 16 * 2**20  # an action file is ~10 KB
 

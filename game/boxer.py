@@ -19,11 +19,12 @@ import numpy as np
 
 from game.actions import HEAVY_HIT_SPEED, Action, reaction_for
 from game.body import add_boxer_body
-from game.hits import hits_from_contacts
+from game.hits import Hit, hits_from_contacts
 from game.motion import PlayerController
+from game.rules import FACE_RATE
 from game.skeleton import compose_root, joint_index, local_to_world, world_to_local
 
-__all__ = ["Boxer", "hits_from_contacts"]
+__all__ = ["Boxer", "Hit", "hits_from_contacts"]
 
 STIFFNESS_HZ = 7.0  # body and legs
 ARM_STIFFNESS_HZ = 12.0  # elbows and fists follow punches closely
@@ -92,18 +93,19 @@ class Boxer:
     def spend_hand(self, hand: str) -> None:
         self._spent.add(hand)
 
-    def react(self, hit: dict, heavy_speed: float | None = None) -> str:
+    def react(self, hit: Hit | dict, heavy_speed: float | None = None) -> str:
         """Play the reaction to `hit` (an event where this boxer was struck); returns its name."""
-        direction = world_to_local(np.asarray(hit["direction"], dtype=float), (0.0, 0.0, self._root[2]))
-        speed = hit["speed"]
+        hit = Hit.of(hit)
+        direction = world_to_local(np.asarray(hit.direction, dtype=float), (0.0, 0.0, self._root[2]))
+        speed = hit.speed
         if heavy_speed is not None:  # the caller's own heavy threshold, rescaled to the library's
             speed = speed * HEAVY_HIT_SPEED / heavy_speed
-        name = reaction_for(hit["target"], direction, speed)
+        name = reaction_for(hit.target, direction, speed)
         if name in self.lib:
             self.controller.play(name)
         return name
 
-    def turn_towards(self, x: float, z: float, rate: float = 0.2) -> None:
+    def turn_towards(self, x: float, z: float, rate: float = FACE_RATE) -> None:
         """Turn the root's yaw `rate` of the way towards the world point (x, z) (the game keeps
         the two boxers facing each other)."""
         rx, rz, yaw = self._root

@@ -25,8 +25,10 @@ from pathlib import Path
 
 import numpy as np
 
+from engine.clock import STEP_HZ
 from engine.errors import InputError
 from game.actions import FPS, Action
+from game.hits import Hit
 from game.skeleton import (
     BONE_LENGTHS,
     BONES,
@@ -601,7 +603,7 @@ class BVHRecorder:
 
 
 def simulate_bout(lib: dict[str, Action], player: list[str], opponent: list[str], gap: float = 0.85,
-                  rest_frames: int = 20) -> tuple[BVHRecorder, list[dict]]:
+                  rest_frames: int = 20) -> tuple[BVHRecorder, list[Hit]]:
     """Two Boxers in a physics world, `gap` metres apart, each playing its list of actions
     back to back (hits make the struck boxer react); returns the recording and the hits."""  # fmt: skip
     import math
@@ -613,7 +615,7 @@ def simulate_bout(lib: dict[str, Action], player: list[str], opponent: list[str]
     boxers = [Boxer(world, lib, z=-gap / 2, yaw=0.0), Boxer(world, lib, z=gap / 2, yaw=math.pi)]
     queues = [list(player), list(opponent)]
     rec = BVHRecorder()
-    hits_all: list[dict] = []
+    hits_all: list[Hit] = []
     idle = 0
     dt = 1.0 / FPS
     while idle < rest_frames or any(queues) or not all(b.controller.idle for b in boxers):
@@ -624,12 +626,12 @@ def simulate_bout(lib: dict[str, Action], player: list[str], opponent: list[str]
             b.step(dt)
         hits = hits_from_contacts(world.step(dt), boxers)
         for h in hits:
-            if not h["blocked"]:
-                boxers[1 - h["attacker"]].react(h)
+            if not h.blocked:
+                boxers[1 - h.attacker].react(h)
         hits_all += hits
         rec.add([b.joint_positions() for b in boxers])
         idle += 1
-        if len(rec.frames) > 60 * 120:  # a runaway script: stop after two minutes
+        if len(rec.frames) > STEP_HZ * 120:  # a runaway script: stop after two minutes
             break
     for _ in range(rest_frames):
         for b in boxers:

@@ -75,19 +75,19 @@ class TwoPlayerHud(Hud):
         """Player 2's source, state and battery under the right health bar, right-aligned."""
         _, right = self.health_rects(surf.get_size())
         y = right.bottom + 32 * u
-        state_col = OK_COLOR if st.source_state == "connected" else (
-            SWITCH_COLOR if st.source_state in ("reconnecting", "connecting") else REJECT_COLOR)
+        state_col = OK_COLOR if st.source.state == "connected" else (
+            SWITCH_COLOR if st.source.state in ("reconnecting", "connecting") else REJECT_COLOR)
         x = right.right
-        if st.battery is not None:
+        if st.source.battery is not None:
             body = pygame.Rect(0, int(y + 2 * u), int(34 * u), int(14 * u))
             body.right = int(x - 3 * u)
             pygame.draw.rect(surf, DIM, body, 2)
             pygame.draw.rect(surf, DIM, (body.right, body.top + body.height // 4, int(3 * u), body.height // 2))
-            b = max(0.0, min(1.0, st.battery))
+            b = max(0.0, min(1.0, st.source.battery))
             pygame.draw.rect(surf, OK_COLOR if b > 0.25 else REJECT_COLOR,
                              (body.left + 3, body.top + 3, int((body.width - 6) * b), body.height - 6))
             x = body.left - 12 * u
-        r = self.blit(surf, f"{st.source_url}  {st.source_state}", int(22 * u), (x, y), DIM, "topright")
+        r = self.blit(surf, f"{st.source.url}  {st.source.state}", int(22 * u), (x, y), DIM, "topright")
         if st.templates:
             self.blit(surf, st.templates, int(18 * u), (right.right, y + 22 * u), DIM, "topright")
         pygame.draw.circle(surf, state_col, (int(r.left - 11 * u), int(y + 8 * u)), int(6 * u))
@@ -105,12 +105,12 @@ class TwoPlayerHud(Hud):
         self.blit(surf, "Esc pause  F3 budget  F11 fullscreen", int(18 * u), (w // 2, 118 * u), DIM, "midtop")
 
     def _centre_two(self, surf: pygame.Surface, st: HudState, u: float) -> None:
-        if st.phase != "over":
-            if not (st.paused and self.second.disconnected):  # the overlay says why, not PAUSED
+        if st.match.phase != "over":
+            if not (st.match.paused and self.second.disconnected):  # the overlay says why, not PAUSED
                 self._centre(surf, st, u)
             return
         w, h = surf.get_size()
-        title = "DRAW" if st.winner is None else f"{st.result} - {st.names[st.winner]} WINS"
+        title = "DRAW" if st.match.winner is None else f"{st.match.result} - {st.names[st.match.winner]} WINS"
         self._banner(surf, title, int(96 * u), (w // 2, h * 0.42))
         if not st.demo:
             self.blit(surf, "Enter: a new match", int(40 * u), (w // 2, h * 0.42 + 60 * u), TEXT, "midtop")

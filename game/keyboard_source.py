@@ -17,7 +17,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from engine.clock import STEP_HZ
 from engine.sensors.source import (
+    KEYS,
+    PLAYABLE,
     Clock,
     Sample,
     Source,
@@ -27,7 +30,7 @@ from engine.sensors.source import (
     url_number,
 )
 
-HZ = 60
+HZ = STEP_HZ
 
 # A key per action: left hand on the left of the keyboard, right hand on the right, guard on
 # space, footwork on the arrows. Values are pygame key names (pygame.key.key_code).
@@ -72,6 +75,8 @@ def key_help(keymap: dict[str, str] | None = None) -> list[tuple[str, str]]:
 
 class KeyboardSource(Source):
     """Samples synthesized from key presses. `press(action)` is what a key does."""
+
+    capabilities = frozenset({PLAYABLE, KEYS})
 
     def __init__(self, url: str, clock: Clock, lib: dict, profile: str = "experienced", seed: int = 0,
                  auto: bool = False, keys: str = "all"):

@@ -15,9 +15,12 @@ scripted match is reproducible and its state hashes. Rules, kept simple and dete
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
-HZ = 60
-MAX_HEALTH = 100.0
+from engine.clock import STEP_HZ
+from game.rules import MAX_HEALTH
+
+HZ = STEP_HZ
 ROUNDS = 3
 ROUND_SECONDS = 60
 BREAK_SECONDS = 3
@@ -25,6 +28,36 @@ COUNT_OUT = 10
 RISE_HEALTH = 40.0
 BREAK_RECOVERY = 20.0
 KNOCKDOWNS_FOR_TKO = 3
+
+
+
+class MatchEvent(NamedTuple):
+    """Something the referee did this step, drained by the session: "bell", "knockdown",
+    "count", "rise", "over". A pair, so `for kind, who in match.drain_events()` reads it."""
+
+    kind: str
+    who: int  # the boxer (0 | 1) it concerns, -1 for none; the number called for "count"
+
+    def to_dict(self) -> dict:
+        return {"kind": self.kind, "who": self.who}
+
+
+@dataclass(frozen=True, slots=True)
+class MatchSnapshot:
+    """What the HUD shows of a match, taken once a step (`Match.snapshot()`)."""
+
+    health: tuple[float, float] = (MAX_HEALTH, MAX_HEALTH)
+    round: int = 1
+    rounds: int = ROUNDS
+    seconds_left: float = float(ROUND_SECONDS)
+    phase: str = "fight"
+    count: int = 0
+    down: int | None = None
+    knockdowns: tuple[int, int] = (0, 0)
+    winner: int | None = None
+    result: str = ""
+    paused: bool = False
+
 
 # phases
 FIGHT = "fight"
@@ -55,7 +88,7 @@ class Match:
     winner: int | None = None  # 0, 1, or None (draw / not over)
     result: str = ""  # "KO", "TKO", "points", "draw"
     hits: list[int] = field(default_factory=lambda: [0, 0])  # landed BY boxer i
-    events: list[tuple[str, int]] = field(default_factory=list)  # (kind, boxer) since last drain
+    events: list[MatchEvent] = field(default_factory=list)  # since the last drain
 
     def __post_init__(self) -> None:
         if not self.clock_steps:
@@ -74,8 +107,14 @@ class Match:
     def seconds_left(self) -> float:
         return self.clock_steps / self.hz
 
-    def drain_events(self) -> list[tuple[str, int]]:
-        """What happened since the last call: ("bell", -1), ("knockdown", i), ("rise", i), ("ko", i)..."""
+    def snapshot(self) -> MatchSnapshot:
+        return MatchSnapshot(
+            (self.health[0], self.health[1]), self.round, self.rounds, self.seconds_left(), self.phase,
+            self.count, self.down, (self.knockdowns[0], self.knockdowns[1]), self.winner, self.result, self.paused,
+        )
+
+    def drain_events(self) -> list[MatchEvent]:
+        """What happened since the last call: ("bell", -1), ("knockdown", i), ("rise", i), ("over", i)..."""
         ev, self.events = self.events, []
         return ev
 
@@ -118,7 +157,7 @@ class Match:
             if self.count_steps >= self.hz:
                 self.count_steps = 0
                 self.count += 1
-                self.events.append(("count", self.count))
+                self.events.append(MatchEvent("count", self.count))
                 self._maybe_rise()
         elif self.phase == BREAK:
             self.clock_steps -= 1
@@ -126,7 +165,7 @@ class Match:
                 self.round += 1
                 self.phase = FIGHT
                 self.clock_steps = self.round_seconds * self.hz
-                self.events.append(("bell", -1))
+                self.events.append(MatchEvent("bell", -1))
 
     # -- rules -------------------------------------------------------------------------
     def rise_count(self, boxer: int) -> int:
@@ -140,7 +179,7 @@ class Match:
         self.phase = COUNT
         self.count = 0
         self.count_steps = 0
-        self.events.append(("knockdown", boxer))
+        self.events.append(MatchEvent("knockdown", boxer))
         if self.round_knockdowns[boxer] >= KNOCKDOWNS_FOR_TKO:
             self._finish(1 - boxer, "TKO")
 
@@ -154,7 +193,7 @@ class Match:
             self.health[boxer] = RISE_HEALTH
             self.down = None
             self.phase = FIGHT
-            self.events.append(("rise", boxer))
+            self.events.append(MatchEvent("rise", boxer))
 
     def _score_round(self) -> None:
         d = self.round_damage
@@ -165,7 +204,7 @@ class Match:
 
     def _end_round(self) -> None:
         self._score_round()
-        self.events.append(("bell", -1))
+        self.events.append(MatchEvent("bell", -1))
         if self.round >= self.rounds:
             if self.scores[0] == self.scores[1]:
                 self._finish(None, "draw")
@@ -185,4 +224,4 @@ class Match:
         self.winner = winner
         self.result = result
         self.down = self.down if result in ("KO", "TKO") else None
-        self.events.append(("over", -1 if winner is None else winner))
+        self.events.append(MatchEvent("over", -1 if winner is None else winner))

@@ -1,17 +1,11 @@
 """A game session: every part of a match wired into the FixedStepLoop's stages.
 
-Stages, in order each 60 Hz step, with their declared budgets (ms; issue 9 holds the loop to
-them and the F3 overlay shows them):
-
-    input      0.30  pygame events (keys, pause, F3, F11), source.poll()
-    frames     0.10  samples -> this step's 60 Hz frame (engine.frames.FrameResampler)
-    recognize  1.00  the frame through the dual-buffer recognizer -> player controller events
-    player     0.50  player controller + body targets; tells the recognizer when a clip ended
-    opponent   0.50  Interaction Graph look-up when at the guard; opponent body targets
-    physics    3.00  Verlet step of both bodies, contacts
-    hits       0.20  contacts -> blows (referee) -> damage, reactions, flashes, sound, rumble
-    match      0.10  round clock, count, winner; HUD state
-    render     8.00  (once per rendered frame) ring, bodies interpolated with alpha, HUD
+The stages, their order, budgets (ms; issue 9 holds the loop to them and the F3 overlay shows
+them) and the session state each reads and writes are one table, game/stages.py; each runs as
+the method `_<name>(step, dt)` here. Once per rendered frame the view (game/session_view.py)
+draws the ring, the bodies interpolated with alpha and the HUD (render, 8 ms; 4 in low power).
+The attract mode's player is game/pilot.py; the HUD reads typed snapshots of the match and the
+source (game/hud.py).
 
 Nothing here reads a clock except through the loop's: with a VirtualClock and a seed a session
 is reproducible to the bit (`state_hash`).
@@ -19,7 +13,6 @@ is reproducible to the bit (`state_hash`).
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -27,50 +20,43 @@ from pathlib import Path
 import numpy as np
 import pygame
 
-from engine.clock import RealClock, VirtualClock
+from engine.clock import STEP_HZ, RealClock, VirtualClock
 from engine.errors import InputError
 from engine.frames import FrameResampler
 from engine.loop import FixedStepLoop
-from engine.sensors.source import Source, SourceState
-from engine.state_hash import state_hash
+from engine.sensors.source import KEYS, Source, SourceState
 from game.difficulty import DifficultySetting
 from game.history import History
-from game.hits import hits_from_contacts
-from game.hud import Hud, HudState
+from game.hits import Hit
+from game.hud import Hud, HudState, SourceSnapshot
 from game.interaction import OpponentController, Situation
 from game.match import Match
+
+# the attract mode's pilot (game/pilot.py), the shared rules (game/rules.py), the stage table
+# (game/stages.py) and the view (game/session_view.py); their names stay importable from here
+from game.pilot import PILOT_ATTACKS, PILOT_REACH, PILOT_SETTLE_STEPS, DemoPilot  # noqa: F401
 from game.render import Renderer
 from game.render_low_power import LowPowerRenderer
+from game.ring import DEMO_RESTART_STEPS, KNOCKDOWN_HOLD, Ring  # noqa: F401
+from game.rules import (  # noqa: F401
+    BLOCKED_SHARE,
+    BLOW_SCALE,
+    REFERENCE_SPEED,
+    RING_LIMIT,
+    START_GAP,
+    blow_damage,
+)
+from game.session_view import LOW_POWER_SCALE, SessionView  # noqa: F401
+from game.stages import STAGE_BUDGETS_MS, wire
 
-HZ = 60
-STAGE_BUDGETS_MS = {
-    "input": 0.30, "frames": 0.10, "recognize": 1.00, "player": 0.50, "opponent": 0.50,
-    "physics": 3.00, "hits": 0.20, "match": 0.10,
-}  # fmt: skip
+HZ = STEP_HZ
 RENDER_BUDGET_MS = 8.0
 LOW_POWER_RENDER_BUDGET_MS = 4.0
-LOW_POWER_SCALE = 0.5  # the low-power mode renders at half size and scales up
-START_GAP = 1.1  # metres between the two roots at the bell: just out of a straight's reach
-RING_LIMIT = 2.6  # metres from the centre a root may go (the ropes are at 3)
-REFERENCE_SPEED = 4.0  # m/s: a blow closing at this speed does its window's damage
-BLOCKED_SHARE = 0.2  # the share of the damage that goes through a block
-# Every blow counts for this share of its window's damage: at 1.0 nearly every match ended by
-# TKO in round 1 (issue 17); the CPU's blows are scaled again by its difficulty.
-BLOW_SCALE = 0.6
 # The CPU reads the situation from a solved table: how often it takes the best action, how late
 # it sees the situation, its rest between moves and how much its blows count are its difficulty
 # (game/difficulty.py), so that a human (whose moves wait for the recognizer) has a fair fight.
 HOME_BUTTON = 0x0080  # Wiimote core buttons: Home
 RUMBLE_MS = 120
-DEMO_RESTART_STEPS = 8 * HZ  # the attract mode shows the result, then boxes again
-PILOT_SETTLE_STEPS = 90  # the pilot's hands rest first: the recognizer learns gravity at rest
-PILOT_VARIETY = 0.4
-# how the virtual player boxes, by its profile (keyboard://?profile=...): how often it picks a
-# move other than the graph's best for its side, and the steps its hands rest between motions
-PILOT_STYLE = {"experienced": (PILOT_VARIETY, 12), "novice": (PILOT_VARIETY, 12)}
-PILOT_REACH = 1.0
-PILOT_ATTACKS = ("straight_l", "straight_r", "hook_l", "hook_r", "uppercut_l", "uppercut_r", "block", "step_left", "step_right")
-KNOCKDOWN_HOLD = 0.55  # the fraction of the knockdown clip held while the referee counts
 
 
 @dataclass
@@ -171,13 +157,6 @@ def load_graph(path: str | Path | None = None):
     return InteractionGraph.load(cached, edges=False)
 
 
-def blow_damage(hit: dict) -> float:
-    """A blow's damage, the same in both modes: its window's damage, scaled by the closing
-    speed and BLOW_SCALE, a fifth through a block (the CPU's difficulty comes on top)."""
-    scale = float(np.clip(hit["speed"] / REFERENCE_SPEED, 0.5, 1.5))
-    return float(hit.get("damage", 8.0)) * scale * BLOW_SCALE * (BLOCKED_SHARE if hit["blocked"] else 1.0)
-
-
 LOG_KEPT = 1024  # recent recognizer events / blows kept in memory (an hour makes ~7,000-12,000 events)
 
 
@@ -186,89 +165,77 @@ def _event_key(ev: dict) -> tuple:
     return (ev.get("frame"), ev.get("event"), ev.get("action"), ev.get("from_frame"))
 
 
-class Session:
+class Session(Ring):
     """Build with a source and a surface to draw on; `loop.run(...)` plays."""
 
     def __init__(self, source: Source, config: SessionConfig | None = None,
                  clock: RealClock | VirtualClock | None = None,
                  surface_provider: Callable[[], pygame.Surface] | None = None):
-        from engine.physics import World
-        from engine.recognition import DualBufferRecognizer
-        from engine.recognition.config import layered
-        from game.actions import load_library
-        from game.boxer import Boxer
         from game.sound import Sounds
 
         self.config = cfg = config or SessionConfig()
         self.clock = clock or RealClock()
         self.source = source
-        self.lib = load_library()
-        self.world = World(gravity=(0.0, -9.81, 0.0), ground_y=0.0, damping=0.01,
-                           iterations=max(1, cfg.physics_iterations // (2 if cfg.low_power else 1)))
-        self.boxers = (Boxer(self.world, self.lib, x=0.0, z=-START_GAP / 2, yaw=0.0),
-                       Boxer(self.world, self.lib, x=0.0, z=START_GAP / 2, yaw=math.pi))
-        self.player, self.opponent = self.boxers
-        graph = load_graph(cfg.graph)
-        self.graph = graph
+        self._build_ring(cfg)
+        self.graph = load_graph(cfg.graph)
         self.difficulty = DifficultySetting(cfg.difficulty)
         self._rest_next = self.difficulty.current.rest_steps  # its rest after the move it plays
-        self.opponent_ai = OpponentController(graph, self.lib, controller=self.opponent.controller,
+        self.opponent_ai = OpponentController(self.graph, self.lib, controller=self.opponent.controller,
                                               rng=np.random.default_rng(cfg.seed + 2))
-        self._pilot_wait = PILOT_SETTLE_STEPS
         self._cpu_rest = 0
         self._over_steps = 0
-        self._pilot_seen = True
-        self._pilot_rng = np.random.default_rng(cfg.seed + 1)
+        self.pilot = DemoPilot(self.graph, self.lib, np.random.default_rng(cfg.seed + 1))
+        self._build_recognition(cfg, source)
+        self.match = Match()
+        self._rounds_seen = 0
+        self.hud_state = self._new_hud_state(cfg, source)
+        self._apply_difficulty()
+        hud = Hud()
+        self.sounds = Sounds(enabled=cfg.sound, seed=cfg.seed)
+        # low power: flat shading (game/render_low_power.py: half the render time of detailed=False)
+        renderer = LowPowerRenderer(cfg.size) if cfg.low_power else Renderer(cfg.size)
+        self.view = SessionView(cfg.size, cfg.low_power, renderer, hud, surface_provider)
+        self.on_toggle_fullscreen: Callable[[], None] | None = None
+        self._t0: float | None = None
+        self._buttons = 0
+        self._auto_paused = False
+        self._step = 0
+        self.loop = self._build_loop(STAGE_BUDGETS_MS)
+        self.sounds.play("bell")
+
+    def _build_recognition(self, cfg: SessionConfig, source: Source) -> None:
+        """Templates, the recognizer and the resampler for this source; the event logs."""
+        from engine.recognition import DualBufferRecognizer
+        from engine.recognition.config import layered
+
         self.templates = load_templates(cfg.templates, cfg.left_handed)
         if source.sensors * 3 != self.templates.dim:
             raise InputError(f"{source.url}: the source has {source.sensors} sensor(s), the templates need "
                              f"{self.templates.dim // 3} (a Wiimote + Nunchuk, or two IMUs)")
         self.recognizer = DualBufferRecognizer.from_config(self.templates, layered(self.templates.recognizer, cfg.recognizer))
         self.resampler = FrameResampler(sensors=self.templates.dim // 3)
-        self.match = Match()
-        self.hud_state = HudState(keys=[], source_url=source.url, keyboard_banner=cfg.keyboard_banner,
-                                  demo=cfg.demo, mode="LOW POWER" if cfg.low_power else "",
-                                  main_size=int(self.recognizer.main) if self.recognizer.main != "auto" else 6,
-                                  supp_size=self.recognizer.supplementary)
-        self.hud_state.message = "ROUND 1"
-        self.hud_state.templates = templates_in_use(cfg.templates)
-        self._apply_difficulty()
-        self._rounds_seen = 0
-        if hasattr(source, "press_key"):
-            from game.keyboard_source import key_help
-
-            self.hud_state.keys = key_help(getattr(source, "keymap", None))  # keyboard://?keys=left: that half
-        self.hud = Hud()
-        self.sounds = Sounds(enabled=cfg.sound, seed=cfg.seed)
-        # low power: flat shading (game/render_low_power.py: half the render time of detailed=False)
-        self.renderer = LowPowerRenderer(cfg.size) if cfg.low_power else Renderer(cfg.size)
-        self._surface_provider = surface_provider
-        self._offscreen: pygame.Surface | None = None
-        self._low_power_surface: pygame.Surface | None = None
         # recognizer events and blows (step, attacker, target, blocked, damage), in order: the
         # recent ones kept (tests, HUD), all of them counted and in the state hash (game/history.py)
         self.events_log: History = History(LOG_KEPT, key=_event_key)
         self.blows_log: History = History(LOG_KEPT)
-        self.on_toggle_fullscreen: Callable[[], None] | None = None
-        self._t0: float | None = None
-        self._buttons = 0
-        self._auto_paused = False
-        self._step = 0
-        self.prev_joints = [b.joint_positions().copy() for b in self.boxers]
-        self.curr_joints = [j.copy() for j in self.prev_joints]
-        self.frame_vec: np.ndarray | None = None
 
-        self.loop = self._build_loop(STAGE_BUDGETS_MS)
-        self.sounds.play("bell")
+    def _new_hud_state(self, cfg: SessionConfig, source: Source) -> HudState:
+        rec = self.recognizer
+        hud = HudState(source=SourceSnapshot(url=source.url), keyboard_banner=cfg.keyboard_banner,
+                       demo=cfg.demo, mode="LOW POWER" if cfg.low_power else "",
+                       main_size=int(rec.main) if rec.main != "auto" else 6, supp_size=rec.supplementary,
+                       message="ROUND 1", templates=templates_in_use(cfg.templates))
+        if KEYS in source.capabilities:
+            from game.keyboard_source import key_help
+
+            hud.keys = key_help(source.keymap)  # keyboard://?keys=left: that half
+        return hud
 
     def _build_loop(self, budgets_ms: dict[str, float]) -> FixedStepLoop:
-        """The fixed-step loop with the stages in their order, each against its budget."""
+        """The fixed-step loop with the stages of game/stages.py, each against its budget."""
         cfg = self.config
         loop = FixedStepLoop(self.clock, hz=HZ, render_hz=HZ // 2 if cfg.low_power else HZ)
-        for name, fn in (("input", self._input), ("frames", self._frames), ("recognize", self._recognize),
-                         ("player", self._player), ("opponent", self._opponent), ("physics", self._physics),
-                         ("hits", self._hits), ("match", self._match)):
-            loop.add_stage(name, fn, budgets_ms[name])
+        wire(loop, self, budgets_ms)
         if cfg.render:
             loop.set_render(self.render, LOW_POWER_RENDER_BUDGET_MS if cfg.low_power else RENDER_BUDGET_MS)
         return loop
@@ -277,27 +244,23 @@ class Session:
         """Which template set is in use, for the console (the HUD shows it under the source)."""
         return [self.hud_state.templates]
 
-    # -- surfaces ------------------------------------------------------------------------
-    def target_surface(self) -> pygame.Surface:
-        if self._surface_provider is not None:
-            return self._surface_provider()
-        if self._offscreen is None:
-            self._offscreen = pygame.Surface(self.config.size)
-        return self._offscreen
-
-    # -- stages --------------------------------------------------------------------------
+    # -- stages (game/stages.py) ---------------------------------------------------------
     def _input(self, step: int, dt: float) -> None:
         if pygame.display.get_init():
             for event in pygame.event.get():
                 self.handle_event(event)
         if self.config.demo:
-            self._pilot()
+            self.pilot.step(self.source, self.match.fighting, self.player, self.opponent)
         samples = self.source.poll()
-        buttons = int(getattr(self.source, "buttons", 0) or 0)
+        buttons = int(self.source.buttons or 0)
         if buttons & HOME_BUTTON and not self._buttons & HOME_BUTTON:
             self.match.toggle_pause()
         self._buttons = buttons
         self.resampler.push(samples)
+        self._watch_connection()
+
+    def _watch_connection(self) -> None:
+        """A lost source pauses the match; back, the recognizer learns gravity afresh."""
         disconnected = self.source.state in (SourceState.DISCONNECTED, SourceState.RECONNECTING, SourceState.CONNECTING)
         if disconnected and not self.hud_state.disconnected:
             if not self.match.paused:
@@ -310,36 +273,6 @@ class Session:
                 self.match.toggle_pause()
             self._auto_paused = False
         self.hud_state.disconnected = disconnected
-
-    def _pilot(self) -> None:
-        """The attract mode's player: the Interaction Graph picks the player's move from the
-        player's side, the virtual player performs it on the keyboard source, and the REAL
-        recognizer has to recognize it before the boxer moves."""
-        if not hasattr(self.source, "press") or self.source.busy or not self.match.fighting:
-            return
-        if self.player.controller.action != "guard":
-            return
-        if self._pilot_wait > 0:
-            self._pilot_wait -= 1
-            return
-        me, them = self.player.controller, self.opponent.controller
-        situation = Situation.from_roots(self.player.root, me.action, me.frame,
-                                         self.opponent.root, them.action, them.frame)
-        action = self.graph.best_action(situation)
-        unrecognized = not self._pilot_seen  # the last motion started nothing: try another
-        variety, rest = PILOT_STYLE.get(getattr(self.source, "profile", ""), PILOT_STYLE["experienced"])
-        if unrecognized or self._pilot_rng.random() < variety:
-            # an attract mode that only ever throws the one best punch is dull to watch: now
-            # and then a different move (closing in when out of reach)
-            near = situation.distance < PILOT_REACH
-            choices = PILOT_ATTACKS if near else ("step_forward",)
-            action = choices[int(self._pilot_rng.integers(len(choices)))]
-        if action in self.lib and action != "guard":
-            self.source.press(action)
-            self._pilot_seen = False
-            self._pilot_wait = rest  # the hands come back to rest before the next motion
-        else:
-            self._pilot_wait = 8
 
     def handle_event(self, event: pygame.event.Event) -> None:
         if event.type == pygame.QUIT:
@@ -356,7 +289,7 @@ class Session:
                 self.new_match()
             elif event.key == pygame.K_d and (self.match.paused or self.match.over):
                 self.cycle_difficulty()  # the pause menu
-            elif hasattr(self.source, "press_key") and not self.match.paused:
+            elif KEYS in self.source.capabilities and not self.match.paused:
                 self.source.press_key(pygame.key.name(event.key))
 
     def _frames(self, step: int, dt: float) -> None:
@@ -372,7 +305,7 @@ class Session:
         events = self.recognizer.push(self.frame_vec, t=step * dt)
         for ev in events:
             self.events_log.append(ev)
-            self._pilot_seen |= ev.get("event") == "start"
+            self.pilot.saw(ev)
             self.hud_state.mark(ev)
             # a whole-motion switch is the recognizer's final word on a motion already over:
             # a label for the record, too late for the character to act on
@@ -398,8 +331,7 @@ class Session:
     def _apply_difficulty(self) -> None:
         d = self.difficulty.current
         self.opponent_ai.set_policy(d.best_share, d.reaction_steps)
-        if hasattr(self, "hud_state"):  # not yet while the session is being built
-            self.hud_state.difficulty = self.difficulty.label
+        self.hud_state.difficulty = self.difficulty.label
 
     def cycle_difficulty(self) -> None:
         """The pause menu's D: the next difficulty, from now on."""
@@ -429,83 +361,19 @@ class Session:
         if self.opponent.controller.finished_action():
             self._cpu_rest = self._rest_next
 
-    def _hold_knockdown(self, i: int) -> None:
-        """While the referee counts, the downed boxer stays down (the clip's low frame)."""
-        ctrl = self.boxers[i].controller
-        clip = self.lib.get("knockdown")
-        if self.match.down == i and clip is not None:
-            hold = int(clip.frames * KNOCKDOWN_HOLD)
-            if ctrl.action != "knockdown" or ctrl.frame > hold:
-                ctrl.play("knockdown", from_frame=min(ctrl.frame, hold) if ctrl.action == "knockdown" else 0)
-
-    def _physics(self, step: int, dt: float) -> None:
-        self.contacts = self.world.step(dt)
-        self.prev_joints, self.curr_joints = self.curr_joints, [b.joint_positions().copy() for b in self.boxers]
-        self.renderer.step_effects()
-
-    def _hits(self, step: int, dt: float) -> None:
-        for hit in hits_from_contacts(self.contacts, list(self.boxers)):
-            self.apply_hit(step, hit)
-
-    def apply_hit(self, step: int, hit: dict) -> None:
-        """A hit event (CONTRACTS.md keys, plus the window's damage and the point): the blow's
-        damage (blow_damage), the CPU's scaled by its difficulty, then land it."""
+    def apply_hit(self, step: int, hit: Hit | dict) -> None:
+        """A hit (game.hits.Hit, or a dict of its keys): the blow's damage (blow_damage), the
+        CPU's scaled by its difficulty, then land it."""
+        hit = Hit.of(hit)
         damage = blow_damage(hit)
-        if hit["attacker"] == 1:
+        if hit.attacker == 1:
             damage *= self.difficulty.current.damage
         self.land_blow(step, hit, damage)
-
-    def land_blow(self, step: int, hit: dict, damage: float) -> None:
-        """The referee counts the blow; reaction, flash, sound, rumble (both modes)."""
-        target = 1 - hit["attacker"]
-        if not self.match.hit(target, damage):
-            return
-        self.blows_log.append((step, hit["attacker"], hit["target"], hit["blocked"], round(damage, 4)))
-        point = hit.get("point")
-        if point is None:
-            point = self.boxers[target].joint_positions()[4]
-        self.renderer.add_flash(point, strong=damage >= 8, blocked=hit["blocked"])
-        if hit["blocked"]:
-            self.sounds.play("block")
-        else:
-            self.sounds.play("hit" if damage >= 8 else "hit_light")
-            if self.match.down != target:
-                self.boxers[target].react(hit)
-        self.rumble(target)
 
     def rumble(self, target: int) -> None:
         """The boxer who was hit: its player feels it (the CPU has no controller)."""
         if target == 0:
             self.source.rumble(RUMBLE_MS)
-
-    def _match(self, step: int, dt: float) -> None:
-        m = self.match
-        m.step()
-        for kind, who in m.drain_events():
-            if kind == "bell":
-                self.sounds.play("bell")
-                if m.phase == "fight":
-                    self.hud_state.message, self.hud_state.message_age = f"ROUND {m.round}", 0
-                    self._to_corners()
-            elif kind == "knockdown":
-                self.boxers[who].controller.play("knockdown")
-            elif kind == "rise":
-                self.boxers[who].controller.play("guard")
-        self._rounds_over(m)
-        if m.over:
-            self._over_steps += 1
-            if self.config.demo and self._over_steps >= DEMO_RESTART_STEPS:
-                self.new_match()  # the attract mode goes on
-        h = self.hud_state
-        h.health = list(m.health)
-        h.round, h.rounds = m.round, m.rounds
-        h.seconds_left = m.seconds_left()
-        h.phase, h.count, h.down = m.phase, m.count, m.down
-        h.knockdowns = list(m.knockdowns)
-        h.winner, h.result, h.paused = m.winner, m.result, m.paused
-        self._show_sources()
-        h.tick()
-        self._step = step
 
     def _rounds_over(self, m: Match) -> None:
         """Each round decided since the last step: the adaptive difficulty follows the player."""
@@ -516,19 +384,8 @@ class Session:
             self._apply_difficulty()
 
     def _show_sources(self) -> None:
-        """The source line's fields of the HUD: URL, state, battery."""
-        h = self.hud_state
-        h.source_url, h.source_state = self.source.url, self.source.state.value
-        h.battery = self.source.battery
-
-    def _to_corners(self) -> None:
-        """Both boxers back to their marks, at the guard (a new round)."""
-        for boxer, z, yaw in ((self.player, -START_GAP / 2, 0.0), (self.opponent, START_GAP / 2, math.pi)):
-            boxer.controller.play("guard", blend=False)
-            boxer.controller.output = self.lib["guard"].posture(0)
-            boxer.place(0.0, z, yaw)
-        self.prev_joints = [b.joint_positions().copy() for b in self.boxers]
-        self.curr_joints = [j.copy() for j in self.prev_joints]
+        """The HUD's snapshot of the source: URL, state, battery."""
+        self.hud_state.source = SourceSnapshot.of(self.source)
 
     def new_match(self) -> None:
         """A fresh match (Enter after the last bell; by itself in the attract mode)."""
@@ -537,34 +394,7 @@ class Session:
         self._over_steps = 0
         self._to_corners()
         self.recognizer.reset()
-        self._pilot_wait = PILOT_SETTLE_STEPS
+        self.pilot.settle()
         self.hud_state.message, self.hud_state.message_age = "ROUND 1", 0
         self.sounds.play("bell")
 
-    # -- rendering -----------------------------------------------------------------------
-    def render(self, alpha: float) -> None:
-        target = self.target_surface()
-        if self.config.low_power:
-            w, h = target.get_size()
-            size = (max(1, int(w * LOW_POWER_SCALE)), max(1, int(h * LOW_POWER_SCALE)))
-            # its own surface: the headless target is self._offscreen, which must keep its size
-            if self._low_power_surface is None or self._low_power_surface.get_size() != size:
-                self._low_power_surface = pygame.Surface(size)
-            surf = self._low_power_surface
-        else:
-            surf = target
-        bodies = [self.prev_joints[i] + (self.curr_joints[i] - self.prev_joints[i]) * alpha for i in (0, 1)]
-        self.renderer.draw(surf, bodies)
-        if surf is not target:
-            # the scene at half size, scaled up; the HUD's text drawn sharp at full size
-            pygame.transform.scale(surf, target.get_size(), target)
-        self.hud.draw(target, self.hud_state, self.loop.budget)
-        if self._surface_provider is not None and pygame.display.get_init() and pygame.display.get_surface() is target:
-            pygame.display.flip()
-
-    # -- reproducibility ------------------------------------------------------------------
-    def state_hash(self) -> str:
-        """The simulation's state: bodies, controllers, match, recognizer decisions."""
-        ctrls = [(b.controller.action, round(float(b.controller.frame), 6), tuple(np.round(b.root, 9))) for b in self.boxers]
-        return state_hash(self.world.x, self.match.state(), ctrls, self.events_log.total, self.events_log.digest(),
-                          self.blows_log.total, self.blows_log.digest())

@@ -26,12 +26,14 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from engine import arguments
+from engine.clock import STEP_HZ
 from engine.errors import InputError
+from engine.sensors.source import PLAYABLE
 
 if TYPE_CHECKING:  # pygame loads only when the screen opens (the CLI imports this module)
     import pygame
 
-HZ = 60
+HZ = STEP_HZ
 TRIALS = 5
 KEEP = 3  # the most representative trials of each action build its templates
 SHOW_STEPS = 90  # the animation alone before the first trial of an action
@@ -344,46 +346,41 @@ def reset_templates(output: Path | None) -> int:
     return 0
 
 
-def run(args: argparse.Namespace) -> int:
-    from game.play import check_visible_window, headless_env, open_player_source, parse_size
+def _chosen_actions(args: argparse.Namespace) -> list[str]:
+    """--actions, checked against the library's names (all of them by default)."""
+    from game.actions import ACTION_NAMES
 
-    size = parse_size(args.size)
-    from engine.recognition.config import parse_assignments
-    from game.actions import ACTION_NAMES, load_library
-
-    settings = parse_assignments(getattr(args, "recognizer", None) or ())
-
-    if args.reset:
-        from game.userdata import profile_templates_path
-
-        # --profile NAME resets NAME's set (profile_templates_path(None) is the default player's)
-        return reset_templates(Path(args.output) if args.output else profile_templates_path(args.profile))
     actions = list(ACTION_NAMES)
     if args.actions:
         actions = [a.strip() for a in args.actions.split(",") if a.strip()]
         unknown = [a for a in actions if a not in ACTION_NAMES]
         if unknown:
             raise InputError(f"--actions: unknown {', '.join(unknown)}; known: {', '.join(ACTION_NAMES)}")
-    if args.headless:
-        headless_env()
-    import pygame
+    return actions
 
-    from engine.clock import RealClock, VirtualClock
-    from engine.frames import FrameResampler
-    from engine.loop import FixedStepLoop
-    from game.userdata import profile_templates_path, user_templates_path
 
-    clock = VirtualClock() if args.headless else RealClock()
+def _open_source(args: argparse.Namespace, clock):
+    """The player's source, said on the console; (source, playable, auto): whether a virtual
+    player behind it performs the moves, and whether it does so by itself."""
+    from game.play import open_player_source
+
     source, fallback = open_player_source(args.source, False, args.seed, clock.seconds)
     if args.demo:
         print("quickjab train: demo: the virtual player performs every move by itself", file=sys.stderr)
     elif fallback:
         print("quickjab train: No Wiimote found: training from the keyboard (press a key to perform)", file=sys.stderr)
-    auto = args.demo or bool(getattr(source, "auto", False))
-    if hasattr(source, "auto"):
+    playable = PLAYABLE in source.capabilities  # a virtual player performs the moves
+    auto = args.demo or (playable and bool(source.auto))
+    if playable:
         source.auto = False  # the trainer decides when the virtual player performs
-    lib = load_library()
-    trainer = Trainer(actions)
+    return source, playable, auto
+
+
+def _open_window(args: argparse.Namespace, size: tuple[int, int], source) -> None:
+    import pygame
+
+    from game.play import check_visible_window
+
     pygame.init()
     pygame.display.set_mode(size, pygame.RESIZABLE)
     if not args.headless:
@@ -394,48 +391,96 @@ def run(args: argparse.Namespace) -> int:
             pygame.quit()
             raise
     pygame.display.set_caption("QuickJab - Train your moves")
+
+
+class _TrainingStages:
+    """`quickjab train`'s stages on the loop: input (keys, the source's samples -> this step's
+    frame) and train (the trainer, saving the templates when it is done), and the render."""
+
+    def __init__(self, loop, source, playable: bool, auto: bool, trainer: Trainer, screen_view: TrainingScreen,
+                 resampler, t0: float, output: Path, left_handed: bool, settings: dict):
+        self.loop, self.source, self.playable, self.auto = loop, source, playable, auto
+        self.trainer, self.screen_view, self.resampler, self.t0 = trainer, screen_view, resampler, t0
+        self.output, self.left_handed, self.settings = output, left_handed, settings
+        self.frame = None
+
+    def perform(self) -> None:
+        # the virtual player behind the keyboard has no handedness: it performs the move itself
+        if self.playable:
+            self.source.press(self.trainer.action)
+
+    def input(self, step: int, dt: float) -> None:
+        import pygame
+
+        for event in pygame.event.get():
+            if event.type == pygame.QUIT or (event.type == pygame.KEYDOWN and event.key == pygame.K_ESCAPE):
+                self.loop.stop()
+            elif event.type == pygame.KEYDOWN and self.trainer.phase in (READY, RECORD):
+                self.perform()
+        self.resampler.push(self.source.poll())
+        self.frame = self.resampler.frame_at(self.t0 + step * dt)
+
+    def train(self, step: int, dt: float) -> None:
+        trainer, output = self.trainer, self.output
+        was_done = trainer.done
+        trainer.step(self.frame)
+        self.screen_view.push_frame(self.frame)
+        if trainer.go and self.auto:
+            self.perform()
+        if trainer.done and not was_done:
+            templates = trainer.templates(self.left_handed, base=base_templates(output), recognizer=self.settings)
+            output.parent.mkdir(parents=True, exist_ok=True)
+            templates.save(output)
+            self.screen_view.saved_to = str(output)
+            print(f"quickjab train: saved {len(templates)} templates to {output}", file=sys.stderr)
+
+    def render(self, alpha: float) -> None:
+        import pygame
+
+        self.screen_view.draw(pygame.display.get_surface())
+        pygame.display.flip()
+
+
+def run(args: argparse.Namespace) -> int:
+    from game.play import headless_env, parse_size
+
+    size = parse_size(args.size)
+    from engine.recognition.config import parse_assignments
+    from game.actions import load_library
+
+    settings = parse_assignments(getattr(args, "recognizer", None) or ())
+
+    if args.reset:
+        from game.userdata import profile_templates_path
+
+        # --profile NAME resets NAME's set (profile_templates_path(None) is the default player's)
+        return reset_templates(Path(args.output) if args.output else profile_templates_path(args.profile))
+    actions = _chosen_actions(args)
+    if args.headless:
+        headless_env()
+    import pygame
+
+    from engine.clock import RealClock, VirtualClock
+    from engine.frames import FrameResampler
+    from engine.loop import FixedStepLoop
+    from game.userdata import profile_templates_path, user_templates_path
+
+    clock = VirtualClock() if args.headless else RealClock()
+    source, playable, auto = _open_source(args, clock)
+    lib = load_library()
+    trainer = Trainer(actions)
+    _open_window(args, size, source)
     screen_view = TrainingScreen(lib, trainer, source.url, args.left_handed)
     resampler = FrameResampler(sensors=2)
     t0 = clock.seconds()
-    state = {"frame": None}
     output = Path(args.output) if args.output else (
         profile_templates_path(args.profile) if getattr(args, "profile", None) else user_templates_path())
     loop = FixedStepLoop(clock)
-
-    def perform() -> None:
-        # the virtual player behind the keyboard has no handedness: it performs the move itself
-        if hasattr(source, "press"):
-            source.press(trainer.action)
-
-    def input_stage(step: int, dt: float) -> None:
-        for event in pygame.event.get():
-            if event.type == pygame.QUIT or (event.type == pygame.KEYDOWN and event.key == pygame.K_ESCAPE):
-                loop.stop()
-            elif event.type == pygame.KEYDOWN and trainer.phase in (READY, RECORD):
-                perform()
-        resampler.push(source.poll())
-        state["frame"] = resampler.frame_at(t0 + step * dt)
-
-    def train_stage(step: int, dt: float) -> None:
-        was_done = trainer.done
-        trainer.step(state["frame"])
-        screen_view.push_frame(state["frame"])
-        if trainer.go and auto:
-            perform()
-        if trainer.done and not was_done:
-            templates = trainer.templates(args.left_handed, base=base_templates(output), recognizer=settings)
-            output.parent.mkdir(parents=True, exist_ok=True)
-            templates.save(output)
-            screen_view.saved_to = str(output)
-            print(f"quickjab train: saved {len(templates)} templates to {output}", file=sys.stderr)
-
-    def render(alpha: float) -> None:
-        screen_view.draw(pygame.display.get_surface())
-        pygame.display.flip()
-
-    loop.add_stage("input", input_stage, 0.3)
-    loop.add_stage("train", train_stage, 1.0)
-    loop.set_render(render, 8.0)
+    stages = _TrainingStages(loop, source, playable, auto, trainer, screen_view, resampler, t0, output,
+                             args.left_handed, settings)
+    loop.add_stage("input", stages.input, 0.3)
+    loop.add_stage("train", stages.train, 1.0)
+    loop.set_render(stages.render, 8.0)
     try:
         loop.run(frames=args.frames, until=lambda: trainer.done and args.frames is None and args.headless)
     finally:

@@ -29,29 +29,27 @@ from engine.arguments import SEED_MAX
 from engine.clock import RealClock, VirtualClock
 from engine.errors import InputError
 from engine.frames import FrameResampler
-from engine.sensors.source import Source, SourceState
+from engine.sensors.source import KEYS, PLAYABLE, Source, SourceState
 from game.difficulty import DifficultySetting
 from game.history import History
-from game.hud import HudState
+from game.hits import Hit
+from game.hud import HudState, SourceSnapshot
 from game.hud_two_player import TwoPlayerHud
 from game.match import Match
+from game.pilot import PILOT_ATTACKS, PILOT_REACH, PILOT_SETTLE_STEPS
+from game.rules import RING_LIMIT, blow_damage
 from game.session import (
     HOME_BUTTON,
     LOG_KEPT,
-    PILOT_ATTACKS,
-    PILOT_REACH,
-    PILOT_SETTLE_STEPS,
-    RING_LIMIT,
     RUMBLE_MS,
-    STAGE_BUDGETS_MS,
-    START_GAP,
     Session,
     SessionConfig,
     _event_key,
-    blow_damage,
     load_templates,
     templates_in_use,
 )
+from game.session_view import SessionView
+from game.stages import STAGE_BUDGETS_MS
 
 # Two recognizers, two sources, two resamplers: those stages get more than the one-player budget
 TWO_PLAYER_BUDGETS_MS = {**STAGE_BUDGETS_MS, "input": 0.40, "frames": 0.20, "recognize": 2.00}
@@ -102,9 +100,6 @@ class TwoPlayerSession(Session):
                  clock: RealClock | VirtualClock | None = None,
                  surface_provider: Callable[[], pygame.Surface] | None = None,
                  templates: Sequence[str | Path | None] = (None, None)):
-        from engine.physics import World
-        from game.actions import load_library
-        from game.boxer import Boxer
         from game.render_two_player import SideOnLowPowerRenderer, SideOnRenderer
         from game.sound import Sounds
 
@@ -112,53 +107,31 @@ class TwoPlayerSession(Session):
             raise InputError(f"a two-player match needs two sources, got {len(sources)}")
         self.config = cfg = config or SessionConfig()
         self.clock = clock or RealClock()
-        self.lib = load_library()
-        self.world = World(gravity=(0.0, -9.81, 0.0), ground_y=0.0, damping=0.01,
-                           iterations=max(1, cfg.physics_iterations // (2 if cfg.low_power else 1)))
-        self.boxers = (Boxer(self.world, self.lib, x=0.0, z=-START_GAP / 2, yaw=0.0),
-                       Boxer(self.world, self.lib, x=0.0, z=START_GAP / 2, yaw=math.pi))
-        self.player, self.opponent = self.boxers
+        self._build_ring(cfg)
         self.graph = None  # the opponent is a person: no Interaction Graph
-        self.seats: list[Seat] = []
-        for i, (source, tmpl) in enumerate(zip(sources, templates, strict=True)):
-            # handedness is player 1's option (the one-player flag); player 2 plays right-handed
-            t = load_templates(tmpl, cfg.left_handed and i == 0)
-            if source.sensors * 3 != t.dim:
-                raise InputError(f"{source.url}: the source has {source.sensors} sensor(s), player {i + 1}'s "
-                                 f"templates need {t.dim // 3} (a Wiimote + Nunchuk, or two IMUs)")
-            rec = build_recognizer(t, cfg.recognizer)
-            hud = HudState(keys=[], source_url=f"{NAMES[i]} {source.url}", demo=cfg.demo,
-                           main_size=int(rec.main) if rec.main != "auto" else 6, supp_size=rec.supplementary,
-                           templates=templates_in_use(tmpl))
-            if hasattr(source, "keymap"):
-                from game.keyboard_source import key_help
-
-                hud.keys = key_help(source.keymap)
-            self.seats.append(Seat(i, source, t, rec, FrameResampler(sensors=t.dim // 3), hud,
-                                   pilot_rng=np.random.default_rng(cfg.seed + 1 + 7919 * i)))
+        self.seats: list[Seat] = [self._new_seat(i, source, tmpl)
+                                  for i, (source, tmpl) in enumerate(zip(sources, templates, strict=True))]
         # the one-player names, for what the shared methods and tools read (player 1's)
         self.source = self.seats[0].source
         self.templates = self.seats[0].templates
         self.recognizer = self.seats[0].recognizer
         self.resampler = self.seats[0].resampler
-        # what the one-player methods it inherits read (cycle_difficulty, _pilot, _input...):
-        # no CPU here, so no opponent_ai and a difficulty that sets nothing (_apply_difficulty)
+        # what the one-player methods it inherits read (cycle_difficulty, _match...): no CPU
+        # here, so no opponent_ai and a difficulty that sets nothing (_apply_difficulty)
         self.difficulty = DifficultySetting(cfg.difficulty)
         self.opponent_ai = None
+        self.pilot = None  # each seat has its own (_pilot_seat)
         self._rounds_seen = self._cpu_rest = self._rest_next = self._buttons = 0
-        self._pilot_wait, self._pilot_seen, self._pilot_rng = PILOT_SETTLE_STEPS, True, self.seats[0].pilot_rng
         self.match = Match()
         self.hud_state = self.seats[0].hud  # player 1's panel carries the match state
         self.hud_state.names = NAMES
         self.hud_state.mode = "LOW POWER" if cfg.low_power else ""
         self.hud_state.message = "ROUND 1"
-        self.hud = TwoPlayerHud(self.seats[1].hud)
+        hud = TwoPlayerHud(self.seats[1].hud)
         self.sounds = Sounds(enabled=cfg.sound, seed=cfg.seed)
         # side-on, following the boxers' line (game/render_two_player.py)
-        self.renderer = SideOnLowPowerRenderer(cfg.size) if cfg.low_power else SideOnRenderer(cfg.size)
-        self._surface_provider = surface_provider
-        self._offscreen: pygame.Surface | None = None
-        self._low_power_surface: pygame.Surface | None = None
+        renderer = SideOnLowPowerRenderer(cfg.size) if cfg.low_power else SideOnRenderer(cfg.size)
+        self.view = SessionView(cfg.size, cfg.low_power, renderer, hud, surface_provider)
         self.events_log: History = History(LOG_KEPT, key=_seat_event_key)  # (seat, event)
         self.blows_log: History = History(LOG_KEPT)
         self.on_toggle_fullscreen: Callable[[], None] | None = None
@@ -166,12 +139,27 @@ class TwoPlayerSession(Session):
         self._auto_paused = False
         self._over_steps = 0
         self._step = 0
-        self.prev_joints = [b.joint_positions().copy() for b in self.boxers]
-        self.curr_joints = [j.copy() for j in self.prev_joints]
-        self.frame_vec = None
-
         self.loop = self._build_loop(TWO_PLAYER_BUDGETS_MS)
         self.sounds.play("bell")
+
+    def _new_seat(self, i: int, source: Source, tmpl: str | Path | None) -> Seat:
+        """Player i's seat: templates (handedness is player 1's option, the one-player flag;
+        player 2 plays right-handed), recognizer, resampler, HUD panel, pilot."""
+        cfg = self.config
+        t = load_templates(tmpl, cfg.left_handed and i == 0)
+        if source.sensors * 3 != t.dim:
+            raise InputError(f"{source.url}: the source has {source.sensors} sensor(s), player {i + 1}'s "
+                             f"templates need {t.dim // 3} (a Wiimote + Nunchuk, or two IMUs)")
+        rec = build_recognizer(t, cfg.recognizer)
+        hud = HudState(source=SourceSnapshot(url=f"{NAMES[i]} {source.url}"), demo=cfg.demo,
+                       main_size=int(rec.main) if rec.main != "auto" else 6, supp_size=rec.supplementary,
+                       templates=templates_in_use(tmpl))
+        if KEYS in source.capabilities:
+            from game.keyboard_source import key_help
+
+            hud.keys = key_help(source.keymap)
+        return Seat(i, source, t, rec, FrameResampler(sensors=t.dim // 3), hud,
+                    pilot_rng=np.random.default_rng(cfg.seed + 1 + 7919 * i))
 
     def templates_lines(self) -> list[str]:
         return [f"{NAMES[seat.index]} {seat.hud.templates}" for seat in self.seats]
@@ -185,7 +173,7 @@ class TwoPlayerSession(Session):
             if self.config.demo:
                 self._pilot_seat(seat)
             samples = seat.source.poll()
-            buttons = int(getattr(seat.source, "buttons", 0) or 0)
+            buttons = int(seat.source.buttons or 0)
             if buttons & HOME_BUTTON and not seat.buttons & HOME_BUTTON:
                 self.match.toggle_pause()
             seat.buttons = buttons
@@ -210,7 +198,7 @@ class TwoPlayerSession(Session):
         step in), performed by the virtual player on the keyboard source; the seat's REAL
         recognizer must recognize it before the boxer moves."""
         source = seat.source
-        if not hasattr(source, "press") or source.busy or not self.match.fighting:
+        if PLAYABLE not in source.capabilities or source.busy or not self.match.fighting:
             return
         if self.boxers[seat.index].controller.action != "guard":
             return
@@ -230,7 +218,7 @@ class TwoPlayerSession(Session):
             if not self.match.paused:
                 name = pygame.key.name(event.key)
                 for seat in self.seats:  # each keyboard seat answers only its half of the keys
-                    if hasattr(seat.source, "press_key"):
+                    if KEYS in seat.source.capabilities:
                         seat.source.press_key(name)
             return
         super().handle_event(event)
@@ -278,9 +266,10 @@ class TwoPlayerSession(Session):
     def _opponent(self, step: int, dt: float) -> None:
         self._step_boxer(1, dt)
 
-    def apply_hit(self, step: int, hit: dict) -> None:
+    def apply_hit(self, step: int, hit: Hit | dict) -> None:
         """The one-player session's blow (blow_damage, land_blow), but a fair fight: no CPU
         difficulty on top."""
+        hit = Hit.of(hit)
         self.land_blow(step, hit, blow_damage(hit))
 
     def rumble(self, target: int) -> None:
@@ -296,8 +285,7 @@ class TwoPlayerSession(Session):
     def _show_sources(self) -> None:
         # each seat's source line (its URL is set once, at the seat's making)
         for seat in self.seats:
-            seat.hud.source_state = seat.source.state.value
-            seat.hud.battery = seat.source.battery
+            seat.hud.source = SourceSnapshot.of(seat.source, url=seat.hud.source.url)
         self.seats[1].hud.tick()  # player 2's marks age as player 1's (hud_state.tick)
 
     def new_match(self) -> None:

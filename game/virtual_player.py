@@ -23,10 +23,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from engine.clock import STEP_HZ
 from game.actions import Action
 from game.skeleton import joint_index
 
-FPS = 60.0
+FPS = float(STEP_HZ)
 G = 9.81
 QUANTUM_G = 1.0 / 26.0  # Wiimote ADC step: ~26 counts per g
 RANGE_G = np.array([3.5, 2.0])  # clip: Wiimote (right, index 0), Nunchuk (left, index 1)

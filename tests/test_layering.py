@@ -67,3 +67,60 @@ def test_the_check_sees_lazy_imports_and_import_tables(tmp_path):
     )
     assert {name for name, _ in imported_modules(sample)} == {"engine.recording", "tools.record", "tools.cli"}
     assert len(ALL_MODULES) > 100 and "tools.cli" in ALL_MODULES and "engine.recording" in ALL_MODULES
+
+
+def test_recordings_never_import_sources():
+    # sources read recordings (the replay source, the Wiimote emulator); a recording names only
+    # the sample (engine/sample.py), so the two packages no longer import each other's names
+    names = {name for name, _ in imported_modules(REPO / "engine" / "recording.py")}
+    assert "engine.sample" in names
+    assert not [n for n in names if n == "engine.sensors" or n.startswith("engine.sensors.")]
+
+
+def top_level_imports(path: Path) -> set[str]:
+    """The project modules a file imports when it is imported (not inside functions),
+    relative imports resolved."""
+    me = module_name(path)
+    package = me if path.name == "__init__.py" else me.rpartition(".")[0]
+    out = set()
+    for node in ast.parse(path.read_text(encoding="utf-8")).body:
+        if isinstance(node, ast.Import):
+            out |= {a.name for a in node.names}
+        elif isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level:
+                parts = package.split(".")[: len(package.split(".")) - (node.level - 1)]
+                base = ".".join(parts + ([node.module] if node.module else []))
+            out.add(base)
+            out |= {f"{base}.{a.name}" for a in node.names}
+    return {n for n in out if n in ALL_MODULES}
+
+
+def import_cycles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """Cycles of a module -> imported modules graph (depth first)."""
+    state: dict[str, int] = {}
+    cycles: list[list[str]] = []
+
+    def visit(m: str, path: list[str]) -> None:
+        state[m] = 1
+        for d in sorted(graph.get(m, ())):
+            if state.get(d) == 1:
+                cycles.append(path[path.index(d):] + [d])
+            elif d not in state:
+                visit(d, path + [d])
+        state[m] = 2
+
+    for m in sorted(graph):
+        if m not in state:
+            visit(m, [m])
+    return cycles
+
+
+def test_no_module_imports_itself_back_at_import_time():
+    paths = {module_name(p): p for pkg in PACKAGES for p in (REPO / pkg).rglob("*.py")}
+    # a module importing its own package's __init__ (or the reverse) is how packages load
+    graph = {m: {d for d in top_level_imports(p) if d != m and not m.startswith(d + ".")}
+             for m, p in paths.items()}
+    assert sum(map(len, graph.values())) > 200  # the graph is the project's, not empty
+    assert import_cycles(graph) == []
+    assert import_cycles({"a": {"b"}, "b": {"c"}, "c": {"a"}}) == [["a", "b", "c", "a"]]

@@ -20,10 +20,11 @@ import time
 
 import numpy as np
 
+from engine.clock import STEP_DT
 from engine.errors import InputError
 from engine.physics import World
 
-DT = 1.0 / 60.0
+DT = STEP_DT
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:

@@ -13,7 +13,9 @@ import time
 
 import numpy as np
 
-DT = 1.0 / 60.0
+from engine.clock import STEP_DT
+
+DT = STEP_DT
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:

@@ -14,10 +14,11 @@ from collections import Counter
 import numpy as np
 
 from engine.budget import UNACCOUNTED, WAIT, percentiles_ms
+from engine.clock import STEP_MS
 from engine.errors import InputError
 from engine.trace import read_chrome_trace
 
-DEFAULT_BUDGET_MS = 1000.0 / 60.0
+DEFAULT_BUDGET_MS = STEP_MS
 
 
 def profile_summary(trace: dict) -> dict:

@@ -26,9 +26,10 @@ from collections import Counter
 from itertools import islice
 
 from engine import arguments
+from engine.clock import STEP_HZ
 from engine.errors import InputError
 
-HZ = 60
+HZ = STEP_HZ
 HOUR_STEPS = 216_000
 WARMUP_SECONDS = 60.0  # caches (text, static layers, hand motions, the graph) fill in the first minute
 

@@ -4,7 +4,7 @@
     templates = Templates.from_trials({"hook_r": [trial, ...]})  # (n, D) at 60 Hz in g
     rec = DualBufferRecognizer(templates)
     rec = DualBufferRecognizer.from_config(templates, RecognizerConfig(noise_g=0.5))  # settings as data
-    events = rec.push(frame)                                      # list of FORMATS.md dicts
+    events = rec.push(frame)                                      # list of dicts, docs/formats.md
 """
 
 from engine.recognition.config import RecognizerConfig

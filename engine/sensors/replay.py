@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from engine.clock import STEP_DT
 from engine.recording import Recording, read_recording
 from engine.sensors.source import (
     Clock,
@@ -29,7 +30,7 @@ class ReplaySource(Source):
         self.speed = speed
         self.loop = loop
         self._rel = rec.t - rec.t[0]
-        period = float(np.median(np.diff(self._rel))) if len(rec) > 1 else 1 / 60
+        period = float(np.median(np.diff(self._rel))) if len(rec) > 1 else STEP_DT
         self._length = float(self._rel[-1]) + period  # one loop's duration
         self.rate_hz = 1.0 / period if period > 0 else None
         self._start = clock()

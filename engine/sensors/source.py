@@ -17,20 +17,11 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from enum import Enum
-from typing import TYPE_CHECKING, NamedTuple
+from typing import ClassVar
 from urllib.parse import parse_qsl, urlsplit
 
 from engine.errors import InputError
-
-if TYPE_CHECKING:  # numpy only names the sample's type here: `import game` need not load it
-    import numpy as np
-
-
-class Sample(NamedTuple):
-    """One reading: host time in seconds and accel of shape (sensors, 3) in g, gravity included."""
-
-    t: float
-    accel: np.ndarray
+from engine.sample import Sample  # noqa: F401 - sources' names: engine.sensors.Sample
 
 
 class SourceState(str, Enum):
@@ -46,6 +37,12 @@ class SourceError(InputError):
 
 
 Clock = Callable[[], float]
+
+# What a source can do beyond poll/close/rumble/buttons/battery, declared in its `capabilities`
+# (callers test membership, never hasattr; docs/sources.md):
+PLAYABLE = "playable"  # press(action) performs a move; busy while it does; profile, auto: a
+#                        virtual player (the attract mode's pilot and the trainer drive it)
+KEYS = "keys"  # press_key(name) -> action or None, keymap {key name: action}: keys drive it
 
 
 @dataclass
@@ -64,6 +61,8 @@ class Source:
     rate_hz: float | None = None  # nominal or measured sample rate
     description: str = ""
     stats: dict[str, int] = field(default_factory=dict)
+    buttons: int = 0  # buttons held (the Wiimote's core bits, Home 0x0080); 0 where there are none
+    capabilities: ClassVar[frozenset[str]] = frozenset()  # PLAYABLE, KEYS: what else it can do
 
     def poll(self) -> list[Sample]:
         raise NotImplementedError

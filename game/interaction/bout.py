@@ -25,6 +25,8 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
+from game.rules import BLOCKED_SHARE, FACE_RATE, MAX_HEALTH
+
 from .state import wrap_angle
 
 HEAD, BODY = 1, 2
@@ -41,11 +43,13 @@ class BoutRules:
     body_radius: float = 0.20      # fist + head capsule radii: a punch lands this far past its reach
     lateral_tolerance: float = 0.30
     guard_arc_deg: float = 60.0    # guards cover attacks from within this angle of the front
-    min_separation: float = 0.75   # roots never closer (the game's MIN_GAP)
-    face_fraction: float = 0.2     # share of the way each boxer turns to face the other per step
-    chip: float = 0.2              # fraction of damage a guarded hit still does (the referee's)
+    # roots never closer: the model's stand-in for the game's bodies, which keep apart by their
+    # collision capsules (engine/physics), not by a rule
+    min_separation: float = 0.75
+    face_fraction: float = FACE_RATE  # share of the way each boxer turns to face the other per step
+    chip: float = BLOCKED_SHARE    # fraction of damage a guarded hit still does (the referee's)
     heavy_damage: float = 9.0      # hits this strong play the heavy reaction
-    hp: float = 100.0
+    hp: float = MAX_HEALTH
 
     def as_dict(self) -> dict:
         return asdict(self)

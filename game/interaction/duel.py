@@ -8,6 +8,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from engine.clock import STEP_HZ
+
 from .bout import ActionTable, Bouts, greedy_choice, step
 from .build import canonical_other, compile_table
 from .runtime import InteractionGraph
@@ -73,7 +75,7 @@ def duel(graph: InteractionGraph, lib: dict, opponent: str = "random", bouts: in
     landed = np.zeros((bouts, 2))
     dealt = np.zeros((bouts, 2))
     ko = np.zeros(bouts, dtype=bool)
-    for _ in range(int(seconds * 60)):
+    for _ in range(int(seconds * STEP_HZ)):
         done = b.done()
         if done.any():
             first = rng.integers(0, 2, bouts)

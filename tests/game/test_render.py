@@ -7,7 +7,8 @@ import pygame
 import pytest
 
 from game.actions import load_library
-from game.hud import OPPONENT_COLOR, PLAYER_COLOR, Hud, HudState
+from game.hud import OPPONENT_COLOR, PLAYER_COLOR, Hud, HudState, SourceSnapshot
+from game.match import MatchSnapshot
 from game.render import JOINT_NAMES, OPPONENT_LOOK, PLAYER_LOOK, Renderer
 from game.skeleton import JOINTS, local_to_world
 
@@ -75,7 +76,7 @@ def test_health_bars_show_health_at_their_positions(lib) -> None:
     pygame.init()
     surf = pygame.Surface(SIZE)
     Renderer(SIZE).draw(surf, list(scene(lib)))
-    st = HudState(health=[75.0, 30.0], shown_health=[75.0, 30.0])
+    st = HudState(match=MatchSnapshot(health=(75.0, 30.0)), shown_health=[75.0, 30.0])
     Hud().draw(surf, st)
     left, right = Hud.health_rects(SIZE)
     y = left.centery + left.height // 4  # below the highlight stripe
@@ -105,7 +106,7 @@ def test_disconnected_overlay_darkens_the_scene(lib) -> None:
     a, b = pygame.Surface(SIZE), pygame.Surface(SIZE)
     for surf, off in ((a, False), (b, True)):
         Renderer(SIZE).draw(surf, list(scene(lib)))
-        Hud().draw(surf, HudState(disconnected=off, source_state="disconnected" if off else "connected"))
+        Hud().draw(surf, HudState(disconnected=off, source=SourceSnapshot(state="disconnected" if off else "connected")))
     probe = (int(SIZE[0] * 0.5), int(SIZE[1] * 0.9))  # the canvas, outside the message box
     assert sum(b.get_at(probe)[:3]) < 0.5 * sum(a.get_at(probe)[:3])
 
@@ -202,7 +203,7 @@ def test_knockdown_count_is_clear_of_the_corner_posts(size) -> None:
     r = Renderer(size)
     surf = pygame.Surface(size)
     hud = Hud()
-    hud.draw(surf, HudState(phase="count", down=1, count=2, knockdowns=[0, 2]))
+    hud.draw(surf, HudState(match=MatchSnapshot(phase="count", down=1, count=2, knockdowns=(0, 2))))
     assert hud.count_rect is not None and surf.get_rect().contains(hud.count_rect)
     for x, z in ((-1, -1), (1, -1), (1, 1), (-1, 1)):
         ends = np.array([[x * POST_HALF, 0.0, z * POST_HALF], [x * POST_HALF, POST_HEIGHT, z * POST_HALF]])
@@ -227,7 +228,7 @@ def test_budget_overlay_has_a_header_over_its_columns() -> None:
     loop.run(frames=5)
     drawn = {}
     for headers in (BUDGET_HEADERS, ("", "", "", "")):
-        import game.hud as hud_mod
+        import game.hud_budget as hud_mod  # the F3 overlay draws its headers
 
         old = hud_mod.BUDGET_HEADERS
         hud_mod.BUDGET_HEADERS = headers

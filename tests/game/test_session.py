@@ -170,8 +170,8 @@ def test_a_replayed_recording_drives_the_player_through_the_wiimote_emulator(tmp
     s = make_session(f"wiimote-emu://{rec}", render=False)
     s.loop.run(steps=8 * 60 + 60)
     starts = [e["action"] for e in s.events_log if e["event"] == "start"]
-    assert s.hud_state.battery is not None  # the emulated remote reports its battery
-    assert s.hud_state.source_state == "connected"
+    assert s.hud_state.source.battery is not None  # the emulated remote reports its battery
+    assert s.hud_state.source.state == "connected"
     # most of the performed actions were recognized, in order
     hits = Counter(starts) & Counter(labels)
     assert sum(hits.values()) >= 0.6 * len(labels)
@@ -224,7 +224,7 @@ def test_home_button_pauses_and_the_battery_shows() -> None:
     remote = HeldRemote(clock).source
     s = Session(remote, SessionConfig(size=SIZE, sound=False, render=False, graph=GRAPH), clock=clock)
     s.loop.run(steps=10)
-    assert s.hud_state.battery == 0.55 and s.hud_state.source_url == "wiimote-test://"
+    assert s.hud_state.source.battery == 0.55 and s.hud_state.source.url == "wiimote-test://"
     remote.buttons = 0x0080  # Home down: pause (once, not every step it is held)
     s.loop.run(steps=10)
     assert s.match.paused

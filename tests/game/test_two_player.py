@@ -119,13 +119,13 @@ def test_player_two_unplugged_mid_round_pauses_both_and_resumes(tmp_path) -> Non
     probe = (SIZE[0] // 2, int(SIZE[1] * 0.80))  # the canvas, where no HUD panel is
     s.loop.run(steps=2 * 60)
     assert [seat.source.state for seat in s.seats] == [SourceState.CONNECTED] * 2
-    assert s.seats[1].hud.battery is not None  # the remote's battery is shown
+    assert s.seats[1].hud.source.battery is not None  # the remote's battery is shown
     bright = sum(surf.get_at(probe)[:3])
     assert s.match.fighting
     s.loop.run(steps=int(1.5 * 60))  # 3.5 s: unplugged
     assert s.seats[1].source.state != SourceState.CONNECTED
     assert s.seats[1].hud.disconnected and not s.seats[0].hud.disconnected
-    assert s.seats[1].hud.source_state != "connected" and s.seats[0].hud.source_state == "connected"
+    assert s.seats[1].hud.source.state != "connected" and s.seats[0].hud.source.state == "connected"
     assert s.match.paused  # for both players
     assert sum(surf.get_at(probe)[:3]) < 0.5 * bright  # the overlay
     clock, p1_events = s.match.clock_steps, s.events_log.total

@@ -15,7 +15,7 @@ from game.interaction.bout import BoutRules, Bouts, Rewards, step
 from game.interaction.build import BuildParams, build_graph, compile_table
 from game.interaction.duel import duel
 
-REPO = Path(__file__).resolve().parents[2]
+REPO = Path(__file__).resolve().parents[3]
 
 
 @pytest.fixture(scope="module")
@@ -138,7 +138,7 @@ def test_bench_graph_on_the_shipped_graph_agrees_with_brute_force():
 
 
 def test_duel_refuses_a_graph_built_from_another_library(lib, tmp_path):
-    sys.path.insert(0, str(Path(__file__).parent))
+    sys.path.insert(0, str(Path(__file__).parent.parent))  # tests/game: hand_actions
     from hand_actions import hand_library
     other = build_graph(hand_library(), BuildParams(seed=1, states=100, bouts=32, bout_steps=100, max_rounds=1))
     with pytest.raises(ValueError, match="rebuild"):

@@ -25,11 +25,11 @@ from game.interaction.solve import solve
 from game.interaction.state import grid_distance2, relative_pose
 from game.interaction.table import ESCAPE, join_small, split_small
 
-sys.path.insert(0, str(Path(__file__).parent))
+sys.path.insert(0, str(Path(__file__).parent.parent))  # tests/game: hand_actions
 from hand_actions import hand_library  # noqa: E402
 
 SMALL = BuildParams(seed=3, states=400, bouts=64, bout_steps=300, max_rounds=1)
-REPO = Path(__file__).resolve().parents[2]
+REPO = Path(__file__).resolve().parents[3]
 
 
 @pytest.fixture(scope="module")

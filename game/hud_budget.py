@@ -1,0 +1,130 @@
+"""The F3 overlay: the last frame's stages as a stacked bar against the 16.7 ms line, a chart of
+the last HISTORY_FRAMES frames, and per stage its last ms, p99 against its budget and overruns.
+Drawn by the HUD (game/hud.py) with its text and backgrounds."""
+
+from __future__ import annotations
+
+from collections import deque
+
+import numpy as np
+import pygame
+
+from engine.budget import UNACCOUNTED, WAIT, FrameBudget
+from game.hud_style import (
+    BUDGET_COLUMNS,
+    BUDGET_HEADERS,
+    CHART_BG,
+    DIM,
+    HISTORY_FRAMES,
+    REJECT_COLOR,
+    STAGE_COLORS,
+    TEXT,
+    TEXT_EVERY,
+)
+
+
+class BudgetOverlay:
+    def __init__(self) -> None:
+        self.p99: dict[str, float] = {}
+        self.p99_frame = -10**9
+        self.history: deque[np.ndarray] = deque(maxlen=HISTORY_FRAMES)  # per frame, ms per stage
+        self.history_frame = -1
+        self.chart: pygame.Surface | None = None  # the chart, scrolled a column per frame
+        self.rows_text: list = []
+        self.text_frame = -10**9
+
+    def draw(self, hud, surf: pygame.Surface, budget: FrameBudget, u: float) -> None:
+        """A stacked bar per stage against the 16.7 ms line, and each stage's p99."""
+        w, h = surf.get_size()
+        chart_h = int(90 * u)
+        panel = pygame.Rect(w - int(440 * u), int(130 * u), int(424 * u), int(80 * u + 20 * u * len(budget.stages)) + chart_h)
+        surf.blit(hud._translucent(panel.size, (0, 0, 0, 190)), panel)
+        last = budget.last_frame_ms()
+        names = [s.name for s in budget.stages if s.name not in (WAIT, UNACCOUNTED)] + [UNACCOUNTED]
+        scale_ms = 2.0 * budget.frame_budget_ms  # the bar spans two frame budgets
+        bar = pygame.Rect(panel.left + int(10 * u), panel.top + int(26 * u), panel.width - int(20 * u), int(18 * u))
+        hud.blit(surf, f"frame budget {budget.frame_budget_ms:.1f} ms   dropped {budget.dropped_steps}", int(18 * u), (panel.left + 10 * u, panel.top + 6 * u), TEXT)
+        self._bar(surf, bar, names, last, budget, scale_ms)
+        self._update_p99(budget, names)
+        chart = pygame.Rect(bar.left, panel.bottom - chart_h - int(4 * u), bar.width, chart_h)
+        self._chart(surf, chart, names, last, budget, scale_ms)
+        self._rows(hud, surf, panel, bar, names, last, budget, u)
+
+    @staticmethod
+    def _bar(surf: pygame.Surface, bar: pygame.Rect, names: list[str], last: dict, budget: FrameBudget, scale_ms: float) -> None:
+        pygame.draw.rect(surf, (50, 50, 56), bar)
+        x = float(bar.left)
+        for k, name in enumerate(names):
+            ms = last.get(name, 0.0)
+            wpx = min(bar.width * ms / scale_ms, bar.right - x)  # an overrun stops at the bar's end
+            if wpx >= 1:
+                pygame.draw.rect(surf, STAGE_COLORS[k % len(STAGE_COLORS)], (int(x), bar.top, int(np.ceil(wpx)), bar.height))
+            x += max(wpx, 0.0)
+        line_x = bar.left + bar.width * budget.frame_budget_ms / scale_ms
+        pygame.draw.line(surf, REJECT_COLOR, (line_x, bar.top - 4), (line_x, bar.bottom + 4), 2)
+
+    def _update_p99(self, budget: FrameBudget, names: list[str]) -> None:
+        if budget.frames - self.p99_frame >= 30:  # percentiles over the ring: twice a second
+            self.p99_frame = budget.frames
+            rows = budget.span_rows()  # once for all stages: each span_rows walks the whole ring
+            ids, durs = budget.s_stage[rows], budget.s_dur[rows]
+            for name in names:
+                d = durs[(ids == budget.stage_id(name)) & (budget.s_depth[rows] == 0)]
+                self.p99[name] = float(np.percentile(d, 99)) / 1e6 if len(d) else 0.0
+
+    def _chart(self, surf: pygame.Surface, chart: pygame.Rect, names: list[str], last: dict,
+               budget: FrameBudget, scale_ms: float) -> None:
+        # history: a stacked column per frame against the same 16.7 ms line, newest on the right.
+        # The chart keeps its own surface and scrolls it one column per frame, so a frame draws
+        # one column, not 120 (drawing them all cost ~2 ms a frame: the overlay ate its budget)
+        new = budget.frames != self.history_frame
+        if new:
+            self.history_frame = budget.frames
+            self.history.append(np.array([last.get(n, 0.0) for n in names]))
+        col_w = max(1, chart.width // HISTORY_FRAMES)
+        px_per_ms = chart.height / scale_ms
+        if self.chart is None or self.chart.get_size() != chart.size:
+            self.chart = pygame.Surface(chart.size)
+            self.chart.fill(CHART_BG)
+            for i, ms in enumerate(self.history):  # after a resize: redraw what is kept
+                self._chart_column(chart.width - (len(self.history) - i) * col_w, col_w, ms, px_per_ms)
+        elif new:
+            self.chart.scroll(-col_w, 0)
+            self.chart.fill(CHART_BG, (chart.width - col_w, 0, col_w, chart.height))
+            self._chart_column(chart.width - col_w, col_w, self.history[-1], px_per_ms)
+        surf.blit(self.chart, chart)
+        line_y = chart.bottom - budget.frame_budget_ms * px_per_ms
+        pygame.draw.line(surf, REJECT_COLOR, (chart.left, line_y), (chart.right, line_y), 1)
+
+    def _chart_column(self, x0: int, col_w: int, ms: np.ndarray, px_per_ms: float) -> None:
+        """One frame's stacked column on the chart surface, at x0."""
+        y0 = float(self.chart.get_height())
+        for k, v in enumerate(ms):
+            hpx = min(v * px_per_ms, y0)
+            if hpx >= 0.5:
+                pygame.draw.rect(self.chart, STAGE_COLORS[k % len(STAGE_COLORS)], (x0, int(y0 - hpx), col_w, int(np.ceil(hpx))))
+                y0 -= hpx
+
+    def _rows(self, hud, surf: pygame.Surface, panel: pygame.Rect, bar: pygame.Rect, names: list[str],
+              last: dict, budget: FrameBudget, u: float) -> None:
+        stages = {s.name: s for s in budget.stages}
+        if budget.frames - self.text_frame >= TEXT_EVERY or len(self.rows_text) != len(names):
+            # the numbers change every frame; re-rendered 6 times a second they stay readable
+            # and the text cache is not flooded with 60 new strings a second
+            self.text_frame = budget.frames
+            self.rows_text = []
+            for name in names:
+                st = stages[name]
+                budget_txt = f" / {st.budget_ms:.2f}" if st.budget_ms else ""
+                self.rows_text.append((name, f"{last.get(name, 0.0):.2f}", f"{self.p99.get(name, 0.0):.2f}{budget_txt}",
+                                       str(st.overruns) if st.overruns else ""))
+        # one column each, under a header: stage, last frame's ms, p99 / budget ms, overruns
+        cols = [panel.left + 28 * u + x * u for x in BUDGET_COLUMNS]
+        y = bar.bottom + 8 * u
+        for x, head in zip(cols, BUDGET_HEADERS, strict=True):
+            hud.blit(surf, head, int(16 * u), (x, y + 2 * u), DIM)
+        for k, row in enumerate(self.rows_text):
+            y = bar.bottom + 28 * u + k * 20 * u
+            pygame.draw.rect(surf, STAGE_COLORS[k % len(STAGE_COLORS)], (int(panel.left + 10 * u), int(y + 3 * u), int(12 * u), int(12 * u)))
+            for x, text in zip(cols, row, strict=True):
+                hud.blit(surf, text, int(18 * u), (x, y), TEXT)

@@ -1,0 +1,24 @@
+"""The HUD's colours and layout constants, shared by the HUD, the two-player HUD and the F3
+overlay (game/hud.py, game/hud_two_player.py, game/hud_budget.py)."""
+
+PLAYER_COLOR = (235, 64, 52)
+OPPONENT_COLOR = (52, 120, 235)
+BAR_BACK = (34, 30, 38)
+BAR_LOSS = (250, 210, 90)  # the recently lost health, shown draining after the fill
+TEXT = (242, 240, 232)
+DIM = (170, 166, 160)
+KEY_TEXT = (228, 225, 218)  # the key legend, on its dark panel
+SWITCH_COLOR = (255, 200, 40)
+REJECT_COLOR = (255, 70, 70)
+OK_COLOR = (90, 220, 120)
+STAGE_COLORS = [
+    (102, 194, 165), (252, 141, 98), (141, 160, 203), (231, 138, 195), (166, 216, 84),
+    (255, 217, 47), (229, 196, 148), (179, 179, 179), (120, 200, 240), (240, 120, 120),
+]
+MARK_STEPS = 45  # how long a switch / reject mark stays lit
+CHART_BG = (30, 30, 36)
+TEXT_EVERY = 10  # frames between refreshes of the F3 overlay's numbers
+COUNT_X = 0.3  # the knockdown count's centre, as a fraction of the width
+BUDGET_HEADERS = ("stage", "last ms", "p99 / budget ms", "overruns")
+BUDGET_COLUMNS = (0, 110, 185, 320)  # their x in the F3 panel (720p pixels from the colour key)
+HISTORY_FRAMES = 120  # the F3 overlay's chart: the last two seconds, a stacked column a frame

@@ -1,0 +1,141 @@
+"""The ring both game modes share (game/session.py: one player against the CPU;
+game/two_player.py: two people): two boxers in the physics world at their marks, the physics,
+hits and match stages (game/stages.py), the referee's blows, the knockdown hold, the corners
+between rounds, the view and the state hash. The session around it brings the input, the
+recognition and the opponent: it sets `config`, `match`, `hud_state`, `sounds`, `view`,
+`events_log`, `blows_log` and `loop`, and says what a blow's rumble, a decided round
+(`_rounds_over`), the source line (`_show_sources`) and a new match mean in its mode."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pygame
+
+from engine.clock import STEP_HZ
+from engine.state_hash import state_hash
+from game.hits import Hit, hits_from_contacts
+from game.rules import START_GAP
+
+KNOCKDOWN_HOLD = 0.55  # the fraction of the knockdown clip held while the referee counts
+DEMO_RESTART_STEPS = 8 * STEP_HZ  # the attract mode shows the result, then boxes again
+
+
+class Ring:
+    """The shared half of a session (see the module docstring); never built on its own."""
+
+    def _build_ring(self, cfg) -> None:
+        """The physics world and the two boxers at their marks; the per-step buffers the
+        stages pass on (frame, contacts, joints for the render)."""
+        from engine.physics import World
+        from game.actions import load_library
+        from game.boxer import Boxer
+
+        self.lib = load_library()
+        self.world = World(gravity=(0.0, -9.81, 0.0), ground_y=0.0, damping=0.01,
+                           iterations=max(1, cfg.physics_iterations // (2 if cfg.low_power else 1)))
+        self.boxers = (Boxer(self.world, self.lib, x=0.0, z=-START_GAP / 2, yaw=0.0),
+                       Boxer(self.world, self.lib, x=0.0, z=START_GAP / 2, yaw=math.pi))
+        self.player, self.opponent = self.boxers
+        self.frame_vec: np.ndarray | None = None  # frames -> recognize
+        self.contacts: list = []  # physics -> hits
+        self.prev_joints = [b.joint_positions().copy() for b in self.boxers]  # physics -> render
+        self.curr_joints = [j.copy() for j in self.prev_joints]
+
+    # -- the view's parts, under the names tools and tests read ------------------------------
+    @property
+    def renderer(self):
+        return self.view.renderer
+
+    @property
+    def hud(self):
+        return self.view.hud
+
+    @property
+    def _low_power_surface(self) -> pygame.Surface | None:
+        return self.view.low_power_surface
+
+    def target_surface(self) -> pygame.Surface:
+        return self.view.target_surface()
+
+    def rumble(self, target: int) -> None:
+        """The boxer who was hit: the session makes its player feel it (land_blow)."""
+
+    def _hold_knockdown(self, i: int) -> None:
+        """While the referee counts, the downed boxer stays down (the clip's low frame)."""
+        ctrl = self.boxers[i].controller
+        clip = self.lib.get("knockdown")
+        if self.match.down == i and clip is not None:
+            hold = int(clip.frames * KNOCKDOWN_HOLD)
+            if ctrl.action != "knockdown" or ctrl.frame > hold:
+                ctrl.play("knockdown", from_frame=min(ctrl.frame, hold) if ctrl.action == "knockdown" else 0)
+
+    def _physics(self, step: int, dt: float) -> None:
+        self.contacts = self.world.step(dt)
+        self.prev_joints, self.curr_joints = self.curr_joints, [b.joint_positions().copy() for b in self.boxers]
+        self.renderer.step_effects()
+
+    def _hits(self, step: int, dt: float) -> None:
+        for hit in hits_from_contacts(self.contacts, list(self.boxers)):
+            self.apply_hit(step, hit)
+
+    def land_blow(self, step: int, hit: Hit, damage: float) -> None:
+        """The referee counts the blow; reaction, flash, sound, rumble (both modes)."""
+        target = 1 - hit.attacker
+        if not self.match.hit(target, damage):
+            return
+        self.blows_log.append((step, hit.attacker, hit.target, hit.blocked, round(damage, 4)))
+        point = hit.point
+        if point is None:
+            point = self.boxers[target].joint_positions()[4]
+        self.renderer.add_flash(point, strong=damage >= 8, blocked=hit.blocked)
+        if hit.blocked:
+            self.sounds.play("block")
+        else:
+            self.sounds.play("hit" if damage >= 8 else "hit_light")
+            if self.match.down != target:
+                self.boxers[target].react(hit)
+        self.rumble(target)
+
+    def _match(self, step: int, dt: float) -> None:
+        m = self.match
+        m.step()
+        for kind, who in m.drain_events():
+            if kind == "bell":
+                self.sounds.play("bell")
+                if m.phase == "fight":
+                    self.hud_state.message, self.hud_state.message_age = f"ROUND {m.round}", 0
+                    self._to_corners()
+            elif kind == "knockdown":
+                self.boxers[who].controller.play("knockdown")
+            elif kind == "rise":
+                self.boxers[who].controller.play("guard")
+        self._rounds_over(m)
+        if m.over:
+            self._over_steps += 1
+            if self.config.demo and self._over_steps >= DEMO_RESTART_STEPS:
+                self.new_match()  # the attract mode goes on
+        self.hud_state.match = self.match.snapshot()
+        self._show_sources()
+        self.hud_state.tick()
+        self._step = step
+
+    def _to_corners(self) -> None:
+        """Both boxers back to their marks, at the guard (a new round)."""
+        for boxer, z, yaw in ((self.player, -START_GAP / 2, 0.0), (self.opponent, START_GAP / 2, math.pi)):
+            boxer.controller.play("guard", blend=False)
+            boxer.controller.output = self.lib["guard"].posture(0)
+            boxer.place(0.0, z, yaw)
+        self.prev_joints = [b.joint_positions().copy() for b in self.boxers]
+        self.curr_joints = [j.copy() for j in self.prev_joints]
+
+    # -- rendering and reproducibility ---------------------------------------------------------
+    def render(self, alpha: float) -> None:
+        self.view.draw(alpha, self.prev_joints, self.curr_joints, self.hud_state, self.loop.budget)
+
+    def state_hash(self) -> str:
+        """The simulation's state: bodies, controllers, match, recognizer decisions."""
+        ctrls = [(b.controller.action, round(float(b.controller.frame), 6), tuple(np.round(b.root, 9))) for b in self.boxers]
+        return state_hash(self.world.x, self.match.state(), ctrls, self.events_log.total, self.events_log.digest(),
+                          self.blows_log.total, self.blows_log.digest())
