@@ -12,7 +12,14 @@ waits for the recognizer, was crushed):
 - `ease_lead`: when it leads the round by this much damage it eases off (takes its best action
   less often, rests longer; in proportion up to that lead), and when it trails by as much it
   presses (rests less): a player who falls behind gets back into the round, one who leads has
-  to hold it against a CPU that comes back (inf: neither; a rubber band, as boxing games do).
+  to hold it (inf: neither; a rubber band, as boxing games do);
+- `ease_form`, `ease_gain`: how much of that it does answers the player's success (PlayerForm:
+  the damage the player lands per round, from the rounds played). A player who lands less than
+  `ease_form` (moves the recognizer rejects or misreads, blows that miss) gets a slower, gentler
+  CPU: up to twice the easing when ahead, less pressing when behind, and blows that count up to
+  half; one who lands more gets up to no easing at all (`ease_gain` 0: the form is not read).
+  The rule reads outcomes, not the recognizer, so it follows the player as recognition or the
+  player gets better.
 
 `adaptive` starts at normal and moves a continuous level in [0, 1] (0 easy, 0.5 normal, 1 hard)
 after every round: up when the player won it, down when the player lost it, so the player's
@@ -21,7 +28,7 @@ round win rate settles near 50 %.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -29,8 +36,36 @@ LEVELS = ("easy", "normal", "hard")
 CHOICES = (*LEVELS, "adaptive")
 ADAPT_STEP = 0.15  # level change per round won or lost (a third of easy -> normal)
 EASE_BEST = 0.9  # fully eased, the CPU takes its best action 90 % less often ...
-EASE_REST = 5.0  # ... and rests six times as long between moves (what lets the novice back in)
-PRESS_REST = 1.0  # trailing by ease_lead, it does not rest between moves at all
+EASE_REST = 5.0  # ... rests six times as long between moves ...
+EASE_DAMAGE = 0.5  # ... and its blows count half
+PRESS_REST = 1.0  # fully pressing, it does not rest between moves at all
+LEAD_FORM = 1.0  # a struggling player's lead easing is up to twice as strong
+FORM_PRIOR = 60.0  # damage per round a player not yet seen is taken to land
+FORM_WEIGHT = 0.5  # the last round's weight in the average
+
+
+class PlayerForm:
+    """The player's recent success: the damage they land per round, from the rounds played
+    (a moving average, so a few rounds tell). Read from the round's damage lead (the CPU's minus
+    the player's) the CPU sees at each decision: a fall is the player landing a blow. Kept
+    across matches and difficulty changes (it is the player's, not the CPU's)."""
+
+    def __init__(self, per_round: float = FORM_PRIOR) -> None:
+        self.per_round = per_round  # damage the player lands in a round, recent rounds weighted most
+        self.landed = 0.0  # damage the player landed in this round so far
+        self._lead = 0.0
+
+    def observe(self, lead: float) -> None:
+        """The round's damage lead of the CPU now."""
+        change, self._lead = lead - self._lead, lead
+        if change < 0.0:
+            self.landed -= change
+
+    def new_round(self) -> None:
+        """A round ended: its damage joins the average; the next round counts from 0."""
+        self.per_round += FORM_WEIGHT * (self.landed - self.per_round)
+        self.landed = 0.0
+        self._lead = 0.0
 
 
 @dataclass(frozen=True)
@@ -41,21 +76,32 @@ class Difficulty:
     rest_steps: int
     damage: float
     ease_lead: float = float("inf")
+    ease_form: float = 60.0
+    ease_gain: float = 0.0
 
-    def eased(self, lead: float) -> tuple[float, int]:
-        """(best_share, rest_steps) when the CPU leads the round by `lead` damage (< 0: trails)."""
-        if not np.isfinite(self.ease_lead):
-            return self.best_share, self.rest_steps
-        f = float(np.clip(lead / self.ease_lead, -1.0, 1.0))
-        ease, press = max(f, 0.0), max(-f, 0.0)
-        return (self.best_share * (1.0 - EASE_BEST * ease),
-                int(round(self.rest_steps * (1.0 + EASE_REST * ease) * (1.0 - PRESS_REST * press))))
+    def shortfall(self, per_round: float) -> float:
+        """How far the player's damage per round falls short of this level's `ease_form`, -1..1
+        (< 0: the player lands more)."""
+        return float(np.clip(self.ease_gain * (1.0 - per_round / self.ease_form), -1.0, 1.0))
+
+    def eased(self, lead: float, per_round: float = float("nan")) -> tuple[float, int, float]:
+        """(best_share, rest_steps, damage) when the CPU leads the round by `lead` damage (< 0:
+        trails) against a player who lands `per_round` damage a round (nan: as expected)."""
+        w = self.shortfall(per_round) if np.isfinite(per_round) else 0.0
+        f = float(np.clip(lead / self.ease_lead, -1.0, 1.0)) if np.isfinite(self.ease_lead) else 0.0
+        ease = max(f, 0.0) * max(1.0 + LEAD_FORM * w, 0.0)
+        press = max(-f, 0.0) * (1.0 - max(w, 0.0))
+        return (self.best_share * (1.0 - EASE_BEST * min(ease, 1.0)),
+                int(round(self.rest_steps * (1.0 + EASE_REST * ease) * (1.0 - PRESS_REST * press))),
+                self.damage * (1.0 - EASE_DAMAGE * max(w, 0.0)))
 
 
 # Tuned with `quickjab graph duel --opponent virtual` (docs/game.md has the figures).
 PRESETS = {
-    "easy": Difficulty("easy", best_share=0.6, reaction_steps=10, rest_steps=32, damage=0.6, ease_lead=2.0),
-    "normal": Difficulty("normal", best_share=1.0, reaction_steps=0, rest_steps=14, damage=0.92, ease_lead=3.0),
+    "easy": Difficulty("easy", best_share=0.6, reaction_steps=10, rest_steps=32, damage=0.6,
+                       ease_lead=2.0, ease_form=80.0, ease_gain=1.0),
+    "normal": Difficulty("normal", best_share=1.0, reaction_steps=0, rest_steps=14, damage=0.92,
+                         ease_lead=3.0, ease_form=60.0, ease_gain=1.0),
     "hard": Difficulty("hard", best_share=1.0, reaction_steps=0, rest_steps=12, damage=1.0),
 }
 
@@ -74,18 +120,58 @@ def at_level(level: float) -> Difficulty:
     return Difficulty(f"adaptive {level:.2f}", mix(lo.best_share, hi.best_share),
                       int(round(mix(lo.reaction_steps, hi.reaction_steps))),
                       int(round(mix(lo.rest_steps, hi.rest_steps))), mix(lo.damage, hi.damage),
-                      1.0 / ease if ease > 0 else float("inf"))
+                      1.0 / ease if ease > 0 else float("inf"), mix(lo.ease_form, hi.ease_form),
+                      mix(lo.ease_gain, hi.ease_gain))
+
+
+@dataclass
+class CpuPolicy:
+    """The CPU in play: a level's Difficulty, eased by the player's form. The session reads
+    `best_share` / `reaction_steps` (the policy's base), `eased(lead)` at each decision and
+    `damage` at each of its blows."""
+
+    level: Difficulty
+    form: PlayerForm = field(default_factory=PlayerForm)
+
+    @property
+    def name(self) -> str:
+        return self.level.name
+
+    @property
+    def best_share(self) -> float:
+        return self.level.best_share
+
+    @property
+    def reaction_steps(self) -> int:
+        return self.level.reaction_steps
+
+    @property
+    def rest_steps(self) -> int:
+        return self.level.rest_steps
+
+    @property
+    def damage(self) -> float:
+        """How much its next blow counts, against the player's form now."""
+        return self.level.eased(0.0, self.form.per_round)[2]
+
+    def eased(self, lead: float) -> tuple[float, int]:
+        """(best_share, rest_steps) for its next decision, given the round's damage lead of the
+        CPU now (the form learns from it)."""
+        self.form.observe(lead)
+        best, rest, _ = self.level.eased(lead, self.form.per_round)
+        return best, rest
 
 
 class DifficultySetting:
     """The difficulty in play: a preset, or the adaptive level that follows the player."""
 
-    def __init__(self, name: str = "normal", level: float = 0.5):
+    def __init__(self, name: str = "normal", level: float = 0.5, form: PlayerForm | None = None):
         if name not in CHOICES:
             raise ValueError(f"difficulty must be one of {', '.join(CHOICES)}, not {name!r}")
         self.name = name
         self.level = level
-        self.current = PRESETS[name] if name in PRESETS else at_level(level)
+        self.form = form if form is not None else PlayerForm()
+        self.current = CpuPolicy(PRESETS[name] if name in PRESETS else at_level(level), self.form)
 
     @property
     def label(self) -> str:
@@ -93,10 +179,12 @@ class DifficultySetting:
 
     def round_over(self, player_result: int) -> None:
         """A round ended: +1 the player won it, -1 the player lost it, 0 even."""
+        self.form.new_round()
         if self.name == "adaptive" and player_result:
             self.level = float(np.clip(self.level + ADAPT_STEP * player_result, 0.0, 1.0))
-            self.current = at_level(self.level)
+            self.current = CpuPolicy(at_level(self.level), self.form)
 
     def next(self) -> DifficultySetting:
-        """The next choice in the menu (easy -> normal -> hard -> adaptive -> easy)."""
-        return DifficultySetting(CHOICES[(CHOICES.index(self.name) + 1) % len(CHOICES)], self.level)
+        """The next choice in the menu (easy -> normal -> hard -> adaptive -> easy); the player's
+        form carries over."""
+        return DifficultySetting(CHOICES[(CHOICES.index(self.name) + 1) % len(CHOICES)], self.level, self.form)

@@ -9,7 +9,7 @@ import numpy as np
 import pygame
 import pytest
 
-from game.difficulty import CHOICES, PRESETS, DifficultySetting, at_level
+from game.difficulty import CHOICES, FORM_PRIOR, PRESETS, DifficultySetting, PlayerForm, at_level
 
 sys.path.insert(0, str(Path(__file__).parent))
 from game_graph import graph_path  # noqa: E402,F401 - the fixture
@@ -21,12 +21,15 @@ def test_presets_order_the_policy_not_only_the_damage():
     assert e.reaction_steps >= n.reaction_steps >= h.reaction_steps and e.reaction_steps > h.reaction_steps
     assert e.rest_steps > n.rest_steps > h.rest_steps
     assert e.ease_lead < n.ease_lead < h.ease_lead  # the easier, the sooner it eases off when ahead
+    # the easier, the more damage a round it expects the player to land before it stops helping
+    assert e.ease_form > n.ease_form and e.ease_gain >= n.ease_gain > h.ease_gain == 0.0
     # easing: leading the round by its ease_lead, the CPU plays worse and rests longer
-    best, rest = n.eased(n.ease_lead)
-    assert best < n.best_share and rest > n.rest_steps
-    best, rest = n.eased(-n.ease_lead)  # trailing: it presses
+    best, rest, damage = n.eased(n.ease_lead)
+    assert best < n.best_share and rest > n.rest_steps and damage == n.damage
+    best, rest, damage = n.eased(-n.ease_lead)  # trailing: it presses
     assert best == n.best_share and rest < n.rest_steps
-    assert n.eased(0.0) == (n.best_share, n.rest_steps) and h.eased(100.0) == (h.best_share, h.rest_steps)
+    assert n.eased(0.0) == (n.best_share, n.rest_steps, n.damage)
+    assert h.eased(100.0, per_round=0.0) == (h.best_share, h.rest_steps, h.damage)  # hard never eases
     assert at_level(0.0).best_share == e.best_share and at_level(0.0).ease_lead == pytest.approx(e.ease_lead)
     assert at_level(0.5).best_share == pytest.approx(n.best_share) and at_level(1.0).reaction_steps == h.reaction_steps
 
@@ -41,10 +44,52 @@ def test_adaptive_follows_the_player():
     assert d.current.rest_steps > start.rest_steps and d.current.best_share < start.best_share
     fixed = DifficultySetting("hard")
     fixed.round_over(+1)
-    assert fixed.current == PRESETS["hard"]
+    assert fixed.current.level == PRESETS["hard"]
     assert [DifficultySetting(c).next().name for c in CHOICES] == [*CHOICES[1:], CHOICES[0]]
     with pytest.raises(ValueError):
         DifficultySetting("impossible")
+
+
+def _play_round(setting: DifficultySetting, player_lands: float, cpu_lands: float, blows: int = 10) -> None:
+    """A round as the CPU sees it: the round's damage lead at its decisions, blow by blow."""
+    lead = 0.0
+    for _ in range(blows):
+        lead -= player_lands / blows
+        setting.current.eased(lead)
+        lead += cpu_lands / blows
+        setting.current.eased(lead)
+    setting.round_over(1 if player_lands > cpu_lands else -1)
+
+
+def test_the_cpu_answers_the_players_form():
+    """The easing follows what the player lands (issue 17: a novice whose moves mostly fail was
+    crushed by a fixed schedule), and recedes as the player gets better."""
+    n = PRESETS["normal"]
+    weak, strong = DifficultySetting("normal"), DifficultySetting("normal")
+    _play_round(weak, player_lands=10.0, cpu_lands=40.0)
+    _play_round(strong, player_lands=120.0, cpu_lands=100.0)
+    assert weak.form.per_round < FORM_PRIOR < strong.form.per_round
+    assert weak.form.landed == 0.0 and strong.form.landed == 0.0  # a new round counts from 0
+    # the same lead, a different CPU: gentler against the player who lands little
+    best_w, rest_w = weak.current.eased(n.ease_lead)
+    best_s, rest_s = strong.current.eased(n.ease_lead)
+    assert rest_w > rest_s and best_w <= best_s
+    assert weak.current.damage < n.damage and strong.current.damage == n.damage
+    # behind in the round, it presses the strong player (no rest) more than the weak one
+    assert weak.current.eased(-n.ease_lead)[1] > strong.current.eased(-n.ease_lead)[1] == 0
+    # the weak player improves: the help recedes, round by round (it self-corrects)
+    helped = []
+    for _ in range(4):
+        _play_round(weak, player_lands=90.0, cpu_lands=80.0)
+        helped.append(weak.current.damage)
+    assert helped == sorted(helped) and helped[-1] == n.damage
+    # the form is the player's: it carries over to the next difficulty from the menu
+    assert weak.next().form is weak.form
+    # a form read from the lead: only its falls are the player's blows
+    f = PlayerForm()
+    for lead in (0.0, 5.0, 2.0, 8.0, -1.0):
+        f.observe(lead)
+    assert f.landed == 3.0 + 9.0
 
 
 def test_the_opponent_takes_its_best_action_by_its_share_and_reacts_late(graph_path):  # noqa: F811
