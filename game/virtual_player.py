@@ -139,6 +139,7 @@ def _hand_motion(action: Action, n: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 _ROLL1, _ROLL2 = np.array([1, 2, 0]), np.array([2, 0, 1])
+_UP, _FORWARD = np.array([0.0, 1.0, 0.0]), np.array([0.0, 0.0, 1.0])
 
 
 def sensor_frames(forearm: np.ndarray, roll: np.ndarray) -> np.ndarray:
@@ -146,10 +147,9 @@ def sensor_frames(forearm: np.ndarray, roll: np.ndarray) -> np.ndarray:
     world up across it (rolled by `roll` radians per hand), x = y cross z."""
     # norms as np.linalg.norm takes them (sqrt of the reduced squares), without its checks
     y = forearm / np.maximum(np.sqrt(np.add.reduce(forearm * forearm, axis=-1, keepdims=True)), 1e-9)
-    up = np.array([0.0, 1.0, 0.0])
-    z = up - y * (y @ up)[..., None]
+    z = _UP - y * (y @ _UP)[..., None]
     zn = np.sqrt(np.add.reduce(z * z, axis=-1, keepdims=True))
-    z = np.where(zn > 1e-6, z / np.maximum(zn, 1e-9), np.array([0.0, 0.0, 1.0]))
+    z = np.where(zn > 1e-6, z / np.maximum(zn, 1e-9), _FORWARD)
     # y cross z: np.cross's own products and differences (x0 = y1 z2 - y2 z1, ...), on the
     # components rolled by one and by two
     x = y[..., _ROLL1] * z[..., _ROLL2] - y[..., _ROLL2] * z[..., _ROLL1]
@@ -162,7 +162,7 @@ def readings(fists: np.ndarray, forearm: np.ndarray, roll: np.ndarray) -> np.nda
     """Noise-free accelerometer readings (n, 2, 3) in g from hand positions at 60 Hz."""
     pad = np.concatenate([fists[:1], fists, fists[-1:]])
     acc = (pad[2:] - 2.0 * pad[1:-1] + pad[:-2]) * (FPS * FPS)
-    specific = acc / G + np.array([0.0, 1.0, 0.0])  # what an accelerometer feels: a - g
+    specific = acc / G + _UP  # what an accelerometer feels: a - g
     rot = sensor_frames(forearm, roll)
     return np.einsum("nhij,nhj->nhi", rot, specific)
 
@@ -228,8 +228,9 @@ def synthesize_action(
 
         library = load_library()
     fists, elbows = performed_motion(action, prof, rng, library)
-    fists = np.concatenate([np.repeat(fists[:1], rest_before, 0), fists, np.repeat(fists[-1:], rest_after, 0)])
-    elbows = np.concatenate([np.repeat(elbows[:1], rest_before, 0), elbows, np.repeat(elbows[-1:], rest_after, 0)])
+    if rest_before or rest_after:  # (a key press has neither: 6 numpy calls saved)
+        fists = np.concatenate([np.repeat(fists[:1], rest_before, 0), fists, np.repeat(fists[-1:], rest_after, 0)])
+        elbows = np.concatenate([np.repeat(elbows[:1], rest_before, 0), elbows, np.repeat(elbows[-1:], rest_after, 0)])
     roll = np.radians(rng.uniform(-prof.grip_roll_deg, prof.grip_roll_deg, 2))
     return finish(readings(fists, fists - elbows, roll), prof.noise_g, rng)
 
