@@ -147,15 +147,20 @@ def sensor_frames(forearm: np.ndarray, roll: np.ndarray) -> np.ndarray:
     world up across it (rolled by `roll` radians per hand), x = y cross z."""
     # norms as np.linalg.norm takes them (sqrt of the reduced squares), without its checks
     y = forearm / np.maximum(np.sqrt(np.add.reduce(forearm * forearm, axis=-1, keepdims=True)), 1e-9)
-    z = _UP - y * (y @ _UP)[..., None]
+    # y . up is y's vertical component (x 0 and z 0 add only a signed zero, which the
+    # subtraction from up turns into the same +0.0)
+    z = _UP - y * y[..., 1:2]
     zn = np.sqrt(np.add.reduce(z * z, axis=-1, keepdims=True))
     z = np.where(zn > 1e-6, z / np.maximum(zn, 1e-9), _FORWARD)
     # y cross z: np.cross's own products and differences (x0 = y1 z2 - y2 z1, ...), on the
     # components rolled by one and by two
     x = y[..., _ROLL1] * z[..., _ROLL2] - y[..., _ROLL2] * z[..., _ROLL1]
     cr, sr = np.cos(roll)[None, :, None], np.sin(roll)[None, :, None]
-    x, z = cr * x + sr * z, -sr * x + cr * z
-    return np.stack([x, y, z], axis=-2)
+    rot = np.empty((*y.shape[:-1], 3, 3))
+    rot[..., 0, :] = cr * x + sr * z
+    rot[..., 1, :] = y
+    rot[..., 2, :] = -sr * x + cr * z
+    return rot
 
 
 def readings(fists: np.ndarray, forearm: np.ndarray, roll: np.ndarray) -> np.ndarray:
