@@ -72,18 +72,32 @@ def _profile(profile: str | Profile) -> Profile:
         raise ValueError(f"unknown player profile {profile!r}; profiles: {', '.join(PROFILES)}") from None
 
 
+_KERNELS: dict[float, np.ndarray] = {}
+
+
+def _gauss(sigma: float) -> np.ndarray:
+    k = _KERNELS.get(sigma)
+    if k is None:
+        r = int(np.ceil(3 * sigma))
+        k = np.exp(-0.5 * (np.arange(-r, r + 1) / sigma) ** 2)
+        k /= k.sum()
+        k.flags.writeable = False
+        _KERNELS[sigma] = k
+    return k
+
+
 def _smooth(x: np.ndarray, sigma: float) -> np.ndarray:
-    """Gaussian smoothing along axis 0 with edge padding (rest stays rest)."""
+    """Gaussian smoothing along axis 0 with edge padding (rest stays rest). The taps are summed
+    in order from 0.0, each output value as `out += w * shifted` tap by tap would, in one
+    reduction over a (taps, n, ...) view of the padded signal (a key press synthesizes inside
+    the 60 Hz input stage, and the tap-by-tap loop was 34 numpy calls)."""
     if sigma <= 0:
         return x
-    r = int(np.ceil(3 * sigma))
-    k = np.exp(-0.5 * (np.arange(-r, r + 1) / sigma) ** 2)
-    k /= k.sum()
+    k = _gauss(sigma)
+    r = len(k) // 2
     pad = np.concatenate([np.repeat(x[:1], r, 0), x, np.repeat(x[-1:], r, 0)])
-    out = np.zeros_like(x)
-    for i, w in enumerate(k):
-        out += w * pad[i : i + len(x)]
-    return out
+    shifted = np.lib.stride_tricks.as_strided(pad, (len(k), *x.shape), (pad.strides[0], *pad.strides), writeable=False)
+    return np.add.reduce(k.reshape(-1, *[1] * x.ndim) * shifted, axis=0, initial=0.0)
 
 
 # hand_motion depends on (action, n) only; the keyboard source synthesizes on a key press,
@@ -125,38 +139,48 @@ def _hand_motion(action: Action, n: int) -> tuple[np.ndarray, np.ndarray]:
     return np.stack(fists, axis=1), np.stack(elbows, axis=1)
 
 
+_ROLL1, _ROLL2 = np.array([1, 2, 0]), np.array([2, 0, 1])
+_UP, _FORWARD = np.array([0.0, 1.0, 0.0]), np.array([0.0, 0.0, 1.0])
+
+
 def sensor_frames(forearm: np.ndarray, roll: np.ndarray) -> np.ndarray:
     """(n, 2, 3, 3) rotation rows [x, y, z] of each sensor: y along the forearm, z the part of
     world up across it (rolled by `roll` radians per hand), x = y cross z."""
-    y = forearm / np.maximum(np.linalg.norm(forearm, axis=-1, keepdims=True), 1e-9)
-    up = np.array([0.0, 1.0, 0.0])
-    z = up - y * (y @ up)[..., None]
-    zn = np.linalg.norm(z, axis=-1, keepdims=True)
-    z = np.where(zn > 1e-6, z / np.maximum(zn, 1e-9), np.array([0.0, 0.0, 1.0]))
-    # y cross z written out: np.cross's own products and differences, without its axis moves
-    x = np.empty_like(y)
-    x[..., 0] = y[..., 1] * z[..., 2] - y[..., 2] * z[..., 1]
-    x[..., 1] = y[..., 2] * z[..., 0] - y[..., 0] * z[..., 2]
-    x[..., 2] = y[..., 0] * z[..., 1] - y[..., 1] * z[..., 0]
+    # norms as np.linalg.norm takes them (sqrt of the reduced squares), without its checks
+    y = forearm / np.maximum(np.sqrt(np.add.reduce(forearm * forearm, axis=-1, keepdims=True)), 1e-9)
+    # y . up is y's vertical component (x 0 and z 0 add only a signed zero, which the
+    # subtraction from up turns into the same +0.0)
+    z = _UP - y * y[..., 1:2]
+    zn = np.sqrt(np.add.reduce(z * z, axis=-1, keepdims=True))
+    z = np.where(zn > 1e-6, z / np.maximum(zn, 1e-9), _FORWARD)
+    # y cross z: np.cross's own products and differences (x0 = y1 z2 - y2 z1, ...), on the
+    # components rolled by one and by two
+    x = y[..., _ROLL1] * z[..., _ROLL2] - y[..., _ROLL2] * z[..., _ROLL1]
     cr, sr = np.cos(roll)[None, :, None], np.sin(roll)[None, :, None]
-    x, z = cr * x + sr * z, -sr * x + cr * z
-    return np.stack([x, y, z], axis=-2)
+    rot = np.empty((*y.shape[:-1], 3, 3))
+    rot[..., 0, :] = cr * x + sr * z
+    rot[..., 1, :] = y
+    rot[..., 2, :] = -sr * x + cr * z
+    return rot
 
 
 def readings(fists: np.ndarray, forearm: np.ndarray, roll: np.ndarray) -> np.ndarray:
     """Noise-free accelerometer readings (n, 2, 3) in g from hand positions at 60 Hz."""
     pad = np.concatenate([fists[:1], fists, fists[-1:]])
     acc = (pad[2:] - 2.0 * pad[1:-1] + pad[:-2]) * (FPS * FPS)
-    specific = acc / G + np.array([0.0, 1.0, 0.0])  # what an accelerometer feels: a - g
+    specific = acc / G + _UP  # what an accelerometer feels: a - g
     rot = sensor_frames(forearm, roll)
     return np.einsum("nhij,nhj->nhi", rot, specific)
+
+
+_LOW_G, _HIGH_G = -RANGE_G[None, :, None], RANGE_G[None, :, None]
 
 
 def finish(signal: np.ndarray, noise_g: float, rng: np.random.Generator) -> np.ndarray:
     """Add sensor noise, quantise to the Wiimote's steps and clip at each device's range."""
     out = signal + rng.normal(0.0, noise_g, signal.shape)
     out = np.round(out / QUANTUM_G) * QUANTUM_G
-    return np.clip(out, -RANGE_G[None, :, None], RANGE_G[None, :, None])
+    return np.minimum(np.maximum(out, _LOW_G), _HIGH_G)  # np.clip's values, without its wrapper
 
 
 def performed_motion(action: Action, prof: Profile, rng: np.random.Generator,
@@ -210,8 +234,9 @@ def synthesize_action(
 
         library = load_library()
     fists, elbows = performed_motion(action, prof, rng, library)
-    fists = np.concatenate([np.repeat(fists[:1], rest_before, 0), fists, np.repeat(fists[-1:], rest_after, 0)])
-    elbows = np.concatenate([np.repeat(elbows[:1], rest_before, 0), elbows, np.repeat(elbows[-1:], rest_after, 0)])
+    if rest_before or rest_after:  # (a key press has neither: 6 numpy calls saved)
+        fists = np.concatenate([np.repeat(fists[:1], rest_before, 0), fists, np.repeat(fists[-1:], rest_after, 0)])
+        elbows = np.concatenate([np.repeat(elbows[:1], rest_before, 0), elbows, np.repeat(elbows[-1:], rest_after, 0)])
     roll = np.radians(rng.uniform(-prof.grip_roll_deg, prof.grip_roll_deg, 2))
     return finish(readings(fists, fists - elbows, roll), prof.noise_g, rng)
 

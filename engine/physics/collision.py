@@ -254,6 +254,13 @@ class CapsulePairs:
         self._cap_b_c = np.ascontiguousarray(cap_b, dtype=np.int64)
         self._mid2, self._extent = np.empty((len(caps), 3)), np.empty(len(caps))
         self._cand = np.empty(len(cap_a), dtype=np.int64)
+        # the kernels' fixed arguments, their addresses taken once (see native.address)
+        adr = native.address
+        self._broad_args = (adr(self._caps_c), self.n_caps, adr(self._diam_c), adr(self._cap_a_c),
+                            adr(self._cap_b_c), len(self.cap_a))
+        self._broad_out = (adr(self._mid2), adr(self._extent), adr(self._cand))
+        self._narrow_args = (adr(self._quad_c), len(self.cap_a))
+        self._rsum_addr = adr(self._rsum_c)
 
     def __len__(self) -> int:
         return len(self.cap_a)
@@ -264,9 +271,7 @@ class CapsulePairs:
         when it can, else numpy)."""
         k = kernels()
         if k is not None and x.flags.c_contiguous and x.dtype == np.float64:
-            n = k[2](x.ctypes.data, self._caps_c.ctypes.data, self.n_caps, self._diam_c.ctypes.data,
-                     self._cap_a_c.ctypes.data, self._cap_b_c.ctypes.data, len(self.cap_a), float(margin),
-                     self._mid2.ctypes.data, self._extent.ctypes.data, self._cand.ctypes.data)
+            n = k[2](native.array_address(x), *self._broad_args, float(margin), *self._broad_out)
             return self._cand[:n].copy()
         return self.candidates_numpy(x, margin)
 
@@ -291,11 +296,11 @@ class CapsulePairs:
         if k is not None and x.flags.c_contiguous and x.dtype == np.float64:
             idx = np.ascontiguousarray(idx, dtype=np.int64)
             n = len(idx)
-            s, t, depth = np.empty(n), np.empty(n), np.empty(n)
-            normal = np.empty((n, 3))
-            bad = k[0](x.ctypes.data, self._quad_c.ctypes.data, len(self.cap_a), idx.ctypes.data, n,
-                       self._rsum_c.ctypes.data, _EPS, s.ctypes.data, t.ctypes.data, normal.ctypes.data,
-                       depth.ctypes.data)
+            out = np.empty(6 * n)  # s, t, depth, normal (n, 3): one buffer, one address
+            s, t, depth, normal = out[:n], out[n : 2 * n], out[2 * n : 3 * n], out[3 * n :].reshape(n, 3)
+            a = native.address(out)
+            bad = k[0](native.array_address(x), *self._narrow_args, native.address(idx), n, self._rsum_addr, _EPS,
+                       a, a + 8 * n, a + 24 * n, a + 16 * n)
             if bad == 0:
                 return s, t, normal, depth
         return self.narrow_numpy(x, idx)
@@ -362,14 +367,14 @@ class ContactSet:
             self.flat = np.ascontiguousarray(self.flat, dtype=np.int64)
             self.rsum = np.ascontiguousarray(self.rsum, dtype=np.float64)
             self._lam, self._acc = np.empty(self.quad.shape[1]), np.empty(self.size)
-            self._c = (k[1], self.quad.ctypes.data, self.quad.shape[1], self.gn.ctypes.data, self.rsum.ctypes.data,
-                       self.push.ctypes.data, self.flat.ctypes.data, self._lam.ctypes.data, self._acc.ctypes.data,
-                       self.size)
+            adr = native.address
+            self._c = (k[1], adr(self.quad), self.quad.shape[1], adr(self.gn), adr(self.rsum),
+                       adr(self.push), adr(self.flat), adr(self._lam), adr(self._acc), self.size)
 
     def project(self, x: np.ndarray) -> None:
         if self._c is not None and x.flags.c_contiguous and x.dtype == np.float64 and x.size == self.size:
             fn, *args = self._c
-            fn(x.ctypes.data, *args)
+            fn(native.array_address(x), *args)
             return
         self.project_numpy(x)
 

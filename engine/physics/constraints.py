@@ -183,7 +183,7 @@ class _Batch:
 
     def project(self, x: np.ndarray) -> None:
         if self.kernel is not None and x.flags.c_contiguous and x.dtype == np.float64 and x.size == self.size:
-            self.kernel(x.ctypes.data, *self._args)
+            self.kernel(native.array_address(x), *self._args)
             return
         self.project_numpy(x)
 

@@ -254,6 +254,36 @@ class IncrementalDTW:
             self._set_padded(np.ascontiguousarray(tmpl), lengths)
         self.reset()
 
+    def replace_template(self, drop: int, template: np.ndarray, at: int) -> None:
+        """Drop the template at position `drop` and put `template` at position `at` of the
+        result (the count stays; the others keep their order): the adaptation's steady state,
+        where an adopted motion replaces its action's oldest. With "native" and a template no
+        longer than the longest so far, only the columns between the two positions move;
+        otherwise as remove_templates + add_templates. The query is forgotten."""
+        T = self.T
+        if not (0 <= drop < T and 0 <= at < T):
+            raise ValueError(f"drop and at must be positions in 0..{T - 1}")
+        t = np.asarray(template, dtype=np.float64)
+        if t.ndim != 2 or t.shape[1] != self.D or len(t) < 1:
+            raise ValueError(f"templates must be (length >= 1, {self.D}) arrays")
+        if self.method != "native" or len(t) > self.L:
+            self.remove_templates([drop])
+            self.add_templates([template], at=[at])
+            return
+        del self.sources[drop]
+        self.sources.insert(at, template)
+        ldt, lengths = self._ldt_full, self._len_full
+        if drop < at:  # overlapping slices: numpy copies through a buffer
+            ldt[:, :, drop:at] = ldt[:, :, drop + 1 : at + 1]
+            lengths[drop:at] = lengths[drop + 1 : at + 1]
+        elif at < drop:
+            ldt[:, :, at + 1 : drop + 1] = ldt[:, :, at:drop]
+            lengths[at + 1 : drop + 1] = lengths[at:drop]
+        ldt[:, :, at] = 0.0
+        ldt[: len(t), :, at] = t
+        lengths[at] = len(t)
+        self.reset()
+
     def update_templates(self, templates: Sequence[np.ndarray]) -> None:
         """Make `templates` the template list, where a template kept from the current list is
         the same array object and the kept ones stay in their order: the ones gone are removed

@@ -173,6 +173,12 @@ ADAPT_PER_ACTION = 3
 IDLE, ACTIVE, DISCARD = "idle", "active", "discard"
 
 
+def _inserted(a: np.ndarray, i: int, value) -> np.ndarray:
+    """np.insert(a, i, value, axis=0) for one row, in one concatenate (np.insert's own
+    bookkeeping costs ~10x more on these short arrays)."""
+    return np.concatenate((a[:i], np.array([value], dtype=a.dtype), a[i:]))
+
+
 class DualBufferRecognizer:
     """Frames in, action events out. See the module docstring for the rules."""
 
@@ -544,15 +550,44 @@ class DualBufferRecognizer:
         if n < 2:
             return
         scores = self._stop_scores if self._stopped else self.dtw.closed_scores()
-        mine = self._tmpl_action == self.action
-        best, other = float(scores[mine].min()), float(scores[~mine].min(initial=np.inf))
-        k = int(np.flatnonzero(mine)[np.argmin(scores[mine])])
+        lo, hi = int(self._action_starts[self.action]), int(self._action_ends[self.action])  # its templates
+        k = lo + int(np.argmin(scores[lo:hi]))
+        best, other = float(scores[k]), float(min(scores[:lo].min(initial=np.inf), scores[hi:].min(initial=np.inf)))
         if not best < (1.0 - ADAPT_MARGIN) * other or best > self.thresholds[k]:
             return
-        kept = self._adapted.setdefault(self.action, [])
-        kept.append((self._motion[:n].copy(), self._peaks(self._acts[:n])))
-        del kept[: -self.adapt]
-        self._set_templates()
+        self._adopt(self._motion[:n].copy(), self._peaks(self._acts[:n]))
+
+    def _adopt(self, motion: np.ndarray, peak: tuple[float, float]) -> None:
+        """The current action's newest adapted template: in place of its oldest once `adapt`
+        are kept, else added at the end of the action's templates. The bookkeeping arrays are
+        edited where they change, the DTW moves a column or two (`replace_template`): what
+        `_set_templates` would build from scratch, at ~1/10 of its cost (on the step a motion ends)."""
+        a = self.action
+        kept = self._adapted.setdefault(a, [])
+        kept.append((motion, peak))
+        lo, hi = int(self._action_starts[a]), int(self._action_ends[a])
+        first = hi - (len(kept) - 1)  # where the action's adapted templates start
+        if len(kept) <= self.adapt:  # one more template: after the action's others
+            b = int(self._base_starts[a])  # its trained templates' thresholds: [b, b + first - lo)
+            loosest = self._base[2][b : b + first - lo].max()
+            self._tmpl_action = _inserted(self._tmpl_action, hi, a)
+            self._action_starts[a + 1 :] += 1
+            self._action_ends[a:] += 1
+            self.thresholds = _inserted(self.thresholds, hi, loosest)
+            self._peak_act = _inserted(self._peak_act, hi, peak)
+            self.template_lengths = _inserted(self.template_lengths, hi, len(motion))
+            self.dtw.add_templates([motion], at=[hi])
+            self._stop_scores = np.empty(self.dtw.T)
+        elif len(kept) == self.adapt + 1 and first < hi:  # the oldest adapted one makes room
+            del kept[0]
+            self._peak_act[first : hi - 1] = self._peak_act[first + 1 : hi]
+            self._peak_act[hi - 1] = peak
+            self.template_lengths[first : hi - 1] = self.template_lengths[first + 1 : hi]
+            self.template_lengths[hi - 1] = len(motion)
+            self.dtw.replace_template(first, motion, hi - 1)
+        else:  # `adapt` lowered since: rebuilt from the kept lists
+            del kept[: -self.adapt]
+            self._set_templates()
 
     def _set_templates(self) -> None:
         """The DTW over the trained templates plus the adapted ones, sorted by action. An adapted
