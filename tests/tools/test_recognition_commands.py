@@ -153,7 +153,10 @@ def test_evaluate_phone_punches_cross_session(capsys):
     rows = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
     assert [r["set"] for r in rows] == [f"phone-punches {h} {a} -> {b}" for h in ("left", "right") for a, b in (("fast", "slow"), ("slow", "fast"))]
     for r in rows:
-        assert r["n"] >= 50 and r["started"] >= 0.9 and r["final_correct"] >= 0.85 and r["lag_ms"] <= 150
+        # lag: full blows (-> slow) 166 / 200 ms since adopted templates no longer give the first
+        # decision (ninth round, docs/recognition.md); quick punches 66 / 92 ms
+        assert r["n"] >= 50 and r["started"] >= 0.9 and r["final_correct"] >= 0.85
+        assert r["lag_ms"] <= (210 if r["set"].endswith("slow") else 120)
 
 
 def test_mixed_stream_splices_every_punch_once_in_a_seeded_order():
