@@ -145,6 +145,36 @@ def test_a_wrong_early_start_is_switched_or_called_off():
     assert not any(e.get("called_off") for e in events)
 
 
+def test_a_wind_up_that_pauses_goes_on_as_one_motion(monkeypatch):
+    # A swing's wind-up, the hand back under the gate for 10 frames (more than null_frames), then
+    # the blow: one motion, started once on the wind-up and ended as a swing. Without the pause
+    # rule the null signal called the wind-up off and the blow started a second action.
+    rng = np.random.default_rng(5)
+    wind = np.tile(G, (20, 1))
+    wind[:, 1] += 0.8 * np.sin(np.linspace(0, np.pi / 2, 20))
+    blow = bump(1, 4.0)
+    blow[:, 1] = np.maximum(blow[:, 1], 0.8 + G[1])
+    swing = np.vstack([wind, blow])
+    poke = bump(0, 0.8, 14)
+    tm = Templates.from_trials({
+        "swing": [np.vstack([rest(10), swing + rng.normal(0, 0.02, swing.shape), rest(10)]) for _ in range(3)],
+        "poke": [np.vstack([rest(10), poke + rng.normal(0, 0.02, poke.shape), rest(10)]) for _ in range(3)],
+    })
+    paused = np.vstack([rest(30), wind[:12], wind[:12][::-1], rest(10), bump(1, 4.0), rest(40)])
+    events = run(DualBufferRecognizer(tm, noise_g=0.3, null_frames=6), paused)
+    kinds = [(e["event"], e["action"]) for e in events if e["event"] != "switch"]
+    assert kinds == [("start", "swing"), ("end", "swing")]
+    assert events[0]["frame"] < 30 + 24  # started on the wind-up, before the pause
+    # a pause longer than PAUSE_FRAMES ends the wind-up: called off, the blow starts anew
+    longer = np.vstack([rest(30), wind[:12], wind[:12][::-1], rest(6 + db.PAUSE_FRAMES + 4), bump(1, 4.0), rest(40)])
+    kinds = [(e["event"], e["action"]) for e in run(DualBufferRecognizer(tm, noise_g=0.3, null_frames=6), longer)]
+    assert ("reject", "swing") in kinds and [k for k, _ in kinds].count("start") == 2
+    # without the rule, the same paused swing was two motions
+    monkeypatch.setattr(db, "PAUSE_FRAMES", 0)
+    kinds = [(e["event"], e["action"]) for e in run(DualBufferRecognizer(tm, noise_g=0.3, null_frames=6), paused)]
+    assert [k for k, _ in kinds].count("start") == 2
+
+
 def test_a_wrong_early_start_is_corrected_by_a_switch():
     # Both actions begin with the same x bump and differ afterwards (z vs y): the first decision
     # cannot tell them apart; when it guesses wrong, a switch with n_p corrects it.
