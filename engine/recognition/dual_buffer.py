@@ -24,7 +24,8 @@ Per 60 Hz frame (`push`):
   template must match (closed end).
 - Rejection: a decision needs the best template's score under its threshold (learned from the
   spread of the training trials) and the motion to have reached ENERGY_RATIO of the template's
-  peak activity over its first ENERGY_FRAMES frames (a wiggle is not a punch). If not, nothing
+  peak activity over its first ENERGY_FRAMES frames (a wiggle is not a punch; a first decision
+  while the activity is still rising needs RISING_RATIO of it). If not, nothing
   starts; the decision may still come later in the supplementary buffer, else the motion is
   `reject`ed when the buffer is full. A started motion that ends without ever reaching
   CALL_OFF_RATIO of its action's peak is called off: `reject` with `called_off`, no `end`.
@@ -118,6 +119,13 @@ CALL_OFF_RATIO = 0.25
 # stayed wrong or was called off (phone-punches right slow -> fast first decision 71.7 -> 86.7 %).
 PAUSE_SHORT = 14
 PAUSE_FRAMES = 20
+# A first decision on a motion whose activity is still rising (this frame is its strongest so far)
+# needs only RISING_RATIO of the template's early peak: a punch on its way gets there; a wiggle or
+# a bounce that has already peaked needs ENERGY_RATIO. A full blow's slow first frames held its
+# start 2-4 frames (phone-punches median lag L fast -> slow 150 -> 92 ms, R 150 -> 100 ms, with
+# the pause rule above to keep the finals; a plain ENERGY_RATIO 0.25 cost two more false starts
+# on phone-boxing than this).
+RISING_RATIO = 0.25
 # No first decision while the hand has been under the gate for this many frames in a row: the
 # motion is dying down (a twitch, the tail of a move the `complete` end split off); it waits, and
 # is rejected if it ends. Synthesized session 6 -> 0 false starts, phone-punches right slow ->
@@ -597,7 +605,11 @@ class DualBufferRecognizer:
         best = int(np.argmin(scores))
         best_action = int(self._tmpl_action[best])
         best_score = float(scores[best])
-        strong = not self.reject or self._peak_act_seen >= ENERGY_RATIO * self._peak_act[best, 0]
+        bar = self._peak_act[best, 0]
+        strong = not self.reject or self._peak_act_seen >= ENERGY_RATIO * bar
+        if not strong and self.action is None:
+            # still rising (this frame is the motion's strongest so far): RISING_RATIO will do
+            strong = self._peak_act_seen >= RISING_RATIO * bar and self._act >= self._peak_act_seen
         ok = strong and best_score <= self.thresholds[best]
         if self.action is None:
             ok = ok and (not self.reject or self._peak_act_seen >= RETURN_RATIO * self._after_peak)

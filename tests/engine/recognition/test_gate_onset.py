@@ -118,6 +118,31 @@ def test_start_counts_main_frames_from_where_the_motion_left_the_rest(templates,
     assert max(start["onset_frame"] + 5, gate_open) <= start["frame"] < plain["frame"]
 
 
+def test_a_slow_rising_punch_starts_when_the_main_buffer_fills(templates, monkeypatch):
+    # The jab three times slower than its templates: still rising when the main buffer fills, it
+    # needs only RISING_RATIO of the templates' early peak and starts on that frame; the plain
+    # energy bar (ENERGY_RATIO) held it 4 frames more.
+    slow = np.vstack([rest(30), bump(0, 3.0, 72), rest(30)])
+    start = next(e for e in run(DualBufferRecognizer(templates, noise_g=0.3, main=6), slow) if e["event"] == "start")
+    assert start["action"] == "jab" and start["frame"] == start["onset_frame"] + 5
+    monkeypatch.setattr(db, "RISING_RATIO", db.ENERGY_RATIO)
+    held = next(e for e in run(DualBufferRecognizer(templates, noise_g=0.3, main=6), slow) if e["event"] == "start")
+    assert held["frame"] >= start["frame"] + 3
+
+
+def test_a_flick_that_has_peaked_needs_the_whole_energy_bar(templates, monkeypatch):
+    # Up to a third of the jab's peak in 3 frames, then falling: when the main buffer fills it is
+    # no longer rising, so the lower bar does not apply and nothing starts. A plain bar as low as
+    # RISING_RATIO starts a jab on it.
+    flick = np.tile(G, (15, 1))
+    flick[:3, 0] += np.sin(np.linspace(0, np.pi / 2, 3))
+    flick[3:, 0] += np.cos(np.linspace(0, np.pi / 2, 12))
+    frames = np.vstack([rest(30), flick, rest(30)])
+    assert not [e for e in run(DualBufferRecognizer(templates, noise_g=0.3, main=6), frames) if e["event"] == "start"]
+    monkeypatch.setattr(db, "ENERGY_RATIO", db.RISING_RATIO)
+    assert [e["action"] for e in run(DualBufferRecognizer(templates, noise_g=0.3, main=6), frames) if e["event"] == "start"] == ["jab"]
+
+
 def test_a_wrong_early_start_is_switched_or_called_off():
     rng = np.random.default_rng(5)
     # "swing": a gentle 0.8 g wind-up over 20 frames, then a 4 g blow; "poke": a short 0.8 g
