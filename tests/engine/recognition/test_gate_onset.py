@@ -143,6 +143,31 @@ def test_a_flick_that_has_peaked_needs_the_whole_energy_bar(templates, monkeypat
     assert [e["action"] for e in run(DualBufferRecognizer(templates, noise_g=0.3, main=6), frames) if e["event"] == "start"] == ["jab"]
 
 
+def test_the_energy_bar_is_the_gentlest_trial_of_the_action():
+    # Two strong jab trials (3 g) and a gentle one (1.2 g): a 0.9 g jab that has already peaked
+    # when the main buffer fills is as strong as the gentle trial allows (0.4 x 1.2 g) and starts;
+    # against the strong trials' bar (0.4 x 3 g) nothing started.
+    rng = np.random.default_rng(1)
+
+    def trial(m: np.ndarray) -> np.ndarray:
+        return np.vstack([rest(30, 0.01, rng), m + rng.normal(0, 0.02, m.shape), rest(10, 0.01, rng)])
+
+    tm = Templates.from_trials({"jab": [trial(bump(0, 3.0)), trial(bump(0, 3.0)), trial(bump(0, 1.2))],
+                                "upper": [trial(bump(2, 3.0)) for _ in range(3)]})
+    rec = DualBufferRecognizer(tm, noise_g=0.3, adapt=0)
+    jab = rec.action_names.index("jab")
+    lo, hi = rec._action_starts[jab], rec._action_ends[jab]
+    assert rec._action_bar[jab] == pytest.approx(rec._peak_act[lo:hi, 0].min()) == pytest.approx(1.2, abs=0.1)
+    flick = np.tile(G, (15, 1))
+    flick[:3, 0] += 0.9 * np.sin(np.linspace(0, np.pi / 2, 3))
+    flick[3:, 0] += 0.9 * np.cos(np.linspace(0, np.pi / 2, 12))
+    frames = np.vstack([rest(30), flick, rest(30)])
+    assert [e["action"] for e in run(rec, frames) if e["event"] == "start"] == ["jab"]
+    strong = DualBufferRecognizer(tm, noise_g=0.3, adapt=0)
+    strong._action_bar = np.maximum.reduceat(strong._peak_act[:, 0], strong._action_starts)
+    assert not [e for e in run(strong, frames) if e["event"] == "start"]
+
+
 def test_a_wrong_early_start_is_switched_or_called_off():
     rng = np.random.default_rng(5)
     # "swing": a gentle 0.8 g wind-up over 20 frames, then a 4 g blow; "poke": a short 0.8 g
