@@ -609,6 +609,7 @@ class DualBufferRecognizer:
             self.thresholds = _inserted(self.thresholds, hi, loosest)
             self._peak_act = _inserted(self._peak_act, hi, peak)
             self.template_lengths = _inserted(self.template_lengths, hi, len(motion))
+            self._is_adapted = _inserted(self._is_adapted, hi, True)
             self.dtw.add_templates([motion], at=[hi])
             self._stop_scores = np.empty(self.dtw.T)
         elif len(kept) == self.adapt + 1 and first < hi:  # the oldest adapted one makes room
@@ -621,6 +622,9 @@ class DualBufferRecognizer:
         else:  # `adapt` lowered since: rebuilt from the kept lists
             del kept[: -self.adapt]
             self._set_templates()
+            return
+        # the action's energy bar: its gentlest template, the adopted one included (as `_set_templates`)
+        self._action_bar[a] = self._peak_act[self._action_starts[a] : self._action_ends[a], 0].min()
 
     def _set_templates(self) -> None:
         """The DTW over the trained templates plus the adapted ones, sorted by action. An adapted
