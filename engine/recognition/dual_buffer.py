@@ -55,7 +55,7 @@ Per 60 Hz frame (`push`):
   `discard_frames`, only once the hand has calmed under DISCARD_HOLD_RATIO of the discarded
   motion's peak activity (at most DISCARD_HOLD x `discard_frames` frames).
 
-Events are dicts with the keys of FORMATS.md ("event", "action", "frame", "t" when the caller
+Events are dicts with the keys of docs/formats.md ("event", "action", "frame", "t" when the caller
 passes it, "from_frame" on switches, "score"), plus estimates of the motion's speed (m/s),
 direction (unit vector in the first sensor's frame) and peak acceleration (g).
 """
@@ -66,6 +66,7 @@ import math
 
 import numpy as np
 
+from engine.clock import STEP_HZ
 from engine.recognition.config import RecognizerConfig
 from engine.recognition.dtw import IncrementalDTW
 from engine.recognition.templates import (
@@ -107,7 +108,7 @@ ENERGY_RATIO = 0.4
 # own peak made it depend on which trial the shape happened to match, and a strong trial held
 # softer punches back (phone-boxing lag 158 -> 125 ms, uWave 94.68 -> 94.92 %).
 # A motion that ends without ever reaching CALL_OFF_RATIO of the whole peak of its action's
-# templates is called off: its start ends as `reject` (FORMATS.md), not `end`.
+# templates is called off: its start ends as `reject` (docs/formats.md), not `end`.
 ENERGY_FRAMES = 20
 # The open end's constraint while the hand moves: the motion's n frames must reach at least
 # PROGRESS * n frames into a template. 1.25 (templates.MIN_PROGRESS, which the rejection
@@ -782,7 +783,7 @@ class DualBufferRecognizer:
         """Integrate the gravity-removed acceleration since the onset: a rough hand velocity,
         enough to tell a hard punch from a soft one (the paper's future work). Plain floats."""
         xs, g0, v = self._xs, self._g0_list, self._velocity
-        k_dt = G / 60.0
+        k_dt = G / STEP_HZ
         for k in range(0, len(xs), 3):
             dx, dy, dz = xs[k] - g0[k], xs[k + 1] - g0[k + 1], xs[k + 2] - g0[k + 2]
             self._peak_g = max(self._peak_g, math.sqrt(dx * dx + dy * dy + dz * dz))
