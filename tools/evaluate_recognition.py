@@ -441,9 +441,14 @@ def evaluate_cross_session(
     return pooled
 
 
-def evaluate_phone_punches(root: str | Path, mains: Sequence[int | str], **kwargs) -> dict[str, list[Summary]]:
+def evaluate_phone_punches(
+    root: str | Path, mains: Sequence[int | str], mixed: bool = False, seed: int = 0, **kwargs
+) -> dict[str, list[Summary]]:
     """Per hand, fast -> slow and slow -> fast: templates from the first trials of each punch in
-    one set's files, tested on every punch of the other set's files (see evaluate_cross_session)."""
+    one set's files, tested on every punch of the other set's files (see evaluate_cross_session).
+    With `mixed`, also on the other set's punches of all kinds spliced into one stream
+    (`mixed_stream`, shuffled with `seed`): as recorded ("mixed") and from one guard ("mixed,
+    one guard")."""
     files = punch_files(root)
     loaded: dict[Path, tuple[np.ndarray, list[str]]] = {}
 
@@ -461,4 +466,103 @@ def evaluate_phone_punches(root: str | Path, mains: Sequence[int | str], **kwarg
             train = {p: load(f) for p, f in files[(hand, src)].items()}
             test = [load(f) for f in files[(hand, dst)].values()]
             out[f"phone-punches {hand} {src} -> {dst}"] = evaluate_cross_session(train, test, mains, **kwargs)
+            if mixed:
+                for name, guard in (("mixed", False), ("mixed, one guard", True)):
+                    stream = mixed_stream(test, seed, one_guard=guard)
+                    out[f"phone-punches {hand} {src} -> {dst} {name}"] = evaluate_cross_session(train, [stream], mains, **kwargs)
     return out
+
+
+# -- mixed streams: the punch kinds interleaved -----------------------------------------------------
+# The outside check tests a person's MIXED sequences (jab, hook, uppercut interleaved) with templates
+# from single-kind files. Built here from the single-kind files: every labelled punch of the test
+# set's files, with the rest around it, spliced into one stream in a seeded shuffled order.
+SPLICE_FRAMES = 20  # a linear ramp between two spliced rests: a guard change of 1/3 s
+LEAD_REST = 120  # frames of rest before the first punch (the auto gate learns from them)
+
+
+def _stillest_window(x: np.ndarray, lo: int, hi: int, w: int = REST_WINDOW) -> int | None:
+    """The first frame of the stillest `w` frames in x[lo:hi] (least summed spread of the sensors'
+    readings about their mean, as `stream_onset` finds the rest); None when fewer than `w`."""
+    if hi - lo < w:
+        return None
+    win = np.lib.stride_tricks.sliding_window_view(x[lo:hi], w, axis=0)  # (n, D, w)
+    dev = win - win.mean(axis=2, keepdims=True)
+    spread = np.sqrt((dev.reshape(len(win), -1, 3, w) ** 2).sum(axis=2).mean(axis=2)).sum(axis=1)
+    return lo + int(np.argmin(spread))
+
+
+def punch_segments(frames: np.ndarray, labels: Sequence[str]) -> list[tuple[np.ndarray, list[str], np.ndarray, int]]:
+    """Every labelled punch of a recording with the rest around it: (frames, labels, rest, cut),
+    cut at frame `cut` in the middle of the stillest REST_WINDOW frames of the gap before it, up to
+    the middle of those of the gap after it (at most REST_SEARCH frames from the label; the label's
+    own edge when the gap is shorter); `rest` is the mean of the window before the punch (its guard)."""
+    x = np.asarray(frames, dtype=np.float64)
+    labels = list(labels)
+    ivs = intervals(labels)
+    cuts, rests = [], []
+    prev_end = 0
+    for _, a, b in ivs:
+        k = _stillest_window(x, max(prev_end, a - REST_SEARCH), a)
+        k = k if k is not None else max(prev_end, a - REST_WINDOW)
+        cuts.append(min(k + REST_WINDOW // 2, a))
+        rests.append(x[k : k + REST_WINDOW].mean(axis=0))
+        prev_end = b
+    b = ivs[-1][2] if ivs else len(x)
+    k = _stillest_window(x, b, min(len(x), b + REST_SEARCH))
+    cuts.append(k + REST_WINDOW // 2 if k is not None else min(len(x), b + REST_WINDOW))
+    return [(x[cuts[i] : cuts[i + 1]], labels[cuts[i] : cuts[i + 1]], rests[i], cuts[i]) for i in range(len(ivs))]
+
+
+def _turn(frames: np.ndarray, src: np.ndarray, dst: np.ndarray) -> np.ndarray:
+    """`frames` turned per sensor by the smallest rotation taking the direction of `src` to that
+    of `dst` (Rodrigues): a punch held with another grip, from another guard."""
+    out = np.asarray(frames, dtype=np.float64).reshape(len(frames), -1, 3).copy()
+    for s in range(out.shape[1]):
+        u = src[3 * s : 3 * s + 3] / max(np.linalg.norm(src[3 * s : 3 * s + 3]), 1e-9)
+        v = dst[3 * s : 3 * s + 3] / max(np.linalg.norm(dst[3 * s : 3 * s + 3]), 1e-9)
+        axis, c = np.cross(u, v), float(np.dot(u, v))
+        k = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
+        rot = np.eye(3) + k + k @ k / (1.0 + c) if c > -1 + 1e-9 else -np.eye(3)
+        out[:, s] = out[:, s] @ rot.T
+    return out.reshape(len(frames), -1)
+
+
+def mixed_stream(
+    recordings: Sequence[tuple[np.ndarray, Sequence[str]]], seed: int = 0, one_guard: bool = False
+) -> tuple[np.ndarray, list[str]]:
+    """One labelled stream of every punch of `recordings` (single-kind files), each with the rest
+    around it (`punch_segments`), in an order shuffled with `seed`; SPLICE_FRAMES of linear ramp
+    between two segments; the stream opens with LEAD_REST frames of the rest before one recording's
+    first punch, then that punch.
+    With `one_guard`, every segment is turned (`_turn`) so that its guard matches the mean guard of
+    all segments: a player who starts every kind from the same guard, so the resting tilt no
+    longer tells the kinds apart (in single-kind files it does: e.g. the left uppercut's rest is
+    ~60 degrees from the jab's)."""
+    segs, origin = [], []  # origin: (recording, its first punch's segment index)
+    for r, (frames, labels) in enumerate(recordings):
+        mine = punch_segments(frames, labels)
+        origin += [(r, len(segs))] * len(mine)
+        segs += mine
+    if not segs:
+        raise ValueError("no labelled punches to mix")
+    order = list(np.random.default_rng(seed).permutation(len(segs)))
+    # The stream opens with the rest before a recording's first punch, then that punch (the rest
+    # and the punch are contiguous, so the auto gate learns from a real rest as it would per file).
+    r0, first = origin[order[0]]
+    j = order.index(first)
+    order[0], order[j] = order[j], order[0]
+    lead = np.asarray(recordings[r0][0][max(0, segs[first][3] - LEAD_REST) : segs[first][3]], dtype=np.float64)
+    if one_guard:
+        guard = np.mean([s[2] for s in segs], axis=0)
+        lead = _turn(lead, segs[first][2], guard) if len(lead) else lead
+        segs = [(_turn(f, r, guard), lab, guard, c) for f, lab, r, c in segs]
+    if not len(lead):
+        lead = segs[first][0][:1]
+    parts, labels = [lead], [""] * len(lead)
+    for n, i in enumerate(order):
+        f, lab = segs[i][:2]
+        ramp = np.linspace(parts[-1][-1], f[0], SPLICE_FRAMES + 2)[1:-1] if n else f[:0]
+        parts += [ramp, f]
+        labels += [""] * len(ramp) + list(lab)
+    return np.vstack(parts), labels

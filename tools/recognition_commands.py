@@ -161,6 +161,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="cross-session: DIR/<hand>_<punch>_<fast|slow>.csv; per hand, templates from the first "
                         "--trials punches of each kind in one set, tested on every punch of the other set")
     e.add_argument("--trials", type=arguments.int_range(1, 1000), default=3, help="--phone-punches: training trials per punch (default 3)")
+    e.add_argument("--mixed", action="store_true",
+                   help="--phone-punches: also the other set's punches of all kinds spliced into one shuffled stream "
+                        "(as recorded, and turned to one guard)")
+    e.add_argument("--seed", type=arguments.seed, default=0, help="--mixed: the shuffle's seed (default 0)")
     e.add_argument("--keep", type=arguments.int_range(1, 1000), default=None,
                    help="templates: keep each action's KEEP most representative trials (e.g. --trials 5 --keep 3)")
     e.add_argument("--every", type=arguments.int_range(1, 1_000_000), default=1, help="use every k-th test trial (quicker sweeps)")
@@ -243,7 +247,8 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         results[f"uWave users {args.users}, noise_g {kw['noise_g']}, {order}"] = [s.row() for s in pooled]
     if args.phone_punches:
         res = ev.evaluate_phone_punches(
-            args.phone_punches, args.mains, trials=args.trials, template_kwargs=tk, clip_frames=args.clip_frames, **kw
+            args.phone_punches, args.mains, mixed=args.mixed, seed=args.seed, trials=args.trials, template_kwargs=tk,
+            clip_frames=args.clip_frames, **kw
         )
         if not res:
             raise InputError(f"{args.phone_punches}: no <hand>_<punch>_<fast|slow>.csv recordings")

@@ -24,11 +24,13 @@ Per 60 Hz frame (`push`):
   template must match (closed end).
 - Rejection: a decision needs the best template's score under its threshold (learned from the
   spread of the training trials) and the motion to have reached ENERGY_RATIO of the template's
-  peak activity over its first ENERGY_FRAMES frames (a wiggle is not a punch). If not, nothing
+  peak activity over its first ENERGY_FRAMES frames (a wiggle is not a punch; a first decision
+  while the activity is still rising needs RISING_RATIO of it). If not, nothing
   starts; the decision may still come later in the supplementary buffer, else the motion is
   `reject`ed when the buffer is full. A started motion that ends without ever reaching
   CALL_OFF_RATIO of its action's peak is called off: `reject` with `called_off`, no `end`.
-- Null signal (IV-C): `null_frames` quiet frames in a row `end` the motion.
+- Null signal (IV-C): `null_frames` quiet frames in a row `end` the motion; a started motion still
+  too short or too weak to be over waits up to PAUSE_FRAMES more quiet frames (a wind-up's pause).
 - Return rule: a motion that follows the previous one without the hand resting in between
   (after a `complete` end or a discard that ran out) starts only once it reaches RETURN_RATIO of
   that motion's peak activity, a bar that fades by RETURN_DECAY a frame (probably the return).
@@ -45,13 +47,15 @@ Per 60 Hz frame (`push`):
   templates better by ADAPT_MARGIN than any other action's (and under the threshold) joins that
   action's templates; the `adapt` (3) most recent per action are kept beside the trained ones,
   across `reset()`, until `forget_adaptation()`. `adapt=0` turns it off. uWave (day-1
-  templates, days 2-7): final 89.9 -> 94.1 %.
+  templates, days 2-7): final 89.9 -> 94.1 %. The adopted templates take part in switches and
+  the final decision; the first decision takes an adopted template only when no trained one
+  fits under its threshold.
 - After `character_finished()` (IV-C) frames are discarded until a null signal or until
   `discard_frames` frames have passed, so the hand's return does not launch a new action; past
   `discard_frames`, only once the hand has calmed under DISCARD_HOLD_RATIO of the discarded
   motion's peak activity (at most DISCARD_HOLD x `discard_frames` frames).
 
-Events are dicts with the keys of FORMATS.md ("event", "action", "frame", "t" when the caller
+Events are dicts with the keys of docs/formats.md ("event", "action", "frame", "t" when the caller
 passes it, "from_frame" on switches, "score"), plus estimates of the motion's speed (m/s),
 direction (unit vector in the first sensor's frame) and peak acceleration (g).
 """
@@ -62,6 +66,7 @@ import math
 
 import numpy as np
 
+from engine.clock import STEP_HZ
 from engine.recognition.config import RecognizerConfig
 from engine.recognition.dtw import IncrementalDTW
 from engine.recognition.templates import (
@@ -99,8 +104,11 @@ ENERGY_RATIO = 0.4
 # ... of the template's peak over its first ENERGY_FRAMES frames from its onset (a third of a
 # second: a punch's first phase). Against the template's whole peak, a full blow's slow wind-up
 # held the start back by 6-12 frames (phone-punches fast -> slow, median lag 233 -> 83 ms).
+# The bar is the gentlest of the action's templates (ninth round): the best-matching template's
+# own peak made it depend on which trial the shape happened to match, and a strong trial held
+# softer punches back (phone-boxing lag 158 -> 125 ms, uWave 94.68 -> 94.92 %).
 # A motion that ends without ever reaching CALL_OFF_RATIO of the whole peak of its action's
-# templates is called off: its start ends as `reject` (FORMATS.md), not `end`.
+# templates is called off: its start ends as `reject` (docs/formats.md), not `end`.
 ENERGY_FRAMES = 20
 # The open end's constraint while the hand moves: the motion's n frames must reach at least
 # PROGRESS * n frames into a template. 1.25 (templates.MIN_PROGRESS, which the rejection
@@ -110,6 +118,21 @@ ENERGY_FRAMES = 20
 # 1.0 / 1.5 against 1.25 on uWave with the 1.0 g gate; both lost).
 PROGRESS = 0.75
 CALL_OFF_RATIO = 0.25
+# A started motion that the null signal would end while it is still too short to be a punch
+# (fewer than PAUSE_SHORT moving frames) or too weak (it would be called off) is a wind-up that
+# paused, not the whole motion: its end waits up to PAUSE_FRAMES more quiet frames, and when the
+# hand moves on within them the motion goes on (same DTW, a `switch` may correct the start).
+# Ended there at once, the blow that followed started a second action and the early start
+# stayed wrong or was called off (phone-punches right slow -> fast first decision 71.7 -> 86.7 %).
+PAUSE_SHORT = 14
+PAUSE_FRAMES = 20
+# A first decision on a motion whose activity is still rising (this frame is its strongest so far)
+# needs only RISING_RATIO of the template's early peak: a punch on its way gets there; a wiggle or
+# a bounce that has already peaked needs ENERGY_RATIO. A full blow's slow first frames held its
+# start 2-4 frames (phone-punches median lag L fast -> slow 150 -> 92 ms, R 150 -> 100 ms, with
+# the pause rule above to keep the finals; a plain ENERGY_RATIO 0.25 cost two more false starts
+# on phone-boxing than this).
+RISING_RATIO = 0.25
 # No first decision while the hand has been under the gate for this many frames in a row: the
 # motion is dying down (a twitch, the tail of a move the `complete` end split off); it waits, and
 # is rejected if it ends. Synthesized session 6 -> 0 false starts, phone-punches right slow ->
@@ -242,6 +265,7 @@ class DualBufferRecognizer:
         self.window = max(self.supplementary, AUTO_MAX_MAIN if main == "auto" else int(main))
         cut = [self._cut_at_gate(templates, k) for k in order]
         self._peak_act = self._template_peaks(templates, order)  # (T, 2): early and window peaks
+        self._action_bar = np.minimum.reduceat(self._peak_act[:, 0], self._action_starts)  # per action
         self.template_lengths = np.array([len(c) for c in cut])
         self.min_progress = float(min_progress)
         self.dtw = IncrementalDTW(cut, method=dtw_method, min_progress=min_progress)
@@ -255,6 +279,7 @@ class DualBufferRecognizer:
         self._dtw_method = dtw_method
         self._base = (cut, self._tmpl_action.copy(), self.thresholds.copy(), self._peak_act.copy())
         self._base_starts = self._action_starts.copy()
+        self._is_adapted = np.zeros(len(order), dtype=bool)
         self._adapted: dict[int, list[tuple[np.ndarray, tuple[float, float]]]] = {}  # (motion, (early, window) peaks)
         self._motion = np.empty((max(self.window, self._extend_to), self.dim))  # features since the onset
         self._acts = np.empty(len(self._motion))  # the gate's activity since the onset
@@ -513,6 +538,8 @@ class DualBufferRecognizer:
                 complete = self._complete(scores)
             else:
                 self._extended = True
+        if self.quiet >= self.null_frames and not complete and self._paused():
+            return  # a wind-up's pause: the blow may follow
         if self.quiet >= self.null_frames or complete:
             if self.action is not None and self._called_off():
                 events.append(self._event("reject", self.action_names[self.action], None, called_off=True))
@@ -530,6 +557,13 @@ class DualBufferRecognizer:
             self._after_peak = self._peak_act_seen if complete else 0.0
             self._begin_motion_state()
             self.state = IDLE
+
+    def _paused(self) -> bool:
+        """A started motion under the null signal that is too short or too weak to be over yet
+        waits up to PAUSE_FRAMES more quiet frames for the hand to go on (see PAUSE_SHORT)."""
+        if self.action is None or self.quiet >= self.null_frames + PAUSE_FRAMES:
+            return False
+        return self.count - self.quiet < PAUSE_SHORT or self._called_off()
 
     def _called_off(self) -> bool:
         """A started motion that ended without ever reaching CALL_OFF_RATIO of the peak of any of
@@ -576,6 +610,7 @@ class DualBufferRecognizer:
             self.thresholds = _inserted(self.thresholds, hi, loosest)
             self._peak_act = _inserted(self._peak_act, hi, peak)
             self.template_lengths = _inserted(self.template_lengths, hi, len(motion))
+            self._is_adapted = _inserted(self._is_adapted, hi, True)
             self.dtw.add_templates([motion], at=[hi])
             self._stop_scores = np.empty(self.dtw.T)
         elif len(kept) == self.adapt + 1 and first < hi:  # the oldest adapted one makes room
@@ -588,6 +623,9 @@ class DualBufferRecognizer:
         else:  # `adapt` lowered since: rebuilt from the kept lists
             del kept[: -self.adapt]
             self._set_templates()
+            return
+        # the action's energy bar: its gentlest template, the adopted one included (as `_set_templates`)
+        self._action_bar[a] = self._peak_act[self._action_starts[a] : self._action_ends[a], 0].min()
 
     def _set_templates(self) -> None:
         """The DTW over the trained templates plus the adapted ones, sorted by action. An adapted
@@ -601,11 +639,13 @@ class DualBufferRecognizer:
         peaks = np.concatenate([peaks, [peak for _, _, peak in extra]]) if extra else peaks
         cut = [*cut, *(motion for motion, _, _ in extra)]
         order = np.argsort(acts, kind="stable")
+        self._is_adapted = order >= len(self._base[1])
         self._tmpl_action = acts[order]
         self._action_starts = np.flatnonzero(np.r_[True, np.diff(self._tmpl_action) != 0])
         self._action_ends = np.r_[self._action_starts[1:], len(order)]
         self.thresholds = thr[order]
         self._peak_act = peaks[order]
+        self._action_bar = np.minimum.reduceat(self._peak_act[:, 0], self._action_starts)
         cut = [cut[k] for k in order]
         self.template_lengths = np.array([len(c) for c in cut])
         self.dtw.update_templates(cut)  # the adopted one added, a dropped one removed: no rebuild
@@ -619,9 +659,24 @@ class DualBufferRecognizer:
 
     def _decide(self, scores: np.ndarray, events: list[dict]) -> None:
         best = int(np.argmin(scores))
+        if self.action is None and self._is_adapted[best]:
+            # The first decision comes from the trained templates while one of them fits under
+            # its threshold: an adopted motion is whole, wind-up included, and the next punch's
+            # wind-up of another kind matched it (a full uppercut adopted, the following jabs
+            # started as uppercuts: mixed right fast -> slow first 80.7 % without adaptation,
+            # 57.9 % with it). A player drifted beyond every trained template still starts
+            # from the adopted ones; switches and the final decision use them all.
+            trained = np.where(self._is_adapted, np.inf, scores)
+            k = int(np.argmin(trained))
+            if trained[k] <= self.thresholds[k]:
+                best = k
         best_action = int(self._tmpl_action[best])
         best_score = float(scores[best])
-        strong = not self.reject or self._peak_act_seen >= ENERGY_RATIO * self._peak_act[best, 0]
+        bar = self._action_bar[best_action]
+        strong = not self.reject or self._peak_act_seen >= ENERGY_RATIO * bar
+        if not strong and self.action is None:
+            # still rising (this frame is the motion's strongest so far): RISING_RATIO will do
+            strong = self._peak_act_seen >= RISING_RATIO * bar and self._act >= self._peak_act_seen
         ok = strong and best_score <= self.thresholds[best]
         if self.action is None:
             ok = ok and (not self.reject or self._peak_act_seen >= RETURN_RATIO * self._after_peak)
@@ -728,7 +783,7 @@ class DualBufferRecognizer:
         """Integrate the gravity-removed acceleration since the onset: a rough hand velocity,
         enough to tell a hard punch from a soft one (the paper's future work). Plain floats."""
         xs, g0, v = self._xs, self._g0_list, self._velocity
-        k_dt = G / 60.0
+        k_dt = G / STEP_HZ
         for k in range(0, len(xs), 3):
             dx, dy, dz = xs[k] - g0[k], xs[k + 1] - g0[k + 1], xs[k + 2] - g0[k + 2]
             self._peak_g = max(self._peak_g, math.sqrt(dx * dx + dy * dy + dz * dz))

@@ -153,7 +153,10 @@ def test_evaluate_phone_punches_cross_session(capsys):
     rows = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
     assert [r["set"] for r in rows] == [f"phone-punches {h} {a} -> {b}" for h in ("left", "right") for a, b in (("fast", "slow"), ("slow", "fast"))]
     for r in rows:
-        assert r["n"] >= 50 and r["started"] >= 0.9 and r["final_correct"] >= 0.85 and r["lag_ms"] <= 150
+        # lag: full blows (-> slow) 166 / 200 ms since adopted templates no longer give the first
+        # decision (ninth round, docs/recognition.md); quick punches 66 / 92 ms
+        assert r["n"] >= 50 and r["started"] >= 0.9 and r["final_correct"] >= 0.85
+        assert r["lag_ms"] <= (210 if r["set"].endswith("slow") else 120)
 
 
 def test_recognizer_settings_saved_with_templates_config_file_and_command_line(tmp_path, trials_dir, capsys, monkeypatch):
@@ -199,3 +202,56 @@ def test_evaluate_takes_recognizer_settings_like_its_flags(tmp_path, trials_dir,
     assert rows("--recognizer", "noise_g=2.5") != rows()
     assert main(["evaluate", str(trials_dir), "--train", str(trials_dir), "--recognizer", "nope=1"]) == 2
     assert "unknown recognizer setting 'nope'" in capsys.readouterr().err
+
+
+def test_mixed_stream_splices_every_punch_once_in_a_seeded_order():
+    """The mixed protocol: every labelled punch of the single-kind recordings, with its rest, in
+    one shuffled stream; with one guard, every punch's rest is turned to the same tilt."""
+    from tools.evaluate_recognition import REST_WINDOW, intervals, mixed_stream
+
+    rng = np.random.default_rng(0)
+
+    def recording(label, axis, guard):
+        parts, labels = [], []
+        for _ in range(4):
+            still = np.tile(guard, (40, 1)) + rng.normal(0, 0.01, (40, 3))
+            parts += [still, still[:24] + bump(axis)[:24] - G]
+            labels += [""] * 40 + [label] * 24
+        parts.append(np.tile(guard, (40, 1)))
+        labels += [""] * 40
+        return np.vstack(parts), labels
+
+    tilted = np.array([0.0, np.sin(1.0), np.cos(1.0)])  # this kind's guard is 57 degrees off
+    recs = [recording("jab", 0, G), recording("upper", 1, tilted)]
+    frames, labels = mixed_stream(recs, seed=1)
+    ivs = intervals(labels)
+    assert sorted(a for a, _, _ in ivs) == ["jab"] * 4 + ["upper"] * 4
+    assert all(b - a == 24 for _, a, b in ivs)  # each punch whole, none merged with another
+    kinds = [a for a, _, _ in ivs]
+    assert kinds != sorted(kinds) and kinds != sorted(kinds, reverse=True)  # interleaved
+    assert mixed_stream(recs, seed=1)[1] == labels and mixed_stream(recs, seed=2)[1] != labels
+    # the splices are ramps, not steps: no jump bigger than the punches' own
+    assert np.abs(np.diff(frames, axis=0)).max() < 1.0
+    # one guard: the rest just before every punch points the same way
+    frames, labels = mixed_stream(recs, seed=1, one_guard=True)
+    rests = np.array([frames[a - REST_WINDOW // 2 : a].mean(axis=0) for _, a, _ in intervals(labels)])
+    rests /= np.linalg.norm(rests, axis=1, keepdims=True)
+    assert np.allclose(rests, rests[0], atol=0.05)
+    plain = np.array([f[a - 4 : a].mean(axis=0) for f, lab in [mixed_stream(recs, seed=1)] for _, a, _ in intervals(lab)])
+    assert np.ptp(plain[:, 1]) > 0.5  # as recorded the two kinds' guards differ
+
+
+def test_evaluate_phone_punches_mixed(capsys):
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[2].parent / "shared" / "data" / "phone-punches"
+    if not root.is_dir():
+        pytest.skip("../shared/data/phone-punches is not here")
+    assert main(["evaluate", "--phone-punches", str(root), "--mains", "6", "--mixed", "--json"]) == 0
+    rows = {json.loads(line)["set"]: json.loads(line) for line in capsys.readouterr().out.splitlines()}
+    for h in ("left", "right"):
+        for a, b in (("fast", "slow"), ("slow", "fast")):
+            one = rows[f"phone-punches {h} {a} -> {b}"]
+            for kind in ("mixed", "mixed, one guard"):
+                r = rows[f"phone-punches {h} {a} -> {b} {kind}"]
+                assert r["n"] == one["n"] and r["started"] >= 0.9  # every punch is there, and starts

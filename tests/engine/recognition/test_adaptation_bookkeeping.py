@@ -47,11 +47,13 @@ class RebuildingRecognizer(DualBufferRecognizer):
         peaks = np.concatenate([peaks, [peak for _, _, peak in extra]]) if extra else peaks
         cut = [*cut, *(motion for motion, _, _ in extra)]
         order = np.argsort(acts, kind="stable")
+        self._is_adapted = order >= len(self._base[1])
         self._tmpl_action = acts[order]
         self._action_starts = np.flatnonzero(np.r_[True, np.diff(self._tmpl_action) != 0])
         self._action_ends = np.r_[self._action_starts[1:], len(order)]
         self.thresholds = thr[order]
         self._peak_act = peaks[order]
+        self._action_bar = np.minimum.reduceat(self._peak_act[:, 0], self._action_starts)
         cut = [cut[k] for k in order]
         self.template_lengths = np.array([len(c) for c in cut])
         self.dtw.update_templates(cut)
@@ -64,7 +66,8 @@ class RebuildingRecognizer(DualBufferRecognizer):
 
 
 def assert_same_templates(new: DualBufferRecognizer, ref: RebuildingRecognizer) -> None:
-    for name in ("_tmpl_action", "_action_starts", "_action_ends", "thresholds", "_peak_act", "template_lengths"):
+    for name in ("_tmpl_action", "_action_starts", "_action_ends", "thresholds", "_peak_act", "template_lengths",
+                 "_is_adapted", "_action_bar"):
         np.testing.assert_array_equal(getattr(new, name), getattr(ref, name), err_msg=name)
     assert new.dtw.T == ref.dtw.T and len(new._stop_scores) == len(ref._stop_scores)
     np.testing.assert_array_equal(new.dtw.lengths, ref.dtw.lengths)

@@ -372,3 +372,18 @@ def test_only_confident_complete_motions_adapt(templates):
     assert rec.dtw.T == len(templates.actions)
     final_actions(rec, [bump(0, 3.0)])
     assert rec.dtw.T == len(templates.actions) + 1
+
+
+def test_adopted_motions_do_not_give_the_first_decision(templates):
+    """An adopted motion is whole, wind-up included: an uppercut thrown after a jab-like wind-up,
+    once adopted, must not start the next jab, whose first frames look like that wind-up. The
+    trained templates alone give the `start`; the adopted one still serves switches."""
+    wind_up = np.tile(G, (10, 1))
+    wind_up[:, 0] += 2.4 * np.sin(np.linspace(0, np.pi, 10))  # a jab's opening, a little gentler
+    upper = np.vstack([wind_up, bump(2, 3.0)])
+    rec = DualBufferRecognizer(templates, reject=False)
+    assert final_actions(rec, [upper]) == ["upper"]
+    assert rec.dtw.T == len(templates.actions) + 1  # adopted
+    jab = bump(0, 2.4)  # the same gentler opening, then a whole jab
+    events = run(rec, np.vstack([rest(10), jab, rest(20)]))
+    assert [e["action"] for e in events if e["event"] == "start"] == ["jab"]

@@ -118,6 +118,56 @@ def test_start_counts_main_frames_from_where_the_motion_left_the_rest(templates,
     assert max(start["onset_frame"] + 5, gate_open) <= start["frame"] < plain["frame"]
 
 
+def test_a_slow_rising_punch_starts_when_the_main_buffer_fills(templates, monkeypatch):
+    # The jab three times slower than its templates: still rising when the main buffer fills, it
+    # needs only RISING_RATIO of the templates' early peak and starts on that frame; the plain
+    # energy bar (ENERGY_RATIO) held it 4 frames more.
+    slow = np.vstack([rest(30), bump(0, 3.0, 72), rest(30)])
+    start = next(e for e in run(DualBufferRecognizer(templates, noise_g=0.3, main=6), slow) if e["event"] == "start")
+    assert start["action"] == "jab" and start["frame"] == start["onset_frame"] + 5
+    monkeypatch.setattr(db, "RISING_RATIO", db.ENERGY_RATIO)
+    held = next(e for e in run(DualBufferRecognizer(templates, noise_g=0.3, main=6), slow) if e["event"] == "start")
+    assert held["frame"] >= start["frame"] + 3
+
+
+def test_a_flick_that_has_peaked_needs_the_whole_energy_bar(templates, monkeypatch):
+    # Up to a third of the jab's peak in 3 frames, then falling: when the main buffer fills it is
+    # no longer rising, so the lower bar does not apply and nothing starts. A plain bar as low as
+    # RISING_RATIO starts a jab on it.
+    flick = np.tile(G, (15, 1))
+    flick[:3, 0] += np.sin(np.linspace(0, np.pi / 2, 3))
+    flick[3:, 0] += np.cos(np.linspace(0, np.pi / 2, 12))
+    frames = np.vstack([rest(30), flick, rest(30)])
+    assert not [e for e in run(DualBufferRecognizer(templates, noise_g=0.3, main=6), frames) if e["event"] == "start"]
+    monkeypatch.setattr(db, "ENERGY_RATIO", db.RISING_RATIO)
+    assert [e["action"] for e in run(DualBufferRecognizer(templates, noise_g=0.3, main=6), frames) if e["event"] == "start"] == ["jab"]
+
+
+def test_the_energy_bar_is_the_gentlest_trial_of_the_action():
+    # Two strong jab trials (3 g) and a gentle one (1.2 g): a 0.9 g jab that has already peaked
+    # when the main buffer fills is as strong as the gentle trial allows (0.4 x 1.2 g) and starts;
+    # against the strong trials' bar (0.4 x 3 g) nothing started.
+    rng = np.random.default_rng(1)
+
+    def trial(m: np.ndarray) -> np.ndarray:
+        return np.vstack([rest(30, 0.01, rng), m + rng.normal(0, 0.02, m.shape), rest(10, 0.01, rng)])
+
+    tm = Templates.from_trials({"jab": [trial(bump(0, 3.0)), trial(bump(0, 3.0)), trial(bump(0, 1.2))],
+                                "upper": [trial(bump(2, 3.0)) for _ in range(3)]})
+    rec = DualBufferRecognizer(tm, noise_g=0.3, adapt=0)
+    jab = rec.action_names.index("jab")
+    lo, hi = rec._action_starts[jab], rec._action_ends[jab]
+    assert rec._action_bar[jab] == pytest.approx(rec._peak_act[lo:hi, 0].min()) == pytest.approx(1.2, abs=0.1)
+    flick = np.tile(G, (15, 1))
+    flick[:3, 0] += 0.9 * np.sin(np.linspace(0, np.pi / 2, 3))
+    flick[3:, 0] += 0.9 * np.cos(np.linspace(0, np.pi / 2, 12))
+    frames = np.vstack([rest(30), flick, rest(30)])
+    assert [e["action"] for e in run(rec, frames) if e["event"] == "start"] == ["jab"]
+    strong = DualBufferRecognizer(tm, noise_g=0.3, adapt=0)
+    strong._action_bar = np.maximum.reduceat(strong._peak_act[:, 0], strong._action_starts)
+    assert not [e for e in run(strong, frames) if e["event"] == "start"]
+
+
 def test_a_wrong_early_start_is_switched_or_called_off():
     rng = np.random.default_rng(5)
     # "swing": a gentle 0.8 g wind-up over 20 frames, then a 4 g blow; "poke": a short 0.8 g
@@ -143,6 +193,36 @@ def test_a_wrong_early_start_is_switched_or_called_off():
     events = run(DualBufferRecognizer(tm, noise_g=0.3), np.vstack([rest(30), swing, rest(30)]))
     assert [(e["event"], e["action"]) for e in events if e["event"] in ("start", "end")] == [("start", "swing"), ("end", "swing")]
     assert not any(e.get("called_off") for e in events)
+
+
+def test_a_wind_up_that_pauses_goes_on_as_one_motion(monkeypatch):
+    # A swing's wind-up, the hand back under the gate for 10 frames (more than null_frames), then
+    # the blow: one motion, started once on the wind-up and ended as a swing. Without the pause
+    # rule the null signal called the wind-up off and the blow started a second action.
+    rng = np.random.default_rng(5)
+    wind = np.tile(G, (20, 1))
+    wind[:, 1] += 0.8 * np.sin(np.linspace(0, np.pi / 2, 20))
+    blow = bump(1, 4.0)
+    blow[:, 1] = np.maximum(blow[:, 1], 0.8 + G[1])
+    swing = np.vstack([wind, blow])
+    poke = bump(0, 0.8, 14)
+    tm = Templates.from_trials({
+        "swing": [np.vstack([rest(10), swing + rng.normal(0, 0.02, swing.shape), rest(10)]) for _ in range(3)],
+        "poke": [np.vstack([rest(10), poke + rng.normal(0, 0.02, poke.shape), rest(10)]) for _ in range(3)],
+    })
+    paused = np.vstack([rest(30), wind[:12], wind[:12][::-1], rest(10), bump(1, 4.0), rest(40)])
+    events = run(DualBufferRecognizer(tm, noise_g=0.3, null_frames=6), paused)
+    kinds = [(e["event"], e["action"]) for e in events if e["event"] != "switch"]
+    assert kinds == [("start", "swing"), ("end", "swing")]
+    assert events[0]["frame"] < 30 + 24  # started on the wind-up, before the pause
+    # a pause longer than PAUSE_FRAMES ends the wind-up: called off, the blow starts anew
+    longer = np.vstack([rest(30), wind[:12], wind[:12][::-1], rest(6 + db.PAUSE_FRAMES + 4), bump(1, 4.0), rest(40)])
+    kinds = [(e["event"], e["action"]) for e in run(DualBufferRecognizer(tm, noise_g=0.3, null_frames=6), longer)]
+    assert ("reject", "swing") in kinds and [k for k, _ in kinds].count("start") == 2
+    # without the rule, the same paused swing was two motions
+    monkeypatch.setattr(db, "PAUSE_FRAMES", 0)
+    kinds = [(e["event"], e["action"]) for e in run(DualBufferRecognizer(tm, noise_g=0.3, null_frames=6), paused)]
+    assert [k for k, _ in kinds].count("start") == 2
 
 
 def test_a_wrong_early_start_is_corrected_by_a_switch():
