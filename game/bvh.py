@@ -102,81 +102,112 @@ def read_bvh(path: str | os.PathLike) -> BVH:
 
 def parse_bvh(text: str, name: str = "<bvh>") -> BVH:
     lines = text.splitlines()
-    joints: list[BVHJoint] = []
-    stack: list[int] = []
+    h = _Hierarchy(name)
     i = 0
-    pending: int | None = None  # joint whose '{' we expect
-    in_end = False
-    end_owner = -1
-
-    def fail(msg: str, line: int) -> BVHError:
-        return BVHError(f"{name}:{line + 1}: {msg}")
-
     while i < len(lines):
         tok = lines[i].split()
-        if not tok:
-            i += 1
-            continue
+        if tok and not h.feed(tok, i):
+            break  # MOTION
+        i += 1
+    if not h.joints:
+        raise BVHError(f"{name}: no HIERARCHY joints")
+    if i >= len(lines):
+        raise BVHError(f"{name}: no MOTION section")
+    frames, frame_time, i = _motion_header(lines, i + 1, name)
+    total = sum(len(j.channels) for j in h.joints)
+    motion = _motion_values(lines[i:], frames, total, name)
+    if not all((np.abs(j.offset) <= MAX_VALUE).all() and (j.end_site is None or (np.abs(j.end_site) <= MAX_VALUE).all())
+               for j in h.joints):
+        raise BVHError(f"{name}: an OFFSET that is not a finite number up to {MAX_VALUE:g}")
+    return BVH(h.joints, motion.reshape(frames, total), frame_time, name)
+
+
+class _Hierarchy:
+    """The HIERARCHY section read line by line: joints, their offsets and channels."""
+
+    def __init__(self, name: str):
+        self.name = name
+        self.joints: list[BVHJoint] = []
+        self.stack: list[int] = []
+        self.pending: int | None = None  # joint whose '{' we expect
+        self.in_end = False
+        self.end_owner = -1
+
+    def fail(self, msg: str, line: int) -> BVHError:
+        return BVHError(f"{self.name}:{line + 1}: {msg}")
+
+    def feed(self, tok: list[str], i: int) -> bool:
+        """Take one non-empty line's tokens; False at MOTION (the hierarchy ends)."""
         key = tok[0].upper()
         if key == "HIERARCHY":
             pass
         elif key in ("ROOT", "JOINT"):
-            if len(tok) < 2:
-                raise fail(f"{key} without a name", i)
-            parent = stack[-1] if stack else -1
-            if key == "JOINT" and parent < 0:
-                raise fail("JOINT outside a ROOT", i)
-            joints.append(BVHJoint(" ".join(tok[1:]), parent, np.zeros(3), []))
-            pending = len(joints) - 1
+            self._joint(key, tok, i)
         elif key == "END":
-            in_end, end_owner = True, stack[-1] if stack else -1
+            self.in_end, self.end_owner = True, self.stack[-1] if self.stack else -1
         elif key == "{":
-            if in_end:
-                stack.append(-2)
-            elif pending is not None:
-                stack.append(pending)
-                pending = None
-            else:
-                raise fail("unexpected '{'", i)
+            self._open(i)
         elif key == "}":
-            if not stack:
-                raise fail("unbalanced '}'", i)
-            top = stack.pop()
-            if top == -2:
-                in_end = False
+            if not self.stack:
+                raise self.fail("unbalanced '}'", i)
+            if self.stack.pop() == -2:
+                self.in_end = False
         elif key == "OFFSET":
-            try:
-                off = np.array([float(v) for v in tok[1:4]])
-            except ValueError:
-                raise fail("OFFSET needs 3 numbers", i) from None
-            if len(off) != 3:
-                raise fail("OFFSET needs 3 numbers", i)
-            if in_end:
-                joints[end_owner].end_site = off
-            elif stack:
-                joints[stack[-1]].offset = off
+            self._offset(tok, i)
         elif key == "CHANNELS":
-            try:
-                n = int(tok[1])
-            except (IndexError, ValueError):
-                raise fail("CHANNELS needs a count", i) from None
-            chans = tok[2 : 2 + n]
-            if len(chans) != n or not stack or stack[-1] < 0:
-                raise fail("bad CHANNELS line", i)
-            for c in chans:
-                if c.lower() not in _CHANNELS:
-                    raise fail(f"unknown channel {c!r}", i)
-            joints[stack[-1]].channels = [c.lower() for c in chans]
+            self._channels(tok, i)
         elif key == "MOTION":
-            break
+            return False
         else:
-            raise fail(f"unexpected {tok[0]!r} in the hierarchy", i)
-        i += 1
-    if not joints:
-        raise BVHError(f"{name}: no HIERARCHY joints")
-    if i >= len(lines):
-        raise BVHError(f"{name}: no MOTION section")
-    i += 1
+            raise self.fail(f"unexpected {tok[0]!r} in the hierarchy", i)
+        return True
+
+    def _joint(self, key: str, tok: list[str], i: int) -> None:
+        if len(tok) < 2:
+            raise self.fail(f"{key} without a name", i)
+        parent = self.stack[-1] if self.stack else -1
+        if key == "JOINT" and parent < 0:
+            raise self.fail("JOINT outside a ROOT", i)
+        self.joints.append(BVHJoint(" ".join(tok[1:]), parent, np.zeros(3), []))
+        self.pending = len(self.joints) - 1
+
+    def _open(self, i: int) -> None:
+        if self.in_end:
+            self.stack.append(-2)
+        elif self.pending is not None:
+            self.stack.append(self.pending)
+            self.pending = None
+        else:
+            raise self.fail("unexpected '{'", i)
+
+    def _offset(self, tok: list[str], i: int) -> None:
+        try:
+            off = np.array([float(v) for v in tok[1:4]])
+        except ValueError:
+            raise self.fail("OFFSET needs 3 numbers", i) from None
+        if len(off) != 3:
+            raise self.fail("OFFSET needs 3 numbers", i)
+        if self.in_end:
+            self.joints[self.end_owner].end_site = off
+        elif self.stack:
+            self.joints[self.stack[-1]].offset = off
+
+    def _channels(self, tok: list[str], i: int) -> None:
+        try:
+            n = int(tok[1])
+        except (IndexError, ValueError):
+            raise self.fail("CHANNELS needs a count", i) from None
+        chans = tok[2 : 2 + n]
+        if len(chans) != n or not self.stack or self.stack[-1] < 0:
+            raise self.fail("bad CHANNELS line", i)
+        for c in chans:
+            if c.lower() not in _CHANNELS:
+                raise self.fail(f"unknown channel {c!r}", i)
+        self.joints[self.stack[-1]].channels = [c.lower() for c in chans]
+
+
+def _motion_header(lines: list[str], i: int, name: str) -> tuple[int, float, int]:
+    """'Frames:' and 'Frame Time:' from line i on, checked; returns them and the next line."""
     frames = frame_time = None
     while i < len(lines) and (frames is None or frame_time is None):
         t = lines[i].strip()
@@ -198,8 +229,12 @@ def parse_bvh(text: str, name: str = "<bvh>") -> BVH:
         raise BVHError(f"{name}: 'Frame Time: {frame_time}' (from {MIN_FRAME_TIME} to {MAX_FRAME_TIME} s)")
     if frames * frame_time > MAX_DURATION_S:
         raise BVHError(f"{name}: {frames * frame_time:.6g} s of motion, over the {MAX_DURATION_S / 3600:g} h limit")
-    total = sum(len(j.channels) for j in joints)
-    rows = [ln for ln in lines[i:] if ln.strip()]
+    return frames, frame_time, i
+
+
+def _motion_values(lines: list[str], frames: int, total: int, name: str) -> np.ndarray:
+    """The (frames, total) motion lines as numbers, each a finite value up to MAX_VALUE."""
+    rows = [ln for ln in lines if ln.strip()]
     if len(rows) < frames:
         raise BVHError(f"{name}: {frames} frames announced, {len(rows)} found")
     try:
@@ -211,10 +246,7 @@ def parse_bvh(text: str, name: str = "<bvh>") -> BVH:
     if not (np.abs(motion) <= MAX_VALUE).all():  # also refuses nan
         row = int(np.argmin((np.abs(motion) <= MAX_VALUE).all(axis=1)))
         raise BVHError(f"{name}: motion frame {row} has a value that is not a finite number up to {MAX_VALUE:g}")
-    if not all((np.abs(j.offset) <= MAX_VALUE).all() and (j.end_site is None or (np.abs(j.end_site) <= MAX_VALUE).all())
-               for j in joints):
-        raise BVHError(f"{name}: an OFFSET that is not a finite number up to {MAX_VALUE:g}")
-    return BVH(joints, motion.reshape(frames, total), frame_time, name)
+    return motion
 
 
 _CHANNELS = {"xposition", "yposition", "zposition", "xrotation", "yrotation", "zrotation"}
@@ -477,64 +509,9 @@ def write_bvh(path: str | os.PathLike, positions: np.ndarray, fps: float = FPS, 
     for i, (_, parent, _, _) in enumerate(hier):
         if parent >= 0:
             children[parent].append(i)
-    glob = np.zeros((len(hier), n, 3, 3))
-    local = np.zeros((len(hier), n, 3, 3))
-    for i, (_, parent, _, j) in enumerate(hier):
-        pr = glob[parent] if parent >= 0 else np.repeat(np.eye(3)[None], n, 0)
-        kids = children[i]
-        if len(kids) == 1:
-            kid = kids[0]
-            kj = hier[kid][3]
-            if kj is None:  # a helper hangs below: aim at the pelvis/chest's child through it
-                kj = hier[children[kid][0]][3]
-                off = hier[children[kid][0]][2]
-            else:
-                off = hier[kid][2]
-            me = j if j is not None else hier[parent][3]
-            want = np.einsum("nji,nj->ni", pr, pos[:, kj] - pos[:, me])
-            local[i] = _swing(off, want)
-        elif len(kids) > 1:
-            # the pelvis / chest itself: orient by its children (Kabsch), helpers do the rest
-            offs, wants = [], []
-            for kid in kids:
-                g = children[kid][0]
-                offs.append(hier[g][2])
-                wants.append(np.einsum("nji,nj->ni", pr, pos[:, hier[g][3]] - pos[:, j]))
-            a = np.array(offs)
-            b = np.stack(wants, axis=1)
-            h = np.einsum("ki,nkj->nij", a, b)
-            u, _, vt = np.linalg.svd(h)
-            d = np.sign(np.linalg.det(np.swapaxes(vt, 1, 2) @ np.swapaxes(u, 1, 2)))
-            fix = np.repeat(np.eye(3)[None], n, 0)
-            fix[:, 2, 2] = d
-            local[i] = np.swapaxes(vt, 1, 2) @ fix @ np.swapaxes(u, 1, 2)
-        else:
-            local[i] = np.repeat(np.eye(3)[None], n, 0)
-        glob[i] = pr @ local[i]
+    local = _export_rotations(pos, hier, children)
     lines = ["HIERARCHY"]
-    order_names = " ".join(f"{a}rotation" for a in EXPORT_ORDER)
-
-    def emit(i: int, depth: int) -> None:
-        name, parent, off, _ = hier[i]
-        pad = "  " * depth
-        lines.append(f"{pad}{'ROOT' if parent < 0 else 'JOINT'} {name}")
-        lines.append(f"{pad}{{")
-        lines.append(f"{pad}  OFFSET {off[0]:.6f} {off[1]:.6f} {off[2]:.6f}")
-        if parent < 0:
-            lines.append(f"{pad}  CHANNELS 6 Xposition Yposition Zposition {order_names}")
-        else:
-            lines.append(f"{pad}  CHANNELS 3 {order_names}")
-        if children[i]:
-            for c in children[i]:
-                emit(c, depth + 1)
-        else:
-            lines.append(f"{pad}  End Site")
-            lines.append(f"{pad}  {{")
-            lines.append(f"{pad}    OFFSET 0.000000 5.000000 0.000000")
-            lines.append(f"{pad}  }}")
-        lines.append(f"{pad}}}")
-
-    emit(0, 0)
+    _emit_joint(lines, hier, children, 0, 0)
     cols = [pos[:, 0]]
     for i in range(len(hier)):
         cols.append(_euler_zxy(local[i]))
@@ -544,6 +521,82 @@ def write_bvh(path: str | os.PathLike, positions: np.ndarray, fps: float = FPS, 
     path = Path(path)
     path.write_text("\n".join(lines) + "\n", encoding="utf-8")
     return path
+
+
+def _export_rotations(pos: np.ndarray, hier: list, children: dict[int, list[int]]) -> np.ndarray:
+    """(joints, n, 3, 3) local rotations that pose the export skeleton on `pos`."""
+    n = len(pos)
+    glob = np.zeros((len(hier), n, 3, 3))
+    local = np.zeros((len(hier), n, 3, 3))
+    for i, (_, parent, _, _) in enumerate(hier):
+        pr = glob[parent] if parent >= 0 else np.repeat(np.eye(3)[None], n, 0)
+        kids = children[i]
+        if len(kids) == 1:
+            local[i] = _aim_at_child(pos, hier, children, i, pr)
+        elif len(kids) > 1:
+            local[i] = _orient_by_children(pos, hier, children, i, pr)
+        else:
+            local[i] = np.repeat(np.eye(3)[None], n, 0)
+        glob[i] = pr @ local[i]
+    return local
+
+
+def _aim_at_child(pos: np.ndarray, hier: list, children: dict[int, list[int]], i: int, pr: np.ndarray) -> np.ndarray:
+    """The swing that points joint i's only bone at its child's position."""
+    _, parent, _, j = hier[i]
+    kid = children[i][0]
+    kj = hier[kid][3]
+    if kj is None:  # a helper hangs below: aim at the pelvis/chest's child through it
+        kj = hier[children[kid][0]][3]
+        off = hier[children[kid][0]][2]
+    else:
+        off = hier[kid][2]
+    me = j if j is not None else hier[parent][3]
+    want = np.einsum("nji,nj->ni", pr, pos[:, kj] - pos[:, me])
+    return _swing(off, want)
+
+
+def _orient_by_children(pos: np.ndarray, hier: list, children: dict[int, list[int]], i: int,
+                        pr: np.ndarray) -> np.ndarray:
+    """The pelvis / chest itself: orient by its children (Kabsch), helpers do the rest."""
+    n = len(pos)
+    j = hier[i][3]
+    offs, wants = [], []
+    for kid in children[i]:
+        g = children[kid][0]
+        offs.append(hier[g][2])
+        wants.append(np.einsum("nji,nj->ni", pr, pos[:, hier[g][3]] - pos[:, j]))
+    a = np.array(offs)
+    b = np.stack(wants, axis=1)
+    h = np.einsum("ki,nkj->nij", a, b)
+    u, _, vt = np.linalg.svd(h)
+    d = np.sign(np.linalg.det(np.swapaxes(vt, 1, 2) @ np.swapaxes(u, 1, 2)))
+    fix = np.repeat(np.eye(3)[None], n, 0)
+    fix[:, 2, 2] = d
+    return np.swapaxes(vt, 1, 2) @ fix @ np.swapaxes(u, 1, 2)
+
+
+def _emit_joint(lines: list[str], hier: list, children: dict[int, list[int]], i: int, depth: int) -> None:
+    """Joint i and its subtree as HIERARCHY lines."""
+    order_names = " ".join(f"{a}rotation" for a in EXPORT_ORDER)
+    name, parent, off, _ = hier[i]
+    pad = "  " * depth
+    lines.append(f"{pad}{'ROOT' if parent < 0 else 'JOINT'} {name}")
+    lines.append(f"{pad}{{")
+    lines.append(f"{pad}  OFFSET {off[0]:.6f} {off[1]:.6f} {off[2]:.6f}")
+    if parent < 0:
+        lines.append(f"{pad}  CHANNELS 6 Xposition Yposition Zposition {order_names}")
+    else:
+        lines.append(f"{pad}  CHANNELS 3 {order_names}")
+    if children[i]:
+        for c in children[i]:
+            _emit_joint(lines, hier, children, c, depth + 1)
+    else:
+        lines.append(f"{pad}  End Site")
+        lines.append(f"{pad}  {{")
+        lines.append(f"{pad}    OFFSET 0.000000 5.000000 0.000000")
+        lines.append(f"{pad}  }}")
+    lines.append(f"{pad}}}")
 
 
 def played_positions(lib: dict[str, Action], names: list[str], root=(0.0, 0.0, 0.0),

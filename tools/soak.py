@@ -126,8 +126,6 @@ def soak(steps: int, seed: int = 0, render_n: int = 60, sample_seconds: float = 
          warmup_seconds: float = WARMUP_SECONDS, use_tracemalloc: bool = False,
          graph=None, templates=None, progress=None) -> dict:
     """Play `steps` steps; return the figures (see the module doc)."""
-    import tracemalloc
-
     import numpy as np
 
     from tools.scripted_match import build_session
@@ -138,53 +136,16 @@ def soak(steps: int, seed: int = 0, render_n: int = 60, sample_seconds: float = 
         s.loop.wrap_stages(lambda name, fn: render_every(fn, render_n) if name.startswith("render") else fn)
     counters = SoakCounters(s)
     s.loop.add_stage("soak", counters, 0.0)
-    if use_tracemalloc:
-        tracemalloc.start()
     sample_steps = max(1, int(round(sample_seconds * HZ)))
     warmup_steps = min(int(round(warmup_seconds * HZ)), steps)
-    samples: list[tuple[int, int, int, int]] = []  # (step, rss, python blocks, traced bytes)
-
-    def sample() -> None:
-        traced = tracemalloc.get_traced_memory()[0] if use_tracemalloc else 0
-        samples.append((s.loop.step_index, rss_bytes(), sys.getallocatedblocks(), traced))
-
-    error = None
-    try:
-        sample()
-        while s.loop.step_index < steps:
-            s.loop.run(steps=min(sample_steps, steps - s.loop.step_index))
-            sample()
-            if progress is not None and len(samples) % 60 == 0:
-                progress(s.loop.step_index, steps, samples[-1][1])
-    except Exception:  # the soak's finding: report it, don't hide it
-        error = traceback.format_exc()
-    if use_tracemalloc:
-        tracemalloc.stop()
+    samples, error = _play_sampled(s, steps, sample_steps, use_tracemalloc, progress)
     wall, cpu = time.perf_counter() - t_wall, time.process_time() - t_cpu
 
     arr = np.array(samples, dtype=np.float64)
-    base_i = int(np.searchsorted(arr[:, 0], warmup_steps))
-    base_i = min(base_i, len(arr) - 1)
-    base, after = arr[base_i], arr[base_i:]
-    mb = 1024 * 1024
-    memory = {
-        "rss_start_mb": arr[0, 1] / mb,
-        "rss_at_warmup_mb": base[1] / mb,
-        "rss_end_mb": arr[-1, 1] / mb,
-        "rss_max_mb": arr[:, 1].max() / mb,
-        "rss_growth_after_warmup_mb": float(after[:, 1].max() - base[1]) / mb,
-        "rss_end_minus_warmup_mb": float(arr[-1, 1] - base[1]) / mb,
-        "python_blocks_at_warmup": int(base[2]),
-        "python_blocks_end": int(arr[-1, 2]),
-        "python_blocks_growth_after_warmup": int(after[:, 2].max() - base[2]),
-        "samples": len(arr),
-        "warmup_seconds": warmup_steps / HZ,
-    }
-    if use_tracemalloc:
-        memory["traced_at_warmup_mb"] = base[3] / mb
-        memory["traced_growth_after_warmup_mb"] = float(after[:, 3].max() - base[3]) / mb
+    memory = _memory_figures(arr, warmup_steps, use_tracemalloc)
     gc_counts = gc.get_stats()
     b = s.loop.budget
+    mb = 1024 * 1024
     return {
         "steps": s.loop.step_index,
         "simulated_minutes": s.loop.step_index / HZ / 60,
@@ -207,6 +168,63 @@ def soak(steps: int, seed: int = 0, render_n: int = 60, sample_seconds: float = 
         "gc_collections": [g["collections"] for g in gc_counts],
         "memory_series": {"step": arr[:, 0].astype(int).tolist(), "rss_mb": (arr[:, 1] / mb).round(3).tolist()},
     }
+
+
+def _play_sampled(s, steps: int, sample_steps: int, use_tracemalloc: bool,
+                  progress) -> tuple[list[tuple[int, int, int, int]], str | None]:
+    """Run the session to `steps`, sampling memory every `sample_steps`: the samples
+    (step, rss, python blocks, traced bytes) and the exception's traceback, if one escaped."""
+    import tracemalloc
+
+    if use_tracemalloc:
+        tracemalloc.start()
+    samples: list[tuple[int, int, int, int]] = []
+
+    def sample() -> None:
+        traced = tracemalloc.get_traced_memory()[0] if use_tracemalloc else 0
+        samples.append((s.loop.step_index, rss_bytes(), sys.getallocatedblocks(), traced))
+
+    error = None
+    try:
+        sample()
+        while s.loop.step_index < steps:
+            s.loop.run(steps=min(sample_steps, steps - s.loop.step_index))
+            sample()
+            if progress is not None and len(samples) % 60 == 0:
+                progress(s.loop.step_index, steps, samples[-1][1])
+    except Exception:  # the soak's finding: report it, don't hide it
+        error = traceback.format_exc()
+    if use_tracemalloc:
+        tracemalloc.stop()
+    return samples, error
+
+
+def _memory_figures(arr, warmup_steps: int, use_tracemalloc: bool) -> dict:
+    """The memory figures from the samples (rows of step, rss, python blocks, traced bytes):
+    where they stood at warm-up and how far they grew after it."""
+    import numpy as np
+
+    base_i = int(np.searchsorted(arr[:, 0], warmup_steps))
+    base_i = min(base_i, len(arr) - 1)
+    base, after = arr[base_i], arr[base_i:]
+    mb = 1024 * 1024
+    memory = {
+        "rss_start_mb": arr[0, 1] / mb,
+        "rss_at_warmup_mb": base[1] / mb,
+        "rss_end_mb": arr[-1, 1] / mb,
+        "rss_max_mb": arr[:, 1].max() / mb,
+        "rss_growth_after_warmup_mb": float(after[:, 1].max() - base[1]) / mb,
+        "rss_end_minus_warmup_mb": float(arr[-1, 1] - base[1]) / mb,
+        "python_blocks_at_warmup": int(base[2]),
+        "python_blocks_end": int(arr[-1, 2]),
+        "python_blocks_growth_after_warmup": int(after[:, 2].max() - base[2]),
+        "samples": len(arr),
+        "warmup_seconds": warmup_steps / HZ,
+    }
+    if use_tracemalloc:
+        memory["traced_at_warmup_mb"] = base[3] / mb
+        memory["traced_growth_after_warmup_mb"] = float(after[:, 3].max() - base[3]) / mb
+    return memory
 
 
 def passed(fig: dict, max_growth_mb: float) -> bool:

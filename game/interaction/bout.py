@@ -129,80 +129,99 @@ class ActionTable:
         for n in names:
             frames.append(rules.wait_frames if n == WAIT else max(1, int(lib[n].frames)))
         frames = np.array(frames, dtype=np.int64)
-        fmax = int(frames.max())
-        A = len(names)
-        offset = np.zeros((A, fmax, 3))
-        window = np.full((A, fmax), -1, dtype=np.int64)
-        cover = np.zeros((A, fmax), dtype=np.int64)
-        gkind = np.zeros((A, fmax), dtype=np.int64)
-        reach, damage, targets, slot, wend, win_action = [], [], [], [], [], []
-        win_hand, win_hook = [], []
+        c = _Compiled(len(names), int(frames.max()))
         kinds = []
         for i, n in enumerate(names):
-            F = int(frames[i])
-            a = lib.get(n)
-            kinds.append("idle" if n == WAIT else a.kind)
+            kinds.append("idle" if n == WAIT else lib.get(n).kind)
             if n == WAIT:
-                guard = lib.get(WAIT)
-                for g in (guard.guards if guard is not None else []):
-                    s, e = _frames_of(g)
-                    if s <= 0 and e >= guard.frames - 1:   # a guard held for the whole idle clip
-                        cover[i, :F] |= sum(PART_BITS.get(p, 0) for p in g.covers)
-                        gkind[i, :F] = GUARD_PARRY if g.kind == "parry" else GUARD_BLOCK
-                continue
-            offset[i, :F] = [np.asarray(a.root_offset(float(f)), dtype=float)[:3] for f in range(F)]
-            offset[i, F:] = offset[i, F - 1]
-            for k, w in enumerate(a.attacks):
-                s, e = _frames_of(w)
-                s, e = max(0, s), min(F - 1, e)
-                window[i, s:e + 1] = len(reach)
-                reach.append(float(w.reach))
-                damage.append(float(w.damage))
-                targets.append(PART_BITS.get(w.targets[0], HEAD) if len(w.targets) else HEAD)
-                win_hand.append(w.hand)
-                win_hook.append("hook" in n)
-                slot.append(k)
-                wend.append(e)
-                win_action.append(i)
-            for g in a.guards:
-                s, e = _frames_of(g)
-                s, e = max(0, s), min(F - 1, e)
-                cover[i, s:e + 1] |= sum(PART_BITS.get(p, 0) for p in g.covers)
-                gkind[i, s:e + 1] = np.maximum(gkind[i, s:e + 1],
-                                               GUARD_PARRY if g.kind == "parry" else GUARD_BLOCK)
-        spent_before = np.zeros((A, fmax + 1), dtype=np.int64)
-        for wid in range(len(reach)):
-            spent_before[win_action[wid], wend[wid] + 1:] |= 1 << slot[wid]
-
-        def pick(*words: str) -> int:
-            """The first reaction whose name has all these words (else fewer of them)."""
-            for k in range(len(words), 0, -1):
-                for n in reactions:
-                    if all(w in n.split("_") for w in words[:k]):
-                        return names.index(n)
-            return -1
-
+                c.add_idle_guard(i, int(frames[i]), lib.get(WAIT))
+            else:
+                c.add_action(i, n, int(frames[i]), lib.get(n))
         if not reactions:
             raise ValueError("the action library has no hit reaction (kind 'reaction')")
-        win_react = []
-        for k in range(len(reach)):
-            part = "head" if targets[k] == HEAD else "body"
-            side = ("left" if win_hand[k] == "r" else "right") if win_hook[k] else "front"
-            strength = "heavy" if damage[k] >= rules.heavy_damage else "light"
-            r = pick(part, side, strength)
-            win_react.append(r if r >= 0 else names.index(reactions[0]))
-        damage_arr = np.array(damage, dtype=float)
+        win_react = [_window_reaction(c, k, reactions, names, rules) for k in range(len(c.reach))]
+        damage_arr = np.array(c.damage, dtype=float)
         return cls(
-            names=names, kinds=kinds, frames=frames, offset=offset, window=window,
-            win_reach=np.array(reach, dtype=float), win_damage=damage_arr,
-            win_targets=np.array(targets, dtype=np.int64), win_slot=np.array(slot, dtype=np.int64),
-            win_end=np.array(wend, dtype=np.int64), guard_cover=cover, guard_kind=gkind,
-            spent_before=spent_before, choices=np.arange(len(choosable) + 1), wait=len(choosable),
+            names=names, kinds=kinds, frames=frames, offset=c.offset, window=c.window,
+            win_reach=np.array(c.reach, dtype=float), win_damage=damage_arr,
+            win_targets=np.array(c.targets, dtype=np.int64), win_slot=np.array(c.slot, dtype=np.int64),
+            win_end=np.array(c.wend, dtype=np.int64), guard_cover=c.cover, guard_kind=c.gkind,
+            spent_before=c.spent_before(), choices=np.arange(len(choosable) + 1), wait=len(choosable),
             win_react=np.array(win_react, dtype=np.int64),
-            react_stagger=max(pick("stagger"), pick("parried")),
+            react_stagger=max(_pick_reaction(reactions, names, "stagger"),
+                              _pick_reaction(reactions, names, "parried")),
             max_damage=float(damage_arr.max()) if len(damage_arr) else 1.0,
             attack_ids=np.array([i for i, k in enumerate(kinds) if k == "attack"], dtype=np.int64),
         )
+
+
+class _Compiled:
+    """The per-(action, frame) arrays and per-window lists `ActionTable.from_library` fills."""
+
+    def __init__(self, n_actions: int, fmax: int):
+        self.fmax = fmax
+        self.offset = np.zeros((n_actions, fmax, 3))
+        self.window = np.full((n_actions, fmax), -1, dtype=np.int64)
+        self.cover = np.zeros((n_actions, fmax), dtype=np.int64)
+        self.gkind = np.zeros((n_actions, fmax), dtype=np.int64)
+        self.reach, self.damage, self.targets, self.slot, self.wend, self.win_action = [], [], [], [], [], []
+        self.win_hand, self.win_hook = [], []
+
+    def add_idle_guard(self, i: int, F: int, guard) -> None:
+        """The wait: covered by the library's idle guards held for the whole idle clip."""
+        for g in (guard.guards if guard is not None else []):
+            s, e = _frames_of(g)
+            if s <= 0 and e >= guard.frames - 1:
+                self.cover[i, :F] |= sum(PART_BITS.get(p, 0) for p in g.covers)
+                self.gkind[i, :F] = GUARD_PARRY if g.kind == "parry" else GUARD_BLOCK
+
+    def add_action(self, i: int, n: str, F: int, a) -> None:
+        """Root motion, attack windows and guards of action `a` (named `n`, row `i`)."""
+        self.offset[i, :F] = [np.asarray(a.root_offset(float(f)), dtype=float)[:3] for f in range(F)]
+        self.offset[i, F:] = self.offset[i, F - 1]
+        for k, w in enumerate(a.attacks):
+            s, e = _frames_of(w)
+            s, e = max(0, s), min(F - 1, e)
+            self.window[i, s:e + 1] = len(self.reach)
+            self.reach.append(float(w.reach))
+            self.damage.append(float(w.damage))
+            self.targets.append(PART_BITS.get(w.targets[0], HEAD) if len(w.targets) else HEAD)
+            self.win_hand.append(w.hand)
+            self.win_hook.append("hook" in n)
+            self.slot.append(k)
+            self.wend.append(e)
+            self.win_action.append(i)
+        for g in a.guards:
+            s, e = _frames_of(g)
+            s, e = max(0, s), min(F - 1, e)
+            self.cover[i, s:e + 1] |= sum(PART_BITS.get(p, 0) for p in g.covers)
+            self.gkind[i, s:e + 1] = np.maximum(self.gkind[i, s:e + 1],
+                                                GUARD_PARRY if g.kind == "parry" else GUARD_BLOCK)
+
+    def spent_before(self) -> np.ndarray:
+        """(A, Fmax + 1) bits of the windows over before each frame."""
+        out = np.zeros((self.offset.shape[0], self.fmax + 1), dtype=np.int64)
+        for wid in range(len(self.reach)):
+            out[self.win_action[wid], self.wend[wid] + 1:] |= 1 << self.slot[wid]
+        return out
+
+
+def _pick_reaction(reactions: list[str], names: list[str], *words: str) -> int:
+    """The first reaction whose name has all these words (else fewer of them); -1 if none."""
+    for k in range(len(words), 0, -1):
+        for n in reactions:
+            if all(w in n.split("_") for w in words[:k]):
+                return names.index(n)
+    return -1
+
+
+def _window_reaction(c: _Compiled, k: int, reactions: list[str], names: list[str], rules: BoutRules) -> int:
+    """The reaction a clean hit of window `k` causes: its part, the side it comes from, its strength."""
+    part = "head" if c.targets[k] == HEAD else "body"
+    side = ("left" if c.win_hand[k] == "r" else "right") if c.win_hook[k] else "front"
+    strength = "heavy" if c.damage[k] >= rules.heavy_damage else "light"
+    r = _pick_reaction(reactions, names, part, side, strength)
+    return r if r >= 0 else names.index(reactions[0])
 
 
 class Bouts:
@@ -292,9 +311,20 @@ class StepResult:
 
 def step(b: Bouts, rules: BoutRules, rewards: Rewards) -> StepResult:
     """Advance every bout by one 60 Hz step (call `start` for choosing boxers first)."""
-    t = b.table
-    n = b.n
     prev_pos = b.pos.copy()
+    f = _advance_clips(b, rules)
+    _keep_apart(b, rules)
+    yaw = b.yaw
+    gain = np.zeros((b.n, 2))
+    gain -= _running_away(b, prev_pos, rewards)
+    landed, blocked, damage = _resolve_hits(b, f, yaw, rules, rewards, gain)
+    return StepResult(gain=gain, landed=landed, blocked=blocked, damage=damage)
+
+
+def _advance_clips(b: Bouts, rules: BoutRules) -> np.ndarray:
+    """Turn each boxer towards the other, show the next frame and move the roots by the
+    clip's root motion. Returns the frame shown, clipped to the table's length."""
+    t = b.table
     prev_f = np.clip(b.frame, 0, None)
     # every step each boxer turns part of the way to face the other (the game does the same)
     dv = b.pos[:, 1] - b.pos[:, 0]
@@ -309,7 +339,11 @@ def step(b: Bouts, rules: BoutRules, rewards: Rewards) -> StepResult:
     c, s = np.cos(b.base_yaw), np.sin(b.base_yaw)
     b.pos[..., 0] += delta[..., 0] * c + delta[..., 1] * s
     b.pos[..., 1] += -delta[..., 0] * s + delta[..., 1] * c
-    # the roots keep apart (the bodies clinch, they do not merge)
+    return f
+
+
+def _keep_apart(b: Bouts, rules: BoutRules) -> None:
+    """The roots keep apart (the bodies clinch, they do not merge)."""
     dv = b.pos[:, 1] - b.pos[:, 0]
     dist = np.hypot(dv[:, 0], dv[:, 1])
     push = np.maximum(rules.min_separation - dist, 0.0) / 2
@@ -317,69 +351,79 @@ def step(b: Bouts, rules: BoutRules, rewards: Rewards) -> StepResult:
     unit[dist < 1e-9] = (0.0, 1.0)
     b.pos[:, 0] -= unit * push[:, None]
     b.pos[:, 1] += unit * push[:, None]
-    yaw = b.yaw
 
-    gain = np.zeros((n, 2))
-    # running away: moving further off when already far
+
+def _running_away(b: Bouts, prev_pos: np.ndarray, rewards: Rewards) -> np.ndarray:
+    """(B, 2) penalty for moving further off when already far."""
     prev_dv = prev_pos[:, 1] - prev_pos[:, 0]
     prev_d = np.hypot(prev_dv[:, 0], prev_dv[:, 1])
     away_dir = np.stack([-prev_dv, prev_dv], axis=1) / np.maximum(prev_d, 1e-9)[:, None, None]
     away = np.einsum("bik,bik->bi", b.pos - prev_pos, away_dir)
-    gain -= rewards.run_penalty * np.maximum(away, 0.0) * (prev_d > rewards.far_distance)[:, None]
+    return rewards.run_penalty * np.maximum(away, 0.0) * (prev_d > rewards.far_distance)[:, None]
 
-    # hits, both attackers against the pre-hit state (simultaneous hits both land)
+
+def _resolve_hits(b: Bouts, f: np.ndarray, yaw: np.ndarray, rules: BoutRules, rewards: Rewards,
+                  gain: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Both attackers against the pre-hit state (simultaneous hits both land): hp, rewards
+    (added to `gain`) and reactions. Returns (landed, blocked, damage), each (B, 2)."""
+    t = b.table
+    n = b.n
     w = t.window[b.act, f]
     slot = np.where(w >= 0, t.win_slot[np.maximum(w, 0)], 0)
     live = (w >= 0) & (((b.spent >> slot) & 1) == 0)
-    landed = np.zeros((n, 2))
-    blocked = np.zeros((n, 2))
-    damage = np.zeros((n, 2))
-    if live.any():
-        fwd = np.stack([np.sin(yaw), np.cos(yaw)], axis=-1)
-        right = np.stack([np.cos(yaw), -np.sin(yaw)], axis=-1)
-        other_pos = b.pos[:, ::-1]
-        rel = other_pos - b.pos
-        ahead = np.einsum("bik,bik->bi", rel, fwd)
-        side = np.einsum("bik,bik->bi", rel, right)
-        wi = np.maximum(w, 0)
-        inreach = (ahead > 0) & (ahead <= t.win_reach[wi] + rules.body_radius) & (
-            np.abs(side) <= rules.lateral_tolerance)
-        hit = live & inreach
-        if hit.any():
-            oact, of = b.act[:, ::-1], f[:, ::-1]
-            cover = t.guard_cover[oact, of]
-            kind = t.guard_kind[oact, of]
-            # a guard covers only attacks from the front of the defender
-            defender_bearing = wrap_angle(np.arctan2(-rel[..., 0], -rel[..., 1]) - yaw[:, ::-1])
-            cover = np.where(np.abs(defender_bearing) <= math.radians(rules.guard_arc_deg), cover, 0)
-            open_ = t.win_targets[wi] & ~cover
-            clean = hit & (open_ != 0)
-            guarded = hit & (open_ == 0)
-            parried = guarded & (kind == GUARD_PARRY)
-            dmg = t.win_damage[wi]
-            took = np.where(clean, dmg, np.where(guarded, rules.chip * dmg, 0.0))
-            damage = took
-            b.hp -= took[:, ::-1]
-            landed = clean.astype(float)
-            blocked = guarded[:, ::-1].astype(float)
-            strong = 1.0 + rewards.strong_bonus * dmg / max(t.max_damage, 1e-9)
-            gain += np.where(clean, dmg * strong, 0.0)
-            gain += np.where(guarded & ~parried, rewards.blocked_hit * dmg, 0.0)
-            gain += np.where(guarded & ~parried, rewards.block_credit * dmg, 0.0)[:, ::-1]
-            gain += np.where(parried, rewards.parry_credit * dmg, 0.0)[:, ::-1]
-            b.spent |= np.where(hit, 1 << slot, 0)
-            # reactions: a clean hit interrupts the defender, a parry staggers the attacker
-            react = t.win_react[wi]
-            for i in (0, 1):
-                o = 1 - i
-                r = np.flatnonzero(clean[:, i])
-                if len(r):
-                    _interrupt(b, r, o, react[r, i])
-                if t.react_stagger >= 0:
-                    r = np.flatnonzero(parried[:, i])
-                    if len(r):
-                        _interrupt(b, r, i, t.react_stagger)
-    return StepResult(gain=gain, landed=landed, blocked=blocked, damage=damage)
+    zeros = (np.zeros((n, 2)), np.zeros((n, 2)), np.zeros((n, 2)))
+    if not live.any():
+        return zeros
+    rel = b.pos[:, ::-1] - b.pos
+    wi = np.maximum(w, 0)
+    hit = live & _in_reach(t, rel, yaw, wi, rules)
+    if not hit.any():
+        return zeros
+    oact, of = b.act[:, ::-1], f[:, ::-1]
+    cover = t.guard_cover[oact, of]
+    kind = t.guard_kind[oact, of]
+    # a guard covers only attacks from the front of the defender
+    defender_bearing = wrap_angle(np.arctan2(-rel[..., 0], -rel[..., 1]) - yaw[:, ::-1])
+    cover = np.where(np.abs(defender_bearing) <= math.radians(rules.guard_arc_deg), cover, 0)
+    open_ = t.win_targets[wi] & ~cover
+    clean = hit & (open_ != 0)
+    guarded = hit & (open_ == 0)
+    parried = guarded & (kind == GUARD_PARRY)
+    dmg = t.win_damage[wi]
+    took = np.where(clean, dmg, np.where(guarded, rules.chip * dmg, 0.0))
+    b.hp -= took[:, ::-1]
+    strong = 1.0 + rewards.strong_bonus * dmg / max(t.max_damage, 1e-9)
+    gain += np.where(clean, dmg * strong, 0.0)
+    gain += np.where(guarded & ~parried, rewards.blocked_hit * dmg, 0.0)
+    gain += np.where(guarded & ~parried, rewards.block_credit * dmg, 0.0)[:, ::-1]
+    gain += np.where(parried, rewards.parry_credit * dmg, 0.0)[:, ::-1]
+    b.spent |= np.where(hit, 1 << slot, 0)
+    _react(b, t.win_react[wi], clean, parried)
+    return clean.astype(float), guarded[:, ::-1].astype(float), took
+
+
+def _in_reach(t: ActionTable, rel: np.ndarray, yaw: np.ndarray, wi: np.ndarray, rules: BoutRules) -> np.ndarray:
+    """(B, 2) bool: the other boxer is ahead within this window's reach and the lateral band."""
+    fwd = np.stack([np.sin(yaw), np.cos(yaw)], axis=-1)
+    right = np.stack([np.cos(yaw), -np.sin(yaw)], axis=-1)
+    ahead = np.einsum("bik,bik->bi", rel, fwd)
+    side = np.einsum("bik,bik->bi", rel, right)
+    return (ahead > 0) & (ahead <= t.win_reach[wi] + rules.body_radius) & (
+        np.abs(side) <= rules.lateral_tolerance)
+
+
+def _react(b: Bouts, react: np.ndarray, clean: np.ndarray, parried: np.ndarray) -> None:
+    """A clean hit interrupts the defender, a parry staggers the attacker."""
+    t = b.table
+    for i in (0, 1):
+        o = 1 - i
+        r = np.flatnonzero(clean[:, i])
+        if len(r):
+            _interrupt(b, r, o, react[r, i])
+        if t.react_stagger >= 0:
+            r = np.flatnonzero(parried[:, i])
+            if len(r):
+                _interrupt(b, r, i, t.react_stagger)
 
 
 def _interrupt(b: Bouts, rows: np.ndarray, who: int, action) -> None:
