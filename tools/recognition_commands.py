@@ -136,7 +136,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     r.add_argument("--main", type=_main_arg, default=None, help="main buffer in frames or 'auto' (default 6)")
     _recognizer_args(r)
     r.set_defaults(func=cmd_recognize)
+    _register_evaluate(sub)
 
+
+def _register_evaluate(sub: argparse._SubParsersAction) -> None:
     e = sub.add_parser(
         "evaluate",
         help="outcome groups per main-buffer size (Figs. 8-9)",
