@@ -16,8 +16,8 @@ waits for the recognizer, was crushed):
 - `ease_form`, `ease_gain`: the CPU answers the player's success both ways (PlayerForm: the
   damage the player lands per round, from the rounds played). A player who lands less than
   `ease_form` (moves the recognizer rejects or misreads, blows that miss) gets a slower, gentler
-  CPU: up to twice the easing when ahead, less pressing when behind, and blows that count up to
-  half. One who lands more gets less easing (none at `ease_gain` times the excess = 1) and a CPU
+  CPU: up to twice the easing when ahead, less pressing when behind, and blows that count down to
+  30 %. One who lands more gets less easing (none at `ease_gain` times the excess = 1) and a CPU
   that presses: it rests less, takes its best action more often and its blows count more, up to
   a cap (FORM_PRESS_*). `ease_gain` 0: the form is not read. The rule reads outcomes, not the
   recognizer, so it corrects itself when recognition or the player gets better or worse.
