@@ -13,13 +13,14 @@ waits for the recognizer, was crushed):
   less often, rests longer; in proportion up to that lead), and when it trails by as much it
   presses (rests less): a player who falls behind gets back into the round, one who leads has
   to hold it (inf: neither; a rubber band, as boxing games do);
-- `ease_form`, `ease_gain`: how much of that it does answers the player's success (PlayerForm:
-  the damage the player lands per round, from the rounds played). A player who lands less than
+- `ease_form`, `ease_gain`: the CPU answers the player's success both ways (PlayerForm: the
+  damage the player lands per round, from the rounds played). A player who lands less than
   `ease_form` (moves the recognizer rejects or misreads, blows that miss) gets a slower, gentler
-  CPU: up to twice the easing when ahead, less pressing when behind, and blows that count up to
-  half; one who lands more gets up to no easing at all (`ease_gain` 0: the form is not read).
-  The rule reads outcomes, not the recognizer, so it follows the player as recognition or the
-  player gets better.
+  CPU: up to twice the easing when ahead, less pressing when behind, and blows that count down to
+  30 %. One who lands more gets less easing (none at `ease_gain` times the excess = 1) and a CPU
+  that presses: it rests less, takes its best action more often and its blows count more, up to
+  a cap (FORM_PRESS_*). `ease_gain` 0: the form is not read. The rule reads outcomes, not the
+  recognizer, so it corrects itself when recognition or the player gets better or worse.
 
 `adaptive` starts at normal and moves a continuous level in [0, 1] (0 easy, 0.5 normal, 1 hard)
 after every round: up when the player won it, down when the player lost it, so the player's
@@ -37,9 +38,13 @@ CHOICES = (*LEVELS, "adaptive")
 ADAPT_STEP = 0.15  # level change per round won or lost (a third of easy -> normal)
 EASE_BEST = 0.9  # fully eased, the CPU takes its best action 90 % less often ...
 EASE_REST = 5.0  # ... rests six times as long between moves ...
-EASE_DAMAGE = 0.5  # ... and its blows count half
+EASE_DAMAGE = 0.7  # ... and its blows count 30 %
 PRESS_REST = 1.0  # fully pressing, it does not rest between moves at all
 LEAD_FORM = 1.0  # a struggling player's lead easing is up to twice as strong
+# against a player who lands more than expected (by the full excess), at any lead:
+FORM_PRESS_REST = 0.3  # it rests up to 30 % less between moves ...
+FORM_PRESS_BEST = 1.0  # ... misses its best action up to never ...
+FORM_PRESS_DAMAGE = 0.15  # ... and its blows count up to 15 % more (the cap)
 FORM_PRIOR = 60.0  # damage per round a player not yet seen is taken to land
 FORM_WEIGHT = 0.5  # the last round's weight in the average
 
@@ -91,9 +96,12 @@ class Difficulty:
         f = float(np.clip(lead / self.ease_lead, -1.0, 1.0)) if np.isfinite(self.ease_lead) else 0.0
         ease = max(f, 0.0) * max(1.0 + LEAD_FORM * w, 0.0)
         press = max(-f, 0.0) * (1.0 - max(w, 0.0))
-        return (self.best_share * (1.0 - EASE_BEST * min(ease, 1.0)),
-                int(round(self.rest_steps * (1.0 + EASE_REST * ease) * (1.0 - PRESS_REST * press))),
-                self.damage * (1.0 - EASE_DAMAGE * max(w, 0.0)))
+        excess = max(-w, 0.0)  # the player lands more than expected: the CPU presses
+        best = self.best_share + (1.0 - self.best_share) * FORM_PRESS_BEST * excess
+        return (best * (1.0 - EASE_BEST * min(ease, 1.0)),
+                int(round(self.rest_steps * (1.0 + EASE_REST * ease) * (1.0 - PRESS_REST * press)
+                          * (1.0 - FORM_PRESS_REST * excess))),
+                self.damage * (1.0 - EASE_DAMAGE * max(w, 0.0)) * (1.0 + FORM_PRESS_DAMAGE * excess))
 
 
 # Tuned with `quickjab graph duel --opponent virtual` (docs/game.md has the figures).
@@ -101,7 +109,7 @@ PRESETS = {
     "easy": Difficulty("easy", best_share=0.6, reaction_steps=10, rest_steps=32, damage=0.6,
                        ease_lead=2.0, ease_form=80.0, ease_gain=1.0),
     "normal": Difficulty("normal", best_share=1.0, reaction_steps=0, rest_steps=14, damage=0.92,
-                         ease_lead=3.0, ease_form=60.0, ease_gain=1.0),
+                         ease_lead=3.0, ease_form=60.0, ease_gain=1.5),
     "hard": Difficulty("hard", best_share=1.0, reaction_steps=0, rest_steps=12, damage=1.0),
 }
 
