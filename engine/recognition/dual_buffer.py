@@ -131,11 +131,7 @@ class DualBufferRecognizer(GravityGate, TemplateSet, FrameFeatures, DecisionRule
             raise TypeError("templates must be a Templates")
         if main != "auto" and (not isinstance(main, (int, np.integer)) or main < 1):
             raise ValueError(f"main must be a positive int or 'auto', not {main!r}")
-        self.auto_gate = noise_g == "auto"
-        if self.auto_gate:
-            noise_g = self._auto_gate(templates.rest_noise) if np.isfinite(templates.rest_noise) else AUTO_START_G
-        elif not isinstance(noise_g, (int, float, np.integer, np.floating)):
-            raise ValueError(f"noise_g must be a number of g or 'auto', not {noise_g!r}")
+        noise_g = self._first_gate(noise_g, templates)
         if supplementary < 1 or null_frames < 1 or discard_frames < 0 or noise_g < 0:
             raise ValueError("supplementary and null_frames must be >= 1, discard_frames and noise_g >= 0")
         self.templates = templates
@@ -154,7 +150,6 @@ class DualBufferRecognizer(GravityGate, TemplateSet, FrameFeatures, DecisionRule
         self.feature = templates.feature
         self._feat = np.empty(self.dim)
         self._stop_scores = np.empty(len(templates.actions))
-
         self.min_progress = float(min_progress)
         self.window = max(self.supplementary, AUTO_MAX_MAIN if main == "auto" else int(main))
         # Adaptation to the player (see `_adapt`): the trained templates stay; up to `adapt`

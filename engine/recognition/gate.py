@@ -67,6 +67,16 @@ class GravityGate:
             on -= 1
         return on - self._backdate(act[max(0, on - BACKDATE_MAX) : on])
 
+    def _first_gate(self, noise_g: float | str, templates: Templates) -> float:
+        """The gate to start with: `noise_g` as given, or for "auto" the one from the training
+        trials' rest (Templates.rest_noise), else AUTO_START_G. Sets `auto_gate`."""
+        self.auto_gate = noise_g == "auto"
+        if self.auto_gate:
+            return self._auto_gate(templates.rest_noise) if np.isfinite(templates.rest_noise) else AUTO_START_G
+        if not isinstance(noise_g, (int, float, np.integer, np.floating)):
+            raise ValueError(f"noise_g must be a number of g or 'auto', not {noise_g!r}")
+        return noise_g
+
     @staticmethod
     def _auto_gate(noise: float) -> float:
         return float(min(max(AUTO_K * noise, AUTO_MIN_G), AUTO_MAX_G))
