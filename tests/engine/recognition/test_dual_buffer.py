@@ -170,7 +170,7 @@ def test_a_weak_motion_right_after_the_discard_is_held_back_but_not_after_a_rest
     """The discard ran out while the hand still moved hard: a weaker motion straight after it is
     probably the return, so its start waits for RETURN_RATIO of the previous motion's peak (a bar
     that fades a little every frame); after a rest the same motion starts on time."""
-    from engine.recognition import dual_buffer
+    from engine.recognition import rules
 
     busy = np.tile(G + np.array([2.0, 0.0, 0.0]), (20, 1))
     busy[::2, 0] -= 4.0
@@ -188,7 +188,7 @@ def test_a_weak_motion_right_after_the_discard_is_held_back_but_not_after_a_rest
 
     onset, held = after_discard(weak)
     rested = after_discard(np.vstack([rest(10), weak]))
-    monkeypatch.setattr(dual_buffer, "RETURN_RATIO", 0.0)
+    monkeypatch.setattr(rules, "RETURN_RATIO", 0.0)
     assert after_discard(weak) == (onset, 5)  # without the rule: main frames from the onset
     assert held >= 10  # with it: until the motion is near the previous one's (fading) peak
     assert rested == after_discard(np.vstack([rest(10), weak])) == (12, 5)  # a rest clears it

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from engine.recognition import DualBufferRecognizer, Templates
+from engine.recognition import DualBufferRecognizer, Templates, gate, rules
 from engine.recognition import dual_buffer as db
 from engine.recognition.templates import features, grip_features, representative_trials
 
@@ -107,7 +107,7 @@ def test_start_counts_main_frames_from_where_the_motion_left_the_rest(templates,
     frames = np.vstack([rest(20), ramp, bump(0, 3.0)[12:], rest(30)])
     events = run(DualBufferRecognizer(templates, noise_g=1.0, main=6), frames)
     start = next(e for e in events if e["event"] == "start")
-    monkeypatch.setattr(db, "ONSET_FRACTION", 10.0)  # no back-dating: the onset is the gate's frame
+    monkeypatch.setattr(gate, "ONSET_FRACTION", 10.0)  # no back-dating: the onset is the gate's frame
     plain = next(e for e in run(DualBufferRecognizer(templates, noise_g=1.0, main=6), frames) if e["event"] == "start")
     gate_open = plain["onset_frame"]
     assert gate_open >= 20 + 9  # the signal reaches 1 g 9 frames into the rise
@@ -125,7 +125,7 @@ def test_a_slow_rising_punch_starts_when_the_main_buffer_fills(templates, monkey
     slow = np.vstack([rest(30), bump(0, 3.0, 72), rest(30)])
     start = next(e for e in run(DualBufferRecognizer(templates, noise_g=0.3, main=6), slow) if e["event"] == "start")
     assert start["action"] == "jab" and start["frame"] == start["onset_frame"] + 5
-    monkeypatch.setattr(db, "RISING_RATIO", db.ENERGY_RATIO)
+    monkeypatch.setattr(rules, "RISING_RATIO", db.ENERGY_RATIO)
     held = next(e for e in run(DualBufferRecognizer(templates, noise_g=0.3, main=6), slow) if e["event"] == "start")
     assert held["frame"] >= start["frame"] + 3
 
@@ -139,7 +139,7 @@ def test_a_flick_that_has_peaked_needs_the_whole_energy_bar(templates, monkeypat
     flick[3:, 0] += np.cos(np.linspace(0, np.pi / 2, 12))
     frames = np.vstack([rest(30), flick, rest(30)])
     assert not [e for e in run(DualBufferRecognizer(templates, noise_g=0.3, main=6), frames) if e["event"] == "start"]
-    monkeypatch.setattr(db, "ENERGY_RATIO", db.RISING_RATIO)
+    monkeypatch.setattr(rules, "ENERGY_RATIO", db.RISING_RATIO)
     assert [e["action"] for e in run(DualBufferRecognizer(templates, noise_g=0.3, main=6), frames) if e["event"] == "start"] == ["jab"]
 
 
@@ -220,7 +220,7 @@ def test_a_wind_up_that_pauses_goes_on_as_one_motion(monkeypatch):
     kinds = [(e["event"], e["action"]) for e in run(DualBufferRecognizer(tm, noise_g=0.3, null_frames=6), longer)]
     assert ("reject", "swing") in kinds and [k for k, _ in kinds].count("start") == 2
     # without the rule, the same paused swing was two motions
-    monkeypatch.setattr(db, "PAUSE_FRAMES", 0)
+    monkeypatch.setattr(rules, "PAUSE_FRAMES", 0)
     kinds = [(e["event"], e["action"]) for e in run(DualBufferRecognizer(tm, noise_g=0.3, null_frames=6), paused)]
     assert [k for k, _ in kinds].count("start") == 2
 

@@ -1,0 +1,224 @@
+"""The dual buffer's decision rules (paper IV-A to IV-C, and the ones beyond it: see
+engine/recognition/dual_buffer.py): when a motion starts, switches, is rejected or called off,
+and when it is over. Mixed into DualBufferRecognizer; they read its motion state."""
+
+from __future__ import annotations
+
+import numpy as np
+
+AUTO_MIN_MAIN = 3
+AUTO_MAX_MAIN = 12
+# A template is only accepted once the motion has been at least this strong relative to the
+# template's own peak activity (a weak wiggle must not launch a punch just because its shape
+# resembles the punch's gentle first frames; a real punch gets there within a few frames).
+CLOSED_END = 1e9  # a min_progress that leaves only each template's last position
+# The consumed-template end needs the motion to have lasted this fraction of the template.
+COMPLETE_MIN_LENGTH = 0.6
+COMPLETE_CALM = 0.3  # ... and the activity to have fallen below this fraction of the motion's peak
+ENERGY_RATIO = 0.4
+# ... of the template's peak over its first ENERGY_FRAMES frames from its onset (a third of a
+# second: a punch's first phase). Against the template's whole peak, a full blow's slow wind-up
+# held the start back by 6-12 frames (phone-punches fast -> slow, median lag 233 -> 83 ms).
+# The bar is the gentlest of the action's templates (ninth round): the best-matching template's
+# own peak made it depend on which trial the shape happened to match, and a strong trial held
+# softer punches back (phone-boxing lag 158 -> 125 ms, uWave 94.68 -> 94.92 %).
+# A motion that ends without ever reaching CALL_OFF_RATIO of the whole peak of its action's
+# templates is called off: its start ends as `reject` (docs/formats.md), not `end`.
+ENERGY_FRAMES = 20
+# The open end's constraint while the hand moves: the motion's n frames must reach at least
+# PROGRESS * n frames into a template. 1.25 (templates.MIN_PROGRESS, which the rejection
+# thresholds are still learned with) held a full blow's slow start against a quick punch's
+# template; 0.75 lets it sit earlier. phone-punches finals 93.1 / 93.9 / 94.7 / 91.7 ->
+# 100 / 95.5 / 98.2 / 91.7 %, uWave and the synthesized players unchanged (recog2 measured
+# 1.0 / 1.5 against 1.25 on uWave with the 1.0 g gate; both lost).
+PROGRESS = 0.75
+CALL_OFF_RATIO = 0.25
+# A started motion that the null signal would end while it is still too short to be a punch
+# (fewer than PAUSE_SHORT moving frames) or too weak (it would be called off) is a wind-up that
+# paused, not the whole motion: its end waits up to PAUSE_FRAMES more quiet frames, and when the
+# hand moves on within them the motion goes on (same DTW, a `switch` may correct the start).
+# Ended there at once, the blow that followed started a second action and the early start
+# stayed wrong or was called off (phone-punches right slow -> fast first decision 71.7 -> 86.7 %).
+PAUSE_SHORT = 14
+PAUSE_FRAMES = 20
+# A first decision on a motion whose activity is still rising (this frame is its strongest so far)
+# needs only RISING_RATIO of the template's early peak: a punch on its way gets there; a wiggle or
+# a bounce that has already peaked needs ENERGY_RATIO. A full blow's slow first frames held its
+# start 2-4 frames (phone-punches median lag L fast -> slow 150 -> 92 ms, R 150 -> 100 ms, with
+# the pause rule above to keep the finals; a plain ENERGY_RATIO 0.25 cost two more false starts
+# on phone-boxing than this).
+RISING_RATIO = 0.25
+# No first decision while the hand has been under the gate for this many frames in a row: the
+# motion is dying down (a twitch, the tail of a move the `complete` end split off); it waits, and
+# is rejected if it ends. Synthesized session 6 -> 0 false starts, phone-punches right slow ->
+# fast final 91.7 -> 93.3 %, the rest unchanged.
+QUIET_DEFER = 2
+# A motion that follows the previous one without the hand resting in between (`null_frames`
+# quiet frames; the previous motion ended by `complete`, or the character finished and the
+# discard ran out while the hand still moved) is likely that motion's return: its first decision
+# also needs RETURN_RATIO of the previous motion's peak activity (discarded frames included), a
+# bar that fades by RETURN_DECAY a frame so that a punch thrown soon after is held back briefly.
+# phone-boxing false starts 2 -> 1, extra starts 6 -> 2 (no character 11 -> 2), type 71.2 ->
+# 74.2 %; phone-punches right slow -> fast extra starts 72 -> 63, left slow -> fast lag 67 -> 75 ms;
+# uWave and the synthesized players unchanged. No decay: quick punches 17-30 frames apart lost.
+RETURN_RATIO = 0.8
+RETURN_DECAY = 0.95
+# The discard (IV-C) does not run out at `discard_frames` while the hand still moves at
+# DISCARD_HOLD_RATIO or more of the discarded motion's peak activity (a full blow's rest or its
+# return, not a new punch), up to DISCARD_HOLD x `discard_frames` frames in all (the paper
+# discards "up to 20 frames"; measured: see docs/recognition.md).
+DISCARD_HOLD_RATIO = 0.5
+DISCARD_HOLD = 1.5
+UNCHANGED_FRAMES = 2
+
+# A decided motion that outlasts the supplementary buffer keeps its DTW growing up to
+# EXTEND_FACTOR x max(window, longest template) frames; at its end a different action whose whole
+# template fits the whole motion better by LATE_SWITCH_MARGIN becomes the final decision (a
+# noticeable change, so a wider margin than a switch inside the buffer). uWave users 1-6: final
+# 89.0 -> 89.9 % (the long gestures the 60-frame buffer cannot see to their end).
+EXTEND_FACTOR = 2.0
+LATE_SWITCH_MARGIN = 0.1
+
+IDLE, ACTIVE, DISCARD = "idle", "active", "discard"
+
+
+class DecisionRules:
+    """The first decision, switches in and after the buffer, the complete end, the pause and
+    the call-off (DualBufferRecognizer's state: `action`, `count`, `quiet`, the templates)."""
+
+    def _paused(self) -> bool:
+        """A started motion under the null signal that is too short or too weak to be over yet
+        waits up to PAUSE_FRAMES more quiet frames for the hand to go on (see PAUSE_SHORT)."""
+        if self.action is None or self.quiet >= self.null_frames + PAUSE_FRAMES:
+            return False
+        return self.count - self.quiet < PAUSE_SHORT or self._called_off()
+
+    def _called_off(self) -> bool:
+        """A started motion that ended without ever reaching CALL_OFF_RATIO of the peak of any of
+        its action's templates was no such action (a wiggle the early start took for one)."""
+        if not self.reject:
+            return False
+        lo, hi = self._action_starts[self.action], self._action_ends[self.action]
+        return self._peak_act_seen < CALL_OFF_RATIO * float(self._peak_act[lo:hi, 1].min())
+
+    def _decide(self, scores: np.ndarray, events: list[dict]) -> None:
+        best = int(np.argmin(scores))
+        if self.action is None and self._is_adapted[best]:
+            # The first decision comes from the trained templates while one of them fits under
+            # its threshold: an adopted motion is whole, wind-up included, and the next punch's
+            # wind-up of another kind matched it (a full uppercut adopted, the following jabs
+            # started as uppercuts: mixed right fast -> slow first 80.7 % without adaptation,
+            # 57.9 % with it). A player drifted beyond every trained template still starts
+            # from the adopted ones; switches and the final decision use them all.
+            trained = np.where(self._is_adapted, np.inf, scores)
+            k = int(np.argmin(trained))
+            if trained[k] <= self.thresholds[k]:
+                best = k
+        best_action = int(self._tmpl_action[best])
+        best_score = float(scores[best])
+        bar = self._action_bar[best_action]
+        strong = not self.reject or self._peak_act_seen >= ENERGY_RATIO * bar
+        if not strong and self.action is None:
+            # still rising (this frame is the motion's strongest so far): RISING_RATIO will do
+            strong = self._peak_act_seen >= RISING_RATIO * bar and self._act >= self._peak_act_seen
+        ok = strong and best_score <= self.thresholds[best]
+        if self.action is None:
+            ok = ok and (not self.reject or self._peak_act_seen >= RETURN_RATIO * self._after_peak)
+            if not self.pending and not self._first_decision_due(scores):
+                return
+            if self.quiet >= QUIET_DEFER and self.count < self.window:
+                self.pending = True  # the motion is dying down: wait, it may have been a twitch
+                return
+            if ok:
+                self._moved = True
+                self.action = best_action
+                self.start_frame = self.frame
+                events.append(self._event("start", self.action_names[best_action], best_score, late=self.pending))
+                self.pending = False
+            elif self.count >= self.window:
+                events.append(self._event("reject", self.action_names[best_action], best_score))
+                self.pending = False
+                self.count = self.window + 1  # decided: no more DTW for this motion
+            else:
+                self.pending = True
+            return
+        # A switch needs the motion to be strong enough for the new template. It needs the new
+        # template's rejection threshold only while the current action still fits under its
+        # own: once the current decision no longer fits either (the player's style has drifted
+        # from the training trials: uWave days 2-7 against day-1 templates), the better match
+        # is the better answer (uWave 85.3 -> 88.7 %); while it fits, no flicker to a misfit.
+        if best_action == self.action or not strong:
+            return
+        if self._beats_current(scores, best_score, ok, self.switch_margin):
+            self.action = best_action
+            events.append(
+                self._event("switch", self.action_names[best_action], best_score, from_frame=self.frame - self.start_frame)
+            )
+
+    def _late_switch(self, scores: np.ndarray, events: list[dict]) -> None:
+        """A motion longer than the supplementary buffer: its DTW kept growing past it, so at
+        the end the whole motion (up to where the hand stopped) is scored against whole
+        templates. A different action that is now better by LATE_SWITCH_MARGIN (with the same
+        threshold rules as a switch) becomes the final decision: a `switch` flagged
+        `whole_motion` (from_frame = n_p, frames since the start, as for any switch) before `end`."""
+        best = int(np.argmin(scores))
+        best_action = int(self._tmpl_action[best])
+        if best_action == self.action:
+            return
+        best_score = float(scores[best])
+        if self._beats_current(scores, best_score, best_score <= self.thresholds[best], LATE_SWITCH_MARGIN):
+            self.action = best_action
+            events.append(
+                self._event(
+                    "switch", self.action_names[best_action], best_score, from_frame=self.frame - self.start_frame, whole_motion=True
+                )
+            )
+
+    def _beats_current(self, scores: np.ndarray, best_score: float, ok: bool, margin: float) -> bool:
+        """A switch's test (in the buffer and at the end): the best template, `ok` if under its
+        threshold, beats the current action's best template by `margin`; a best template over
+        its threshold only counts once the current action no longer fits under its own."""
+        k = self._current_best(scores)
+        current = float(scores[k])
+        if not ok and current <= self.thresholds[k]:
+            return False
+        return best_score < current * (1.0 - margin)
+
+    def _complete(self, scores: np.ndarray) -> bool:
+        """True when the current action's best template has been matched to its end for
+        `complete_frames` frames in a row: the motion is over even if the hand never rests
+        (punches thrown back to back), so the next rise is a new onset."""
+        if self.complete_fraction <= 0 or self.action is None:
+            return False
+        k = self._current_best(scores)
+        if self.count < COMPLETE_MIN_LENGTH * self.template_lengths[k] or self._act > COMPLETE_CALM * self._peak_act_seen:
+            # too early (an alignment can jump to a template's end at the start), or the
+            # hand is still moving hard: not over yet
+            self._done = 0
+            return False
+        pos = self.dtw.position(k)
+        self._done = self._done + 1 if pos + 1 >= self.complete_fraction * self.template_lengths[k] else 0
+        if self._done < self.complete_frames:
+            return False
+        # ... and the motion so far, taken as whole, fits this template at least as well as
+        # any other action's whole template (a long gesture pausing after a stretch that
+        # looks like a shorter action's whole is not over; uWave +0.2, novice +0.4 points,
+        # phone recall unchanged; requiring a margin here costs phone recall).
+        closed = self.dtw.closed_scores()
+        return bool(closed[k] <= np.min(np.where(self._tmpl_action == self.action, np.inf, closed)))
+
+    def _current_best(self, scores: np.ndarray) -> int:
+        """The current action's best-scoring template (templates are sorted by action)."""
+        lo, hi = self._action_starts[self.action], self._action_ends[self.action]
+        return int(lo + scores[lo:hi].argmin())
+
+    def _first_decision_due(self, scores: np.ndarray) -> bool:
+        if self.main != "auto":
+            return self.count >= self.main
+        if self.count < AUTO_MIN_MAIN:
+            return False
+        if self.count >= AUTO_MAX_MAIN or len(self.action_names) < 2:
+            return True
+        per_action = np.minimum.reduceat(scores, self._action_starts)
+        first, second = np.partition(per_action, 1)[:2]
+        return second > 0 and (second - first) / second >= self.auto_lead

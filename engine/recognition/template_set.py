@@ -1,0 +1,134 @@
+"""The recognizer's template set: the trained templates sorted by action (per-action minima are
+one reduceat), their bookkeeping (thresholds, early and window peak activity, lengths, each action's
+energy bar), the DTW over them, and the in-place adoption of adapted templates. Mixed into
+DualBufferRecognizer."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from engine.recognition.dtw import IncrementalDTW
+from engine.recognition.rules import ENERGY_FRAMES, EXTEND_FACTOR
+from engine.recognition.templates import Templates, activity, features
+
+
+def _inserted(a: np.ndarray, i: int, value) -> np.ndarray:
+    """np.insert(a, i, value, axis=0) for one row, in one concatenate (np.insert's own
+    bookkeeping costs ~10x more on these short arrays)."""
+    return np.concatenate((a[:i], np.array([value], dtype=a.dtype), a[i:]))
+
+
+class TemplateSet:
+    """Templates sorted by action, with the trained set kept for adaptation (`_adopt`)."""
+
+    def _build_templates(self, templates: Templates, reject: bool, extend: bool) -> None:
+        """The templates sorted by action and their bookkeeping (thresholds, peaks, lengths, the
+        action's energy bar), the DTW over them cut at the gate, and the trained set kept for
+        adaptation."""
+        # Templates sorted by action so per-action minima are one reduceat.
+        names = templates.action_names
+        index = {a: i for i, a in enumerate(names)}
+        order = np.argsort([index[a] for a in templates.actions], kind="stable")
+        self.action_names = names
+        self._tmpl_action = np.array([index[templates.actions[k]] for k in order])
+        self._action_starts = np.flatnonzero(np.r_[True, np.diff(self._tmpl_action) != 0])
+        self._action_ends = np.r_[self._action_starts[1:], len(order)]
+        self.thresholds = templates.thresholds[order] if reject else np.full(len(order), np.inf)
+        cut = [self._cut_at_gate(templates, k) for k in order]
+        self._peak_act = self._template_peaks(templates, order)  # (T, 2): early and window peaks
+        self._action_bar = np.minimum.reduceat(self._peak_act[:, 0], self._action_starts)  # per action
+        self.template_lengths = np.array([len(c) for c in cut])
+        self.dtw = IncrementalDTW(cut, method=self._dtw_method, min_progress=self.min_progress)
+        # A decided motion that outlasts the supplementary buffer keeps its DTW growing (one
+        # row a frame, as before) up to this many frames, for a final decision over the whole
+        # motion at its end (`_late_switch`); bounded so a hand that never rests costs nothing.
+        self._extend_to = int(EXTEND_FACTOR * max(self.window, int(self.template_lengths.max()))) if extend else 0
+        self._base = (cut, self._tmpl_action.copy(), self.thresholds.copy(), self._peak_act.copy())
+        self._base_starts = self._action_starts.copy()
+        self._is_adapted = np.zeros(len(order), dtype=bool)
+        self._adapted: dict[int, list[tuple[np.ndarray, tuple[float, float]]]] = {}  # (motion, (early, window) peaks)
+
+    def _template_peaks(self, templates: Templates, order: np.ndarray) -> np.ndarray:
+        """(T, 2) each template's peak activity from its onset over its first ENERGY_FRAMES frames
+        (the energy rule of a start) and over `window` frames (a motion that never gets near it
+        is called off)."""
+        return np.array([
+            self._peaks(activity(templates.signals[k], templates.gravity[k])[self._gate_start(templates, k) :]) for k in order
+        ])
+
+    def _peaks(self, act: np.ndarray) -> tuple[float, float]:
+        """(early, window) peaks of an activity series from its onset."""
+        if not len(act):
+            return 0.0, 0.0
+        return float(act[:ENERGY_FRAMES].max()), float(act[: self.window].max())
+
+    def _cut_at_gate(self, templates: Templates, k: int) -> np.ndarray:
+        """Template k from its gate onset, in the recognizer's feature space."""
+        sig, g = templates.signals[k], templates.gravity[k]
+        return features(sig[self._gate_start(templates, k) :], g, self.feature)
+
+    def _adopt(self, motion: np.ndarray, peak: tuple[float, float]) -> None:
+        """The current action's newest adapted template: in place of its oldest once `adapt`
+        are kept, else added at the end of the action's templates. The bookkeeping arrays are
+        edited where they change, the DTW moves a column or two (`replace_template`): what
+        `_set_templates` would build from scratch, at ~1/10 of its cost (on the step a motion ends)."""
+        a = self.action
+        kept = self._adapted.setdefault(a, [])
+        kept.append((motion, peak))
+        lo, hi = int(self._action_starts[a]), int(self._action_ends[a])
+        first = hi - (len(kept) - 1)  # where the action's adapted templates start
+        if len(kept) <= self.adapt:  # one more template: after the action's others
+            b = int(self._base_starts[a])  # its trained templates' thresholds: [b, b + first - lo)
+            loosest = self._base[2][b : b + first - lo].max()
+            self._tmpl_action = _inserted(self._tmpl_action, hi, a)
+            self._action_starts[a + 1 :] += 1
+            self._action_ends[a:] += 1
+            self.thresholds = _inserted(self.thresholds, hi, loosest)
+            self._peak_act = _inserted(self._peak_act, hi, peak)
+            self.template_lengths = _inserted(self.template_lengths, hi, len(motion))
+            self._is_adapted = _inserted(self._is_adapted, hi, True)
+            self.dtw.add_templates([motion], at=[hi])
+            self._stop_scores = np.empty(self.dtw.T)
+        elif len(kept) == self.adapt + 1 and first < hi:  # the oldest adapted one makes room
+            del kept[0]
+            self._peak_act[first : hi - 1] = self._peak_act[first + 1 : hi]
+            self._peak_act[hi - 1] = peak
+            self.template_lengths[first : hi - 1] = self.template_lengths[first + 1 : hi]
+            self.template_lengths[hi - 1] = len(motion)
+            self.dtw.replace_template(first, motion, hi - 1)
+        else:  # `adapt` lowered since: rebuilt from the kept lists
+            del kept[: -self.adapt]
+            self._set_templates()
+            return
+        # the action's energy bar: its gentlest template, the adopted one included (as `_set_templates`)
+        self._action_bar[a] = self._peak_act[self._action_starts[a] : self._action_ends[a], 0].min()
+
+    def _set_templates(self) -> None:
+        """The DTW over the trained templates plus the adapted ones, sorted by action. An adapted
+        template takes its action's loosest trained threshold."""
+        cut, acts, thr, peaks = self._base
+        extra = [(motion, a, peak) for a, kept in self._adapted.items() for motion, peak in kept]
+        new_acts = np.array([a for _, a, _ in extra], dtype=acts.dtype)
+        loosest = np.maximum.reduceat(thr, self._base_starts)  # per action (trained sorted by action)
+        acts = np.concatenate([acts, new_acts])
+        thr = np.concatenate([thr, loosest[new_acts]])
+        peaks = np.concatenate([peaks, [peak for _, _, peak in extra]]) if extra else peaks
+        cut = [*cut, *(motion for motion, _, _ in extra)]
+        order = np.argsort(acts, kind="stable")
+        self._is_adapted = order >= len(self._base[1])
+        self._tmpl_action = acts[order]
+        self._action_starts = np.flatnonzero(np.r_[True, np.diff(self._tmpl_action) != 0])
+        self._action_ends = np.r_[self._action_starts[1:], len(order)]
+        self.thresholds = thr[order]
+        self._peak_act = peaks[order]
+        self._action_bar = np.minimum.reduceat(self._peak_act[:, 0], self._action_starts)
+        cut = [cut[k] for k in order]
+        self.template_lengths = np.array([len(c) for c in cut])
+        self.dtw.update_templates(cut)  # the adopted one added, a dropped one removed: no rebuild
+        self._stop_scores = np.empty(len(cut))
+
+    def forget_adaptation(self) -> None:
+        """Back to the trained templates only (a new player)."""
+        if self._adapted:
+            self._adapted = {}
+            self._set_templates()
