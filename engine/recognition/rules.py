@@ -8,13 +8,13 @@ import numpy as np
 
 AUTO_MIN_MAIN = 3
 AUTO_MAX_MAIN = 12
-# A template is only accepted once the motion has been at least this strong relative to the
-# template's own peak activity (a weak wiggle must not launch a punch just because its shape
-# resembles the punch's gentle first frames; a real punch gets there within a few frames).
 CLOSED_END = 1e9  # a min_progress that leaves only each template's last position
 # The consumed-template end needs the motion to have lasted this fraction of the template.
 COMPLETE_MIN_LENGTH = 0.6
 COMPLETE_CALM = 0.3  # ... and the activity to have fallen below this fraction of the motion's peak
+# A template is only accepted once the motion has been at least this strong relative to the
+# template's own peak activity (a weak wiggle must not launch a punch just because its shape
+# resembles the punch's gentle first frames; a real punch gets there within a few frames).
 ENERGY_RATIO = 0.4
 # ... of the template's peak over its first ENERGY_FRAMES frames from its onset (a third of a
 # second: a punch's first phase). Against the template's whole peak, a full blow's slow wind-up
