@@ -40,13 +40,13 @@ from game.match import Match
 from game.pilot import PILOT_ATTACKS, PILOT_REACH, PILOT_SETTLE_STEPS
 from game.rules import RING_LIMIT, blow_damage
 from game.session import (
-    HOME_BUTTON,
     LOG_KEPT,
     RUMBLE_MS,
     Session,
     SessionConfig,
     _event_key,
     load_templates,
+    pause_on_home,
     templates_in_use,
 )
 from game.session_view import SessionView
@@ -174,10 +174,7 @@ class TwoPlayerSession(Session):
             if self.config.demo:
                 self._pilot_seat(seat)
             samples = seat.source.poll()
-            buttons = int(seat.source.buttons or 0)
-            if buttons & HOME_BUTTON and not seat.buttons & HOME_BUTTON:
-                self.match.toggle_pause()
-            seat.buttons = buttons
+            seat.buttons = pause_on_home(seat.source, seat.buttons, self.match)
             seat.resampler.push(samples)
             lost = seat.disconnected
             if not lost and seat.hud.disconnected:
