@@ -5,8 +5,8 @@ game never imports tools, so it cannot offer the tools' commands here."""
 import argparse
 import sys
 
-from engine.errors import InputError
 from game import play, training
+from game.command import run_command
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -16,17 +16,7 @@ def main(argv: list[str] | None = None) -> int:
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     play.register(sub)
     training.register(sub)
-    args = parser.parse_args(argv)
-    if not getattr(args, "func", None):
-        parser.print_help()
-        return 0
-    try:
-        return int(args.func(args) or 0)
-    except (InputError, OSError) as exc:  # one line, exit 2, as quickjab does
-        print(f"quickjab {args.command}: {exc}", file=sys.stderr)
-        return 2
-    except KeyboardInterrupt:
-        return 130
+    return run_command(parser, parser.parse_args(argv))  # one line, exit 2, as quickjab does
 
 
 if __name__ == "__main__":

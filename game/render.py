@@ -15,19 +15,20 @@ import numpy as np
 import pygame
 from pygame import gfxdraw
 
+# the ring's geometry and colour helpers live with the static layers; re-exported here
+from game.arena import APRON_HALF as APRON_HALF
+from game.arena import KEY as KEY
+from game.arena import POST_HALF as POST_HALF
+from game.arena import POST_HEIGHT as POST_HEIGHT
+from game.arena import RING_HALF as RING_HALF
+from game.arena import ROPE_HEIGHTS as ROPE_HEIGHTS
+from game.arena import build_layers, poly, shade
 from game.camera import Camera
 from game.skeleton import JOINTS
 
 JOINT_NAMES = JOINTS  # the bodies' (17, 3) rows are in the skeleton's joint order
 J = {name: i for i, name in enumerate(JOINT_NAMES)}
 
-RING_HALF = 3.0  # inside the ropes
-APRON_HALF = 3.55
-POST_HALF = 3.15
-ROPE_HEIGHTS = (0.55, 0.9, 1.25)
-POST_HEIGHT = 1.4
-
-KEY = (255, 0, 255)
 # When the near boxer (the player, seen from behind) covers this share of the far one's screen
 # box, it is drawn at NEAR_OPACITY: the CPU shows through it in clinches.
 OVERLAP_SHARE = 0.15
@@ -88,12 +89,17 @@ def _shifted(kind: int, args: tuple, offset: tuple[float, float]) -> tuple:
     return (args[0] - np.array(offset), *args[1:])
 
 
-def shade(c: tuple[int, int, int], k: float) -> tuple[int, int, int]:
-    """Darken (k < 1) or lighten (k > 1, towards white) a colour."""
-    if k <= 1.0:
-        return (int(c[0] * k), int(c[1] * k), int(c[2] * k))
-    t = min(1.0, k - 1.0)
-    return (int(c[0] + (255 - c[0]) * t), int(c[1] + (255 - c[1]) * t), int(c[2] + (255 - c[2]) * t))
+def _capsule_edges(surf: pygame.Surface, a, b, ra: float, rb: float, color) -> None:
+    """The antialiased sides and end caps of a capsule's outline."""
+    ax, ay, bx, by = float(a[0]), float(a[1]), float(b[0]), float(b[1])
+    dx, dy = bx - ax, by - ay
+    n = math.sqrt(dx * dx + dy * dy)
+    if n > 1e-6:
+        px, py = -dy / n, dx / n
+        pygame.draw.aaline(surf, color, (ax + px * ra, ay + py * ra), (bx + px * rb, by + py * rb))
+        pygame.draw.aaline(surf, color, (ax - px * ra, ay - py * ra), (bx - px * rb, by - py * rb))
+    _aacircle(surf, color, ax, ay, ra)
+    _aacircle(surf, color, bx, by, rb)
 
 
 @dataclass
@@ -125,96 +131,10 @@ class Renderer:
             self.camera.resize(size)
             self._static = self._front = None
 
-    def _poly(self, surf: pygame.Surface, color, pts: np.ndarray, width: int = 0) -> None:
-        pygame.draw.polygon(surf, color, np.asarray(pts).tolist(), width)
+    _poly = staticmethod(poly)
 
     def _build_static(self) -> None:
-        w, h = self.camera.size
-        cam = self.camera
-        back = pygame.Surface((w, h))
-        # arena: a dark gradient with a warm glow above the ring
-        grad = np.linspace(0.0, 1.0, h)[:, None]
-        top, bottom = np.array([14, 16, 26]), np.array([40, 34, 44])
-        rows = (top * (1 - grad) + bottom * grad).astype(np.uint8)
-        arr = np.broadcast_to(rows[None, :, :], (w, h, 3))
-        pygame.surfarray.blit_array(back, np.ascontiguousarray(arr))
-        glow = pygame.Surface((w, h), pygame.SRCALPHA)
-        for i in range(6):
-            r = int(h * (0.75 - i * 0.1))
-            pygame.draw.ellipse(glow, (255, 220, 160, 10), (w // 2 - r * 1.3, int(h * 0.12) - r // 3, r * 2.6, r * 1.1))
-        back.blit(glow, (0, 0))
-        # crowd: rows of dim heads in the dark, seeded so every run draws the same crowd
-        rng = np.random.default_rng(7)
-        horizon = int(cam.project(np.array([0.0, 0.0, 14.0]))[0][1])
-        for row in range(5):
-            y = horizon - 20 - row * int(h * 0.045)
-            n = 40 + row * 6
-            xs = rng.uniform(0, w, n)
-            for x in xs:
-                shade_k = rng.uniform(0.5, 1.0)
-                col = (int(60 * shade_k), int(52 * shade_k), int(64 * shade_k))
-                rr = max(3, int(h * 0.012 * (1 - row * 0.1)))
-                pygame.draw.circle(back, col, (int(x), int(y + rng.uniform(-4, 4))), rr)
-        # apron and canvas
-        a, c = APRON_HALF, RING_HALF
-        apron = np.array([[-a, 0, -a], [a, 0, -a], [a, 0, a], [-a, 0, a]], dtype=float)
-        self._poly(back, (70, 22, 30), cam.project(apron)[0])
-        # the apron's skirt on the two sides that face the camera
-        top, _ = cam.project(apron)
-        low, _ = cam.project(apron + [0.0, -0.4, 0.0])
-        for i, j in ((0, 1), (1, 2)):
-            self._poly(back, (44, 12, 20), np.array([top[i], top[j], low[j], low[i]]))
-        canvas = np.array([[-c, 0.002, -c], [c, 0.002, -c], [c, 0.002, c], [-c, 0.002, c]], dtype=float)
-        self._poly(back, (198, 196, 184), cam.project(canvas)[0])
-        # canvas shading: a soft darker border and the centre logo circle
-        inner = canvas * [0.92, 1, 0.92]
-        edge = pygame.Surface((w, h), pygame.SRCALPHA)
-        self._poly(edge, (0, 0, 0, 28), cam.project(canvas)[0])
-        self._poly(edge, (0, 0, 0, 0), cam.project(inner)[0])
-        back.blit(edge, (0, 0))
-        ang = np.linspace(0, 2 * np.pi, 48, endpoint=False)
-        circle = np.stack([1.1 * np.cos(ang), np.full_like(ang, 0.003), 1.1 * np.sin(ang)], axis=1)
-        self._poly(back, (178, 176, 166), cam.project(circle)[0])
-        self._poly(back, (150, 40, 50), cam.project(circle)[0], max(2, int(h / 240)))
-        # corner pads colours: red near the player's corner, blue at the opponent's
-        posts = np.array([[-POST_HALF, 0, -POST_HALF], [POST_HALF, 0, -POST_HALF],
-                          [POST_HALF, 0, POST_HALF], [-POST_HALF, 0, POST_HALF]], dtype=float)
-        post_cols = [(200, 40, 40), (235, 235, 235), (40, 80, 210), (235, 235, 235)]
-        depth_of = cam.project(posts)[1]
-        mid_depth = cam.project(np.zeros(3))[1]
-        # the front layer is opaque ropes over a colour key: an RLE-accelerated blit costs
-        # only its few opaque pixels, where a per-pixel-alpha layer would cost the whole screen
-        front = pygame.Surface((w, h))
-        front.fill(KEY)
-        front.set_colorkey(KEY, pygame.RLEACCEL)
-        # sides: (post i, post j); near sides go in the front layer
-        for i in range(4):
-            j = (i + 1) % 4
-            near = (depth_of[i] + depth_of[j]) / 2 < mid_depth
-            layer = front if near else back
-            for k, hgt in enumerate(ROPE_HEIGHTS):
-                ends = np.array([posts[i] + [0, hgt, 0], posts[j] + [0, hgt, 0]])
-                xy, z = cam.project(ends)
-                thick = max(2, int(cam.scale_at(z.mean()) * 0.035))
-                col = (235, 235, 235) if k != 1 else (200, 40, 40)
-                pygame.draw.line(layer, shade(col, 0.55), xy[0] + [0, thick * 0.5], xy[1] + [0, thick * 0.5], thick)
-                pygame.draw.line(layer, col, xy[0], xy[1], thick)
-        for i in range(4):
-            near = depth_of[i] < mid_depth
-            layer = front if near else back
-            ends = np.array([posts[i], posts[i] + [0, POST_HEIGHT, 0]])
-            xy, z = cam.project(ends)
-            thick = max(4, int(cam.scale_at(z.mean()) * 0.16))
-            pygame.draw.line(layer, (60, 60, 66), xy[0], xy[1], thick)
-            pad = np.array([posts[i] + [0, 0.45, 0], posts[i] + [0, POST_HEIGHT - 0.05, 0]])
-            pxy, _ = cam.project(pad)
-            pygame.draw.line(layer, post_cols[i], pxy[0], pxy[1], int(thick * 1.25))
-        if pygame.display.get_init() and pygame.display.get_surface() is not None:
-            # in the display's pixel format: a per-frame blit without conversion
-            back = back.convert()
-            front = front.convert()
-            front.set_colorkey(KEY, pygame.RLEACCEL)
-        self._static, self._front = back, front
+        self._static, self._front = build_layers(self.camera)
 
     def screen_box(self, joints: np.ndarray, margin: float = 0.15) -> pygame.Rect:
         """The screen rectangle a body's joints (with `margin` metres around them) project to."""
@@ -350,7 +270,7 @@ class Renderer:
         outline = shade(color, 0.45)
         self._capsule_fill(surf, (ax, ay), (bx, by), ra + 1.5, rb + 1.5, outline)
         if self.antialias:  # smooth the silhouette: the outline's edges and end caps
-            self._capsule_edges(surf, (ax, ay), (bx, by), ra + 1.5, rb + 1.5, outline)
+            _capsule_edges(surf, (ax, ay), (bx, by), ra + 1.5, rb + 1.5, outline)
         self._capsule_fill(surf, (ax, ay), (bx, by), ra, rb, color)
         if not self.detailed:
             return
@@ -369,17 +289,6 @@ class Renderer:
                                               (bx - px * rb, by - py * rb), (ax - px * ra, ay - py * ra)))
         pygame.draw.circle(surf, color, (ax, ay), max(1.0, ra))
         pygame.draw.circle(surf, color, (bx, by), max(1.0, rb))
-
-    def _capsule_edges(self, surf: pygame.Surface, a, b, ra: float, rb: float, color) -> None:
-        ax, ay, bx, by = float(a[0]), float(a[1]), float(b[0]), float(b[1])
-        dx, dy = bx - ax, by - ay
-        n = math.sqrt(dx * dx + dy * dy)
-        if n > 1e-6:
-            px, py = -dy / n, dx / n
-            pygame.draw.aaline(surf, color, (ax + px * ra, ay + py * ra), (bx + px * rb, by + py * rb))
-            pygame.draw.aaline(surf, color, (ax - px * ra, ay - py * ra), (bx - px * rb, by - py * rb))
-        _aacircle(surf, color, ax, ay, ra)
-        _aacircle(surf, color, bx, by, rb)
 
     def _eyes(self, surf: pygame.Surface, xy: np.ndarray, k: float) -> None:
         r = max(1.0, 0.014 * k)

@@ -28,13 +28,13 @@ class Ring:
     def _build_ring(self, cfg) -> None:
         """The physics world and the two boxers at their marks; the per-step buffers the
         stages pass on (frame, contacts, joints for the render)."""
-        from engine.physics import World
+        from engine.physics import World, WorldDef
         from game.actions import load_library
         from game.boxer import Boxer
 
         self.lib = load_library()
-        self.world = World(gravity=(0.0, -9.81, 0.0), ground_y=0.0, damping=0.01,
-                           iterations=max(1, cfg.physics_iterations // (2 if cfg.low_power else 1)))
+        self.world = World.from_def(WorldDef(gravity=(0.0, -9.81, 0.0), ground_y=0.0, damping=0.01,
+                                             iterations=max(1, cfg.physics_iterations // (2 if cfg.low_power else 1))))
         self.boxers = (Boxer(self.world, self.lib, x=0.0, z=-START_GAP / 2, yaw=0.0),
                        Boxer(self.world, self.lib, x=0.0, z=START_GAP / 2, yaw=math.pi))
         self.player, self.opponent = self.boxers

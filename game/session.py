@@ -59,6 +59,15 @@ HOME_BUTTON = 0x0080  # Wiimote core buttons: Home
 RUMBLE_MS = 120
 
 
+def pause_on_home(source, held: int, match) -> int:
+    """Toggle the match's pause when the source's Home button goes down (a press, not a hold:
+    `held` is the buttons held at the last poll); returns the buttons held now."""
+    buttons = int(source.buttons or 0)
+    if buttons & HOME_BUTTON and not held & HOME_BUTTON:
+        match.toggle_pause()
+    return buttons
+
+
 @dataclass
 class SessionConfig:
     seed: int = 0
@@ -252,10 +261,7 @@ class Session(Ring):
         if self.config.demo:
             self.pilot.step(self.source, self.match.fighting, self.player, self.opponent)
         samples = self.source.poll()
-        buttons = int(self.source.buttons or 0)
-        if buttons & HOME_BUTTON and not self._buttons & HOME_BUTTON:
-            self.match.toggle_pause()
-        self._buttons = buttons
+        self._buttons = pause_on_home(self.source, self._buttons, self.match)
         self.resampler.push(samples)
         self._watch_connection()
 

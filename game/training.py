@@ -29,6 +29,7 @@ from engine import arguments
 from engine.clock import STEP_HZ
 from engine.errors import InputError
 from engine.sensors.source import PLAYABLE
+from game.launch import check_visible_window, headless_env, open_player_source, parse_size
 
 if TYPE_CHECKING:  # pygame loads only when the screen opens (the CLI imports this module)
     import pygame
@@ -362,8 +363,6 @@ def _chosen_actions(args: argparse.Namespace) -> list[str]:
 def _open_source(args: argparse.Namespace, clock):
     """The player's source, said on the console; (source, playable, auto): whether a virtual
     player behind it performs the moves, and whether it does so by itself."""
-    from game.play import open_player_source
-
     source, fallback = open_player_source(args.source, False, args.seed, clock.seconds)
     if args.demo:
         print("quickjab train: demo: the virtual player performs every move by itself", file=sys.stderr)
@@ -378,8 +377,6 @@ def _open_source(args: argparse.Namespace, clock):
 
 def _open_window(args: argparse.Namespace, size: tuple[int, int], source) -> None:
     import pygame
-
-    from game.play import check_visible_window
 
     pygame.init()
     pygame.display.set_mode(size, pygame.RESIZABLE)
@@ -442,8 +439,6 @@ class _TrainingStages:
 
 
 def run(args: argparse.Namespace) -> int:
-    from game.play import headless_env, parse_size
-
     size = parse_size(args.size)
     from engine.recognition.config import parse_assignments
     from game.actions import load_library

@@ -35,17 +35,18 @@ from game.history import History
 from game.hits import Hit
 from game.hud import HudState, SourceSnapshot
 from game.hud_two_player import TwoPlayerHud
+from game.launch import DEMO_SOURCE, run_session
 from game.match import Match
 from game.pilot import PILOT_ATTACKS, PILOT_REACH, PILOT_SETTLE_STEPS
 from game.rules import RING_LIMIT, blow_damage
 from game.session import (
-    HOME_BUTTON,
     LOG_KEPT,
     RUMBLE_MS,
     Session,
     SessionConfig,
     _event_key,
     load_templates,
+    pause_on_home,
     templates_in_use,
 )
 from game.session_view import SessionView
@@ -173,10 +174,7 @@ class TwoPlayerSession(Session):
             if self.config.demo:
                 self._pilot_seat(seat)
             samples = seat.source.poll()
-            buttons = int(seat.source.buttons or 0)
-            if buttons & HOME_BUTTON and not seat.buttons & HOME_BUTTON:
-                self.match.toggle_pause()
-            seat.buttons = buttons
+            seat.buttons = pause_on_home(seat.source, seat.buttons, self.match)
             seat.resampler.push(samples)
             lost = seat.disconnected
             if not lost and seat.hud.disconnected:
@@ -320,8 +318,6 @@ def source_urls(url1: str | None, url2: str | None, demo: bool, seed: int,
     """The two seats' source URLs and notes for the player. Default: the first two Wiimotes
     found (a seat without one plays from its half of the keyboard). Two keyboard seats split
     the keyboard (keys=left / keys=right) unless their URLs say otherwise."""
-    from game.play import DEMO_SOURCE
-
     notes: list[str] = []
     if demo:
         return [f"{DEMO_SOURCE}&seed={seat_seed(seed, i)}&keys={half}" for i, half in enumerate(("left", "right"))], notes
@@ -390,11 +386,10 @@ def seat_templates(profile: str | None, templates: str | None) -> tuple[Path | s
 
 def run_match(args) -> int:
     """`quickjab play --players 2`: both seats' templates and sources, then play as one
-    player does (game.play.run_session: headless frames, window check, screenshot, trace)."""
+    player does (game.launch.run_session: headless frames, window check, screenshot, trace)."""
     import sys
 
     from engine.sensors import open_source
-    from game.play import run_session
     from game.user_config import recognizer_settings
 
     settings = recognizer_settings(getattr(args, "recognizer", None) or ())  # a bad file or value: before any window

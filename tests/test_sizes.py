@@ -23,14 +23,6 @@ ALLOWED = {
     ("engine/sensors/wiimote/emulator.py", "EmulatedWiimote"),
     ("engine/sensors/wiimote/emulator.py", "EmulatedWiimote.__init__"),
     ("engine/trace.py", "chrome_trace"),
-    ("game/interaction/table.py", "GraphTable._from_arrays"),
-    ("game/render.py", "Renderer"),
-    ("game/render.py", "Renderer._build_static"),
-    ("tools/bench_serial.py", "run"),
-    ("tools/input_campaign.py", "bad_graphs"),
-    ("tools/input_campaign.py", "build_cases"),
-    ("tools/recognition_commands.py", "cmd_evaluate"),
-    ("tools/record.py", "record"),
 }
 
 

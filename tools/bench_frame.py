@@ -251,7 +251,7 @@ def realtime(args: argparse.Namespace, size: tuple[int, int], low_power: bool) -
 
 
 def run(args: argparse.Namespace) -> int:
-    from game.play import parse_size
+    from game.launch import parse_size
 
     if args.steps < 1:
         raise InputError(f"bench frame: --steps must be >= 1, got {args.steps}")

@@ -160,45 +160,61 @@ def decode_only_us_per_frame(n: int = 4000, repeats: int = 5) -> tuple[float, fl
     return best_ours, best_naive
 
 
-def run(args: argparse.Namespace) -> int:
+def timed_source_poll(src):
+    """A reader (see run_readers) for the serial:// source: its decoder is tapped to see the
+    t_us of each frame it decodes."""
+    captured: list[protocol.Frame] = []
+    feed = src.decoder.feed
+
+    def tapped(data: bytes) -> list[protocol.Frame]:  # sees the t_us of each frame decoded
+        got = feed(data)
+        captured[:] = got
+        return got
+
+    src.decoder.feed = tapped
+
+    def poll_source():
+        captured.clear()
+        t0 = time.perf_counter_ns()
+        samples = src.poll()
+        t1 = time.perf_counter_ns()
+        t_us = [f.t_us for f in captured if f.msg_type == protocol.SAMPLE]
+        paired = zip(samples, t_us[-len(samples):] if samples else [], strict=True)
+        return len(captured), [(s.t, t) for s, t in paired], t0, t1
+
+    return poll_source
+
+
+def timed_naive_poll(naive: NaiveReader):
+    """A reader (see run_readers) for the naive bytewise peer."""
+    clock = time.perf_counter
+
+    def poll_naive():
+        before = naive.frames
+        t0 = time.perf_counter_ns()
+        got = naive.poll(clock)
+        t1 = time.perf_counter_ns()
+        return naive.frames - before, [(stamp, t_us) for stamp, _, t_us in got], t0, t1
+
+    return poll_naive
+
+
+def measure_both_readers(seconds: float, rate: int) -> tuple[dict, dict, dict]:
+    """Both readers on their own pty, each fed by an emulated board: (the serial:// source's
+    summary, the peer's summary, the source's counters)."""
     import serial
 
     with tempfile.TemporaryDirectory(prefix="qj-bench-serial-") as tmp:
         link_a, link_b = os.path.join(tmp, "a"), os.path.join(tmp, "b")
-        emus = [start_emulator(args.seconds + 4.0, args.rate, link) for link in (link_a, link_b)]
+        emus = [start_emulator(seconds + 4.0, rate, link) for link in (link_a, link_b)]
         try:
             src = open_source(f"serial://{link_a}")
-            captured: list[protocol.Frame] = []
-            feed = src.decoder.feed
-
-            def tapped(data: bytes) -> list[protocol.Frame]:  # sees the t_us of each frame decoded
-                got = feed(data)
-                captured[:] = got
-                return got
-
-            src.decoder.feed = tapped
+            poll_source = timed_source_poll(src)
             port = serial.Serial(link_b, timeout=0)
             naive = NaiveReader(port)
-            clock = time.perf_counter
-
-            def poll_source():
-                captured.clear()
-                t0 = time.perf_counter_ns()
-                samples = src.poll()
-                t1 = time.perf_counter_ns()
-                t_us = [f.t_us for f in captured if f.msg_type == protocol.SAMPLE]
-                paired = zip(samples, t_us[-len(samples):] if samples else [], strict=True)
-                return len(captured), [(s.t, t) for s, t in paired], t0, t1
-
-            def poll_naive():
-                before = naive.frames
-                t0 = time.perf_counter_ns()
-                got = naive.poll(clock)
-                t1 = time.perf_counter_ns()
-                return naive.frames - before, [(stamp, t_us) for stamp, _, t_us in got], t0, t1
-
-            warm_up([src.poll, lambda: naive.poll(clock)])
-            ours, peer = run_readers({"serial:// source": poll_source, "peer: naive bytewise": poll_naive}, args.seconds)
+            poll_naive = timed_naive_poll(naive)
+            warm_up([src.poll, lambda: naive.poll(time.perf_counter)])
+            ours, peer = run_readers({"serial:// source": poll_source, "peer: naive bytewise": poll_naive}, seconds)
             stats = dict(src.stats)
             src.close()
             port.close()
@@ -206,14 +222,15 @@ def run(args: argparse.Namespace) -> int:
             for emu in emus:
                 emu.terminate()
                 emu.wait(5)
-    dec_ours, dec_naive = decode_only_us_per_frame()
-    ratio = peer["poll_cost_us_per_frame"]["median"] / ours["poll_cost_us_per_frame"]["median"]
-    result = {"rate_hz": args.rate, "poll_hz": 60, "readers": [ours, peer], "peer_median_cost_ratio": ratio,
-              "decode_only_us_per_frame": {"decoder": dec_ours, "naive_bytewise": dec_naive},
-              "source_stats": {k: v for k, v in stats.items() if v}}
-    if args.json:
-        print(json.dumps(result, indent=2))
-        return 0
+    return ours, peer, stats
+
+
+def print_report(args: argparse.Namespace, result: dict) -> None:
+    """The benchmark's figures as text."""
+    ours, peer = result["readers"]
+    ratio = result["peer_median_cost_ratio"]
+    dec_ours = result["decode_only_us_per_frame"]["decoder"]
+    dec_naive = result["decode_only_us_per_frame"]["naive_bytewise"]
     print(f"two ptys, an emulated board on each at {args.rate} Hz, both readers polled in each 60 Hz step, {args.seconds:.0f} s")
     for r in (ours, peer):
         c, a = r["poll_cost_us_per_frame"], r["sample_age_ms"]
@@ -226,4 +243,17 @@ def run(args: argparse.Namespace) -> int:
     print(f"serial:// timestamp lag (now - Sample.t, median): {ours['stamp_age_ms_median']:.2f} ms "
           f"(true age minus the least transport delay seen)")
     print(f"source counters: {result['source_stats']}")
+
+
+def run(args: argparse.Namespace) -> int:
+    ours, peer, stats = measure_both_readers(args.seconds, args.rate)
+    dec_ours, dec_naive = decode_only_us_per_frame()
+    ratio = peer["poll_cost_us_per_frame"]["median"] / ours["poll_cost_us_per_frame"]["median"]
+    result = {"rate_hz": args.rate, "poll_hz": 60, "readers": [ours, peer], "peer_median_cost_ratio": ratio,
+              "decode_only_us_per_frame": {"decoder": dec_ours, "naive_bytewise": dec_naive},
+              "source_stats": {k: v for k, v in stats.items() if v}}
+    if args.json:
+        print(json.dumps(result, indent=2))
+        return 0
+    print_report(args, result)
     return 0

@@ -1,6 +1,6 @@
 """The `quickjab` command. Each subcommand lives in its own module, which exposes
-`register(subparsers)`; this module only collects them and turns input errors into one line
-on stderr and exit code 2.
+`register(subparsers)`; this module only collects them; game/command.py runs the one asked for
+and turns input errors into one line on stderr and exit code 2.
 
 Start-up (issue 14): a command imports only its own module. COMMANDS names every command with
 its module and one-line help, so `quickjab --help` lists them without importing any, and
@@ -14,7 +14,7 @@ import sys
 from typing import NoReturn
 
 from engine import __version__
-from engine.errors import InputError
+from game.command import run_command
 
 # command -> (module whose register() adds it, the one line `--help` shows), in `--help` order.
 # A module may add several commands (tools.recognition_commands: templates, recognize, evaluate).
@@ -92,20 +92,7 @@ def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
     command = command_word(argv)
     parser = build_parser(command) if command is not None else listing_parser()
-    args = parser.parse_args(argv)
-    if not getattr(args, "func", None):
-        parser.print_help()
-        return 0
-    try:
-        return int(args.func(args) or 0)
-    except InputError as exc:
-        print(f"quickjab {args.command}: {exc}", file=sys.stderr)
-        return 2
-    except OSError as exc:  # a file the user named cannot be read or written; str names it
-        print(f"quickjab {args.command}: {exc}", file=sys.stderr)
-        return 2
-    except KeyboardInterrupt:
-        return 130
+    return run_command(parser, parser.parse_args(argv))
 
 
 if __name__ == "__main__":

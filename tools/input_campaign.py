@@ -179,11 +179,9 @@ def bad_templates(d: Path, bomb_gb: float = 1.5) -> dict[str, str]:
     return out
 
 
-def bad_graphs(d: Path, bomb_gb: float = 1.5) -> dict[str, str]:
-    with np.load(ASSETS / "graph.npz", allow_pickle=False) as z:
-        good = {k: z[k] for k in z.files}
-    meta = json.loads(str(good["meta"]))
-    out = {}
+def _graph_variant_writer(d: Path, good: dict, meta: dict, out: dict[str, str]):
+    """variant(name, meta_change, **changes) writes the shipped graph with its meta keys
+    ("grid.n_angle": value) and arrays changed (None drops one) and records it in `out`."""
 
     def variant(name: str, meta_change: dict | None = None, **changes: np.ndarray | None) -> None:
         a = dict(good)
@@ -203,6 +201,32 @@ def bad_graphs(d: Path, bomb_gb: float = 1.5) -> dict[str, str]:
                 a[k] = v
         out[name] = _npz(d / "graph" / f"{name}.npz", a)
 
+    return variant
+
+
+def _bad_meta_numbers(meta: dict, variant) -> None:
+    """Each number in the meta's grid, rules and rewards made NaN, zero or negative."""
+    for k, v in meta["grid"].items():
+        if isinstance(v, (int, float)) and not isinstance(v, bool):
+            variant(f"grid-{k}-nan", {f"grid.{k}": float("nan")})
+            variant(f"grid-{k}-zero", {f"grid.{k}": 0})
+            variant(f"grid-{k}-neg", {f"grid.{k}": -1})
+    for k, v in meta["rules"].items():
+        if isinstance(v, (int, float)) and not isinstance(v, bool):
+            variant(f"rules-{k}-nan", {f"rules.{k}": float("nan")})
+            variant(f"rules-{k}-neg", {f"rules.{k}": -1})
+    for k, v in meta["rewards"].items():
+        if isinstance(v, (int, float)) and not isinstance(v, bool):
+            variant(f"rewards-{k}-nan", {f"rewards.{k}": float("nan")})
+
+
+def bad_graphs(d: Path, bomb_gb: float = 1.5) -> dict[str, str]:
+    with np.load(ASSETS / "graph.npz", allow_pickle=False) as z:
+        good = {k: z[k] for k in z.files}
+    meta = json.loads(str(good["meta"]))
+    out: dict[str, str] = {}
+    variant = _graph_variant_writer(d, good, meta, out)
+
     S = len(good["key_steps"])
     E = len(good["edge_action"])
     variant("nan-reward", edge_reward=np.full(E, np.nan, np.float32))
@@ -219,18 +243,7 @@ def bad_graphs(d: Path, bomb_gb: float = 1.5) -> dict[str, str]:
     variant("n-choices-neg", {"n_choices": -3})
     variant("n-choices-huge", {"n_choices": 10**6})
     variant("n-choices-text", {"n_choices": "x"})
-    for k, v in meta["grid"].items():
-        if isinstance(v, (int, float)) and not isinstance(v, bool):
-            variant(f"grid-{k}-nan", {f"grid.{k}": float("nan")})
-            variant(f"grid-{k}-zero", {f"grid.{k}": 0})
-            variant(f"grid-{k}-neg", {f"grid.{k}": -1})
-    for k, v in meta["rules"].items():
-        if isinstance(v, (int, float)) and not isinstance(v, bool):
-            variant(f"rules-{k}-nan", {f"rules.{k}": float("nan")})
-            variant(f"rules-{k}-neg", {f"rules.{k}": -1})
-    for k, v in meta["rewards"].items():
-        if isinstance(v, (int, float)) and not isinstance(v, bool):
-            variant(f"rewards-{k}-nan", {f"rewards.{k}": float("nan")})
+    _bad_meta_numbers(meta, variant)
     variant("meta-list", meta=np.array("[1, 2]"))
     variant("meta-2d", meta=np.array([[json.dumps(meta)]]))
     variant("key-steps-neg", key_steps=-good["key_steps"].astype(np.int64))
@@ -431,8 +444,20 @@ def build_cases(d: Path, big_mb: int, bomb_gb: float = 1.5) -> list[Case]:
     tpl = str(ASSETS / "templates.npz")
     out = d / "out"
     out.mkdir(exist_ok=True)
-    cases: list[Case] = []
     recs, tpls, graphs = bad_recordings(d, big_mb), bad_templates(d, bomb_gb), bad_graphs(d, bomb_gb)
+    cases = _recording_cases(q, d, recs, tpl, out)
+    cases += _bad_file_cases(q, d, tpls, graphs, good_rec, tpl, out)
+    cases += _url_cases(q, good_rec, out)
+    args = {**_bad_game_args(q, d, good_rec, tpl, out), **_bad_tool_args(q, d, out)}
+    for name, argv in args.items():
+        cases.append(Case(f"arg/{name}", argv))
+    cases += _valid_cases(q, d, good_rec, tpl, out)
+    return cases
+
+
+def _recording_cases(q: list[str], d: Path, recs: dict[str, str], tpl: str, out: Path) -> list[Case]:
+    """Bad recordings through recognize, record, evaluate, wiimote-emu, scope and templates build."""
+    cases: list[Case] = []
     for name, path in recs.items():
         if name.startswith("big"):  # valid: read whole (memory is the figure), replayed briefly
             cases.append(Case(f"ok/{name}/record-replay", q + ["record", "--source", f"replay://{path}?speed=1000", "--seconds", "0.5", "-o", str(out / "b.csv")], expect="ok"))
@@ -448,6 +473,14 @@ def build_cases(d: Path, big_mb: int, bomb_gb: float = 1.5) -> list[Case]:
     trials.mkdir(parents=True, exist_ok=True)
     (trials / "1.csv").write_text(_rec(["0,0,0,1,0,0,1,", "10000000,0,0,1,0,0,1,"]))
     cases.append(Case("rec/gap/templates-build", q + ["templates", "build", str(d / "trials"), "-o", str(out / "t.npz")]))
+    return cases
+
+
+def _bad_file_cases(q: list[str], d: Path, tpls: dict[str, str], graphs: dict[str, str], good_rec: str,
+                    tpl: str, out: Path) -> list[Case]:
+    """Bad templates, config files, graphs, traces, BVH files and action folders, each
+    through the commands that read it."""
+    cases: list[Case] = []
     for name, path in tpls.items():
         cases.append(Case(f"tpl/{name}/recognize", q + ["recognize", good_rec, "--templates", path]))
     for name in ("nan-gravity", "zip-bomb", "npy", "recognizer-unknown"):
@@ -472,6 +505,12 @@ def build_cases(d: Path, big_mb: int, bomb_gb: float = 1.5) -> list[Case]:
             cases.append(Case(f"mocap/{name}/cut", q + ["bvh", "cut", path, "--start", "0", "--end", "20", "--name", "x", "-o", str(out / "m.json")]))
     for name, folder in bad_action_dirs(d).items():
         cases.append(Case(f"actions/{name}/list", q + ["actions", "list", "--dir", folder]))
+    return cases
+
+
+def _url_cases(q: list[str], good_rec: str, out: Path) -> list[Case]:
+    """Source URLs with bad parameters, through record and scope."""
+    cases: list[Case] = []
     emu = f"wiimote-emu://{good_rec}"
     urls = {
         "demo-rate-1e9": "demo://?rate=1e9",
@@ -505,8 +544,13 @@ def build_cases(d: Path, big_mb: int, bomb_gb: float = 1.5) -> list[Case]:
         cases.append(Case(f"url/{name}/record", q + ["record", "--source", url, "--seconds", "0.3", "-o", str(out / "u.csv")]))
     for name in ("demo-rate-1e9", "emu-drop-2", "keyboard-seed-neg"):
         cases.append(Case(f"url/{name}/scope", q + ["scope", "--headless", "--frames", "3", "--source", urls[name]]))
+    return cases
+
+
+def _bad_game_args(q: list[str], d: Path, good_rec: str, tpl: str, out: Path) -> dict[str, list[str]]:
+    """Bad options of play, train, scope, evaluate, recognize and the --recognizer settings."""
     ev_base = q + ["evaluate", good_rec]
-    args = {
+    return {
         "play-seed-neg": q + ["play", "--headless", "--frames", "2", "--seed", "-1"],
         "play-size-huge": q + ["play", "--headless", "--frames", "2", "--size", "20000x20000"],
         "play-size-text": q + ["play", "--headless", "--frames", "2", "--size", "abc"],
@@ -540,6 +584,12 @@ def build_cases(d: Path, big_mb: int, bomb_gb: float = 1.5) -> list[Case]:
         "train-recognizer-type": q + ["train", "--headless", "--frames", "2", "--recognizer", "reject=maybe"],
         "templates-build-recognizer-bad": q + ["templates", "build", str(d / "trials"), "-o", str(out / "t.npz"), "--recognizer", "adapt=-1"],
         "evaluate-recognizer-unknown": ev_base + ["--recognizer", "x=1"],
+    }
+
+
+def _bad_tool_args(q: list[str], d: Path, out: Path) -> dict[str, list[str]]:
+    """Bad options of synth, soak, graph, record and bvh."""
+    return {
         "synth-session-nan": q + ["synth", "--session", "nan", "-o", str(out / "s.csv")],
         "synth-session-neg": q + ["synth", "--session", "-1", "-o", str(out / "s.csv")],
         "synth-session-huge": q + ["synth", "--session", "1e12", "-o", str(out / "s.csv")],
@@ -565,9 +615,12 @@ def build_cases(d: Path, big_mb: int, bomb_gb: float = 1.5) -> list[Case]:
         "bvh-export-gap-nan": q + ["bvh", "export", "--play", "guard", "--gap", "nan", "-o", str(out / "x.bvh")],
         "bvh-cut-start-neg": q + ["bvh", "cut", _write(d, "bvh/ok.bvh", BVH_HEAD + "Frames: 3\nFrame Time: 0.0166667\n" + "0 90 0 0 0 0 0 0 0\n" * 3), "--start", "-5", "--end", "1", "--name", "x", "-o", str(out / "a.json")],
     }
-    for name, argv in args.items():
-        cases.append(Case(f"arg/{name}", argv))
-    # valid inputs that must keep working
+
+
+def _valid_cases(q: list[str], d: Path, good_rec: str, tpl: str, out: Path) -> list[Case]:
+    """Valid inputs that must keep working."""
+    cases: list[Case] = []
+    emu = f"wiimote-emu://{good_rec}"
     cases.append(Case("ok/recognize-good", q + ["recognize", good_rec, "--templates", tpl], expect="ok"))
     cases.append(Case("ok/graph-info-shipped", q + ["graph", "info"], expect="ok"))
     cases.append(Case("ok/record-demo", q + ["record", "--source", "demo://?rate=100", "--seconds", "0.3", "-o", str(out / "d.csv")], expect="ok"))

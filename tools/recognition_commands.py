@@ -234,20 +234,7 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     tk = {k: v for k, v in (("method", args.method), ("feature", args.feature), ("keep", args.keep)) if v}
     results: dict[str, list[dict]] = {}
     if args.uwave:
-        users = [int(u) for u in _mains(args.users)]
-        pooled = None
-        for u in users:
-            root = Path(args.uwave) / f"U{u}"
-            templates = Templates.from_trials(load_trials_dir(root, "d1-r0[1-3].csv"), **tk)
-            tests = {a: ts[:: args.every] for a, ts in load_trials_dir(root, "d[2-7]-*.csv").items()}
-            res = ev.evaluate_trials(templates, tests, args.mains, fresh=args.fresh, **kw)
-            if pooled is None:
-                pooled = res
-            else:
-                for p, r in zip(pooled, res, strict=True):
-                    p.outcomes += r.outcomes
-        order = "fresh recognizer per trial" if args.fresh else "session order"
-        results[f"uWave users {args.users}, noise_g {kw['noise_g']}, {order}"] = [s.row() for s in pooled]
+        results.update(_evaluate_uwave(args, kw, tk))
     if args.phone_punches:
         res = ev.evaluate_phone_punches(
             args.phone_punches, args.mains, mixed=args.mixed, seed=args.seed, trials=args.trials, template_kwargs=tk,
@@ -262,32 +249,63 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     if templates is not None:
         kw = _rec_kwargs(args, templates.recognizer)  # a --templates file's saved settings under the command line's
     for inp in args.inputs:
-        path = Path(inp)
-        if path.is_dir():
-            if templates is None:
-                raise InputError(f"{inp}: trial directories need --templates or --train")
-            tests = {a: ts[:: args.every] for a, ts in load_trials_dir(path).items()}
-            res = ev.evaluate_trials(templates, tests, args.mains, fresh=args.fresh, **kw)
-        else:
-            _, frames, labels = recording_frames(read_recording(path))
-            if not any(labels):
-                raise InputError(f"{inp}: no labelled intervals (label column empty)")
-            if templates is None:
-                res = ev.evaluate_stream_folds(
-                    frames, labels, args.mains, folds=args.folds, template_kwargs=tk, clip_frames=args.clip_frames, **kw
-                )
-            else:
-                res = ev.evaluate_stream(templates, frames, labels, args.mains, clip_frames=args.clip_frames, **kw)
-        results[path.name] = [s.row() for s in res]
+        results[Path(inp).name] = _evaluate_input(args, inp, templates, kw, tk)
     if not results:
         raise InputError("nothing to evaluate: give INPUTs, --uwave DIR, or see --help")
+    _print_results(args, results)
+    if args.plot:
+        ev.plot(results, args.plot)
+        print(f"wrote {args.plot}")
+    return 0
+
+
+def _evaluate_uwave(args: argparse.Namespace, kw: dict, tk: dict) -> dict[str, list[dict]]:
+    """The uWave users' rows pooled: each user's first three day-1 trials are the templates,
+    days 2-7 the tests."""
+    users = [int(u) for u in _mains(args.users)]
+    pooled = None
+    for u in users:
+        root = Path(args.uwave) / f"U{u}"
+        templates = Templates.from_trials(load_trials_dir(root, "d1-r0[1-3].csv"), **tk)
+        tests = {a: ts[:: args.every] for a, ts in load_trials_dir(root, "d[2-7]-*.csv").items()}
+        res = ev.evaluate_trials(templates, tests, args.mains, fresh=args.fresh, **kw)
+        if pooled is None:
+            pooled = res
+        else:
+            for p, r in zip(pooled, res, strict=True):
+                p.outcomes += r.outcomes
+    order = "fresh recognizer per trial" if args.fresh else "session order"
+    return {f"uWave users {args.users}, noise_g {kw['noise_g']}, {order}": [s.row() for s in pooled]}
+
+
+def _evaluate_input(args: argparse.Namespace, inp: str, templates: Templates | None, kw: dict,
+                    tk: dict) -> list[dict]:
+    """One INPUT's rows: a trial directory against the templates, or a labelled recording
+    against the templates or, without them, in folds that learn from the rest of it."""
+    path = Path(inp)
+    if path.is_dir():
+        if templates is None:
+            raise InputError(f"{inp}: trial directories need --templates or --train")
+        tests = {a: ts[:: args.every] for a, ts in load_trials_dir(path).items()}
+        res = ev.evaluate_trials(templates, tests, args.mains, fresh=args.fresh, **kw)
+    else:
+        _, frames, labels = recording_frames(read_recording(path))
+        if not any(labels):
+            raise InputError(f"{inp}: no labelled intervals (label column empty)")
+        if templates is None:
+            res = ev.evaluate_stream_folds(
+                frames, labels, args.mains, folds=args.folds, template_kwargs=tk, clip_frames=args.clip_frames, **kw
+            )
+        else:
+            res = ev.evaluate_stream(templates, frames, labels, args.mains, clip_frames=args.clip_frames, **kw)
+    return [s.row() for s in res]
+
+
+def _print_results(args: argparse.Namespace, results: dict[str, list[dict]]) -> None:
+    """Each set's rows as JSON lines (--json) or a table."""
     for title, rows in results.items():
         if args.json:
             for r in rows:
                 print(json.dumps({"set": title, **r}))
         else:
             print(f"## {title}\n{ev.format_table(rows)}\n")
-    if args.plot:
-        ev.plot(results, args.plot)
-        print(f"wrote {args.plot}")
-    return 0

@@ -64,88 +64,113 @@ def record(url: str, output: str, seconds: float | None, label: str = "", poll_s
     continues in a new file, out.2.csv and so on, whose header has the new columns: a row never
     has another width than its file's header (docs/formats.md), so every file reads back."""
     source = open_source(url)
-    meta = {"source": source.description or url, "recorded_from": url}
-    writer: RecordingWriter | None = None
-    pending: list = []  # samples held until the rate is known
-    rows = 0
-    files: list[Path] = []
-    t0: float | None = None  # every file of a run keeps the run's time origin
-    start = time.perf_counter()
-    last_state = None
-    ever_connected = False
-
-    def open_writer(width: int) -> RecordingWriter:
-        rate = source.rate_hz or measured_rate([s.t for s in pending])
-        head = {**meta, "source": source.description or url}  # a HELLO may have named the device by now
-        if rate:
-            head = {"rate_hz": f"{rate:g}", **head}
-        path = part_path(output, len(files) + 1)
-        if files:
-            head["continues"] = str(files[-1].name)
-        w = RecordingWriter(path, width, head, t0=t0)
-        files.append(path)
-        return w
-
-    def write(samples: list) -> None:
-        nonlocal writer, rows, t0
-        for sample in samples:
-            width = len(sample.accel)
-            if writer is not None and width != writer.sensors:
-                rows += writer.rows
-                writer.close()
-                print(f"source {url}: now {width} sensor(s), continuing in a new file", file=sys.stderr)
-                writer = None
-            if writer is None:
-                writer = open_writer(width)
-            writer.write(sample, label)
-            t0 = writer.t0
-
+    parts = _RecordingParts(source, url, output, label)
     try:
-        while seconds is None or time.perf_counter() - start < seconds:
-            if source.state is not last_state:
-                print(f"source {url}: {source.state.value}", file=sys.stderr)
-                last_state = source.state
-            ever_connected |= source.state is SourceState.CONNECTED
-            samples = source.poll()
-            ever_connected |= bool(samples)
-            if not files:
-                pending.extend(samples)
-                if pending and (source.rate_hz or pending[-1].t - pending[0].t >= RATE_PROBE_S):
-                    write(pending)
-                    pending.clear()
-            else:
-                write(samples)
-            if writer is not None:
-                writer.flush_if_due()  # a silent source still gets its rows synced
-            if source.state is SourceState.ENDED:
-                break
-            if not ever_connected and time.perf_counter() - start >= connect_timeout:
-                raise InputError(f"{url}: no device connected after {connect_timeout:g} s (source {source.state.value}); "
-                                 "check the port (`quickjab devices`) and that the board is plugged in")
-            time.sleep(poll_s)
+        _poll_into(parts, seconds, poll_s, connect_timeout)
     except KeyboardInterrupt:
         pass
     except BaseException:
-        if writer is not None:
-            writer.close()
+        parts.close()
         raise
     finally:
         source.close()
-    write(pending)  # the source ended, or Ctrl-C, before the rate was known
-    if writer is not None:
-        writer.close()
-    if not ever_connected:
+    parts.write(parts.pending)  # the source ended, or Ctrl-C, before the rate was known
+    parts.close()
+    if not parts.connected:
         raise InputError(f"{url}: the source never connected (state {source.state.value}); nothing recorded")
-    if writer is None and not files:
-        writer = open_writer(source.sensors)
-        writer.close()
-    if writer is not None:
-        rows += writer.rows
-    names = ", ".join(str(f) for f in files)
+    rows = parts.finish()
+    names = ", ".join(str(f) for f in parts.files)
     print(f"wrote {rows} samples to {names}", file=sys.stderr)
     if "frames_ok" in source.stats:
         print(f"link: {link_counts(source.stats)}", file=sys.stderr)
     return rows
+
+
+def _poll_into(parts: _RecordingParts, seconds: float | None, poll_s: float, connect_timeout: float) -> None:
+    """Poll the source into `parts` until `seconds` pass or it ends; say each state change."""
+    source, url = parts.source, parts.url
+    start = time.perf_counter()
+    last_state = None
+    while seconds is None or time.perf_counter() - start < seconds:
+        if source.state is not last_state:
+            print(f"source {url}: {source.state.value}", file=sys.stderr)
+            last_state = source.state
+        parts.connected |= source.state is SourceState.CONNECTED
+        samples = source.poll()
+        parts.connected |= bool(samples)
+        parts.take(samples)
+        if parts.writer is not None:
+            parts.writer.flush_if_due()  # a silent source still gets its rows synced
+        if source.state is SourceState.ENDED:
+            break
+        if not parts.connected and time.perf_counter() - start >= connect_timeout:
+            raise InputError(f"{url}: no device connected after {connect_timeout:g} s (source {source.state.value}); "
+                             "check the port (`quickjab devices`) and that the board is plugged in")
+        time.sleep(poll_s)
+
+
+class _RecordingParts:
+    """The files of one recording run: samples are held until the rate is known, and a change
+    of sensor count continues in the next part file."""
+
+    def __init__(self, source, url: str, output: str, label: str):
+        self.source, self.url, self.output, self.label = source, url, output, label
+        self.meta = {"source": source.description or url, "recorded_from": url}
+        self.writer: RecordingWriter | None = None
+        self.pending: list = []  # samples held until the rate is known
+        self.rows = 0  # rows in the part files already closed
+        self.files: list[Path] = []
+        self.t0: float | None = None  # every file of a run keeps the run's time origin
+        self.connected = False  # the source has connected or delivered a sample
+
+    def open_writer(self, width: int) -> RecordingWriter:
+        source = self.source
+        rate = source.rate_hz or measured_rate([s.t for s in self.pending])
+        head = {**self.meta, "source": source.description or self.url}  # a HELLO may have named the device by now
+        if rate:
+            head = {"rate_hz": f"{rate:g}", **head}
+        path = part_path(self.output, len(self.files) + 1)
+        if self.files:
+            head["continues"] = str(self.files[-1].name)
+        w = RecordingWriter(path, width, head, t0=self.t0)
+        self.files.append(path)
+        return w
+
+    def write(self, samples: list) -> None:
+        for sample in samples:
+            width = len(sample.accel)
+            if self.writer is not None and width != self.writer.sensors:
+                self.rows += self.writer.rows
+                self.writer.close()
+                print(f"source {self.url}: now {width} sensor(s), continuing in a new file", file=sys.stderr)
+                self.writer = None
+            if self.writer is None:
+                self.writer = self.open_writer(width)
+            self.writer.write(sample, self.label)
+            self.t0 = self.writer.t0
+
+    def take(self, samples: list) -> None:
+        """Hold samples until the rate is announced or measured, then write them."""
+        if not self.files:
+            self.pending.extend(samples)
+            if self.pending and (self.source.rate_hz or self.pending[-1].t - self.pending[0].t >= RATE_PROBE_S):
+                self.write(self.pending)
+                self.pending.clear()
+        else:
+            self.write(samples)
+
+    def close(self) -> None:
+        if self.writer is not None:
+            self.writer.close()
+
+    def finish(self) -> int:
+        """The run's row count; a run without samples still leaves a file with its header."""
+        if self.writer is None and not self.files:
+            self.writer = self.open_writer(self.source.sensors)
+            self.writer.close()
+        if self.writer is not None:
+            self.rows += self.writer.rows
+        return self.rows
 
 
 def run(args: argparse.Namespace) -> int:

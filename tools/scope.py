@@ -139,7 +139,7 @@ class Scope:
         except pygame.error as exc:
             source.close()
             raise InputError(f"cannot open a window ({exc}); without a display use --headless") from None
-        from game.play import check_visible_window
+        from game.launch import check_visible_window
 
         try:
             check_visible_window("scope")  # SDL fell back to a driver that shows nothing

@@ -56,7 +56,7 @@ def build_session(seed: int = 0, low_power: bool = False, render: bool = True,
 
     pygame.init()
     clock = clock if clock is not None else VirtualClock()
-    from game.play import DEMO_SOURCE
+    from game.launch import DEMO_SOURCE
 
     source = open_source(f"{DEMO_SOURCE}&seed={seed}", clock=clock.seconds)
     cfg = SessionConfig(seed=seed, size=size, low_power=low_power, demo=True, sound=False, render=render,

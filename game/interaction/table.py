@@ -298,87 +298,112 @@ class GraphTable:
         def bad(why: str) -> GraphFileError:
             return GraphFileError(f"{path}: corrupt Interaction Graph file: {why}")
 
-        if "meta" not in a:
-            raise bad("missing meta")
-        try:
-            meta = json.loads(str(a["meta"]))
-            if meta.get("format") != FORMAT:
-                raise bad(f"format is {meta.get('format')!r}, expected {FORMAT!r}")
-            version = meta.get("version")
-            if version not in READS:
-                raise bad(f"version {version}, this program reads {', '.join(map(str, READS))}")
-            grid = StateGrid(**meta["grid"])
-            rules = BoutRules(**meta["rules"])
-            rewards = Rewards(**meta["rewards"])
-            why = _bad_meta(meta, grid, rules, rewards)
-            if why:
-                raise bad(why)
-        except GraphFileError:
-            raise
-        except (ValueError, TypeError, KeyError, AttributeError) as exc:
-            raise bad(f"bad meta ({exc})") from None
-        common = ["action_names", "other_action", "other_frame", "visits", "best_action",
-                  "value", "edge_action", "edge_steps", "edge_flip", "edge_reward",
-                  "fill_key_steps"]
-        own = (["keys", "features", "edge_ptr", "edge_dst", "fill_state"] if version == 2 else
-               ["key_steps", "feature_pos", "edge_count", "edge_dst_steps", "edge_dst_steps_big",
-                "fill_state_offset", "fill_state_offset_big"])
-        missing = [k for k in common + own if k not in a]
-        if missing:
-            raise bad(f"missing {', '.join(missing)}")
-        why = _bad_kinds(a)
+        meta, grid, rules, rewards = _read_meta(a, bad)
+        why = _missing_arrays(a, meta["version"]) or _bad_kinds(a)
         if why:
             raise bad(why)
-        if version == 3:
+        if meta["version"] == 3:
             a = cls._decode_v3(a, grid, bad)
-        S = len(a["keys"])
-        E = len(a["edge_dst"])
-        A = len(a["action_names"])
-        shapes_ok = (
-            a["features"].shape == (S, 3)
-            and all(a[k].shape == (S,) for k in ("other_action", "other_frame", "visits",
-                                                  "best_action", "value"))
-            and a["edge_ptr"].shape == (S + 1,)
-            and all(a[k].shape == (E,) for k in ("edge_action", "edge_steps", "edge_flip",
-                                                  "edge_reward"))
-            and a["fill_key_steps"].ndim == 1 and a["fill_state"].shape == a["fill_key_steps"].shape
-        )
-        if not shapes_ok:
-            raise bad("array shapes disagree")
-        if S == 0:
-            raise bad("no states")
-        if "guard" not in [str(x) for x in a["action_names"]]:
-            raise bad("action_names lacks 'guard'")
-        ptr = a["edge_ptr"].astype(np.int64)
-        if ptr[0] != 0 or ptr[-1] != E or (np.diff(ptr) < 0).any():
-            raise bad("edge offsets out of order")
-        if E and (a["edge_dst"].min() < 0 or a["edge_dst"].max() >= S):
-            raise bad("an edge points outside the states")
-        if a["best_action"].min() < 0 or a["best_action"].max() >= A or \
-                (E and a["edge_action"].max() >= A):
-            raise bad("an action id outside action_names")
-        steps = a["fill_key_steps"].astype(np.int64)
-        if (np.diff(a["keys"]) <= 0).any() or (steps[1:] <= 0).any() or (steps[:1] < 0).any():
-            raise bad("keys not strictly ascending")
-        if len(a["fill_state"]) and (a["fill_state"].min() < 0 or a["fill_state"].max() >= S):
-            raise bad("the look-up fill points outside the states")
-        if not (np.isfinite(a["value"]).all() and np.isfinite(a["features"]).all()
-                and np.isfinite(a["edge_reward"]).all()):
-            raise bad("non-finite numbers")
-        if meta["n_choices"] > A or (a["other_action"] < 0).any() or a["other_action"].max() >= A or \
-                (E and a["edge_action"].min() < 0):
-            raise bad("an action id outside action_names")
-        if (a["other_frame"] < 0).any() or (a["visits"] < 0).any():
-            raise bad("negative frames or visits")
-        if len(set(a["action_names"].tolist())) != A:
-            raise bad("action_names repeat")
+        why = _bad_shapes(a) or _bad_contents(a, meta)
+        if why:
+            raise bad(why)
         return cls(
             action_names=[str(x) for x in a["action_names"]], n_choices=int(meta["n_choices"]),
             keys=a["keys"].astype(np.int64), features=a["features"],
             other_action=a["other_action"].astype(np.int64),
             other_frame=a["other_frame"].astype(np.int64), visits=a["visits"],
             best_action=a["best_action"].astype(np.int64), value=a["value"],
-            edge_ptr=ptr, edge_dst=a["edge_dst"], edge_action=a["edge_action"],
-            edge_steps=a["edge_steps"], edge_flip=a["edge_flip"], edge_reward=a["edge_reward"],
-            fill_keys=np.cumsum(steps), fill_state=a["fill_state"],
-            grid=grid, rules=rules, rewards=rewards, build=meta.get("build", {}))
+            edge_ptr=a["edge_ptr"].astype(np.int64), edge_dst=a["edge_dst"],
+            edge_action=a["edge_action"], edge_steps=a["edge_steps"], edge_flip=a["edge_flip"],
+            edge_reward=a["edge_reward"], fill_keys=np.cumsum(a["fill_key_steps"].astype(np.int64)),
+            fill_state=a["fill_state"], grid=grid, rules=rules, rewards=rewards,
+            build=meta.get("build", {}))
+
+
+def _read_meta(a: dict, bad) -> tuple[dict, StateGrid, BoutRules, Rewards]:
+    """The file's meta record and the grid, rules and rewards it names; raises `bad(why)`."""
+    if "meta" not in a:
+        raise bad("missing meta")
+    try:
+        meta = json.loads(str(a["meta"]))
+        if meta.get("format") != FORMAT:
+            raise bad(f"format is {meta.get('format')!r}, expected {FORMAT!r}")
+        version = meta.get("version")
+        if version not in READS:
+            raise bad(f"version {version}, this program reads {', '.join(map(str, READS))}")
+        grid = StateGrid(**meta["grid"])
+        rules = BoutRules(**meta["rules"])
+        rewards = Rewards(**meta["rewards"])
+        why = _bad_meta(meta, grid, rules, rewards)
+        if why:
+            raise bad(why)
+    except GraphFileError:
+        raise
+    except (ValueError, TypeError, KeyError, AttributeError) as exc:
+        raise bad(f"bad meta ({exc})") from None
+    return meta, grid, rules, rewards
+
+
+def _missing_arrays(a: dict, version: int) -> str | None:
+    """Which arrays this file's version needs and it lacks, or None."""
+    common = ["action_names", "other_action", "other_frame", "visits", "best_action",
+              "value", "edge_action", "edge_steps", "edge_flip", "edge_reward",
+              "fill_key_steps"]
+    own = (["keys", "features", "edge_ptr", "edge_dst", "fill_state"] if version == 2 else
+           ["key_steps", "feature_pos", "edge_count", "edge_dst_steps", "edge_dst_steps_big",
+            "fill_state_offset", "fill_state_offset_big"])
+    missing = [k for k in common + own if k not in a]
+    return f"missing {', '.join(missing)}" if missing else None
+
+
+def _bad_shapes(a: dict) -> str | None:
+    """Why the decoded arrays' shapes disagree with the state and edge counts, or None."""
+    S = len(a["keys"])
+    E = len(a["edge_dst"])
+    shapes_ok = (
+        a["features"].shape == (S, 3)
+        and all(a[k].shape == (S,) for k in ("other_action", "other_frame", "visits",
+                                              "best_action", "value"))
+        and a["edge_ptr"].shape == (S + 1,)
+        and all(a[k].shape == (E,) for k in ("edge_action", "edge_steps", "edge_flip",
+                                              "edge_reward"))
+        and a["fill_key_steps"].ndim == 1 and a["fill_state"].shape == a["fill_key_steps"].shape
+    )
+    if not shapes_ok:
+        return "array shapes disagree"
+    if S == 0:
+        return "no states"
+    if "guard" not in [str(x) for x in a["action_names"]]:
+        return "action_names lacks 'guard'"
+    return None
+
+
+def _bad_contents(a: dict, meta: dict) -> str | None:
+    """Why the decoded arrays' values are out of range or out of order, or None."""
+    S = len(a["keys"])
+    E = len(a["edge_dst"])
+    A = len(a["action_names"])
+    ptr = a["edge_ptr"].astype(np.int64)
+    if ptr[0] != 0 or ptr[-1] != E or (np.diff(ptr) < 0).any():
+        return "edge offsets out of order"
+    if E and (a["edge_dst"].min() < 0 or a["edge_dst"].max() >= S):
+        return "an edge points outside the states"
+    if a["best_action"].min() < 0 or a["best_action"].max() >= A or \
+            (E and a["edge_action"].max() >= A):
+        return "an action id outside action_names"
+    steps = a["fill_key_steps"].astype(np.int64)
+    if (np.diff(a["keys"]) <= 0).any() or (steps[1:] <= 0).any() or (steps[:1] < 0).any():
+        return "keys not strictly ascending"
+    if len(a["fill_state"]) and (a["fill_state"].min() < 0 or a["fill_state"].max() >= S):
+        return "the look-up fill points outside the states"
+    if not (np.isfinite(a["value"]).all() and np.isfinite(a["features"]).all()
+            and np.isfinite(a["edge_reward"]).all()):
+        return "non-finite numbers"
+    if meta["n_choices"] > A or (a["other_action"] < 0).any() or a["other_action"].max() >= A or \
+            (E and a["edge_action"].min() < 0):
+        return "an action id outside action_names"
+    if (a["other_frame"] < 0).any() or (a["visits"] < 0).any():
+        return "negative frames or visits"
+    if len(set(a["action_names"].tolist())) != A:
+        return "action_names repeat"
+    return None

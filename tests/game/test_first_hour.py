@@ -126,7 +126,7 @@ def test_headless_play_without_frames_ends(tmp_path, graph_path, capsys):  # noq
     trace = tmp_path / "t.json"
     assert main(["play", "--headless", "--graph", graph_path, "--no-sound", "--source", "keyboard://",
                  "--size", "320x180", "--trace", str(trace)]) == 0
-    from game.play import HEADLESS_FRAMES
+    from game.launch import HEADLESS_FRAMES
 
     frames = [e for e in json.loads(trace.read_text())["traceEvents"] if e.get("name") == "frame"]
     assert len(frames) == HEADLESS_FRAMES

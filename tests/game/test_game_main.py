@@ -8,6 +8,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 REPO = Path(__file__).resolve().parents[2]
 
 
@@ -30,3 +32,32 @@ def test_python_m_game_reports_bad_input_in_one_line():
     assert [line for line in r.stderr.splitlines() if line.startswith("quickjab play:")] == [
         "quickjab play: unknown source scheme 'nosuch' in 'nosuch://x'; known: demo, keyboard, replay, serial, wiimote, wiimote-emu"
     ]
+
+
+def test_one_owner_runs_a_command_for_both_command_lines(capsys):
+    """game.command.run_command is the error handling of `quickjab` and `python -m game`."""
+    import argparse
+
+    import game.__main__
+    import tools.cli
+    from engine.errors import InputError
+    from game.command import run_command
+
+    assert tools.cli.run_command is run_command and game.__main__.run_command is run_command
+
+    def raising(exc):
+        def func(args):
+            raise exc
+        return argparse.Namespace(command="play", func=func)
+
+    parser = argparse.ArgumentParser(prog="x")
+    assert run_command(parser, raising(InputError("bad.csv: line 3: not a number"))) == 2
+    assert run_command(parser, raising(FileNotFoundError(2, "No such file", "gone.npz"))) == 2
+    assert run_command(parser, raising(KeyboardInterrupt())) == 130
+    assert run_command(parser, argparse.Namespace(command="play", func=lambda args: None)) == 0
+    assert capsys.readouterr().err.splitlines() == [
+        "quickjab play: bad.csv: line 3: not a number",
+        "quickjab play: [Errno 2] No such file: 'gone.npz'",
+    ]
+    with pytest.raises(ValueError):  # a bug is not input: its traceback shows
+        run_command(parser, raising(ValueError("bug")))

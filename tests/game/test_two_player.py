@@ -140,6 +140,19 @@ def test_player_two_unplugged_mid_round_pauses_both_and_resumes(tmp_path) -> Non
     assert s.events_log.total >= p1_events
 
 
+def test_either_players_home_button_pauses_both_once_per_press() -> None:
+    s = make_session(["keyboard://?seed=4&keys=left", "keyboard://?seed=5&keys=right"], render=False)
+    s.loop.run(steps=10)
+    assert s.match.fighting and not s.match.paused
+    s.seats[1].source.buttons = 0x0080  # player 2's Home down: pause (once, not every step it is held)
+    s.loop.run(steps=10)
+    assert s.match.paused
+    s.seats[1].source.buttons = 0
+    s.seats[0].source.buttons = 0x0080  # player 1's Home resumes
+    s.loop.run(steps=10)
+    assert not s.match.paused
+
+
 def test_demo_renders_two_panels_side_on(tmp_path) -> None:
     from tools.cli import main
 

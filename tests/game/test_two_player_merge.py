@@ -23,9 +23,9 @@ def own_data_dir(tmp_path, monkeypatch):
 
 
 def test_two_player_headless_without_frames_ends_and_names_the_templates(tmp_path, monkeypatch, capsys) -> None:
-    import game.play
+    import game.launch
 
-    monkeypatch.setattr(game.play, "HEADLESS_FRAMES", 40)  # the one-player default, shortened
+    monkeypatch.setattr(game.launch, "HEADLESS_FRAMES", 40)  # the one-player default, shortened
     trace = tmp_path / "t.json"
     assert main(["play", "--players", "2", "--demo", "--headless", "--size", "320x180", "--trace", str(trace)]) == 0
     frames = [e for e in json.loads(trace.read_text())["traceEvents"] if e.get("name") == "frame"]

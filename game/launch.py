@@ -1,0 +1,128 @@
+"""What the game's windowed commands share to start (`quickjab play`, one or two players, and
+`quickjab train`): the window size, the headless mode and its frame count, the check that a
+window shows, the player's source with its keyboard fallback, and the run of a session's loop.
+game.play and game.two_player both build on it, so neither imports the other for these.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+from collections.abc import Callable
+
+from engine import arguments
+from engine.errors import InputError
+
+DEFAULT_SOURCE = "wiimote://"
+KEYBOARD_SOURCE = "keyboard://"
+DEMO_SOURCE = "keyboard://?profile=experienced"
+KEYBOARD_BANNER = "No Wiimote found: playing from the keyboard"
+HEADLESS_FRAMES = 600  # `--headless` without `--frames` stops after 10 s of play, never runs on unseen
+INVISIBLE_DRIVERS = ("offscreen", "dummy")  # SDL video drivers that open no window
+
+
+def parse_size(text: str) -> tuple[int, int]:
+    try:
+        w, h = (int(v) for v in arguments.window_size(text).lower().split("x"))
+    except argparse.ArgumentTypeError as exc:  # one line naming --size, as before
+        raise InputError(f"--size {text!r}: {exc}") from None
+    return w, h
+
+
+def check_visible_window(command: str) -> None:
+    """A window was asked for but SDL fell back to a driver that shows nothing (no display: a
+    server, an SSH session): say so and stop, rather than run unseen forever. Choosing such a
+    driver on purpose (SDL_VIDEODRIVER=dummy) is allowed."""
+    import pygame
+
+    driver = pygame.display.get_driver()
+    if driver in INVISIBLE_DRIVERS and os.environ.get("SDL_VIDEODRIVER", "").lower() != driver:
+        raise InputError(f"no display: SDL opened its {driver!r} video driver, so no window would show; "
+                         f"run it where a display is (DISPLAY / WAYLAND_DISPLAY), or use `quickjab {command} --headless --frames N`")
+
+
+def headless_frames(frames: int | None, headless: bool, command: str) -> int | None:
+    """The frame count to run: a headless run without --frames ends after HEADLESS_FRAMES."""
+    if frames is None and headless:
+        print(f"quickjab {command}: --headless without --frames: stopping after {HEADLESS_FRAMES} frames", file=sys.stderr)
+        return HEADLESS_FRAMES
+    return frames
+
+
+def headless_env() -> None:
+    """No window, no sound device: SDL's dummy drivers (set before pygame initialises)."""
+    os.environ["SDL_VIDEODRIVER"] = "dummy"
+    os.environ["SDL_AUDIODRIVER"] = "dummy"
+
+
+def open_player_source(url: str | None, demo: bool, seed: int, clock) -> tuple[object, bool]:
+    """The source to play with and whether the keyboard fallback was taken."""
+    import game.keyboard_source  # noqa: F401 - registers keyboard://
+    from engine.sensors import SourceError, SourceState, open_source
+
+    if demo:
+        return open_source(f"{DEMO_SOURCE}&seed={seed}", clock=clock), False
+    if url is not None:
+        if url.startswith("keyboard://") and "seed=" not in url:
+            url += ("&" if "?" in url else "?") + f"seed={seed}"
+        return open_source(url, clock=clock), False
+    try:
+        source = open_source(DEFAULT_SOURCE, clock=clock)
+    except SourceError as exc:
+        print(f"quickjab: {str(exc).split(';')[0]}; using the keyboard", file=sys.stderr)
+    else:
+        if source.state is not SourceState.DISCONNECTED:
+            return source, False
+        source.close()
+    return open_source(f"{KEYBOARD_SOURCE}?seed={seed}", clock=clock), True
+
+
+def run_session(args: argparse.Namespace, caption: str, open_sources: Callable[[object], list],
+                make_session: Callable[..., object]) -> int:
+    """What one- and two-player play share: the window (or none: --headless, which stops after
+    HEADLESS_FRAMES without --frames), a clear error when SDL shows no window, the clock, the
+    templates line, the loop, then the screenshot and trace, and the sources closed.
+    `open_sources(clock)` returns the sources (opened before the window: a bad URL is an
+    error, not a window that opens and closes); `make_session(sources, clock, size,
+    surface_provider)` builds the session."""
+    size = parse_size(args.size)
+    if args.frames is not None and args.frames < 1:
+        raise InputError("--frames must be at least 1")
+    frames = headless_frames(args.frames, args.headless, "play")
+    if args.headless:
+        headless_env()
+    import pygame
+
+    from engine.clock import RealClock, VirtualClock
+    from engine.trace import write_chrome_trace
+
+    clock = VirtualClock() if args.headless or args.virtual_clock else RealClock()
+    sources: list = []
+    try:
+        sources.extend(open_sources(clock))
+        pygame.init()
+        flags = pygame.RESIZABLE | (pygame.FULLSCREEN if args.fullscreen and not args.headless else 0)
+        pygame.display.set_mode(size, flags)
+        if not args.headless:
+            check_visible_window("play")
+        pygame.display.set_caption(caption)
+        session = make_session(sources, clock, size, pygame.display.get_surface)
+        for line in session.templates_lines():
+            print(f"quickjab play: {line}", file=sys.stderr)
+        session.hud_state.show_budget = args.budget
+        session.on_toggle_fullscreen = pygame.display.toggle_fullscreen
+        try:
+            session.loop.run(frames=frames)
+        finally:
+            if args.screenshot:
+                pygame.image.save(pygame.display.get_surface(), args.screenshot)
+                print(f"quickjab play: wrote {args.screenshot}", file=sys.stderr)
+            if args.trace:
+                write_chrome_trace(session.loop.budget, args.trace)
+                print(f"quickjab play: wrote {args.trace}", file=sys.stderr)
+    finally:
+        for source in sources:
+            source.close()
+        pygame.quit()
+    return 0
