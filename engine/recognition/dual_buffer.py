@@ -94,7 +94,7 @@ from engine.recognition.rules import (
 )
 from engine.recognition.speed import SpeedEstimate
 from engine.recognition.template_set import TemplateSet
-from engine.recognition.templates import Templates, activity
+from engine.recognition.templates import Templates, activity, linear
 
 # re-exported: the names tests and tools read from here
 __all__ = [
@@ -203,6 +203,7 @@ class DualBufferRecognizer(GravityGate, TemplateSet, FrameFeatures, DecisionRule
         self._peak_dir = [0.0, 0.0, 0.0]
         self._peak_g = 0.0
         self._peak_act_seen = 0.0
+        self._peak_lin = 0.0  # the motion's peak of the gate's `_lin` (see TURN_RATIO)
         self._done = 0
         self._extended = False  # the DTW ran past the supplementary buffer (a long motion)
         self._was_closed = False
@@ -270,12 +271,13 @@ class DualBufferRecognizer(GravityGate, TemplateSet, FrameFeatures, DecisionRule
             recent = self._recent[(self._n_recent - m + np.arange(m)) % BACKDATE_MAX]
             back = self._backdate(activity(recent, self._g0)) if m else 0
             self.onset_frame = self.frame - back
-            xs, act = self._xs, self._act
+            xs, act, lin = self._xs, self._act, self._lin
             for r in recent[m - back :]:
                 self._xs = r.tolist()
                 self._act = float(activity(r[None], self._g0)[0])
+                self._lin = float(linear(r[None], self._g0)[0])
                 self._step_active(r, True, events, backdated=True)
-            self._xs, self._act = xs, act
+            self._xs, self._act, self._lin = xs, act, lin
             self._n_recent = 0
         self._step_active(x, valid, events)
         return events
@@ -289,6 +291,7 @@ class DualBufferRecognizer(GravityGate, TemplateSet, FrameFeatures, DecisionRule
         self.count += 1
         self.quiet = 0 if valid else self.quiet + 1
         self._peak_act_seen = max(self._peak_act_seen, self._act)
+        self._peak_lin = max(self._peak_lin, self._lin)
         self._after_peak *= RETURN_DECAY
         self._track_speed()
         complete = False

@@ -70,6 +70,7 @@ RETURN_DECAY = 0.95
 DISCARD_HOLD_RATIO = 0.5
 DISCARD_HOLD = 1.5
 UNCHANGED_FRAMES = 2
+TURN_RATIO = 0.4
 
 # A decided motion that outlasts the supplementary buffer keeps its DTW growing up to
 # EXTEND_FACTOR x max(window, longest template) frames; at its end a different action whose whole
@@ -124,6 +125,7 @@ class DecisionRules:
         ok = strong and best_score <= self.thresholds[best]
         if self.action is None:
             ok = ok and (not self.reject or self._peak_act_seen >= RETURN_RATIO * self._after_peak)
+            ok = ok and (not self.reject or self._peak_lin >= TURN_RATIO * self._turn_bar[best_action] * self._peak_act_seen)
             if not self.pending and not self._first_decision_due(scores):
                 return
             if self.quiet >= QUIET_DEFER and self.count < self.window:
