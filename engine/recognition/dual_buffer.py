@@ -29,6 +29,10 @@ Per 60 Hz frame (`push`):
   starts; the decision may still come later in the supplementary buffer, else the motion is
   `reject`ed when the buffer is full. A started motion that ends without ever reaching
   CALL_OFF_RATIO of its action's peak is called off: `reject` with `called_off`, no `end`.
+  A first decision also needs the motion's peak of ||a| - |g|| to reach TURN_RATIO of the
+  action's templates' share of it (their gentlest, over their first ENERGY_FRAMES) times the
+  motion's peak activity: a turn of the hand (a guard change, a drift) moves the reading away
+  from gravity without changing its magnitude, and it starts nothing; the punch after it does.
 - Null signal (IV-C): `null_frames` quiet frames in a row `end` the motion; a started motion still
   too short or too weak to be over waits up to PAUSE_FRAMES more quiet frames (a wind-up's pause).
 - Return rule: a motion that follows the previous one without the hand resting in between
