@@ -278,8 +278,7 @@ class DualBufferRecognizer(GravityGate, TemplateSet, FrameFeatures, DecisionRule
             xs, act, lin = self._xs, self._act, self._lin
             for r in recent[m - back :]:
                 self._xs = r.tolist()
-                self._act = float(activity(r[None], self._g0)[0])
-                self._lin = float(linear(r[None], self._g0)[0])
+                self._act, self._lin = float(activity(r[None], self._g0)[0]), float(linear(r[None], self._g0)[0])
                 self._step_active(r, True, events, backdated=True)
             self._xs, self._act, self._lin = xs, act, lin
             self._n_recent = 0
