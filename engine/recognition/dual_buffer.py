@@ -29,6 +29,10 @@ Per 60 Hz frame (`push`):
   starts; the decision may still come later in the supplementary buffer, else the motion is
   `reject`ed when the buffer is full. A started motion that ends without ever reaching
   CALL_OFF_RATIO of its action's peak is called off: `reject` with `called_off`, no `end`.
+  A first decision also needs the motion's peak of ||a| - |g|| to reach TURN_RATIO of the
+  action's templates' share of it (their gentlest, over their first ENERGY_FRAMES) times the
+  motion's peak activity: a turn of the hand (a guard change, a drift) moves the reading away
+  from gravity without changing its magnitude, and it starts nothing; the punch after it does.
 - Null signal (IV-C): `null_frames` quiet frames in a row `end` the motion; a started motion still
   too short or too weak to be over waits up to PAUSE_FRAMES more quiet frames (a wind-up's pause).
 - Return rule: a motion that follows the previous one without the hand resting in between
@@ -94,7 +98,7 @@ from engine.recognition.rules import (
 )
 from engine.recognition.speed import SpeedEstimate
 from engine.recognition.template_set import TemplateSet
-from engine.recognition.templates import Templates, activity
+from engine.recognition.templates import Templates, activity, linear
 
 # re-exported: the names tests and tools read from here
 __all__ = [
@@ -203,6 +207,7 @@ class DualBufferRecognizer(GravityGate, TemplateSet, FrameFeatures, DecisionRule
         self._peak_dir = [0.0, 0.0, 0.0]
         self._peak_g = 0.0
         self._peak_act_seen = 0.0
+        self._peak_lin = 0.0  # the motion's peak of the gate's `_lin` (see TURN_RATIO)
         self._done = 0
         self._extended = False  # the DTW ran past the supplementary buffer (a long motion)
         self._was_closed = False
@@ -270,12 +275,12 @@ class DualBufferRecognizer(GravityGate, TemplateSet, FrameFeatures, DecisionRule
             recent = self._recent[(self._n_recent - m + np.arange(m)) % BACKDATE_MAX]
             back = self._backdate(activity(recent, self._g0)) if m else 0
             self.onset_frame = self.frame - back
-            xs, act = self._xs, self._act
+            xs, act, lin = self._xs, self._act, self._lin
             for r in recent[m - back :]:
                 self._xs = r.tolist()
-                self._act = float(activity(r[None], self._g0)[0])
+                self._act, self._lin = float(activity(r[None], self._g0)[0]), float(linear(r[None], self._g0)[0])
                 self._step_active(r, True, events, backdated=True)
-            self._xs, self._act = xs, act
+            self._xs, self._act, self._lin = xs, act, lin
             self._n_recent = 0
         self._step_active(x, valid, events)
         return events
@@ -289,6 +294,7 @@ class DualBufferRecognizer(GravityGate, TemplateSet, FrameFeatures, DecisionRule
         self.count += 1
         self.quiet = 0 if valid else self.quiet + 1
         self._peak_act_seen = max(self._peak_act_seen, self._act)
+        self._peak_lin = max(self._peak_lin, self._lin)
         self._after_peak *= RETURN_DECAY
         self._track_speed()
         complete = False

@@ -108,7 +108,7 @@ class GravityGate:
             self._last = list(xs)
             self._mean = list(xs)
         g, last, mean = self.gravity.tolist(), self._last, self._mean
-        still_now, unchanged_now, steady_now, act = True, True, True, 0.0
+        still_now, unchanged_now, steady_now, act, lin = True, True, True, 0.0, 0.0
         a = STEADY_ALPHA
         for k in range(0, len(xs), 3):
             ax, ay, az = xs[k], xs[k + 1], xs[k + 2]
@@ -124,18 +124,22 @@ class GravityGate:
                 steady_now = False
             gx, gy, gz = ax - g[k], ay - g[k + 1], az - g[k + 2]
             act += math.sqrt(gx * gx + gy * gy + gz * gz)
+            # how far the reading's magnitude is from gravity's (a turn of the hand keeps it)
+            lin += abs(math.sqrt(ax * ax + ay * ay + az * az) - math.sqrt(g[k] * g[k] + g[k + 1] * g[k + 1] + g[k + 2] * g[k + 2]))
         self._last = self._xs = xs
         self._still = self._still + 1 if still_now else 0
         self._unchanged = self._unchanged + 1 if unchanged_now else 0
         self._steady = self._steady + 1 if steady_now else 0
         if self._still >= STILL_FRAMES:
             self.gravity[:] = x
-            act = 0.0
+            act = lin = 0.0
         elif self._steady >= RECOVER_FRAMES and act >= self.noise_g and (self.state != ACTIVE or self.count >= self.window):
             self.gravity[:] = mean
-            act = 0.0
+            act = lin = 0.0
         valid = act >= self.noise_g
         self._act = act
+        self._lin = lin
         if not valid and self.state != ACTIVE:
             self.gravity += GRAVITY_FOLLOW * (x - self.gravity)
         return valid
+

@@ -70,6 +70,16 @@ RETURN_DECAY = 0.95
 DISCARD_HOLD_RATIO = 0.5
 DISCARD_HOLD = 1.5
 UNCHANGED_FRAMES = 2
+# A first decision needs the motion's peak of `linear` (||a| - |g||, summed over sensors: what a
+# turn of the hand does not make) to reach TURN_RATIO x the action's templates' share of it (the
+# least, over their first ENERGY_FRAMES frames, of peak linear / peak activity: TemplateSet
+# `_turn_bar`) x the motion's peak activity. A guard change or a slow drift turns the sensor:
+# its activity rises like a punch's first frames and started the wrong action 12-50 frames before
+# the punch, which then ran into the punch or ended just before it (15 of the 31 finals lost on
+# the mixed streams, seed 0). Mixed finals L f>s 87.9 -> 96.5 %, L s>f 86.4 -> 89.4 %, R f>s
+# 84.2 -> 91.2 %; costs: one punch per file in L s>f and R f>s, R f>s one guard 89.5 -> 84.2 %
+# (docs/recognition.md, thirteenth round). Trained templates only: adoption does not move it.
+TURN_RATIO = 0.4
 
 # A decided motion that outlasts the supplementary buffer keeps its DTW growing up to
 # EXTEND_FACTOR x max(window, longest template) frames; at its end a different action whose whole
@@ -124,6 +134,7 @@ class DecisionRules:
         ok = strong and best_score <= self.thresholds[best]
         if self.action is None:
             ok = ok and (not self.reject or self._peak_act_seen >= RETURN_RATIO * self._after_peak)
+            ok = ok and (not self.reject or self._peak_lin >= TURN_RATIO * self._turn_bar[best_action] * self._peak_act_seen)
             if not self.pending and not self._first_decision_due(scores):
                 return
             if self.quiet >= QUIET_DEFER and self.count < self.window:

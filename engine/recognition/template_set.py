@@ -9,7 +9,7 @@ import numpy as np
 
 from engine.recognition.dtw import IncrementalDTW
 from engine.recognition.rules import ENERGY_FRAMES, EXTEND_FACTOR
-from engine.recognition.templates import Templates, activity, features
+from engine.recognition.templates import Templates, activity, features, linear
 
 
 def _inserted(a: np.ndarray, i: int, value) -> np.ndarray:
@@ -37,6 +37,7 @@ class TemplateSet:
         cut = [self._cut_at_gate(templates, k) for k in order]
         self._peak_act = self._template_peaks(templates, order)  # (T, 2): early and window peaks
         self._action_bar = np.minimum.reduceat(self._peak_act[:, 0], self._action_starts)  # per action
+        self._turn_bar = np.minimum.reduceat(self._template_lin_share(templates, order), self._action_starts)  # per action
         self.template_lengths = np.array([len(c) for c in cut])
         self.dtw = IncrementalDTW(cut, method=self._dtw_method, min_progress=self.min_progress)
         # A decided motion that outlasts the supplementary buffer keeps its DTW growing (one
@@ -55,6 +56,18 @@ class TemplateSet:
         return np.array([
             self._peaks(activity(templates.signals[k], templates.gravity[k])[self._gate_start(templates, k) :]) for k in order
         ])
+
+    def _template_lin_share(self, templates: Templates, order: np.ndarray) -> np.ndarray:
+        """(T,) each template's peak of `linear` over its peak activity, both over its first
+        ENERGY_FRAMES frames from its onset: how little of its early activity a turn of the hand
+        explains (see rules.TURN_RATIO)."""
+        out = []
+        for k in order:
+            on = self._gate_start(templates, k)
+            act = activity(templates.signals[k], templates.gravity[k])[on : on + ENERGY_FRAMES]
+            lin = linear(templates.signals[k], templates.gravity[k])[on : on + ENERGY_FRAMES]
+            out.append(float(lin.max() / act.max()) if len(act) and act.max() > 0 else 0.0)
+        return np.array(out)
 
     def _peaks(self, act: np.ndarray) -> tuple[float, float]:
         """(early, window) peaks of an activity series from its onset."""

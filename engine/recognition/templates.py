@@ -70,6 +70,13 @@ def activity(frames: np.ndarray, gravity: np.ndarray) -> np.ndarray:
     return np.linalg.norm(dev, axis=2).sum(axis=1)
 
 
+def linear(frames: np.ndarray, gravity: np.ndarray) -> np.ndarray:
+    """(n,) the sum over sensors of ||a| - |g||: the part of the activity a turn of the hand
+    (a guard change, a drift) does not make."""
+    a = np.linalg.norm(np.asarray(frames, dtype=np.float64).reshape(len(frames), -1, 3), axis=2)
+    return np.abs(a - np.linalg.norm(np.asarray(gravity, dtype=np.float64).reshape(-1, 3), axis=1)).sum(axis=1)
+
+
 def features(frames: np.ndarray, gravity: np.ndarray, kind: str) -> np.ndarray:
     """What DTW compares: "raw" is the signal as read (gravity included, so the hand's holding
     posture and its changes count); "log" is raw compressed per axis (a 12 g punch and a 1.5 g

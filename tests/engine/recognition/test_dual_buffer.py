@@ -387,3 +387,23 @@ def test_adopted_motions_do_not_give_the_first_decision(templates):
     jab = bump(0, 2.4)  # the same gentler opening, then a whole jab
     events = run(rec, np.vstack([rest(10), jab, rest(20)]))
     assert [e["action"] for e in events if e["event"] == "start"] == ["jab"]
+
+
+@pytest.mark.parametrize("rule", [True, False])
+def test_a_turn_of_the_hand_does_not_start_a_punch(rule, monkeypatch):
+    """A guard change turns the sensor: its activity (|a - g|) rises as a punch's first frames do,
+    but the reading's magnitude stays 1 g. With the turn rule (rules.TURN_RATIO) it starts
+    nothing; without it the same turn starts a jab. A real jab still starts either way."""
+    import engine.recognition.rules as rules
+
+    if not rule:
+        monkeypatch.setattr(rules, "TURN_RATIO", 0.0)
+    rng = np.random.default_rng(0)
+    tmpl = Templates.from_trials({"jab": trials_of(bump(0, 2.0), rng), "upper": trials_of(bump(2, 2.0), rng)})
+    phi = np.radians(60) * np.sin(np.linspace(0, np.pi, 24))  # out and back, 60 degrees
+    turn = np.stack([np.sin(phi), np.zeros(24), np.cos(phi)], axis=1)
+    events = run(DualBufferRecognizer(tmpl), np.vstack([rest(150), turn, rest(40)]))
+    starts = [e["action"] for e in events if e["event"] == "start"]
+    assert starts == ([] if rule else ["jab"])
+    events = run(DualBufferRecognizer(tmpl), np.vstack([rest(150), bump(0, 2.0), rest(40)]))
+    assert [e["action"] for e in events if e["event"] == "start"] == ["jab"]
