@@ -6,6 +6,8 @@
   Its parts: `scripts` (set-up scripts that wait for replies, one per poll), `setup` (the
   set-up itself: calibration, extension, mode, battery), `accel` (counts to g).
 - `emulator`: a protocol-faithful stand-in for `hid.device`, fed from a recording.
+  Its parts: `emulated_memory` (EEPROM, Nunchuk registers), `emulated_queue` (reports in
+  flight, the host's buffer), `playback` (the recording at each report slot).
 
 URLs:
   wiimote://                  the first Wiimote found; error with pairing help if none
