@@ -34,14 +34,24 @@ def _us(ns: int) -> float:
 
 
 def chrome_trace(budget: FrameBudget) -> dict:
+    """The frames and spans `budget` holds as a Chrome trace (a dict ready for json.dumps)."""
     frames = budget.frame_rows()
     spans = budget.span_rows()
     events: list[dict] = [
         {"ph": "M", "name": "process_name", "pid": PID, "tid": TID, "args": {"name": "quickjab"}},
         {"ph": "M", "name": "thread_name", "pid": PID, "tid": TID, "args": {"name": "main loop"}},
     ]
+    other = _other_data(budget)
+    if len(frames) == 0:
+        return {"traceEvents": events, "displayTimeUnit": "ms", "otherData": other}
+    events += _frame_events(budget, frames, spans)
+    return {"traceEvents": events, "displayTimeUnit": "ms", "otherData": other}
+
+
+def _other_data(budget: FrameBudget) -> dict:
+    """The trace's otherData: the stages' budgets and overruns and the loop's totals."""
     stages = {s.name: {"budget_ms": s.budget_ms, "overruns": s.overruns} for s in budget.stages}
-    other = {
+    return {
         "stages": stages,
         "frame_budget_ms": budget.frame_budget_ms,
         "frame_period_ms": budget.frame_period_ms,
@@ -49,8 +59,12 @@ def chrome_trace(budget: FrameBudget) -> dict:
         "frame_overruns": budget.frame_overruns,
         "frames_total": budget.frames,
     }
-    if len(frames) == 0:
-        return {"traceEvents": events, "displayTimeUnit": "ms", "otherData": other}
+
+
+def _frame_events(budget: FrameBudget, frames: np.ndarray, spans: np.ndarray) -> list[dict]:
+    """Per recorded frame (rows `frames`, at least one): its X event, its spans' X events (rows
+    `spans`) and its two C events, times from the first frame's start."""
+    events: list[dict] = []
     origin = int(budget.f_start[frames[0]])
     first_frame = budget.frames - len(frames)
     names = [s.name for s in budget.stages]
@@ -81,15 +95,7 @@ def chrome_trace(budget: FrameBudget) -> dict:
             if stage == unaccounted_id:
                 frame_event["args"]["unaccounted_us"] = _us(int(budget.s_dur[r]))
                 continue
-            depth, dur = int(budget.s_depth[r]), int(budget.s_dur[r])
-            args = {"step": int(budget.s_step[r]), "depth": depth}
-            if depth == 0 and dur > limits_ns[stage]:
-                args["overrun"] = True  # over the stage's declared budget: visible in Perfetto
-            events.append({
-                "ph": "X", "name": names[stage], "cat": "stage" if depth == 0 else "span",
-                "pid": PID, "tid": TID,
-                "ts": _us(int(budget.s_start[r]) - origin), "dur": _us(dur), "args": args,
-            })
+            events.append(_span_event(budget, r, names[stage], limits_ns[stage], origin))
         dropped_total += int(budget.f_dropped[fr])
         events.append({
             "ph": "C", "name": "budget", "pid": PID, "tid": TID, "ts": _us(end - origin),
@@ -99,7 +105,21 @@ def chrome_trace(budget: FrameBudget) -> dict:
             "ph": "C", "name": "dropped_steps", "pid": PID, "tid": TID, "ts": _us(end - origin),
             "args": {"dropped": dropped_total},
         })
-    return {"traceEvents": events, "displayTimeUnit": "ms", "otherData": other}
+    return events
+
+
+def _span_event(budget: FrameBudget, r: int, name: str, limit_ns: float, origin: int) -> dict:
+    """The X event of span row `r`: a stage (depth 0, marked when over its budget `limit_ns`)
+    or a span nested in one."""
+    depth, dur = int(budget.s_depth[r]), int(budget.s_dur[r])
+    args = {"step": int(budget.s_step[r]), "depth": depth}
+    if depth == 0 and dur > limit_ns:
+        args["overrun"] = True  # over the stage's declared budget: visible in Perfetto
+    return {
+        "ph": "X", "name": name, "cat": "stage" if depth == 0 else "span",
+        "pid": PID, "tid": TID,
+        "ts": _us(int(budget.s_start[r]) - origin), "dur": _us(dur), "args": args,
+    }
 
 
 def write_chrome_trace(budget: FrameBudget, path: str | os.PathLike) -> None:

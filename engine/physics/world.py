@@ -6,8 +6,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from engine.physics.collision import CapsulePairs, Contact, kernels
+from engine.physics.collision import Contact, kernels
 from engine.physics.constraints import DistanceConstraints, project_kernel
+from engine.physics.contacts import ContactDetector
 from engine.physics.world_def import WorldDef
 from engine.state_hash import state_hash as _hash
 
@@ -52,6 +53,29 @@ def _parse_limits(limits, n: int) -> tuple[np.ndarray, np.ndarray]:
     return pairs, ranges
 
 
+def _body_arrays(positions, masses, sticks, capsules, radii, capsule_tags):
+    """add_body's arguments as checked arrays: (positions, masses, sticks, capsules, radii, tags)."""
+    pos = np.asarray(positions, dtype=float)
+    if pos.ndim != 2 or pos.shape[1] != 3 or len(pos) == 0:
+        raise ValueError(f"positions must be (P, 3), got {pos.shape}")
+    p = len(pos)
+    m = np.asarray(masses, dtype=float).reshape(-1)
+    if m.shape != (p,) or not np.all(m > 0) or not np.all(np.isfinite(m)):
+        raise ValueError("masses must be (P,) finite and > 0")
+    st = np.asarray(sticks, dtype=np.int64).reshape(-1, 2)
+    caps = np.asarray(capsules, dtype=np.int64).reshape(-1, 2)
+    rad = np.asarray(radii, dtype=float).reshape(-1)
+    tags = list(capsule_tags)
+    for name, a in (("sticks", st), ("capsules", caps)):
+        if len(a) and (a.min() < 0 or a.max() >= p):
+            raise ValueError(f"{name}: particle index out of range 0..{p - 1}")
+    if len(st) and np.any(st[:, 0] == st[:, 1]):
+        raise ValueError("sticks: a stick needs two different particles")
+    if len(rad) != len(caps) or len(tags) != len(caps) or np.any(rad < 0):
+        raise ValueError("capsules, radii (>= 0) and capsule_tags must have the same length")
+    return pos, m, st, caps, rad, tags
+
+
 _D = WorldDef()
 
 
@@ -88,11 +112,7 @@ class World:
         self.steps = 0
         self._dt_prev: float | None = None
         self._alloc(0)
-        self._caps = np.zeros((0, 2), dtype=np.int64)
-        self._radii = np.zeros(0)
-        self._cap_body = np.zeros(0, dtype=np.int64)
-        self._cap_local = np.zeros(0, dtype=np.int64)
-        self._cap_tags: list[str] = []
+        self._detector = ContactDetector()
         self._rebuild()
         # The C kernels now, not in the first step with a contact: their first build on a
         # machine (a compiler run, seconds on a slow board) must not stall a match's opening.
@@ -138,24 +158,8 @@ class World:
     def add_body(self, positions, masses, sticks, capsules, radii, capsule_tags, limits=None) -> int:
         """Add a body; returns its id. Sticks keep their initial lengths. `limits` is None, a
         pair (pairs (L, 2) int, ranges (L, 2) float min/max distance) or rows (i, j, min, max)."""
-        pos = np.asarray(positions, dtype=float)
-        if pos.ndim != 2 or pos.shape[1] != 3 or len(pos) == 0:
-            raise ValueError(f"positions must be (P, 3), got {pos.shape}")
+        pos, m, st, caps, rad, tags = _body_arrays(positions, masses, sticks, capsules, radii, capsule_tags)
         p = len(pos)
-        m = np.asarray(masses, dtype=float).reshape(-1)
-        if m.shape != (p,) or not np.all(m > 0) or not np.all(np.isfinite(m)):
-            raise ValueError("masses must be (P,) finite and > 0")
-        st = np.asarray(sticks, dtype=np.int64).reshape(-1, 2)
-        caps = np.asarray(capsules, dtype=np.int64).reshape(-1, 2)
-        rad = np.asarray(radii, dtype=float).reshape(-1)
-        tags = list(capsule_tags)
-        for name, a in (("sticks", st), ("capsules", caps)):
-            if len(a) and (a.min() < 0 or a.max() >= p):
-                raise ValueError(f"{name}: particle index out of range 0..{p - 1}")
-        if len(st) and np.any(st[:, 0] == st[:, 1]):
-            raise ValueError("sticks: a stick needs two different particles")
-        if len(rad) != len(caps) or len(tags) != len(caps) or np.any(rad < 0):
-            raise ValueError("capsules, radii (>= 0) and capsule_tags must have the same length")
         lim, lim_rng = _parse_limits(limits, p)
         rest = np.linalg.norm(pos[st[:, 1]] - pos[st[:, 0]], axis=1)
 
@@ -167,13 +171,9 @@ class World:
         self.mass[sl] = m
         self.inv_mass[sl] = 1.0 / m
         self.targets[sl] = pos
-        c0 = len(self._caps)
+        c0 = self._detector.n_capsules
         bid = len(self.bodies)
-        self._caps = np.concatenate([self._caps, caps + start])
-        self._radii = np.concatenate([self._radii, rad])
-        self._cap_body = np.concatenate([self._cap_body, np.full(len(caps), bid)])
-        self._cap_local = np.concatenate([self._cap_local, np.arange(len(caps))])
-        self._cap_tags += tags
+        self._detector.add_capsules(caps + start, rad, tags, bid)
         self._pd_key.append(None)
         self._target_vel_on.append(False)
         self.bodies.append(Body(bid, sl, slice(c0, c0 + len(caps)), caps, rad, tags, st, rest, m, lim, lim_rng))
@@ -191,16 +191,12 @@ class World:
         self.constraints = DistanceConstraints(np.concatenate(pairs), np.concatenate(lo),
                                                np.concatenate(hi), self.inv_mass, self.solver,
                                                self.relaxation)
-        ca, cb = np.meshgrid(np.arange(len(self._caps)), np.arange(len(self._caps)), indexing="ij")
-        ca, cb = ca.ravel(), cb.ravel()
-        keep = self._cap_body[ca] < self._cap_body[cb] if len(ca) else np.zeros(0, dtype=bool)
-        self.pairs = CapsulePairs(ca[keep], cb[keep], self._caps, self._radii, self.inv_mass, len(self.x))
-        self._forget_contacts()
+        self._detector.rebuild(self.inv_mass, len(self.x))
 
-    def _forget_contacts(self) -> None:
-        """Forget which pairs touched last step (new body, teleport): Contact.new starts over."""
-        self._touching = np.zeros(len(self.pairs), dtype=bool)  # pairs overlapping last step
-        self._hit_idx = np.zeros(0, dtype=np.int64)
+    @property
+    def pairs(self):
+        """The capsule pairs between different bodies (a collision.CapsulePairs)."""
+        return self._detector.pairs
 
     # ---- control --------------------------------------------------------------------------
 
@@ -249,7 +245,7 @@ class World:
         sl = self.bodies[bid].slice
         self.x[sl] = positions
         self.x_prev[sl] = self.x[sl]
-        self._forget_contacts()
+        self._detector.forget()
 
     def velocity(self, dt: float) -> np.ndarray:
         """Particle velocities (N, 3) over the last step of length dt."""
@@ -303,7 +299,7 @@ class World:
         x = self.x
         v = self._integrate(dt)
         self._dt_prev = dt
-        contacts, cset, near_idx = self._detect(v)
+        contacts, cset, near_idx = self._detector.detect(x, self.x_prev, v, self.collision_margin)
 
         ground = x[:, 1]
         relax = self.constraints.relax
@@ -313,14 +309,7 @@ class World:
                 cset.project(x)
             np.maximum(ground, self.ground_y, out=ground)
         if cset is not None:
-            # contact passes linearized at the relaxed positions: the closest points moved
-            # during the iterations, and what the user sees must not interpenetrate
-            for _ in range(self.contact_passes):
-                s, t, n, depth = self.pairs.narrow(x, near_idx)
-                pen = depth > self.contact_tolerance
-                if not pen.any():
-                    break
-                self.pairs.contact_set(near_idx[pen], s[pen], t[pen], n[pen]).project(x)
+            self._detector.separate(x, near_idx, self.contact_passes, self.contact_tolerance)
             np.maximum(ground, self.ground_y, out=ground)
 
         if self.ground_friction > 0.0:
@@ -331,60 +320,6 @@ class World:
                 x[on, ::2] = pk + (x[on, ::2] - pk) * (1.0 - self.ground_friction)
         self.steps += 1
         return contacts
-
-    def _detect(self, v: np.ndarray):
-        """Contacts at the integrated positions, and this step's contact constraints: the pairs
-        touching or within `collision_margin` (so relaxing the sticks cannot push them into
-        each other). Returns (contacts, ContactSet or None, their pair indices)."""
-        contacts: list[Contact] = []
-        cset = None
-        near_idx = np.zeros(0, dtype=np.int64)
-        cand = self.pairs.candidates(self.x, self.collision_margin) if len(self.pairs) else near_idx
-        if len(cand):
-            s, t, n, depth = self.pairs.narrow(self.x, cand)
-            near = np.flatnonzero(depth > -self.collision_margin)
-            if len(near):
-                near_idx = cand[near]
-                s, t, n, depth = s[near], t[near], n[near], depth[near]
-                cset = self.pairs.contact_set(near_idx, s, t, n)
-                closing = cset.closing_speeds(v)
-                # a pair whose closest points were on the other side of each other at the start
-                # of the step went past the middle within it (a fast fist): turn it back the
-                # way it came. (The last step ended without overlap, so before this step's
-                # motion the separation along n was positive unless they crossed.)
-                flip = (depth > 0.0) & (cset.separations(self.x_prev) < 0.0)
-                if flip.any():
-                    n = np.where(flip[:, None], -n, n)
-                    depth = np.where(flip, 2.0 * self.pairs.rsum[near_idx] - depth, depth)
-                    closing = np.where(flip, -closing, closing)
-                    cset = self.pairs.contact_set(near_idx, s, t, n)
-                contacts = self._contacts(near_idx, s, n, depth, closing)
-        # remember which pairs touch, for Contact.new
-        self._touching[self._hit_idx] = False
-        self._hit_idx = np.array([c.pair for c in contacts], dtype=np.int64) if contacts else near_idx[:0]
-        self._touching[self._hit_idx] = True
-        return contacts, cset, near_idx
-
-    def _contacts(self, idx, s, n, depth, closing) -> list[Contact]:
-        """Contacts among pairs `idx` that overlap at the integrated positions (before any
-        resolution), with the closing speed of their closest points along the normal."""
-        hit = np.flatnonzero(depth > 0.0)
-        if len(hit) == 0:
-            return []
-        p = self.pairs
-        k = idx[hit]
-        n, depth = n[hit], depth[hit]
-        ca = p.closest_on_a(self.x, k, s[hit])
-        # midway between the two surfaces along the normal
-        point = ca + n * (self._radii[p.cap_a[k]] - 0.5 * depth)[:, None]
-        ga, gb = p.cap_a[k], p.cap_b[k]
-        rows = zip(self._cap_body[ga].tolist(), self._cap_local[ga].tolist(), ga.tolist(),
-                   self._cap_body[gb].tolist(), self._cap_local[gb].tolist(), gb.tolist(),
-                   point, n, closing[hit].tolist(), depth.tolist(), strict=True)
-        tags = self._cap_tags
-        fresh = (~self._touching[k]).tolist()
-        return [Contact(ba, la, tags[a], bb, lb, tags[b], pt, nn, sp, de, nw, pr)
-                for (ba, la, a, bb, lb, b, pt, nn, sp, de), nw, pr in zip(rows, fresh, k.tolist(), strict=True)]
 
     def state_hash(self) -> str:
         """Hash of the simulation state (positions, previous positions, step count)."""

@@ -25,10 +25,10 @@ import termios
 from collections import deque
 from urllib.parse import parse_qsl
 
-import numpy as np
 import serial
 from serial.tools import list_ports
 
+from engine.sensors.serial_accel import SampleAccel
 from engine.sensors.source import Clock, Sample, Source, SourceError, SourceState, register_scheme
 from firmware_bridge import protocol
 
@@ -120,7 +120,7 @@ class SerialSource(Source):
         self.devclock = DeviceClock(window_s)
         self.hello: protocol.Hello | None = None
         self.messages: deque[str] = deque(maxlen=32)  # the device's TEXT lines
-        self._last_row: np.ndarray | None = None  # the last SAMPLE's accel, (sensors, 3)
+        self._accel = SampleAccel(self.count)  # SAMPLE payloads to g, each sensor's last value
         self._next_try = 0.0
         self._last_byte = clock()
         self._stalled = False
@@ -311,56 +311,10 @@ class SerialSource(Source):
         # a few samples per poll: plain floats beat numpy calls here
         offset, last = self.devclock.offset, self.devclock.last_t
         out = []
-        for dev, a in zip(times, self._accel_rows(sample_frames), strict=True):
+        for dev, a in zip(times, self._accel.rows(sample_frames, self.hello, self.sensors), strict=True):
             last = max(dev + offset, last)  # never backwards
             out.append(Sample(last, a))
         self.devclock.last_t = last
-        return out
-
-    def _accel_rows(self, frames: list[protocol.Frame]) -> list[np.ndarray] | np.ndarray:
-        """(sensors, 3) in g per frame: one numpy conversion for the whole poll when every frame
-        has the layout the HELLO announced (the usual case), frame by frame otherwise."""
-        flags = frames[0].flags & ~protocol.FLAG_OVERRUN
-        want = self.hello.flags & protocol.FLAGS_SENSORS
-        if (flags & protocol.FLAGS_SENSORS) == want and self.hello.sensors == self.sensors \
-                and all((f.flags & ~protocol.FLAG_OVERRUN) == flags for f in frames):
-            per = protocol.sample_values_per_sensor(flags)
-            raw = np.frombuffer(b"".join([f.payload for f in frames]), dtype="<i2")
-            acc = raw.reshape(len(frames), self.sensors, per)[:, :, :3] * (1.0 / self.hello.accel_lsb_per_g)
-            self._last_row = acc[-1]  # for a later SAMPLE that lacks a sensor
-            return acc
-        return [self._accel(f) for f in frames]
-
-    def _last(self) -> np.ndarray:
-        """Every sensor's last accel, (sensors, 3); zeros before any."""
-        last = self._last_row
-        if last is None or last.shape[0] != self.sensors:
-            return np.zeros((self.sensors, 3))
-        return last
-
-    def _accel(self, f: protocol.Frame) -> np.ndarray:
-        """(sensors, 3) in g; a sensor the HELLO announced but this SAMPLE lacks holds its last value."""
-        per = protocol.sample_values_per_sensor(f.flags)
-        raw = np.frombuffer(f.payload, dtype="<i2").reshape(-1, per)[:, :3] / self.hello.accel_lsb_per_g
-        want = self.hello.flags & protocol.FLAGS_SENSORS
-        have = f.flags & protocol.FLAGS_SENSORS
-        if have == want or not want:
-            out = raw
-        else:
-            self.count("sensor_missing")
-            out = self._last().copy()
-            slots = [s for s in (protocol.FLAG_SENSOR_A, protocol.FLAG_SENSOR_B) if want & s]
-            k = 0
-            for i, s in enumerate(slots):
-                if have & s:
-                    out[i] = raw[k]
-                    k += 1
-        if out.shape[0] != self.sensors:
-            base = self._last().copy()
-            k = min(out.shape[0], self.sensors)
-            base[:k] = out[:k]
-            out = base
-        self._last_row = out
         return out
 
 

@@ -3,7 +3,11 @@
 - `protocol`: pure bytes in / reports out and report builders (the public API below).
 - `transport`: a thin non-blocking wrapper over hidapi's `hidraw` (Linux) or `hid` module.
 - `driver`: the state machine that turns reports into samples of shape (2, 3) in g.
+  Its parts: `scripts` (set-up scripts that wait for replies, one per poll), `setup` (the
+  set-up itself: calibration, extension, mode, battery), `accel` (counts to g).
 - `emulator`: a protocol-faithful stand-in for `hid.device`, fed from a recording.
+  Its parts: `emulated_memory` (EEPROM, Nunchuk registers), `emulated_queue` (reports in
+  flight, the host's buffer), `playback` (the recording at each report slot).
 
 URLs:
   wiimote://                  the first Wiimote found; error with pairing help if none

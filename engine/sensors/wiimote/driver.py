@@ -19,13 +19,13 @@ RECONNECTING while a returned remote is set up again, CONNECTED when samples flo
 from __future__ import annotations
 
 import logging
-from collections.abc import Callable, Generator
 from typing import Any
-
-import numpy as np
 
 from engine.sensors.source import Clock, Sample, Source, SourceState
 from engine.sensors.wiimote import protocol as p
+from engine.sensors.wiimote.accel import CalibratedAccel
+from engine.sensors.wiimote.scripts import DeviceGone, ScriptRunner
+from engine.sensors.wiimote.setup import LOSS_S, PROBE_S, RemoteSetup
 from engine.sensors.wiimote.transport import (
     HidTransport,
     TransportError,
@@ -36,40 +36,30 @@ from engine.sensors.wiimote.transport import (
 log = logging.getLogger(__name__)
 
 REPORT_PERIOD_S = 0.01  # about 100 reports a second over PC Bluetooth
-REPLY_TIMEOUT_S = 0.15  # a live Wiimote answers within a few tens of ms
-REPLY_RETRIES = 2
-PROBE_S = 0.2  # silence after which a status request asks "are you there?"
-LOSS_S = 0.45  # silence after which the remote is gone (the brief: detected within 0.5 s)
 RESCAN_S = 1.0  # how often a lost or absent remote is looked for
-STATUS_EVERY_S = 10.0  # battery refresh (Dolphin does the same)
-MODE_FIX_EVERY_S = 0.5  # at most this often re-assert our mode against another driver
 MAX_READS_PER_POLL = 256  # more than a hidraw buffer (64) holds
-REST = np.array([0.0, 0.0, 1.0])  # what a still, level sensor reads
 
 
-class ReplyTimeout(Exception):
-    """Thrown into a script when the reply it waits for does not come in time."""
+class Rumble:
+    """The motor: on until `until`; its bit rides on every output report meanwhile."""
 
+    __slots__ = ("on", "until")
 
-class DeviceGone(Exception):
-    """A write failed: the connection is already marked lost."""
+    def __init__(self) -> None:
+        self.on = False
+        self.until = 0.0
 
+    def start(self, now: float, ms: int) -> None:
+        until = now + ms / 1000.0
+        self.until = max(self.until, until) if self.on else until
+        self.on = True
 
-class SetupFailed(Exception):
-    """A script gave up (no reply after retries)."""
-
-
-class Wait:
-    """What a script waits for: a report matching `match`, within `timeout` seconds."""
-
-    __slots__ = ("match", "timeout")
-
-    def __init__(self, match: Callable[[p.Report], bool], timeout: float = REPLY_TIMEOUT_S):
-        self.match = match
-        self.timeout = timeout
-
-
-Script = Generator[Wait, Any, Any]
+    def due_off(self, now: float) -> bool:
+        """True once, when the time is up (the motor is then off)."""
+        if self.on and now >= self.until:
+            self.on = False
+            return True
+        return False
 
 
 class WiimoteSource(Source):
@@ -107,24 +97,15 @@ class WiimoteSource(Source):
         self._serial = ""
         self._closed = False
         self._ever_connected = False
-        self._script: Script | None = None
-        self._wait: Wait | None = None
-        self._wait_deadline = 0.0
-        self._ext_flag: bool | None = None
-        self._ext_dirty = False
+        self._scripts = ScriptRunner(self._send, self.count, self._lost)
+        self._setup = RemoteSetup(self, self._scripts)
+        self._accel = CalibratedAccel()
         self._streaming = False
-        self._status_solicited_until = -1.0
         self._last_rx = 0.0
-        self._last_data = 0.0
         self._probe_sent = False
         self._next_scan = -1e18
-        self._next_status = 0.0
-        self._last_mode_fix = -1e18
-        self._rumble_on = False
-        self._rumble_until = 0.0
+        self._rumble = Rumble()
         self._last_t = -1e18
-        self._left = REST.copy()
-        self._rz = self._rs = self._nz = self._ns = None  # calibration as arrays: zero, span
         self._try_connect(self.clock())
 
     # ---- public -------------------------------------------------------------------------
@@ -179,9 +160,7 @@ class WiimoteSource(Source):
         if self._transport is None or ms <= 0:
             return
         now = self.clock()
-        until = now + ms / 1000.0
-        self._rumble_until = max(self._rumble_until, until) if self._rumble_on else until
-        self._rumble_on = True
+        self._rumble.start(now, ms)
         try:
             self._send(p.build_rumble(True))
         except DeviceGone:
@@ -190,7 +169,7 @@ class WiimoteSource(Source):
     def close(self) -> None:
         """Rumble off, LEDs off, handle closed. Safe to call twice."""
         if self._transport is not None:
-            self._rumble_on = False
+            self._rumble.on = False
             for report in (p.build_rumble(False), p.build_leds(0)):
                 try:
                     self._transport.write(report)
@@ -199,7 +178,7 @@ class WiimoteSource(Source):
             self._transport.close()
             self._transport = None
         self._closed = True
-        self._script = None
+        self._scripts.stop()
         self._streaming = False
         self.state = SourceState.DISCONNECTED
 
@@ -213,19 +192,6 @@ class WiimoteSource(Source):
         self.notes.append(message)
         log.warning("%s: %s", self.url, message)
 
-    def _pick(self, found: list[WiimoteInfo]) -> WiimoteInfo | None:
-        if self.want_path:
-            for info in found:
-                if info.path == self.want_path:
-                    return info
-        if self._serial:  # the same remote back, maybe on a new /dev/hidrawN
-            for info in found:
-                if info.serial == self._serial:
-                    return info
-        if self.want_path:
-            return None
-        return found[0] if found else None
-
     def _try_connect(self, now: float) -> None:
         self._next_scan = now + self.rescan_s
         try:
@@ -234,7 +200,7 @@ class WiimoteSource(Source):
             self.last_error = f"scan failed: {exc}"
             self.count("scan_errors")
             return
-        info = self._pick(found)
+        info = pick_wiimote(found, self.want_path, self._serial)
         if info is None:
             self.last_error = "no Wiimote found"
             return
@@ -259,19 +225,18 @@ class WiimoteSource(Source):
         self.count("opens")
         self._last_rx = now
         self._probe_sent = False
-        self._ext_flag = None
+        self._setup.ext_flag = None
         self._streaming = False
-        self._rumble_on = False
-        self._start(self._handshake(), now)
+        self._rumble.on = False
+        self._scripts.start(self._setup.handshake(), now)
 
     def _lost(self, now: float, reason: str) -> None:
         if self._transport is not None:
             self._transport.close()
             self._transport = None
-        self._script = None
-        self._wait = None
+        self._scripts.stop()
         self._streaming = False
-        self._rumble_on = False
+        self._rumble.on = False
         self.last_error = reason
         self.state = SourceState.DISCONNECTED
         self.count("disconnects")
@@ -284,153 +249,14 @@ class WiimoteSource(Source):
         if self._transport is None:
             raise DeviceGone
         try:
-            self._transport.write(p.with_rumble(report, self._rumble_on))
+            self._transport.write(p.with_rumble(report, self._rumble.on))
         except TransportError as exc:
             self._lost(self.clock(), f"write failed ({exc})")
             raise DeviceGone from None
         self.count("sent")
 
     def _request_status(self, now: float) -> None:
-        self._status_solicited_until = now + LOSS_S
-        self._send(p.build_status_request())
-
-    def _set_mode(self, now: float) -> None:
-        self._last_mode_fix = now
-        self._last_data = now  # data should follow from now on
-        self._send(p.build_report_mode(p.MODE_CORE_ACCEL_EXT16, continuous=True))
-
-    # ---- scripts ------------------------------------------------------------------------
-
-    def _start(self, script: Script, now: float) -> None:
-        self._script = script
-        self._advance(now, None)
-
-    def _advance(self, now: float, value: Any, error: BaseException | None = None) -> None:
-        script = self._script
-        if script is None:
-            return
-        try:
-            wait = script.throw(error) if error is not None else script.send(value)
-        except (StopIteration, DeviceGone):  # done, or the connection is already marked lost (or closed)
-            if self._script is script:
-                self._script = None
-                self._wait = None
-            return
-        except SetupFailed as exc:
-            self.count("setup_failures")
-            self._lost(now, str(exc))
-            return
-        if self._script is script:
-            self._wait = wait
-            self._wait_deadline = now + wait.timeout
-
-    def _request(self, report: bytes, match: Callable[[p.Report], bool], what: str) -> Script:
-        for _ in range(REPLY_RETRIES + 1):
-            self._send(report)
-            try:
-                return (yield Wait(match))
-            except ReplyTimeout:
-                self.count("timeouts")
-        raise SetupFailed(f"no reply to {what}")
-
-    def _write_register(self, address: int, data: bytes) -> Script:
-        """Write and wait for the 0x22 ack; returns its error code."""
-        rep = yield from self._request(
-            p.build_write(address, data),
-            lambda r: r.report_id == p.IN_ACK and r.acked_report == p.OUT_WRITE_MEMORY,
-            f"write at {address:06X}",
-        )
-        return rep.error
-
-    def _read_memory(self, address: int, size: int) -> Script:
-        """Read `size` bytes in 16-byte replies; returns the bytes, or None on a read error."""
-        for _ in range(REPLY_RETRIES + 1):
-            buf = bytearray()
-            self._send(p.build_read(address, size))
-            try:
-                while len(buf) < size:
-                    offset = (address + len(buf)) & 0xFFFF
-                    rep = yield Wait(lambda r, o=offset: r.report_id == p.IN_READ_REPLY and r.address == o)
-                    if rep.error:
-                        self.count("read_errors")
-                        return None
-                    buf += rep.payload
-                return bytes(buf[:size])
-            except ReplyTimeout:
-                self.count("timeouts")
-        raise SetupFailed(f"no reply to a read at {address:06X}")
-
-    def _handshake(self) -> Script:
-        self._send(p.build_leds(self.leds))
-        self._status_solicited_until = self.clock() + LOSS_S
-        yield from self._request(p.build_status_request(), lambda r: r.report_id == p.IN_STATUS, "status request")
-        cal = None
-        for where in (p.EEPROM_CALIBRATION, p.EEPROM_CALIBRATION_COPY):
-            block = yield from self._read_memory(where, 10)
-            cal = p.parse_calibration(block) if block else None
-            if cal is not None:
-                if where != p.EEPROM_CALIBRATION:
-                    self._say("wiimote-copy", "Wiimote calibration at 0x16 failed its checksum; using the copy at 0x20")
-                break
-        if cal is None:
-            cal = p.WIIMOTE_TYPICAL
-            self._say("wiimote-typical", "Wiimote calibration unreadable (a clone?); using typical values")
-        self.wiimote_calibration = cal
-        self._rz, self._rs = self._arrays(cal)
-        yield from self._configure_extension()
-
-    def _configure_extension(self) -> Script:
-        """(Re)detect the extension, set it up, then set the reporting mode (which a 0x20 stopped)."""
-        while True:
-            self._ext_dirty = False
-            if self._ext_flag:
-                yield from self._init_extension()
-            else:
-                self._drop_extension()
-            if not self._ext_dirty:
-                break
-        self._set_mode(self.clock())
-        self._streaming = True
-        self._next_status = self.clock() + STATUS_EVERY_S
-
-    def _drop_extension(self) -> None:
-        if self.extension != "none":
-            self.count("extension_removed")
-        self.extension = "none"
-        self.nunchuk = None
-        self.nunchuk_calibration = None
-        self._nz = self._ns = None
-
-    def _init_extension(self) -> Script:
-        # Without encryption ("the new way"): 0x55 to A400F0, then 0x00 to A400FB.
-        err = yield from self._write_register(p.EXT_INIT1, b"\x55")
-        if not err:
-            err = yield from self._write_register(p.EXT_INIT2, b"\x00")
-        ident = None if err else (yield from self._read_memory(p.EXT_ID, 6))
-        if ident is None or ident == b"\xff" * 6:  # all 0xFF: half inserted (Linux: none)
-            self.count("extension_init_errors")
-            self._drop_extension()  # unplugged again meanwhile, or it would not answer
-            return
-        if not p.is_nunchuk_id(ident):
-            self._drop_extension()
-            self.extension = "unknown"
-            self._say(f"ext-{ident.hex()}", f"extension {ident.hex(' ')} is not a Nunchuk; ignoring it")
-            return
-        block = yield from self._read_memory(p.EXT_CALIBRATION, 16)
-        cal = p.parse_nunchuk_calibration(block) if block else None
-        if cal is None:
-            cal = p.NUNCHUK_TYPICAL
-            self._say("nunchuk-typical", "Nunchuk calibration fails its checksum (a clone?); using typical values")
-        self.nunchuk_calibration = cal
-        self._nz, self._ns = self._arrays(cal)
-        if self.extension != "nunchuk":
-            self.count("nunchuk_plugged")
-        self.extension = "nunchuk"
-
-    @staticmethod
-    def _arrays(cal: p.Calibration) -> tuple[np.ndarray, np.ndarray]:
-        zero = np.asarray(cal.zero, dtype=np.float64)
-        return zero, np.asarray(cal.one_g, dtype=np.float64) - zero
+        self._setup.request_status(now)
 
     # ---- reports ------------------------------------------------------------------------
 
@@ -444,65 +270,21 @@ class WiimoteSource(Source):
         if rep.buttons is not None:
             self.buttons = rep.buttons
         if rep.report_id == p.IN_STATUS:
-            self._on_status(rep, now)
-        if self._wait is not None and self._wait.match(rep):
-            self._wait = None
-            self._advance(now, rep)
+            self._setup.on_status(rep, now)
+        self._scripts.offer(rep, now)
         if rep.report_id in p.DATA_LAYOUTS:
             return self._on_data(rep, now, t)
         return None
 
-    def _on_status(self, rep: p.Report, now: float) -> None:
-        self.count("status")
-        self.battery_raw = rep.battery
-        self.battery = min(1.0, (rep.battery or 0) / p.BATTERY_FULL)
-        solicited = now <= self._status_solicited_until
-        self._status_solicited_until = -1.0
-        changed = self._ext_flag is not None and rep.extension_connected != self._ext_flag
-        self._ext_flag = bool(rep.extension_connected)
-        if changed:
-            self.count("extension_events")
-            if self._script is None:
-                self._start(self._configure_extension(), now)
-            else:
-                self._ext_dirty = True
-        elif self._streaming and self._script is None:
-            # WiiBrew: after an unrequested 0x20 the mode must be set again; Linux's
-            # hid-wiimote (handler_status_K) re-sends it after every 0x20, and so do we.
-            if not solicited:
-                self.count("unsolicited_status")
-            try:
-                self._set_mode(now)
-            except DeviceGone:
-                pass
-
     def _on_data(self, rep: p.Report, now: float, t: float) -> Sample | None:
         self.count("data_reports")
-        self._last_data = now
-        if rep.report_id != p.MODE_CORE_ACCEL_EXT16 and self._streaming and self._script is None:
-            self.count("foreign_mode")
-            self._say(
-                "foreign-mode",
-                f"data report 0x{rep.report_id:02X} while mode 0x35 was set: another driver "
-                "(Linux hid-wiimote?) changes the mode; re-asserting it",
-            )
-            if now - self._last_mode_fix >= MODE_FIX_EVERY_S:
-                try:
-                    self._set_mode(now)
-                except DeviceGone:
-                    return None
-        if rep.accel is None or self._rs is None:
+        if not self._setup.on_data(rep, now):
             return None
-        accel = np.empty((2, 3))
-        accel[0] = (np.asarray(rep.accel, dtype=np.float64) - self._rz) / self._rs
-        if self._ns is not None and rep.extension is not None and len(rep.extension) >= 6:
-            nun = p.decode_nunchuk(rep.extension)
-            if nun is not None:
-                self.nunchuk = nun
-                self._left = (np.asarray(nun.accel, dtype=np.float64) - self._nz) / self._ns
-        else:
-            self.count("samples_without_nunchuk")
-        accel[1] = self._left  # held while no Nunchuk is plugged (REST until one ever was)
+        if rep.accel is None or not self._accel.ready:
+            return None
+        accel, nun = self._accel.rows(rep, self.count)
+        if nun is not None:
+            self.nunchuk = nun
         self.count("samples")
         if self._streaming and self._transport is not None and self.state is not SourceState.CONNECTED:
             self.state = SourceState.CONNECTED
@@ -513,34 +295,34 @@ class WiimoteSource(Source):
 
     def _timers(self, now: float) -> None:
         try:
-            if self._rumble_on and now >= self._rumble_until:
-                self._rumble_on = False
+            if self._rumble.due_off(now):
                 self._send(p.build_rumble(False))
-            if self._wait is not None and now >= self._wait_deadline:
-                self._wait = None
-                self._advance(now, None, ReplyTimeout())
+            self._scripts.expire(now)
             if self._transport is None:
                 return
             silence = now - self._last_rx
             if silence >= LOSS_S:
                 self._lost(now, f"no reports for {silence:.2f} s")
                 return
-            if silence >= PROBE_S and not self._probe_sent:
+            probe = silence >= PROBE_S and not self._probe_sent
+            if probe:
                 self._probe_sent = True
-                self.count("probes")
-                self._request_status(now)
-            elif self._streaming and self._script is None and now >= self._next_status:
-                self._next_status = now + STATUS_EVERY_S
-                self._request_status(now)
-            if (
-                self._streaming
-                and self._script is None
-                and now - self._last_data >= PROBE_S
-                and now - self._last_mode_fix >= MODE_FIX_EVERY_S
-            ):
-                # It answers but sends no data: our mode report was lost, or something
-                # stopped reporting. Ask again (no harm if it was only slow).
-                self.count("mode_resent")
-                self._set_mode(now)
+            self._setup.upkeep(now, probe)
         except DeviceGone:
             pass
+
+
+def pick_wiimote(found: list[WiimoteInfo], want_path: bytes | None, serial: str) -> WiimoteInfo | None:
+    """The remote to open: the one at `want_path` if given, else the same remote as before
+    (by `serial`, maybe on a new /dev/hidrawN), else the first found."""
+    if want_path:
+        for info in found:
+            if info.path == want_path:
+                return info
+    if serial:  # the same remote back, maybe on a new /dev/hidrawN
+        for info in found:
+            if info.serial == serial:
+                return info
+    if want_path:
+        return None
+    return found[0] if found else None

@@ -41,9 +41,8 @@ calibration (X 10 bits, Y and Z 9), and the log of what was sent lets tests comp
 
 from __future__ import annotations
 
-import heapq
 from collections.abc import Callable
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, fields
 from typing import Any
 
 import numpy as np
@@ -52,12 +51,14 @@ from engine.recording import MAX_DURATION_S, Recording, read_recording
 from engine.sensors.source import SourceError, parse_source_url, url_flag, url_number
 from engine.sensors.wiimote import protocol as p
 from engine.sensors.wiimote.driver import WiimoteSource
+from engine.sensors.wiimote.emulated_memory import EmulatedMemory
+from engine.sensors.wiimote.emulated_queue import ReportQueue
+from engine.sensors.wiimote.playback import RecordingPlayback
 
-EEPROM_SIZE = 0x1700  # Dolphin EEPROM_FREE_SIZE: reads past it fail with error 8
-EXT_SLAVE = 0x52  # the extension's i2c address (0xA4 >> 1)
-HOST_BUFFER = 64  # Linux hidraw keeps 64 reports per reader
 PERIOD_S = 0.01
-CHUNK_GAP_S = 0.005  # between successive 0x21 replies of one read
+# the scripted events (wiimote-emu:// options `<event>_at`) and the methods that do them
+EVENTS = {"unplug": "unplug", "replug": "replug", "nunchuk_out": "unplug_nunchuk",
+          "nunchuk_in": "plug_nunchuk", "foreign_mode": "foreign_mode"}
 MAX_PAD = 64  # input reports are at most 22 bytes; Windows pads them to 22
 
 # A genuine-looking calibration, deliberately not the typical values and with low bits set,
@@ -79,14 +80,6 @@ class SentData:
     left: tuple[int, int, int] | None  # raw counts sent for the Nunchuk, None when unplugged
     dropped: bool = False
     read_at: float | None = None  # host time the driver read it; None if never read
-
-
-@dataclass(order=True)
-class _Pending:
-    due: float
-    seq: int
-    data: bytes = field(compare=False)
-    sent: SentData | None = field(compare=False, default=None)
 
 
 @dataclass(frozen=True)
@@ -122,6 +115,9 @@ class WiimoteEmulatorDef:
 
 
 class EmulatedWiimote:
+    """The emulated remote (see the module docstring), with its memory (EmulatedMemory), the
+    reports in flight (ReportQueue) and the recording it plays (RecordingPlayback)."""
+
     def __init__(
         self,
         rec: Recording,
@@ -162,43 +158,21 @@ class EmulatedWiimote:
         self.start = start
         self.status_stops = status_stops
         self.t0 = clock()
-        self._rel = rec.t - rec.t[0]
-        period = float(np.median(np.diff(self._rel))) if len(rec) > 1 else PERIOD_S
-        self._length = float(self._rel[-1]) + period
-        # (n, sensors*3) contiguous: a report looks up two rows, never copies a whole column
-        self._values = np.ascontiguousarray(rec.accel.reshape(len(rec), -1), dtype=np.float64)
+        self._playback = RecordingPlayback(rec, PERIOD_S)
         self._events = sorted(events or [])
 
         # The truth the emulator encodes with. A clone's Nunchuk block is unreadable, so what
         # it "really" is cannot be known; it is built to match the typical values.
         self.wiimote_cal = GENUINE_WIIMOTE
         self.nunchuk_cal = p.NUNCHUK_TYPICAL if clone else GENUINE_NUNCHUK
-        self.eeprom = bytearray(EEPROM_SIZE)
-        good = p.encode_calibration(self.wiimote_cal)
-        self.eeprom[0x16:0x20] = good
-        self.eeprom[0x20:0x2A] = good
-        self.ext_regs = bytearray(256)
-        self.ext_regs[0xFA:0x100] = bytes([0x00, 0x00, 0xA4, 0x20, 0x00, 0x00])
-        if clone in ("zeros",):
-            cal_block = bytes(16)
-        elif clone:
-            cal_block = bytes(self.rng.integers(0, 256, 16, dtype=np.uint8))
-            if p.parse_nunchuk_calibration(cal_block) is not None:  # astronomically unlikely
-                cal_block = bytes(16)
-            bad = bytearray(good)
-            bad[9] ^= 0xFF
-            self.eeprom[0x16:0x20] = bad
-        else:
-            cal_block = p.encode_nunchuk_calibration(self.nunchuk_cal)
-        self.ext_regs[0x20:0x30] = cal_block
-        self.ext_regs[0x30:0x40] = cal_block
+        self.stats: dict[str, int] = {}
+        self.memory = EmulatedMemory(self.wiimote_cal, self.nunchuk_cal, clone, self.rng, self._count)
 
         self.nunchuk_plugged = nunchuk
         self.connected = True  # paired and in range
         self.connection = 0  # bumps on every re-plug: the OS gives it a new node
         self.sent: list[SentData] = []
         self.outputs: list[bytes] = []  # every output report received, in order
-        self.stats: dict[str, int] = {}
         self.lose_outputs = 0  # the next N output reports vanish on the air
         self._reset_link()
 
@@ -216,12 +190,15 @@ class EmulatedWiimote:
         self.continuous = False
         self.leds = 0
         self.rumble = False
-        self.ext_stage = 0  # 1 after 0x55 -> F0; 2 (plain data) after 0x00 -> FB
-        self._queue: list[_Pending] = []
-        self._seq = 0
-        self._read_busy_until = -1.0
+        self.memory.reset_link()
+        self._queue = ReportQueue(self.pad, self._count)
         self._next_slot = self._slot_at(self.clock()) + 1
         self._pumped_to = self.clock()
+
+    @property
+    def ext_stage(self) -> int:
+        """How far the extension's init got: 1 after 0x55 -> F0; 2 (plain data) after 0x00 -> FB."""
+        return self.memory.ext_stage
 
     @property
     def path(self) -> bytes:
@@ -238,10 +215,7 @@ class EmulatedWiimote:
     def unplug(self) -> None:
         """The remote switches off or leaves range."""
         self.connected = False
-        for item in self._queue:
-            if item.sent is not None:
-                item.sent.dropped = True
-        self._queue.clear()
+        self._queue.drop_all()
 
     def replug(self) -> None:
         """The remote comes back (a new Bluetooth connection: new node, reset state)."""
@@ -253,7 +227,7 @@ class EmulatedWiimote:
         if plugged == self.nunchuk_plugged:
             return
         self.nunchuk_plugged = plugged
-        self.ext_stage = 0
+        self.memory.ext_stage = 0
         # Dolphin ProcessExtensionPortEvent: reporting stops, an unsolicited 0x20 follows.
         self.mode = None
         if self.connected:
@@ -267,15 +241,6 @@ class EmulatedWiimote:
         if self.connected:
             self.mode, self.continuous = 0x31, True
 
-    def _run_event(self, name: str) -> None:
-        {
-            "unplug": self.unplug,
-            "replug": self.replug,
-            "nunchuk_out": self.unplug_nunchuk,
-            "nunchuk_in": self.plug_nunchuk,
-            "foreign_mode": self.foreign_mode,
-        }[name]()
-
     # ---- time ---------------------------------------------------------------------------
 
     def pump(self, now: float | None = None) -> None:
@@ -284,7 +249,7 @@ class EmulatedWiimote:
         while self._events and self.t0 + self._events[0][0] <= now:
             at, name = self._events.pop(0)
             self._stream_until(self.t0 + at)
-            self._run_event(name)
+            getattr(self, EVENTS[name])()
         self._stream_until(now)
 
     def _stream_until(self, t: float) -> None:
@@ -306,48 +271,18 @@ class EmulatedWiimote:
             self._emit(data, due, sent)
 
     def _emit(self, data: bytes, due: float, sent: SentData | None = None) -> None:
-        if self.pad and len(data) < self.pad:
-            data = data + bytes(self.pad - len(data))
-        self._seq += 1
-        heapq.heappush(self._queue, _Pending(due, self._seq, data, sent))
+        self._queue.push(data, due, sent)
 
     def take(self, now: float) -> bytes | None:
         """The next input report the host has received by `now`, or None."""
         self.pump(now)
-        if not self._queue or self._queue[0].due > now:
-            return None
-        due_count = sum(1 for item in self._queue if item.due <= now)
-        if due_count > HOST_BUFFER:  # the buffer filled while nobody read: newest lost
-            keep = heapq.nsmallest(HOST_BUFFER, (i for i in self._queue if i.due <= now))
-            lost = [i for i in self._queue if i.due <= now and i not in keep]
-            for item in lost:
-                if item.sent is not None:
-                    item.sent.dropped = True
-                self._count("overflow")
-            self._queue = [i for i in self._queue if i.due > now] + keep
-            heapq.heapify(self._queue)
-        item = heapq.heappop(self._queue)
-        if item.sent is not None:
-            item.sent.read_at = now
-        return item.data
+        return self._queue.pop(now)
 
     # ---- what it sends ------------------------------------------------------------------
 
     def _values_at(self, k: int) -> tuple[float, np.ndarray]:
-        rel = self.start + k * PERIOD_S
-        rel = rel % self._length if self.loop else min(rel, float(self._rel[-1]))
-        # np.interp's arithmetic on the two samples around rel, found by one binary search:
-        # O(log n) per report (interp on the recording's columns copied them: O(n))
-        xp, fp = self._rel, self._values
-        j = int(np.searchsorted(xp, rel, side="right")) - 1
-        if j < 0:
-            g = fp[0].copy()
-        elif j >= len(xp) - 1:
-            g = fp[-1].copy()
-        else:
-            slope = (fp[j + 1] - fp[j]) / (xp[j + 1] - xp[j])
-            g = slope * (rel - xp[j]) + fp[j]
-        return rel, g.reshape(self.rec.sensors, 3)
+        rel = self._playback.wrap(self.start + k * PERIOD_S, self.loop)
+        return rel, self._playback.values_at(rel)
 
     def _data_report(self, k: int) -> tuple[bytes, SentData]:
         rel, g = self._values_at(k)
@@ -357,28 +292,10 @@ class EmulatedWiimote:
         sent = SentData(slot=k, rec_time=rel, right=right, left=left)
         if left is not None:
             plain = p.encode_nunchuk((0x80, 0x7F), left)
-            self.ext_regs[0:6] = plain
-        ext = self._ext_bytes()
+            self.memory.ext_regs[0:6] = plain
+        ext = self.memory.ext_bytes(self.nunchuk_plugged)
         core = p.encode_core(0, right)
-        mode = self.mode
-        has_buttons, has_accel, ext_off, ext_len = p.DATA_LAYOUTS[mode]
-        body = bytearray(p.INPUT_REPORT_LENGTHS[mode])
-        body[0] = mode
-        if has_buttons:
-            body[1:3] = core[:2]
-        if has_accel:
-            body[3:6] = core[2:]
-        if ext_len:
-            body[ext_off : ext_off + ext_len] = ext[:ext_len].ljust(ext_len, b"\0")
-        return bytes(body), sent
-
-    def _ext_bytes(self) -> bytes:
-        if not self.nunchuk_plugged:
-            return bytes(21)
-        data = bytes(self.ext_regs[0:21])
-        if self.ext_stage < 2:  # not initialised: what comes out is scrambled
-            data = bytes(((b ^ 0x17) + 0x17) & 0xFF for b in data)
-        return data
+        return data_report(self.mode, core, ext), sent
 
     def _status_report(self) -> bytes:
         flags = (0x01 if self.battery < 0x20 else 0) | (0x02 if self.nunchuk_plugged else 0) | self.leds << 4
@@ -439,90 +356,28 @@ class EmulatedWiimote:
         return True
 
     def _write(self, data: bytes, now: float) -> None:
-        if len(data) < 6:
-            self._count("short_output")
-            return
-        space = (data[1] >> 2) & 0x3
-        address = data[3] << 8 | data[4]
-        size = data[5]
-        payload = data[6 : 6 + size]
-        if size == 0 or size > 16 or len(payload) < size:
-            self._count("invalid_write")  # a real remote silently ignores it
-            return
-        error = p.ERR_OK
-        if space == 0:
-            if address + size > EEPROM_SIZE:
-                error = p.ERR_INVALID_ADDRESS
-            else:
-                self.eeprom[address : address + size] = payload
-        elif space in (1, 2):
-            slave = data[2] >> 1
-            if slave == EXT_SLAVE and self.nunchuk_plugged:
-                reg = address & 0xFF
-                for i, b in enumerate(payload):
-                    self._ext_register_write((reg + i) & 0xFF, b)
-            elif slave == EXT_SLAVE:
-                error = p.ERR_NACK
-            # other slaves (speaker 0x51, camera 0x58) accept and are not modelled
-        else:
-            error = p.ERR_INVALID_SPACE
-        self._ack(p.OUT_WRITE_MEMORY, error, now)
-
-    def _ext_register_write(self, reg: int, value: int) -> None:
-        if reg == 0xF0:
-            self.ext_stage = 1 if value == 0x55 else 0
-            return
-        if reg == 0xFB:
-            if self.ext_stage >= 1 and value == 0x00:
-                self.ext_stage = 2
-            return
-        if reg >= 0xFA:
-            return  # the ID is read-only
-        self.ext_regs[reg] = value
+        error = self.memory.write(data, self.nunchuk_plugged)
+        if error is not None:
+            self._ack(p.OUT_WRITE_MEMORY, error, now)
 
     def _read(self, data: bytes, now: float) -> None:
-        if len(data) < 7:
-            self._count("short_output")
-            return
-        if now < self._read_busy_until:
-            self._count("read_ignored")  # a real remote ignores a read during a read
-            return
-        space = (data[1] >> 2) & 0x3
-        address = data[3] << 8 | data[4]
-        size = data[5] << 8 | data[6]
-        if size == 0:
-            return
-        t = now + self.latency
+        for report, at in self.memory.read(data, self.nunchuk_plugged, now, self.latency):
+            self._emit(report, at)
 
-        def reply(error: int, addr: int, chunk: bytes, at: float) -> None:
-            n = len(chunk) if not error else 16  # errors report size nibble 0xF (Dolphin)
-            self._emit(bytes([p.IN_READ_REPLY, 0, 0, (n - 1) << 4 | error, addr >> 8 & 0xFF, addr & 0xFF]) + chunk.ljust(16, b"\0"), at)
 
-        if space == 0:
-            if address + size > EEPROM_SIZE:
-                reply(p.ERR_INVALID_ADDRESS, address, b"", t)
-                return
-            source = bytes(self.eeprom)
-        elif space in (1, 2) and data[2] >> 1 == EXT_SLAVE and self.nunchuk_plugged:
-            source = bytes(self.ext_regs)
-            if self.ext_stage < 2:
-                source = bytes(((b ^ 0x17) + 0x17) & 0xFF for b in source)
-                source = source[:0xFA] + bytes(self.ext_regs[0xFA:])  # the ID reads plain
-        else:
-            reply(p.ERR_NACK if space in (1, 2) else p.ERR_INVALID_SPACE, address, b"", t)
-            return
-        done = 0
-        while done < size:
-            n = min(16, size - done)
-            a = address + done
-            if len(source) == 256:  # the i2c register file wraps
-                chunk = bytes(source[(a + i) & 0xFF] for i in range(n))
-            else:
-                chunk = source[a : a + n]
-            reply(p.ERR_OK, a & 0xFFFF, chunk, t)
-            done += n
-            t += CHUNK_GAP_S
-        self._read_busy_until = t
+def data_report(mode: int, core: bytes, ext: bytes) -> bytes:
+    """An input data report in `mode`: what of the core (buttons, accel) and the extension
+    bytes the mode's layout carries."""
+    has_buttons, has_accel, ext_off, ext_len = p.DATA_LAYOUTS[mode]
+    body = bytearray(p.INPUT_REPORT_LENGTHS[mode])
+    body[0] = mode
+    if has_buttons:
+        body[1:3] = core[:2]
+    if has_accel:
+        body[3:6] = core[2:]
+    if ext_len:
+        body[ext_off : ext_off + ext_len] = ext[:ext_len].ljust(ext_len, b"\0")
+    return bytes(body)
 
 
 def quantize(raw: np.ndarray, nine_bit_yz: bool = False) -> tuple[int, int, int]:

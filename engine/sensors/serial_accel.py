@@ -1,0 +1,66 @@
+"""SAMPLE payloads of protocol v1 to accelerations in g, one (sensors, 3) row per frame,
+holding each sensor's last value for a frame that lacks it."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+
+from firmware_bridge import protocol
+
+
+class SampleAccel:
+    """Converts SAMPLE frames with the scales and layout of the device's HELLO; counts each
+    frame missing an announced sensor through `count("sensor_missing")`."""
+
+    def __init__(self, count: Callable[[str], None]) -> None:
+        self.count = count
+        self.last_row: np.ndarray | None = None  # the last SAMPLE's accel, (sensors, 3)
+
+    def rows(self, frames: list[protocol.Frame], hello: protocol.Hello,
+             sensors: int) -> list[np.ndarray] | np.ndarray:
+        """(sensors, 3) in g per frame: one numpy conversion for the whole poll when every frame
+        has the layout the HELLO announced (the usual case), frame by frame otherwise."""
+        flags = frames[0].flags & ~protocol.FLAG_OVERRUN
+        want = hello.flags & protocol.FLAGS_SENSORS
+        if (flags & protocol.FLAGS_SENSORS) == want and hello.sensors == sensors \
+                and all((f.flags & ~protocol.FLAG_OVERRUN) == flags for f in frames):
+            per = protocol.sample_values_per_sensor(flags)
+            raw = np.frombuffer(b"".join([f.payload for f in frames]), dtype="<i2")
+            acc = raw.reshape(len(frames), sensors, per)[:, :, :3] * (1.0 / hello.accel_lsb_per_g)
+            self.last_row = acc[-1]  # for a later SAMPLE that lacks a sensor
+            return acc
+        return [self._accel(f, hello, sensors) for f in frames]
+
+    def _last(self, sensors: int) -> np.ndarray:
+        """Every sensor's last accel, (sensors, 3); zeros before any."""
+        last = self.last_row
+        if last is None or last.shape[0] != sensors:
+            return np.zeros((sensors, 3))
+        return last
+
+    def _accel(self, f: protocol.Frame, hello: protocol.Hello, sensors: int) -> np.ndarray:
+        """(sensors, 3) in g; a sensor the HELLO announced but this SAMPLE lacks holds its last value."""
+        per = protocol.sample_values_per_sensor(f.flags)
+        raw = np.frombuffer(f.payload, dtype="<i2").reshape(-1, per)[:, :3] / hello.accel_lsb_per_g
+        want = hello.flags & protocol.FLAGS_SENSORS
+        have = f.flags & protocol.FLAGS_SENSORS
+        if have == want or not want:
+            out = raw
+        else:
+            self.count("sensor_missing")
+            out = self._last(sensors).copy()
+            slots = [s for s in (protocol.FLAG_SENSOR_A, protocol.FLAG_SENSOR_B) if want & s]
+            k = 0
+            for i, s in enumerate(slots):
+                if have & s:
+                    out[i] = raw[k]
+                    k += 1
+        if out.shape[0] != sensors:
+            base = self._last(sensors).copy()
+            k = min(out.shape[0], sensors)
+            base[:k] = out[:k]
+            out = base
+        self.last_row = out
+        return out
