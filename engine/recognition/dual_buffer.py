@@ -186,6 +186,7 @@ class DualBufferRecognizer(GravityGate, TemplateSet, FrameFeatures, DecisionRule
         self._queued: list[dict] = []
         self._n_recent = 0
         self._after_peak = 0.0  # the previous motion's peak (fading) while the hand has not rested since
+        self._forget_launch()
         self._idle_quiet = 0  # quiet idle frames in a row
         self._begin_motion_state()
 
@@ -208,6 +209,13 @@ class DualBufferRecognizer(GravityGate, TemplateSet, FrameFeatures, DecisionRule
         self._was_closed = False
         self._stopped = False
         self._stop_n = 0
+
+    def _forget_launch(self) -> None:
+        # the launch of the motion in progress or being discarded (see DecisionRules._relaunched)
+        self._launch: list[float] | None = None
+        self._launch_norm = 0.0
+        self._reversed = False
+        self._reversed_at = -1
 
     @property
     def current_action(self) -> str | None:
@@ -235,6 +243,16 @@ class DualBufferRecognizer(GravityGate, TemplateSet, FrameFeatures, DecisionRule
         if not np.isfinite(x).all():  # the method: no fromnumeric wrapper (~1 us a frame)
             return events  # a malformed frame is dropped, not a crash
         valid = self._gate(x)
+        if self.state != IDLE and self._relaunched() and (self.state == DISCARD or self.action is not None):
+            # a new punch straight after the decided or discarded one (a double, RELAUNCH_RATIO):
+            # that motion is over and this frame is the new one's onset
+            if self.state == ACTIVE:
+                events.append(self._event("end", self.action_names[self.action], None, reason="complete"))
+                self._after_peak = self._peak_act_seen
+            self._begin_motion_state()
+            self._forget_launch()
+            self.state = IDLE
+            self._n_recent = 0  # no back-dating into the previous motion
         if self.state == DISCARD:
             self.discarded += 1
             self.quiet = 0 if valid else self.quiet + 1
@@ -244,6 +262,7 @@ class DualBufferRecognizer(GravityGate, TemplateSet, FrameFeatures, DecisionRule
             )
             if self.quiet >= self.null_frames or ran_out:
                 self._begin_motion_state()
+                self._forget_launch()
                 self.state = IDLE
             return events
         if self.state == IDLE:
@@ -258,6 +277,7 @@ class DualBufferRecognizer(GravityGate, TemplateSet, FrameFeatures, DecisionRule
                     self._learn_gate(self._act)
                 return events
             self.state = ACTIVE
+            self._forget_launch()
             self._idle_quiet = 0
             self.dtw.reset()
             self._g0 = self.gravity.copy()
@@ -333,6 +353,7 @@ class DualBufferRecognizer(GravityGate, TemplateSet, FrameFeatures, DecisionRule
                     self._learn_gate(float(a))
             self._after_peak = self._peak_act_seen if complete else 0.0
             self._begin_motion_state()
+            self._forget_launch()
             self.state = IDLE
 
     def _event(self, kind: str, action: str | None, score: float | None, **extra) -> dict:
