@@ -91,6 +91,8 @@ from engine.recognition.rules import (
     RISING_RATIO,
     UNCHANGED_FRAMES,
     DecisionRules,
+    LaunchTracker,
+    relaunches,
 )
 from engine.recognition.speed import SpeedEstimate
 from engine.recognition.template_set import TemplateSet
@@ -157,6 +159,13 @@ class DualBufferRecognizer(GravityGate, TemplateSet, FrameFeatures, DecisionRule
         self.adapt = max(0, int(adapt))
         self._dtw_method = dtw_method
         self._build_templates(templates, reject, extend)
+        # per action: do most of its templates launch again after a stop (a shake, not a punch)?
+        strokes = [relaunches(s[o:], g, self.noise_g) for s, g, o in zip(templates.signals, templates.gravity, templates.onsets)]
+        self._strokes = [
+            2 * sum(st for st, a in zip(strokes, templates.actions) if a == name) > templates.actions.count(name)
+            for name in self.action_names
+        ]
+        self._discarded_action: int | None = None
         self._motion = np.empty((max(self.window, self._extend_to), self.dim))  # features since the onset
         self._acts = np.empty(len(self._motion))  # the gate's activity since the onset
         self._recent = np.empty((BACKDATE_MAX, self.dim))  # the last idle frames (ring), for back-dating
@@ -211,11 +220,8 @@ class DualBufferRecognizer(GravityGate, TemplateSet, FrameFeatures, DecisionRule
         self._stop_n = 0
 
     def _forget_launch(self) -> None:
-        # the launch of the motion in progress or being discarded (see DecisionRules._relaunched)
-        self._launch: list[float] | None = None
-        self._launch_norm = 0.0
-        self._reversed = False
-        self._reversed_at = -1
+        # the launch of the motion in progress or being discarded (see RELAUNCH_RATIO)
+        self._launch = LaunchTracker()
 
     @property
     def current_action(self) -> str | None:
@@ -228,6 +234,7 @@ class DualBufferRecognizer(GravityGate, TemplateSet, FrameFeatures, DecisionRule
             return
         self._queued.append(self._event("end", self.action_names[self.action], None, reason="character_finished"))
         self._after_peak = self._peak_act_seen
+        self._discarded_action = self.action
         self._begin_motion_state()
         self.state = DISCARD
 
@@ -243,10 +250,18 @@ class DualBufferRecognizer(GravityGate, TemplateSet, FrameFeatures, DecisionRule
         if not np.isfinite(x).all():  # the method: no fromnumeric wrapper (~1 us a frame)
             return events  # a malformed frame is dropped, not a crash
         valid = self._gate(x)
-        if self.state != IDLE and self._relaunched() and (self.state == DISCARD or self.action is not None):
-            # a new punch straight after the decided or discarded one (a double, RELAUNCH_RATIO):
-            # that motion is over and this frame is the new one's onset
+        if (
+            self.state != IDLE
+            and self._launch.step([v - g for v, g in zip(self._xs, self._g0_list)], valid)
+            and (self.action if self.state == ACTIVE else self._discarded_action) is not None
+            and not self._strokes[self.action if self.state == ACTIVE else self._discarded_action]
+        ):
+            # a new punch straight after the decided or discarded one (a double, RELAUNCH_RATIO;
+            # not when the action's own templates relaunch, a shake): that motion is over and
+            # this frame is the new one's onset
             if self.state == ACTIVE:
+                if self.adapt and self.count <= max(self.window, self._extend_to):
+                    self._adapt()  # as at any end
                 events.append(self._event("end", self.action_names[self.action], None, reason="complete"))
                 self._after_peak = self._peak_act_seen
             self._begin_motion_state()

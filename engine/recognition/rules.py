@@ -6,6 +6,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from engine.recognition.templates import activity
+
 AUTO_MIN_MAIN = 3
 AUTO_MAX_MAIN = 12
 CLOSED_END = 1e9  # a min_progress that leaves only each template's last position
@@ -85,6 +87,9 @@ RELAUNCH_RATIO = 0.6
 # that happens to point along its first one does not: uWave 94.3 % without this bound, 94.6 % with it).
 RELAUNCH_COS = 0.5
 RELAUNCH_WITHIN = 10
+# A stop is RELAUNCH_STOP frames in a row against the launch: a fist takes a few frames to stop;
+# a buzz or a sensor's jitter flipping sign every frame is no stop.
+RELAUNCH_STOP = 2
 # A first decision needs the motion to have reached GATE_FLOOR x the gate: a motion that barely
 # crosses the gate (the hand settling after a blow, a wiggle) is within reach of the sensor's noise,
 # however well its shape fits a template's gentle first frames (phone-boxing: the uppercut whose
@@ -102,30 +107,56 @@ LATE_SWITCH_MARGIN = 0.1
 IDLE, ACTIVE, DISCARD = "idle", "active", "discard"
 
 
+class LaunchTracker:
+    """A motion's launch, stop and relaunch (see RELAUNCH_RATIO), one gravity-removed acceleration
+    (all sensors' axes together, plain floats) a frame."""
+
+    def __init__(self) -> None:
+        self.launch: list[float] | None = None  # the strongest acceleration before the first stop
+        self.norm = 0.0
+        self.stopped_at: int | None = None  # frames counted by `step`, at the last stop
+        self.stop_run = 0  # stopping frames in a row
+        self.n = 0
+
+    def step(self, a: list[float], valid: bool = True) -> bool:
+        """True when this frame launches the hand along the launch again just after a stop. Only
+        frames over the gate (`valid`) launch, stop or relaunch: a launch taken from the motion's
+        first faint frames would make any wobble a stop."""
+        self.n += 1
+        if not valid:
+            return False
+        norm = sum(v * v for v in a) ** 0.5
+        if self.launch is None or self.norm <= 0:
+            self.launch, self.norm = a, norm
+            return False
+        if self.stopped_at is not None and self.n - self.stopped_at > RELAUNCH_WITHIN:
+            return False  # the punch's own stop passed without a new launch: no double
+        proj = sum(v * w for v, w in zip(a, self.launch)) / self.norm
+        if proj <= -RELAUNCH_RATIO * self.norm:
+            self.stop_run += 1
+            if self.stop_run >= RELAUNCH_STOP:
+                self.stopped_at = self.n  # (its last frame: the stop lasts several)
+            return False
+        self.stop_run = 0
+        if self.stopped_at is None:
+            if norm > self.norm:
+                self.launch, self.norm = a, norm
+            return False
+        return self.n - self.stopped_at <= RELAUNCH_WITHIN and norm >= RELAUNCH_RATIO * self.norm and proj >= RELAUNCH_COS * norm
+
+
+def relaunches(signal: np.ndarray, gravity: np.ndarray, gate: float) -> bool:
+    """Whether a (template) signal launches again after a stop: a motion of several strokes (a
+    shake, a zig-zag), which a relaunch does not end."""
+    tracker = LaunchTracker()
+    a = np.asarray(signal, dtype=np.float64) - np.asarray(gravity, dtype=np.float64)
+    valid = activity(signal, gravity) >= gate
+    return any(tracker.step(row, bool(v)) for row, v in zip(a.tolist(), valid))
+
+
 class DecisionRules:
     """The first decision, switches in and after the buffer, the complete end, the pause and
     the call-off (DualBufferRecognizer's state: `action`, `count`, `quiet`, the templates)."""
-
-    def _relaunched(self) -> bool:
-        """Follow the motion's launch (its strongest gravity-removed acceleration before it first
-        reverses) and say whether this frame launches the hand along it again just after a stop
-        (a double: see RELAUNCH_RATIO). Plain floats, all sensors' axes together."""
-        a = [x - g for x, g in zip(self._xs, self._g0_list)]
-        norm = sum(v * v for v in a) ** 0.5
-        launch = self._launch
-        if launch is None:
-            self._launch, self._launch_norm = a, norm
-            return False
-        proj = sum(v * w for v, w in zip(a, launch)) / self._launch_norm if self._launch_norm > 0 else 0.0
-        if proj <= -RELAUNCH_RATIO * self._launch_norm:
-            self._reversed = True
-            self._reversed_at = self.frame
-            return False
-        if not self._reversed:
-            if norm > self._launch_norm:
-                self._launch, self._launch_norm = a, norm
-            return False
-        return self.frame - self._reversed_at <= RELAUNCH_WITHIN and norm >= RELAUNCH_RATIO * self._launch_norm and proj >= RELAUNCH_COS * norm
 
     def _paused(self) -> bool:
         """A started motion under the null signal that is too short or too weak to be over yet
