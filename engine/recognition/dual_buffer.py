@@ -92,7 +92,7 @@ from engine.recognition.rules import (
     UNCHANGED_FRAMES,
     DecisionRules,
     LaunchTracker,
-    relaunches,
+    shaken_actions,
 )
 from engine.recognition.speed import SpeedEstimate
 from engine.recognition.template_set import TemplateSet
@@ -159,12 +159,7 @@ class DualBufferRecognizer(GravityGate, TemplateSet, FrameFeatures, DecisionRule
         self.adapt = max(0, int(adapt))
         self._dtw_method = dtw_method
         self._build_templates(templates, reject, extend)
-        # per action: do most of its templates launch again after a stop (a shake, not a punch)?
-        strokes = [relaunches(s[o:], g, self.noise_g) for s, g, o in zip(templates.signals, templates.gravity, templates.onsets)]
-        self._strokes = [
-            2 * sum(st for st, a in zip(strokes, templates.actions) if a == name) > templates.actions.count(name)
-            for name in self.action_names
-        ]
+        self._strokes = shaken_actions(templates, self.action_names, self.noise_g)  # a relaunch ends none of these
         self._discarded_action: int | None = None
         self._motion = np.empty((max(self.window, self._extend_to), self.dim))  # features since the onset
         self._acts = np.empty(len(self._motion))  # the gate's activity since the onset
@@ -252,7 +247,7 @@ class DualBufferRecognizer(GravityGate, TemplateSet, FrameFeatures, DecisionRule
         valid = self._gate(x)
         if (
             self.state != IDLE
-            and self._launch.step([v - g for v, g in zip(self._xs, self._g0_list)], valid)
+            and self._launch.step([v - g for v, g in zip(self._xs, self._g0_list, strict=True)], valid)
             and (self.action if self.state == ACTIVE else self._discarded_action) is not None
             and not self._strokes[self.action if self.state == ACTIVE else self._discarded_action]
         ):

@@ -131,7 +131,7 @@ class LaunchTracker:
             return False
         if self.stopped_at is not None and self.n - self.stopped_at > RELAUNCH_WITHIN:
             return False  # the punch's own stop passed without a new launch: no double
-        proj = sum(v * w for v, w in zip(a, self.launch)) / self.norm
+        proj = sum(v * w for v, w in zip(a, self.launch, strict=True)) / self.norm
         if proj <= -RELAUNCH_RATIO * self.norm:
             self.stop_run += 1
             if self.stop_run >= RELAUNCH_STOP:
@@ -151,7 +151,7 @@ def relaunches(signal: np.ndarray, gravity: np.ndarray, gate: float) -> bool:
     tracker = LaunchTracker()
     a = np.asarray(signal, dtype=np.float64) - np.asarray(gravity, dtype=np.float64)
     valid = activity(signal, gravity) >= gate
-    return any(tracker.step(row, bool(v)) for row, v in zip(a.tolist(), valid))
+    return any(tracker.step(row, bool(v)) for row, v in zip(a.tolist(), valid, strict=True))
 
 
 class DecisionRules:
@@ -296,3 +296,10 @@ class DecisionRules:
         per_action = np.minimum.reduceat(scores, self._action_starts)
         first, second = np.partition(per_action, 1)[:2]
         return second > 0 and (second - first) / second >= self.auto_lead
+
+
+def shaken_actions(templates, names: list[str], gate: float) -> list[bool]:
+    """Per action: do most of its templates launch again after a stop (a shake, a zig-zag: several
+    strokes, not one punch)? A relaunch does not end such an action's motion."""
+    shaken = [relaunches(s[o:], g, gate) for s, g, o in zip(templates.signals, templates.gravity, templates.onsets, strict=True)]
+    return [2 * sum(k for k, a in zip(shaken, templates.actions, strict=True) if a == name) > templates.actions.count(name) for name in names]
