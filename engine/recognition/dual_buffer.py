@@ -91,6 +91,7 @@ from engine.recognition.rules import (
     RISING_RATIO,
     UNCHANGED_FRAMES,
     DecisionRules,
+    RELAUNCH_MIN,
     LaunchTracker,
     shaken_actions,
 )
@@ -248,6 +249,7 @@ class DualBufferRecognizer(GravityGate, TemplateSet, FrameFeatures, DecisionRule
         if (
             self.state != IDLE
             and self._launch.step([v - g for v, g in zip(self._xs, self._g0_list, strict=True)], valid)
+            and self._launch.norm >= RELAUNCH_MIN * self.noise_g
             and (self.action if self.state == ACTIVE else self._discarded_action) is not None
             and not self._strokes[self.action if self.state == ACTIVE else self._discarded_action]
         ):
@@ -292,6 +294,7 @@ class DualBufferRecognizer(GravityGate, TemplateSet, FrameFeatures, DecisionRule
             self.dtw.reset()
             self._g0 = self.gravity.copy()
             self._g0_list = self._g0.tolist()
+            self._launch.step([v - g for v, g in zip(self._xs, self._g0_list, strict=True)], valid)  # the onset frame launches too
             # The frames just before the gate opened that were already on their way (see
             # ONSET_FRACTION) start the motion: replayed now, oldest first. (Measured against the
             # gravity from before them instead of the current one, which follows a slow rise a

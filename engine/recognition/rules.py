@@ -87,6 +87,11 @@ RELAUNCH_RATIO = 0.6
 # that happens to point along its first one does not: uWave 94.3 % without this bound, 94.6 % with it).
 RELAUNCH_COS = 0.5
 RELAUNCH_WITHIN = 10
+# ... and a launch of at least RELAUNCH_MIN x the gate: a double is two hard punches far over the
+# noise; a gentle motion whose acceleration turns round (a hook's sweep on a quiet synthesized
+# player, whose onset jerk became its launch) is not split (synthesized session: extra starts
+# 4 -> 8 with the relaunch, 14 without this bar and the onset frame's launch).
+RELAUNCH_MIN = 3.0
 # A stop is RELAUNCH_STOP frames in a row against the launch: a fist takes a few frames to stop;
 # a buzz or a sensor's jitter flipping sign every frame is no stop.
 RELAUNCH_STOP = 2

@@ -77,6 +77,17 @@ def test_a_double_after_the_clip_ends_the_discard(templates, monkeypatch):
     assert [e["action"] for e in starts(8)] == ["jab"]
 
 
+def test_a_gentle_double_is_not_split(templates, monkeypatch):
+    # launches under RELAUNCH_MIN x the gate (2.5 g over a 1 g gate): one motion, as before
+    frames = np.vstack([rest(10), bump(0, 2.5)[:20], bump(0, 2.5)[3:], rest(30)])
+    evs = with_character(DualBufferRecognizer(templates, noise_g=1.0), frames)
+    assert not any(e.get("reason") == "complete" and e["frame"] < 10 + 20 + 6 for e in evs if e["event"] == "end")
+    monkeypatch.setattr(rules, "RELAUNCH_MIN", 0.0)
+    monkeypatch.setattr(dual_buffer, "RELAUNCH_MIN", 0.0)
+    again = with_character(DualBufferRecognizer(templates, noise_g=1.0), frames)
+    assert any(e.get("reason") == "complete" and 10 + 20 <= e["frame"] <= 10 + 20 + 6 for e in again if e["event"] == "end")
+
+
 def test_a_shake_whose_templates_relaunch_is_not_split(monkeypatch):
     # an action that is itself several strokes back to back (a shake): its motion is one action
     rng = np.random.default_rng(1)
