@@ -50,6 +50,10 @@ Per 60 Hz frame (`push`):
   templates, days 2-7): final 89.9 -> 94.1 %. The adopted templates take part in switches and
   the final decision; the first decision takes an adopted template only when no trained one
   fits under its threshold.
+- Relaunch (a double): just after a punch's stop, the hand launching along that punch's launch
+  again (RELAUNCH_*) ends the decided motion (`complete`) or the discard; that frame is the next
+  motion's onset. Not for actions whose own templates relaunch (a shake). A first decision needs
+  GATE_FLOOR x the gate.
 - After `character_finished()` (IV-C) frames are discarded until a null signal or until
   `discard_frames` frames have passed, so the hand's return does not launch a new action; past
   `discard_frames`, only once the hand has calmed under DISCARD_HOLD_RATIO of the discarded
@@ -86,12 +90,12 @@ from engine.recognition.rules import (
     IDLE,
     PAUSE_FRAMES,
     PROGRESS,
+    RELAUNCH_MIN,
     RETURN_DECAY,
     RETURN_RATIO,
     RISING_RATIO,
     UNCHANGED_FRAMES,
     DecisionRules,
-    RELAUNCH_MIN,
     LaunchTracker,
     shaken_actions,
 )
