@@ -90,14 +90,11 @@ from engine.recognition.rules import (
     IDLE,
     PAUSE_FRAMES,
     PROGRESS,
-    RELAUNCH_MIN,
     RETURN_DECAY,
     RETURN_RATIO,
     RISING_RATIO,
     UNCHANGED_FRAMES,
     DecisionRules,
-    LaunchTracker,
-    shaken_actions,
 )
 from engine.recognition.speed import SpeedEstimate
 from engine.recognition.template_set import TemplateSet
@@ -164,8 +161,6 @@ class DualBufferRecognizer(GravityGate, TemplateSet, FrameFeatures, DecisionRule
         self.adapt = max(0, int(adapt))
         self._dtw_method = dtw_method
         self._build_templates(templates, reject, extend)
-        self._strokes = shaken_actions(templates, self.action_names, self.noise_g)  # a relaunch ends none of these
-        self._discarded_action: int | None = None
         self._motion = np.empty((max(self.window, self._extend_to), self.dim))  # features since the onset
         self._acts = np.empty(len(self._motion))  # the gate's activity since the onset
         self._recent = np.empty((BACKDATE_MAX, self.dim))  # the last idle frames (ring), for back-dating
@@ -195,7 +190,6 @@ class DualBufferRecognizer(GravityGate, TemplateSet, FrameFeatures, DecisionRule
         self._queued: list[dict] = []
         self._n_recent = 0
         self._after_peak = 0.0  # the previous motion's peak (fading) while the hand has not rested since
-        self._forget_launch()
         self._idle_quiet = 0  # quiet idle frames in a row
         self._begin_motion_state()
 
@@ -219,10 +213,6 @@ class DualBufferRecognizer(GravityGate, TemplateSet, FrameFeatures, DecisionRule
         self._stopped = False
         self._stop_n = 0
 
-    def _forget_launch(self) -> None:
-        # the launch of the motion in progress or being discarded (see RELAUNCH_RATIO)
-        self._launch = LaunchTracker()
-
     @property
     def current_action(self) -> str | None:
         return None if self.action is None else self.action_names[self.action]
@@ -234,7 +224,6 @@ class DualBufferRecognizer(GravityGate, TemplateSet, FrameFeatures, DecisionRule
             return
         self._queued.append(self._event("end", self.action_names[self.action], None, reason="character_finished"))
         self._after_peak = self._peak_act_seen
-        self._discarded_action = self.action
         self._begin_motion_state()
         self.state = DISCARD
 
@@ -250,25 +239,7 @@ class DualBufferRecognizer(GravityGate, TemplateSet, FrameFeatures, DecisionRule
         if not np.isfinite(x).all():  # the method: no fromnumeric wrapper (~1 us a frame)
             return events  # a malformed frame is dropped, not a crash
         valid = self._gate(x)
-        if (
-            self.state != IDLE
-            and self._launch.step([v - g for v, g in zip(self._xs, self._g0_list, strict=True)], valid)
-            and self._launch.norm >= RELAUNCH_MIN * self.noise_g
-            and (self.action if self.state == ACTIVE else self._discarded_action) is not None
-            and not self._strokes[self.action if self.state == ACTIVE else self._discarded_action]
-        ):
-            # a new punch straight after the decided or discarded one (a double, RELAUNCH_RATIO;
-            # not when the action's own templates relaunch, a shake): that motion is over and
-            # this frame is the new one's onset
-            if self.state == ACTIVE:
-                if self.adapt and self.count <= max(self.window, self._extend_to):
-                    self._adapt()  # as at any end
-                events.append(self._event("end", self.action_names[self.action], None, reason="complete"))
-                self._after_peak = self._peak_act_seen
-            self._begin_motion_state()
-            self._forget_launch()
-            self.state = IDLE
-            self._n_recent = 0  # no back-dating into the previous motion
+        self._relaunch(valid, events)  # a double: the previous motion is over, this frame is an onset
         if self.state == DISCARD:
             self.discarded += 1
             self.quiet = 0 if valid else self.quiet + 1
@@ -278,7 +249,6 @@ class DualBufferRecognizer(GravityGate, TemplateSet, FrameFeatures, DecisionRule
             )
             if self.quiet >= self.null_frames or ran_out:
                 self._begin_motion_state()
-                self._forget_launch()
                 self.state = IDLE
             return events
         if self.state == IDLE:
@@ -293,12 +263,10 @@ class DualBufferRecognizer(GravityGate, TemplateSet, FrameFeatures, DecisionRule
                     self._learn_gate(self._act)
                 return events
             self.state = ACTIVE
-            self._forget_launch()
             self._idle_quiet = 0
             self.dtw.reset()
             self._g0 = self.gravity.copy()
             self._g0_list = self._g0.tolist()
-            self._launch.step([v - g for v, g in zip(self._xs, self._g0_list, strict=True)], valid)  # the onset frame launches too
             # The frames just before the gate opened that were already on their way (see
             # ONSET_FRACTION) start the motion: replayed now, oldest first. (Measured against the
             # gravity from before them instead of the current one, which follows a slow rise a
@@ -370,7 +338,6 @@ class DualBufferRecognizer(GravityGate, TemplateSet, FrameFeatures, DecisionRule
                     self._learn_gate(float(a))
             self._after_peak = self._peak_act_seen if complete else 0.0
             self._begin_motion_state()
-            self._forget_launch()
             self.state = IDLE
 
     def _event(self, kind: str, action: str | None, score: float | None, **extra) -> dict:

@@ -122,6 +122,7 @@ class LaunchTracker:
         self.stopped_at: int | None = None  # frames counted by `step`, at the last stop
         self.stop_run = 0  # stopping frames in a row
         self.n = 0
+        self.action: int | None = None  # the motion's decided action (kept through its discard)
 
     def step(self, a: list[float], valid: bool = True) -> bool:
         """True when this frame launches the hand along the launch again just after a stop. Only
@@ -162,6 +163,38 @@ def relaunches(signal: np.ndarray, gravity: np.ndarray, gate: float) -> bool:
 class DecisionRules:
     """The first decision, switches in and after the buffer, the complete end, the pause and
     the call-off (DualBufferRecognizer's state: `action`, `count`, `quiet`, the templates)."""
+
+    def _relaunch(self, valid: bool, events: list[dict]) -> None:
+        """A double (see RELAUNCH_RATIO): just after the punch's stop, the hand launches along the
+        punch's launch again. The decided motion ends there (`complete`) or the discard does, and
+        the state goes back to idle so that this frame is the next motion's onset. Idle: a fresh
+        tracker at the onset, which that frame launches."""
+        if self.state == IDLE:
+            if valid:  # the onset: against the gravity the motion is about to take as its rest
+                self._launch = LaunchTracker()
+                self._launch.step([v - g for v, g in zip(self._xs, self.gravity.tolist(), strict=True)], valid)
+            return
+        if self.state == ACTIVE and self.action is not None:
+            self._launch.action = self.action  # kept through the discard
+        action = self._launch.action
+        if not (
+            self._launch.step([v - g for v, g in zip(self._xs, self._g0_list, strict=True)], valid)
+            and self._launch.norm >= RELAUNCH_MIN * self.noise_g
+            and action is not None
+            and not self._strokes[action]
+            and (self.state == DISCARD or self.action is not None)
+        ):
+            return
+        if self.state == ACTIVE:
+            if self.adapt and self.count <= max(self.window, self._extend_to):
+                self._adapt()  # as at any end
+            events.append(self._event("end", self.action_names[self.action], None, reason="complete"))
+            self._after_peak = self._peak_act_seen
+        self._begin_motion_state()
+        self.state = IDLE
+        self._n_recent = 0  # no back-dating into the previous motion
+        self._launch = LaunchTracker()
+        self._launch.step([v - g for v, g in zip(self._xs, self._g0_list, strict=True)], valid)
 
     def _paused(self) -> bool:
         """A started motion under the null signal that is too short or too weak to be over yet

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from engine.recognition import DualBufferRecognizer, Templates, dual_buffer, rules
+from engine.recognition import DualBufferRecognizer, Templates, rules, template_set
 from tests.engine.recognition.test_dual_buffer import G, bump, rest, run, trials_of
 
 CLIP = 24  # the simulated character's clip, as `quickjab evaluate` plays it
@@ -83,7 +83,6 @@ def test_a_gentle_double_is_not_split(templates, monkeypatch):
     evs = with_character(DualBufferRecognizer(templates, noise_g=1.0), frames)
     assert not any(e.get("reason") == "complete" and e["frame"] < 10 + 20 + 6 for e in evs if e["event"] == "end")
     monkeypatch.setattr(rules, "RELAUNCH_MIN", 0.0)
-    monkeypatch.setattr(dual_buffer, "RELAUNCH_MIN", 0.0)
     again = with_character(DualBufferRecognizer(templates, noise_g=1.0), frames)
     assert any(e.get("reason") == "complete" and 10 + 20 <= e["frame"] <= 10 + 20 + 6 for e in again if e["event"] == "end")
 
@@ -97,7 +96,7 @@ def test_a_shake_whose_templates_relaunch_is_not_split(monkeypatch):
     assert rec._strokes == [True, False]
     frames = np.vstack([rest(10), shake, rest(30)])
     assert [e["action"] for e in run(rec, frames) if e["event"] == "start"] == ["shake"]
-    monkeypatch.setattr(dual_buffer, "shaken_actions", lambda *a: [False, False])
+    monkeypatch.setattr(template_set, "shaken_actions", lambda *a: [False, False])
     split = run(DualBufferRecognizer(tm), frames)
     assert [e["event"] for e in split].count("start") >= 2
 
