@@ -54,6 +54,10 @@ Per 60 Hz frame (`push`):
   templates, days 2-7): final 89.9 -> 94.1 %. The adopted templates take part in switches and
   the final decision; the first decision takes an adopted template only when no trained one
   fits under its threshold.
+- Relaunch (a double): just after a punch's stop, the hand launching along that punch's launch
+  again (RELAUNCH_*) ends the decided motion (`complete`) or the discard; that frame is the next
+  motion's onset. Not for actions whose own templates relaunch (a shake). A first decision needs
+  GATE_FLOOR x the gate.
 - After `character_finished()` (IV-C) frames are discarded until a null signal or until
   `discard_frames` frames have passed, so the hand's return does not launch a new action; past
   `discard_frames`, only once the hand has calmed under DISCARD_HOLD_RATIO of the discarded
@@ -108,8 +112,7 @@ __all__ = [
 
 
 class DualBufferRecognizer(GravityGate, TemplateSet, FrameFeatures, DecisionRules, Adaptation, SpeedEstimate):
-    """Frames in, action events out. See the module docstring for the rules; each concept lives in
-    its own module (gate, template_set, features, rules, adaptation, speed) and is mixed in here."""
+    """Frames in, action events out: the module docstring's rules, one concept module per mixin."""
 
     def __init__(
         self,
@@ -240,6 +243,7 @@ class DualBufferRecognizer(GravityGate, TemplateSet, FrameFeatures, DecisionRule
         if not np.isfinite(x).all():  # the method: no fromnumeric wrapper (~1 us a frame)
             return events  # a malformed frame is dropped, not a crash
         valid = self._gate(x)
+        self._relaunch(valid, events)  # a double: the previous motion is over, this frame is an onset
         if self.state == DISCARD:
             self.discarded += 1
             self.quiet = 0 if valid else self.quiet + 1

@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from engine.recognition.dtw import IncrementalDTW
-from engine.recognition.rules import ENERGY_FRAMES, EXTEND_FACTOR
+from engine.recognition.rules import ENERGY_FRAMES, EXTEND_FACTOR, shaken_actions
 from engine.recognition.templates import Templates, activity, features, linear
 
 
@@ -39,6 +39,7 @@ class TemplateSet:
         self._action_bar = np.minimum.reduceat(self._peak_act[:, 0], self._action_starts)  # per action
         self._turn_bar = np.minimum.reduceat(self._template_lin_share(templates, order), self._action_starts)  # per action
         self.template_lengths = np.array([len(c) for c in cut])
+        self._strokes = shaken_actions(templates, self.action_names, self.noise_g)  # a relaunch ends none of these
         self.dtw = IncrementalDTW(cut, method=self._dtw_method, min_progress=self.min_progress)
         # A decided motion that outlasts the supplementary buffer keeps its DTW growing (one
         # row a frame, as before) up to this many frames, for a final decision over the whole
