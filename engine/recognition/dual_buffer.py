@@ -74,6 +74,7 @@ import numpy as np
 
 from engine.recognition.adaptation import ADAPT_MARGIN, ADAPT_PER_ACTION, Adaptation
 from engine.recognition.config import RecognizerConfig
+from engine.recognition.events import RecognizerEvent
 from engine.recognition.features import FrameFeatures
 from engine.recognition.gate import (
     AUTO_FRAMES,
@@ -190,7 +191,7 @@ class DualBufferRecognizer(GravityGate, TemplateSet, FrameFeatures, DecisionRule
         self._mean: list[float] = []
         self._steady = 0
         self._unchanged = 0
-        self._queued: list[dict] = []
+        self._queued: list[RecognizerEvent] = []
         self._n_recent = 0
         self._after_peak = 0.0  # the previous motion's peak (fading) while the hand has not rested since
         self._idle_quiet = 0  # quiet idle frames in a row
@@ -232,7 +233,7 @@ class DualBufferRecognizer(GravityGate, TemplateSet, FrameFeatures, DecisionRule
         self.state = DISCARD
 
     # -- the per-frame step ------------------------------------------------------------------
-    def push(self, frame: np.ndarray, t: float | None = None) -> list[dict]:
+    def push(self, frame: np.ndarray, t: float | None = None) -> list[RecognizerEvent]:
         """Feed one 60 Hz frame of shape (D,); returns the events it decided (often none)."""
         x = np.asarray(frame, dtype=np.float64).reshape(-1)
         if x.shape[0] != self.dim:
@@ -289,7 +290,7 @@ class DualBufferRecognizer(GravityGate, TemplateSet, FrameFeatures, DecisionRule
         self._step_active(x, valid, events)
         return events
 
-    def _step_active(self, x: np.ndarray, valid: bool, events: list[dict], backdated: bool = False) -> None:
+    def _step_active(self, x: np.ndarray, valid: bool, events: list[RecognizerEvent], backdated: bool = False) -> None:
         if self.auto_gate and not self._moved and self.action is None and self.count >= self.window:
             # Nothing has ever started and this motion was rejected (or outlasted the buffer
             # undecided): the sensor's noise crossing a gate set too low (e.g. from quieter
@@ -345,18 +346,18 @@ class DualBufferRecognizer(GravityGate, TemplateSet, FrameFeatures, DecisionRule
             self._begin_motion_state()
             self.state = IDLE
 
-    def _event(self, kind: str, action: str | None, score: float | None, **extra) -> dict:
-        ev: dict = {"event": kind, "action": action, "frame": self.frame}
-        if self._t is not None:
-            ev["t"] = round(float(self._t), 4)
-        if "from_frame" in extra:
-            ev["from_frame"] = int(extra.pop("from_frame"))
-        if score is not None:
-            ev["score"] = round(score, 5)
-        if kind in ("start", "switch"):
-            ev["speed"] = round(self._peak_speed, 3)
-            ev["direction"] = [round(v, 3) for v in self._peak_dir]
-            ev["peak_g"] = round(self._peak_g, 3)
-            ev["onset_frame"] = self.onset_frame
-        ev.update({k: v for k, v in extra.items() if v})
-        return ev
+    def _event(self, kind: str, action: str | None, score: float | None, **flags) -> RecognizerEvent:
+        """The event decided now; a start or switch carries the motion estimate and onset so far."""
+        motion = kind in ("start", "switch")
+        from_frame = flags.pop("from_frame", None)
+        return RecognizerEvent(
+            kind, action, self.frame,
+            t=None if self._t is None else round(float(self._t), 4),
+            from_frame=None if from_frame is None else int(from_frame),
+            score=None if score is None else round(score, 5),
+            speed=round(self._peak_speed, 3) if motion else None,
+            direction=tuple(round(v, 3) for v in self._peak_dir) if motion else None,
+            peak_g=round(self._peak_g, 3) if motion else None,
+            onset_frame=self.onset_frame if motion else None,
+            **flags,
+        )

@@ -221,7 +221,7 @@ class DecisionRules:
         lo, hi = self._action_starts[self.action], self._action_ends[self.action]
         return self._peak_act_seen < CALL_OFF_RATIO * float(self._peak_act[lo:hi, 1].min())
 
-    def _decide(self, scores: np.ndarray, events: list[dict]) -> None:
+    def _decide(self, scores: np.ndarray, events: list) -> None:
         best = int(np.argmin(scores))
         if self.action is None and self._is_adapted[best]:
             # The first decision comes from the trained templates while one of them fits under
@@ -278,7 +278,7 @@ class DecisionRules:
                 self._event("switch", self.action_names[best_action], best_score, from_frame=self.frame - self.start_frame)
             )
 
-    def _late_switch(self, scores: np.ndarray, events: list[dict]) -> None:
+    def _late_switch(self, scores: np.ndarray, events: list) -> None:
         """A motion longer than the supplementary buffer: its DTW kept growing past it, so at
         the end the whole motion (up to where the hand stopped) is scored against whole
         templates. A different action that is now better by LATE_SWITCH_MARGIN (with the same
