@@ -50,8 +50,7 @@ Per 60 Hz frame (`push`):
 - Beyond the paper: adaptation to the player. A motion whose whole fits its final action's
   templates better by ADAPT_MARGIN than any other action's (and under the threshold) joins that
   action's templates; the `adapt` (3) most recent per action are kept beside the trained ones,
-  across `reset()`, until `forget_adaptation()`. `adapt=0` turns it off. uWave (day-1
-  templates, days 2-7): final 89.9 -> 94.1 %. The adopted templates take part in switches and
+  across `reset()`, until `forget_adaptation()`. `adapt=0` turns it off. The adopted templates take part in switches and
   the final decision; the first decision takes an adopted template only when no trained one
   fits under its threshold.
 - Relaunch (a double): just after a punch's stop, the hand launching along that punch's launch
@@ -273,9 +272,8 @@ class DualBufferRecognizer(GravityGate, TemplateSet, FrameFeatures, DecisionRule
             self._g0 = self.gravity.copy()
             self._g0_list = self._g0.tolist()
             # The frames just before the gate opened that were already on their way (see
-            # ONSET_FRACTION) start the motion: replayed now, oldest first. (Measured against the
-            # gravity from before them instead of the current one, which follows a slow rise a
-            # little: phone-punches finals 1-5 points lower, so not kept.)
+            # ONSET_FRACTION) start the motion: replayed now, oldest first, against the current
+            # gravity (which follows a slow rise a little; the gravity from before them lost).
             m = min(self._n_recent, BACKDATE_MAX)
             recent = self._recent[(self._n_recent - m + np.arange(m)) % BACKDATE_MAX]
             back = self._backdate(activity(recent, self._g0)) if m else 0

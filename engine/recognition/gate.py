@@ -36,7 +36,7 @@ BACKDATE_MAX = 8
 # AUTO_FRAMES kept, refreshed every AUTO_EVERY frames); until then the rest before the training
 # trials' motions (Templates.rest_noise), else AUTO_START_G (the paper's gate). Frozen from the
 # first motion on: the idle between punches holds the hand's returns, and learning from them
-# ratcheted the gate up to its cap (phone-punches recall 100 -> 36 %). Kept across reset().
+# ratcheted the gate up to its cap (most phone punches were lost). Kept across reset().
 AUTO_K = 2.0
 AUTO_QUANTILE = 90
 AUTO_MIN_G = 0.3
