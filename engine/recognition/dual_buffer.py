@@ -111,7 +111,7 @@ __all__ = [
 ]
 
 
-class DualBufferRecognizer(GravityGate, TemplateSet, FrameFeatures, DecisionRules, Adaptation, SpeedEstimate):
+class DualBufferRecognizer(GravityGate, TemplateSet, DecisionRules, Adaptation):
     """Frames in, action events out: the module docstring's rules, one concept module per mixin."""
 
     def __init__(
@@ -155,7 +155,8 @@ class DualBufferRecognizer(GravityGate, TemplateSet, FrameFeatures, DecisionRule
         self.closed_after = int(closed_after) if closed_after > 0 else 1 << 30
         self.dim = templates.dim
         self.feature = templates.feature
-        self._feat = np.empty(self.dim)
+        self.frame_features = FrameFeatures(self.feature, self.dim)  # owns its buffer
+        self.speed = SpeedEstimate(self.dim)  # the motion estimates on start and switch events
         self._stop_scores = np.empty(len(templates.actions))
         self.min_progress = float(min_progress)
         self.window = max(self.supplementary, AUTO_MAX_MAIN if main == "auto" else int(main))
@@ -205,10 +206,7 @@ class DualBufferRecognizer(GravityGate, TemplateSet, FrameFeatures, DecisionRule
         self.pending = False  # past the first decision point with nothing good enough yet
         self.discarded = 0
         self._g0 = None
-        self._velocity = [0.0] * self.dim
-        self._peak_speed = 0.0
-        self._peak_dir = [0.0, 0.0, 0.0]
-        self._peak_g = 0.0
+        self.speed.reset()
         self._peak_act_seen = 0.0
         self._peak_lin = 0.0  # the motion's peak of the gate's `_lin` (see TURN_RATIO)
         self._done = 0
@@ -299,7 +297,7 @@ class DualBufferRecognizer(GravityGate, TemplateSet, FrameFeatures, DecisionRule
         self._peak_act_seen = max(self._peak_act_seen, self._act)
         self._peak_lin = max(self._peak_lin, self._lin)
         self._after_peak *= RETURN_DECAY
-        self._track_speed()
+        self.speed.track(self._xs, self._g0_list)
         complete = False
         in_window = self.count <= self.window
         if in_window or (self.action is not None and self.count <= self._extend_to):
@@ -309,7 +307,7 @@ class DualBufferRecognizer(GravityGate, TemplateSet, FrameFeatures, DecisionRule
             # the reading has stopped changing.
             closed = not backdated and (self._unchanged >= UNCHANGED_FRAMES or (not valid and self.quiet >= self.closed_after))
             self.dtw.min_progress = CLOSED_END if closed else self.min_progress
-            f = self._features(x)
+            f = self.frame_features.of(x, self._g0)
             self._acts[self.dtw.n] = self._act
             self._motion[self.dtw.n] = f
             scores = self.dtw.push(f)
@@ -353,9 +351,9 @@ class DualBufferRecognizer(GravityGate, TemplateSet, FrameFeatures, DecisionRule
             t=None if self._t is None else round(float(self._t), 4),
             from_frame=None if from_frame is None else int(from_frame),
             score=None if score is None else round(score, 5),
-            speed=round(self._peak_speed, 3) if motion else None,
-            direction=tuple(round(v, 3) for v in self._peak_dir) if motion else None,
-            peak_g=round(self._peak_g, 3) if motion else None,
+            speed=round(self.speed.peak_speed, 3) if motion else None,
+            direction=tuple(round(v, 3) for v in self.speed.peak_dir) if motion else None,
+            peak_g=round(self.speed.peak_g, 3) if motion else None,
             onset_frame=self.onset_frame if motion else None,
             **flags,
         )
