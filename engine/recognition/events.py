@@ -7,7 +7,10 @@ written against the dicts keeps working; new code reads the attributes."""
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from engine.recognition.speed import SpeedEstimate
 
 # The flags an event may carry, each only when true (one at most per event).
 FLAGS = ("reason", "late", "called_off", "whole_motion")
@@ -52,6 +55,24 @@ class RecognizerEvent:
             if value:
                 out[name] = value
         return out
+
+    @classmethod
+    def decided(cls, kind: str, action: str | None, frame: int, t: float | None, score: float | None,
+                speed: SpeedEstimate, onset_frame: int, from_frame: int | None = None, **flags: Any) -> RecognizerEvent:
+        """The recognizer's event, rounded as the contract writes it; a start or switch carries
+        the motion estimate (`speed`) and the onset so far."""
+        motion = kind in ("start", "switch")
+        return cls(
+            kind, action, frame,
+            t=None if t is None else round(float(t), 4),
+            from_frame=None if from_frame is None else int(from_frame),
+            score=None if score is None else round(score, 5),
+            speed=round(speed.peak_speed, 3) if motion else None,
+            direction=tuple(round(v, 3) for v in speed.peak_dir) if motion else None,
+            peak_g=round(speed.peak_g, 3) if motion else None,
+            onset_frame=onset_frame if motion else None,
+            **flags,
+        )
 
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> RecognizerEvent:

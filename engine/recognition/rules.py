@@ -170,14 +170,14 @@ class DecisionRules:
         if self.state == IDLE:
             if valid:  # the onset: against the gravity the motion is about to take as its rest
                 self._launch = LaunchTracker()
-                self._launch.step([v - g for v, g in zip(self._xs, self.gravity.tolist(), strict=True)], valid)
+                self._launch.step([v - g for v, g in zip(self._xs, self.gate.gravity.tolist(), strict=True)], valid)
             return
         if self.state == ACTIVE and self.action is not None:
             self._launch.action = self.action  # kept through the discard
         action = self._launch.action
         if not (
             self._launch.step([v - g for v, g in zip(self._xs, self._g0_list, strict=True)], valid)
-            and self._launch.norm >= RELAUNCH_MIN * self.noise_g
+            and self._launch.norm >= RELAUNCH_MIN * self.gate.noise_g
             and action is not None
             and not self._strokes[action]
             and (self.state == DISCARD or self.action is not None)
@@ -225,7 +225,7 @@ class DecisionRules:
         best_score = float(scores[best])
         bar = self._action_bar[best_action]
         strong = not self.reject or self._peak_act_seen >= ENERGY_RATIO * bar
-        if self.reject and self.action is None and self._peak_act_seen < GATE_FLOOR * self.noise_g:
+        if self.reject and self.action is None and self._peak_act_seen < GATE_FLOOR * self.gate.noise_g:
             strong = False  # barely over the gate: see GATE_FLOOR
         if not strong and self.action is None:
             # still rising (this frame is the motion's strongest so far): RISING_RATIO will do
