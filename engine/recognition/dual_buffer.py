@@ -111,7 +111,8 @@ __all__ = [
 
 
 class DualBufferRecognizer(TemplateSet, DecisionRules, Adaptation):
-    """Frames in, action events out: the module docstring's rules, one concept module per mixin."""
+    """Frames in, action events out (the module docstring's rules). Owns a gate, features and a speed
+    estimate; the rules, template set and adaptation are mixins over its one motion state."""
 
     def __init__(
         self,
