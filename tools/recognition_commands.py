@@ -217,7 +217,7 @@ def cmd_recognize(args: argparse.Namespace) -> int:
     try:
         for t, f in zip(times, frames, strict=True):
             for e in rec.push(f, t=float(t)):
-                out.write(json.dumps(e) + "\n")
+                out.write(json.dumps(e.to_dict()) + "\n")
     finally:
         if args.output:
             out.close()

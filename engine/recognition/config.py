@@ -74,7 +74,7 @@ class RecognizerConfig:
     dtw_method: str = "auto"
     # Open-end progress (fraction of the motion's length): while the hand moves, the motion's n
     # frames must reach at least min_progress * n frames into a template. 0.75 lets a full
-    # blow's slow start match a quick punch's template early (phone-punches finals up 2-8 points).
+    # blow's slow start match a quick punch's template early.
     min_progress: float = 0.75
     # Complete fraction (of the template's length): a motion also ends once its action's template
     # is matched past this fraction and the hand calms down, so punches thrown back to back start
@@ -87,11 +87,11 @@ class RecognizerConfig:
     closed_after: int = 1
     # Extend (on/off): a decided motion that outlasts the supplementary buffer keeps being
     # scored, and a clearly better action becomes the final decision just before its `end`.
-    # On: uWave's long gestures final 89.0 -> 89.9 %.
+    # For long gestures (docs/recognition.md).
     extend: bool = True
     # Adaptation (templates per action): a confidently recognized whole motion joins its action's
-    # templates; this many recent ones are kept. 3: uWave day 1 -> days 2-7 final 89.9 -> 94.1 %;
-    # 0 turns adaptation off.
+    # templates; this many recent ones are kept (a player drifting from the training trials,
+    # docs/recognition.md, fifth round); 0 turns adaptation off.
     adapt: int = 3
 
     def __post_init__(self) -> None:

@@ -50,8 +50,7 @@ Per 60 Hz frame (`push`):
 - Beyond the paper: adaptation to the player. A motion whose whole fits its final action's
   templates better by ADAPT_MARGIN than any other action's (and under the threshold) joins that
   action's templates; the `adapt` (3) most recent per action are kept beside the trained ones,
-  across `reset()`, until `forget_adaptation()`. `adapt=0` turns it off. uWave (day-1
-  templates, days 2-7): final 89.9 -> 94.1 %. The adopted templates take part in switches and
+  across `reset()`, until `forget_adaptation()`. `adapt=0` turns it off. The adopted templates take part in switches and
   the final decision; the first decision takes an adopted template only when no trained one
   fits under its threshold.
 - Relaunch (a double): just after a punch's stop, the hand launching along that punch's launch
@@ -74,14 +73,14 @@ import numpy as np
 
 from engine.recognition.adaptation import ADAPT_MARGIN, ADAPT_PER_ACTION, Adaptation
 from engine.recognition.config import RecognizerConfig
+from engine.recognition.events import RecognizerEvent
 from engine.recognition.features import FrameFeatures
 from engine.recognition.gate import (
-    AUTO_FRAMES,
     AUTO_MAX_G,
     AUTO_MIN_G,
     AUTO_START_G,
     BACKDATE_MAX,
-    GravityGate,
+    NoiseGate,
 )
 from engine.recognition.rules import (
     ACTIVE,
@@ -111,8 +110,9 @@ __all__ = [
 ]
 
 
-class DualBufferRecognizer(GravityGate, TemplateSet, FrameFeatures, DecisionRules, Adaptation, SpeedEstimate):
-    """Frames in, action events out: the module docstring's rules, one concept module per mixin."""
+class DualBufferRecognizer(TemplateSet, DecisionRules, Adaptation):
+    """Frames in, action events out (the module docstring's rules). Owns a gate, features and a speed
+    estimate; the rules, template set and adaptation are mixins over its one motion state."""
 
     def __init__(
         self,
@@ -138,13 +138,13 @@ class DualBufferRecognizer(GravityGate, TemplateSet, FrameFeatures, DecisionRule
             raise TypeError("templates must be a Templates")
         if main != "auto" and (not isinstance(main, (int, np.integer)) or main < 1):
             raise ValueError(f"main must be a positive int or 'auto', not {main!r}")
-        noise_g = self._first_gate(noise_g, templates)
-        if supplementary < 1 or null_frames < 1 or discard_frames < 0 or noise_g < 0:
+        self.gate = NoiseGate(noise_g, templates)  # gravity and the gate (IV-A)
+        if supplementary < 1 or null_frames < 1 or discard_frames < 0 or self.gate.noise_g < 0:
             raise ValueError("supplementary and null_frames must be >= 1, discard_frames and noise_g >= 0")
         self.templates = templates
         self.main = main
         self.supplementary = int(supplementary)
-        self.noise_g = float(noise_g)
+        self.gate.noise_g = float(self.gate.noise_g)
         self.null_frames = int(null_frames)
         self.discard_frames = int(discard_frames)
         self.switch_margin = float(switch_margin)
@@ -155,7 +155,8 @@ class DualBufferRecognizer(GravityGate, TemplateSet, FrameFeatures, DecisionRule
         self.closed_after = int(closed_after) if closed_after > 0 else 1 << 30
         self.dim = templates.dim
         self.feature = templates.feature
-        self._feat = np.empty(self.dim)
+        self.frame_features = FrameFeatures(self.feature, self.dim)  # owns its buffer
+        self.speed = SpeedEstimate(self.dim)  # the motion estimates on start and switch events
         self._stop_scores = np.empty(len(templates.actions))
         self.min_progress = float(min_progress)
         self.window = max(self.supplementary, AUTO_MAX_MAIN if main == "auto" else int(main))
@@ -167,8 +168,6 @@ class DualBufferRecognizer(GravityGate, TemplateSet, FrameFeatures, DecisionRule
         self._motion = np.empty((max(self.window, self._extend_to), self.dim))  # features since the onset
         self._acts = np.empty(len(self._motion))  # the gate's activity since the onset
         self._recent = np.empty((BACKDATE_MAX, self.dim))  # the last idle frames (ring), for back-dating
-        self._idle_acts = np.empty(AUTO_FRAMES)  # the gate's activity on the last idle frames (ring), for "auto"
-        self._n_idle = 0
         self._moved = False  # a motion has started (a `start`) since the recognizer was built
         self.reset()
 
@@ -184,13 +183,8 @@ class DualBufferRecognizer(GravityGate, TemplateSet, FrameFeatures, DecisionRule
         self.state = IDLE
         self.frame = -1
         self._t: float | None = None
-        self.gravity: np.ndarray | None = None
-        self._last: list[float] | None = None  # the previous frame, plain floats (see _gate)
-        self._still = 0
-        self._mean: list[float] = []
-        self._steady = 0
-        self._unchanged = 0
-        self._queued: list[dict] = []
+        self.gate.reset()
+        self._queued: list[RecognizerEvent] = []
         self._n_recent = 0
         self._after_peak = 0.0  # the previous motion's peak (fading) while the hand has not rested since
         self._idle_quiet = 0  # quiet idle frames in a row
@@ -205,10 +199,7 @@ class DualBufferRecognizer(GravityGate, TemplateSet, FrameFeatures, DecisionRule
         self.pending = False  # past the first decision point with nothing good enough yet
         self.discarded = 0
         self._g0 = None
-        self._velocity = [0.0] * self.dim
-        self._peak_speed = 0.0
-        self._peak_dir = [0.0, 0.0, 0.0]
-        self._peak_g = 0.0
+        self.speed.reset()
         self._peak_act_seen = 0.0
         self._peak_lin = 0.0  # the motion's peak of the gate's `_lin` (see TURN_RATIO)
         self._done = 0
@@ -216,6 +207,20 @@ class DualBufferRecognizer(GravityGate, TemplateSet, FrameFeatures, DecisionRule
         self._was_closed = False
         self._stopped = False
         self._stop_n = 0
+
+    @property
+    def noise_g(self) -> float:
+        """The gate now (g): as given, or learnt from the resting noise when "auto"."""
+        return self.gate.noise_g
+
+    @property
+    def auto_gate(self) -> bool:
+        return self.gate.auto
+
+    @property
+    def gravity(self) -> np.ndarray | None:
+        """Each sensor's gravity as the gate estimates it (None before the first frame)."""
+        return self.gate.gravity
 
     @property
     def current_action(self) -> str | None:
@@ -232,7 +237,7 @@ class DualBufferRecognizer(GravityGate, TemplateSet, FrameFeatures, DecisionRule
         self.state = DISCARD
 
     # -- the per-frame step ------------------------------------------------------------------
-    def push(self, frame: np.ndarray, t: float | None = None) -> list[dict]:
+    def push(self, frame: np.ndarray, t: float | None = None) -> list[RecognizerEvent]:
         """Feed one 60 Hz frame of shape (D,); returns the events it decided (often none)."""
         x = np.asarray(frame, dtype=np.float64).reshape(-1)
         if x.shape[0] != self.dim:
@@ -242,7 +247,8 @@ class DualBufferRecognizer(GravityGate, TemplateSet, FrameFeatures, DecisionRule
         events, self._queued = self._queued, []
         if not np.isfinite(x).all():  # the method: no fromnumeric wrapper (~1 us a frame)
             return events  # a malformed frame is dropped, not a crash
-        valid = self._gate(x)
+        valid = self.gate.step(x, self.state == ACTIVE, self.count >= self.window)
+        self._xs, self._act, self._lin = self.gate.xs, self.gate.act, self.gate.lin
         self._relaunch(valid, events)  # a double: the previous motion is over, this frame is an onset
         if self.state == DISCARD:
             self.discarded += 1
@@ -263,21 +269,20 @@ class DualBufferRecognizer(GravityGate, TemplateSet, FrameFeatures, DecisionRule
                 self._after_peak *= RETURN_DECAY
                 if self._idle_quiet >= self.null_frames:
                     self._after_peak = 0.0
-                if self.auto_gate and not self._moved:
-                    self._learn_gate(self._act)
+                if self.gate.auto and not self._moved:
+                    self.gate.learn(self._act)
                 return events
             self.state = ACTIVE
             self._idle_quiet = 0
             self.dtw.reset()
-            self._g0 = self.gravity.copy()
+            self._g0 = self.gate.gravity.copy()
             self._g0_list = self._g0.tolist()
             # The frames just before the gate opened that were already on their way (see
-            # ONSET_FRACTION) start the motion: replayed now, oldest first. (Measured against the
-            # gravity from before them instead of the current one, which follows a slow rise a
-            # little: phone-punches finals 1-5 points lower, so not kept.)
+            # ONSET_FRACTION) start the motion: replayed now, oldest first, against the current
+            # gravity (which follows a slow rise a little; the gravity from before them lost).
             m = min(self._n_recent, BACKDATE_MAX)
             recent = self._recent[(self._n_recent - m + np.arange(m)) % BACKDATE_MAX]
-            back = self._backdate(activity(recent, self._g0)) if m else 0
+            back = self.gate.backdate(activity(recent, self._g0)) if m else 0
             self.onset_frame = self.frame - back
             xs, act, lin = self._xs, self._act, self._lin
             for r in recent[m - back :]:
@@ -289,18 +294,18 @@ class DualBufferRecognizer(GravityGate, TemplateSet, FrameFeatures, DecisionRule
         self._step_active(x, valid, events)
         return events
 
-    def _step_active(self, x: np.ndarray, valid: bool, events: list[dict], backdated: bool = False) -> None:
-        if self.auto_gate and not self._moved and self.action is None and self.count >= self.window:
+    def _step_active(self, x: np.ndarray, valid: bool, events: list[RecognizerEvent], backdated: bool = False) -> None:
+        if self.gate.auto and not self._moved and self.action is None and self.count >= self.window:
             # Nothing has ever started and this motion was rejected (or outlasted the buffer
             # undecided): the sensor's noise crossing a gate set too low (e.g. from quieter
             # training trials) holds the gate open, so these frames count as rest too.
-            self._learn_gate(self._act)
+            self.gate.learn(self._act)
         self.count += 1
         self.quiet = 0 if valid else self.quiet + 1
         self._peak_act_seen = max(self._peak_act_seen, self._act)
         self._peak_lin = max(self._peak_lin, self._lin)
         self._after_peak *= RETURN_DECAY
-        self._track_speed()
+        self.speed.track(self._xs, self._g0_list)
         complete = False
         in_window = self.count <= self.window
         if in_window or (self.action is not None and self.count <= self._extend_to):
@@ -308,9 +313,9 @@ class DualBufferRecognizer(GravityGate, TemplateSet, FrameFeatures, DecisionRule
             # anywhere past min_progress * n in a template). Once it is quiet the motion has
             # probably ended, and the whole template must be matched (closed end); so too once
             # the reading has stopped changing.
-            closed = not backdated and (self._unchanged >= UNCHANGED_FRAMES or (not valid and self.quiet >= self.closed_after))
+            closed = not backdated and (self.gate.unchanged >= UNCHANGED_FRAMES or (not valid and self.quiet >= self.closed_after))
             self.dtw.min_progress = CLOSED_END if closed else self.min_progress
-            f = self._features(x)
+            f = self.frame_features.of(x, self._g0)
             self._acts[self.dtw.n] = self._act
             self._motion[self.dtw.n] = f
             scores = self.dtw.push(f)
@@ -338,25 +343,13 @@ class DualBufferRecognizer(GravityGate, TemplateSet, FrameFeatures, DecisionRule
                 events.append(self._event("end", self.action_names[self.action], None, reason="complete" if complete else None))
             elif self.pending:
                 events.append(self._event("reject", None, None))
-            if self.action is None and self.auto_gate and not self._moved:
+            if self.action is None and self.gate.auto and not self._moved:
                 for a in self._acts[: min(self.dtw.n, self.window)]:  # as above: it was rest
-                    self._learn_gate(float(a))
+                    self.gate.learn(float(a))
             self._after_peak = self._peak_act_seen if complete else 0.0
             self._begin_motion_state()
             self.state = IDLE
 
-    def _event(self, kind: str, action: str | None, score: float | None, **extra) -> dict:
-        ev: dict = {"event": kind, "action": action, "frame": self.frame}
-        if self._t is not None:
-            ev["t"] = round(float(self._t), 4)
-        if "from_frame" in extra:
-            ev["from_frame"] = int(extra.pop("from_frame"))
-        if score is not None:
-            ev["score"] = round(score, 5)
-        if kind in ("start", "switch"):
-            ev["speed"] = round(self._peak_speed, 3)
-            ev["direction"] = [round(v, 3) for v in self._peak_dir]
-            ev["peak_g"] = round(self._peak_g, 3)
-            ev["onset_frame"] = self.onset_frame
-        ev.update({k: v for k, v in extra.items() if v})
-        return ev
+    def _event(self, kind: str, action: str | None, score: float | None, **flags) -> RecognizerEvent:
+        """The event decided now; a start or switch carries the motion estimate and onset so far."""
+        return RecognizerEvent.decided(kind, action, self.frame, self._t, score, self.speed, self.onset_frame, **flags)

@@ -1,5 +1,5 @@
 """The noise gate (paper IV-A): gravity tracking, the gate itself, the "auto" gate learnt from the
-resting noise, and the back-dating of an onset. Mixed into DualBufferRecognizer."""
+resting noise, and the back-dating of an onset. DualBufferRecognizer owns one (`self.gate`)."""
 
 from __future__ import annotations
 
@@ -7,7 +7,6 @@ import math
 
 import numpy as np
 
-from engine.recognition.rules import ACTIVE
 from engine.recognition.templates import Templates, activity
 
 STILL_DELTA_G = 0.03  # a sensor is still when it changes less than this per frame ...
@@ -36,7 +35,7 @@ BACKDATE_MAX = 8
 # AUTO_FRAMES kept, refreshed every AUTO_EVERY frames); until then the rest before the training
 # trials' motions (Templates.rest_noise), else AUTO_START_G (the paper's gate). Frozen from the
 # first motion on: the idle between punches holds the hand's returns, and learning from them
-# ratcheted the gate up to its cap (phone-punches recall 100 -> 36 %). Kept across reset().
+# ratcheted the gate up to its cap (most phone punches were lost). Kept across reset().
 AUTO_K = 2.0
 AUTO_QUANTILE = 90
 AUTO_MIN_G = 0.3
@@ -47,15 +46,46 @@ AUTO_MIN_FRAMES = 30
 AUTO_EVERY = 10
 
 
-class GravityGate:
-    """Gravity per sensor and whether a frame is above the gate (`noise_g`, learnt when "auto")."""
+class NoiseGate:
+    """Gravity per sensor and whether a frame is above the gate (`noise_g`, learnt when "auto").
+    After each `step`: `xs` (the frame, plain floats), `act` (the gate's activity, sum over sensors
+    of |a - g|) and `lin` (sum of ||a| - |g||, what a turn of the hand does not make)."""
 
-    def _gate_start(self, templates: Templates, k: int) -> int:
-        """Where this recognizer's onset would be on template k: the start of the run of
+    def __init__(self, noise_g: float | str, templates: Templates):
+        """The gate to start with: `noise_g` as given, or for "auto" the one from the training
+        trials' rest (Templates.rest_noise), else AUTO_START_G."""
+        self.auto = noise_g == "auto"
+        if self.auto:
+            noise_g = self.auto_gate(templates.rest_noise) if np.isfinite(templates.rest_noise) else AUTO_START_G
+        elif not isinstance(noise_g, (int, float, np.integer, np.floating)):
+            raise ValueError(f"noise_g must be a number of g or 'auto', not {noise_g!r}")
+        self.noise_g = noise_g
+        self._idle_acts = np.empty(AUTO_FRAMES)  # the activity on the last idle frames (ring), for "auto"
+        self._n_idle = 0
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget gravity (the learnt gate is kept: see AUTO_*)."""
+        self.gravity: np.ndarray | None = None
+        self._last: list[float] | None = None  # the previous frame, plain floats
+        self._mean: list[float] = []
+        self._still = 0
+        self._steady = 0
+        self.unchanged = 0  # frames in a row whose reading has not changed (UNCHANGED_FRAMES)
+        self.xs: list[float] = []
+        self.act = 0.0
+        self.lin = 0.0
+
+    @staticmethod
+    def auto_gate(noise: float) -> float:
+        return float(min(max(AUTO_K * noise, AUTO_MIN_G), AUTO_MAX_G))
+
+    def start_on(self, templates: Templates, k: int) -> int:
+        """Where this gate's onset would be on template k: the start of the run of
         above-gate frames that holds the template's trimmed onset (earlier wiggles separated by
         quiet frames are not the motion); the first above-gate frame after the onset when the
         onset itself is gentler than the gate; the onset when the gate never opens. Then
-        back-dated as `push` does (`_backdate`)."""
+        back-dated as the recognizer does (`backdate`)."""
         act = activity(templates.signals[k], templates.gravity[k])
         on = int(templates.onsets[k])
         if act[on] < self.noise_g:
@@ -65,37 +95,24 @@ class GravityGate:
             on += int(later[0])
         while on > 0 and act[on - 1] >= self.noise_g:
             on -= 1
-        return on - self._backdate(act[max(0, on - BACKDATE_MAX) : on])
+        return on - self.backdate(act[max(0, on - BACKDATE_MAX) : on])
 
-    def _first_gate(self, noise_g: float | str, templates: Templates) -> float:
-        """The gate to start with: `noise_g` as given, or for "auto" the one from the training
-        trials' rest (Templates.rest_noise), else AUTO_START_G. Sets `auto_gate`."""
-        self.auto_gate = noise_g == "auto"
-        if self.auto_gate:
-            return self._auto_gate(templates.rest_noise) if np.isfinite(templates.rest_noise) else AUTO_START_G
-        if not isinstance(noise_g, (int, float, np.integer, np.floating)):
-            raise ValueError(f"noise_g must be a number of g or 'auto', not {noise_g!r}")
-        return noise_g
-
-    @staticmethod
-    def _auto_gate(noise: float) -> float:
-        return float(min(max(AUTO_K * noise, AUTO_MIN_G), AUTO_MAX_G))
-
-    def _learn_gate(self, act: float) -> None:
+    def learn(self, act: float) -> None:
         """noise_g="auto": one more resting frame's activity; now and then the gate from them."""
         self._idle_acts[self._n_idle % AUTO_FRAMES] = act
         self._n_idle += 1
         if self._n_idle >= AUTO_MIN_FRAMES and self._n_idle % AUTO_EVERY == 0:
-            self.noise_g = self._auto_gate(float(np.percentile(self._idle_acts[: min(self._n_idle, AUTO_FRAMES)], AUTO_QUANTILE)))
+            self.noise_g = self.auto_gate(float(np.percentile(self._idle_acts[: min(self._n_idle, AUTO_FRAMES)], AUTO_QUANTILE)))
 
-    def _backdate(self, before: np.ndarray) -> int:
+    def backdate(self, before: np.ndarray) -> int:
         """How many of the frames just before the gate opened (activity `before`, oldest first)
         belong to the motion: the run at the end whose activity reaches ONSET_FRACTION of the gate."""
         low = np.flatnonzero(before < ONSET_FRACTION * self.noise_g)
         return len(before) - (int(low[-1]) + 1 if len(low) else 0)
 
-    def _gate(self, x: np.ndarray) -> bool:
-        """Update the gravity estimate and say whether this frame is valid (above the gate).
+    def step(self, x: np.ndarray, in_motion: bool, decided: bool) -> bool:
+        """Update the gravity estimate and say whether this frame is valid (above the gate);
+        `in_motion`: a motion is being recognized, `decided`: its buffers are full.
         Plain floats: with 1-4 sensors that is cheaper than a dozen tiny numpy calls.
 
         Gravity: the first frame is only a guess (it may be mid-motion); it snaps to the reading after
@@ -126,20 +143,20 @@ class GravityGate:
             act += math.sqrt(gx * gx + gy * gy + gz * gz)
             # how far the reading's magnitude is from gravity's (a turn of the hand keeps it)
             lin += abs(math.sqrt(ax * ax + ay * ay + az * az) - math.sqrt(g[k] * g[k] + g[k + 1] * g[k + 1] + g[k + 2] * g[k + 2]))
-        self._last = self._xs = xs
+        self._last = self.xs = xs
         self._still = self._still + 1 if still_now else 0
-        self._unchanged = self._unchanged + 1 if unchanged_now else 0
+        self.unchanged = self.unchanged + 1 if unchanged_now else 0
         self._steady = self._steady + 1 if steady_now else 0
         if self._still >= STILL_FRAMES:
             self.gravity[:] = x
             act = lin = 0.0
-        elif self._steady >= RECOVER_FRAMES and act >= self.noise_g and (self.state != ACTIVE or self.count >= self.window):
+        elif self._steady >= RECOVER_FRAMES and act >= self.noise_g and (not in_motion or decided):
             self.gravity[:] = mean
             act = lin = 0.0
         valid = act >= self.noise_g
-        self._act = act
-        self._lin = lin
-        if not valid and self.state != ACTIVE:
+        self.act = act
+        self.lin = lin
+        if not valid and not in_motion:
             self.gravity += GRAVITY_FOLLOW * (x - self.gravity)
         return valid
 

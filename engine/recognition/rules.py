@@ -20,19 +20,16 @@ COMPLETE_CALM = 0.3  # ... and the activity to have fallen below this fraction o
 ENERGY_RATIO = 0.4
 # ... of the template's peak over its first ENERGY_FRAMES frames from its onset (a third of a
 # second: a punch's first phase). Against the template's whole peak, a full blow's slow wind-up
-# held the start back by 6-12 frames (phone-punches fast -> slow, median lag 233 -> 83 ms).
-# The bar is the gentlest of the action's templates (ninth round): the best-matching template's
-# own peak made it depend on which trial the shape happened to match, and a strong trial held
-# softer punches back (phone-boxing lag 158 -> 125 ms, uWave 94.68 -> 94.92 %).
+# held the start back by 6-12 frames. The bar is the gentlest of the action's templates: the
+# best-matching template's own peak made it depend on which trial the shape happened to match,
+# and a strong trial held softer punches back (docs/recognition.md, the constants' measurements).
 # A motion that ends without ever reaching CALL_OFF_RATIO of the whole peak of its action's
 # templates is called off: its start ends as `reject` (docs/formats.md), not `end`.
 ENERGY_FRAMES = 20
 # The open end's constraint while the hand moves: the motion's n frames must reach at least
 # PROGRESS * n frames into a template. 1.25 (templates.MIN_PROGRESS, which the rejection
 # thresholds are still learned with) held a full blow's slow start against a quick punch's
-# template; 0.75 lets it sit earlier. phone-punches finals 93.1 / 93.9 / 94.7 / 91.7 ->
-# 100 / 95.5 / 98.2 / 91.7 %, uWave and the synthesized players unchanged (recog2 measured
-# 1.0 / 1.5 against 1.25 on uWave with the 1.0 g gate; both lost).
+# template; 0.75 lets it sit earlier (figures: docs/recognition.md).
 PROGRESS = 0.75
 CALL_OFF_RATIO = 0.25
 # A started motion that the null signal would end while it is still too short to be a punch
@@ -40,29 +37,24 @@ CALL_OFF_RATIO = 0.25
 # paused, not the whole motion: its end waits up to PAUSE_FRAMES more quiet frames, and when the
 # hand moves on within them the motion goes on (same DTW, a `switch` may correct the start).
 # Ended there at once, the blow that followed started a second action and the early start
-# stayed wrong or was called off (phone-punches right slow -> fast first decision 71.7 -> 86.7 %).
+# stayed wrong or was called off (docs/recognition.md, the constants' measurements).
 PAUSE_SHORT = 14
 PAUSE_FRAMES = 20
 # A first decision on a motion whose activity is still rising (this frame is its strongest so far)
 # needs only RISING_RATIO of the template's early peak: a punch on its way gets there; a wiggle or
 # a bounce that has already peaked needs ENERGY_RATIO. A full blow's slow first frames held its
-# start 2-4 frames (phone-punches median lag L fast -> slow 150 -> 92 ms, R 150 -> 100 ms, with
-# the pause rule above to keep the finals; a plain ENERGY_RATIO 0.25 cost two more false starts
-# on phone-boxing than this).
+# start 2-4 frames; a plain lower ENERGY_RATIO let more wiggles start (docs/recognition.md, the constants' measurements).
 RISING_RATIO = 0.25
 # No first decision while the hand has been under the gate for this many frames in a row: the
 # motion is dying down (a twitch, the tail of a move the `complete` end split off); it waits, and
-# is rejected if it ends. Synthesized session 6 -> 0 false starts, phone-punches right slow ->
-# fast final 91.7 -> 93.3 %, the rest unchanged.
+# is rejected if it ends (a twitch's false start; docs/recognition.md, the constants' measurements).
 QUIET_DEFER = 2
 # A motion that follows the previous one without the hand resting in between (`null_frames`
 # quiet frames; the previous motion ended by `complete`, or the character finished and the
 # discard ran out while the hand still moved) is likely that motion's return: its first decision
 # also needs RETURN_RATIO of the previous motion's peak activity (discarded frames included), a
-# bar that fades by RETURN_DECAY a frame so that a punch thrown soon after is held back briefly.
-# phone-boxing false starts 2 -> 1, extra starts 6 -> 2 (no character 11 -> 2), type 71.2 ->
-# 74.2 %; phone-punches right slow -> fast extra starts 72 -> 63, left slow -> fast lag 67 -> 75 ms;
-# uWave and the synthesized players unchanged. No decay: quick punches 17-30 frames apart lost.
+# bar that fades by RETURN_DECAY a frame so that a punch thrown soon after is held back briefly
+# (without the decay, quick punches 17-30 frames apart were lost; docs/recognition.md).
 RETURN_RATIO = 0.8
 RETURN_DECAY = 0.95
 # The discard (IV-C) does not run out at `discard_frames` while the hand still moves at
@@ -77,10 +69,8 @@ UNCHANGED_FRAMES = 2
 # least, over their first ENERGY_FRAMES frames, of peak linear / peak activity: TemplateSet
 # `_turn_bar`) x the motion's peak activity. A guard change or a slow drift turns the sensor:
 # its activity rises like a punch's first frames and started the wrong action 12-50 frames before
-# the punch, which then ran into the punch or ended just before it (15 of the 31 finals lost on
-# the mixed streams, seed 0). Mixed finals L f>s 87.9 -> 96.5 %, L s>f 86.4 -> 89.4 %, R f>s
-# 84.2 -> 91.2 %; costs: one punch per file in L s>f and R f>s, R f>s one guard 89.5 -> 84.2 %
-# (docs/recognition.md, thirteenth round). Trained templates only: adoption does not move it.
+# the punch, which then ran into the punch or ended just before it (figures and costs:
+# docs/recognition.md, thirteenth round). Trained templates only: adoption does not move it.
 TURN_RATIO = 0.4
 # A punch thrown straight after another with no rest between (a double): a punch launches the fist
 # (the gravity-removed acceleration along some direction d: its strongest frame before the first
@@ -88,34 +78,32 @@ TURN_RATIO = 0.4
 # after that stop, the hand accelerates along d again at RELAUNCH_RATIO or more of the launch, a
 # new punch has started: a decided motion ends there (`complete`), a discard ends there, and this
 # frame is the new motion's onset (the return rule still applies to it). Without it a double was
-# one motion: the clip and the discard swallowed the second punch (phone-boxing: all 5 misses, and
-# the punch after it started late). The hand's return (along -d, then stopped along +d) does not
+# one motion: the clip and the discard swallowed the second punch, and the punch after it started
+# late (docs/recognition.md, thirteenth round, doubles). The hand's return (along -d, then stopped along +d) does not
 # relaunch unless its stop is as hard and as prompt.
 RELAUNCH_RATIO = 0.6
 # ... within 60 degrees of the launch (cos >= RELAUNCH_COS), and within RELAUNCH_WITHIN frames of
 # the stop (a double's second launch follows the first's stop at once; a gesture's later stroke
-# that happens to point along its first one does not: uWave 94.3 % without this bound, 94.6 % with it).
+# that happens to point along its first one does not).
 RELAUNCH_COS = 0.5
 RELAUNCH_WITHIN = 10
 # ... and a launch of at least RELAUNCH_MIN x the gate: a double is two hard punches far over the
 # noise; a gentle motion whose acceleration turns round (a hook's sweep on a quiet synthesized
-# player, whose onset jerk became its launch) is not split (synthesized session: extra starts
-# 4 -> 8 with the relaunch, 14 without this bar and the onset frame's launch).
+# player, whose onset jerk became its launch) is not split.
 RELAUNCH_MIN = 3.0
 # A stop is RELAUNCH_STOP frames in a row against the launch: a fist takes a few frames to stop;
 # a buzz or a sensor's jitter flipping sign every frame is no stop.
 RELAUNCH_STOP = 2
 # A first decision needs the motion to have reached GATE_FLOOR x the gate: a motion that barely
 # crosses the gate (the hand settling after a blow, a wiggle) is within reach of the sensor's noise,
-# however well its shape fits a template's gentle first frames (phone-boxing: the uppercut whose
-# gentlest template peaks at 3.6 g early started on a 2.4 g settle over a 1.9 g gate).
+# however well its shape fits a template's gentle first frames.
 GATE_FLOOR = 1.3
 
 # A decided motion that outlasts the supplementary buffer keeps its DTW growing up to
 # EXTEND_FACTOR x max(window, longest template) frames; at its end a different action whose whole
 # template fits the whole motion better by LATE_SWITCH_MARGIN becomes the final decision (a
-# noticeable change, so a wider margin than a switch inside the buffer). uWave users 1-6: final
-# 89.0 -> 89.9 % (the long gestures the 60-frame buffer cannot see to their end).
+# noticeable change, so a wider margin than a switch inside the buffer): long gestures that the
+# 60-frame buffer cannot see to their end.
 EXTEND_FACTOR = 2.0
 LATE_SWITCH_MARGIN = 0.1
 
@@ -182,14 +170,14 @@ class DecisionRules:
         if self.state == IDLE:
             if valid:  # the onset: against the gravity the motion is about to take as its rest
                 self._launch = LaunchTracker()
-                self._launch.step([v - g for v, g in zip(self._xs, self.gravity.tolist(), strict=True)], valid)
+                self._launch.step([v - g for v, g in zip(self._xs, self.gate.gravity.tolist(), strict=True)], valid)
             return
         if self.state == ACTIVE and self.action is not None:
             self._launch.action = self.action  # kept through the discard
         action = self._launch.action
         if not (
             self._launch.step([v - g for v, g in zip(self._xs, self._g0_list, strict=True)], valid)
-            and self._launch.norm >= RELAUNCH_MIN * self.noise_g
+            and self._launch.norm >= RELAUNCH_MIN * self.gate.noise_g
             and action is not None
             and not self._strokes[action]
             and (self.state == DISCARD or self.action is not None)
@@ -221,14 +209,13 @@ class DecisionRules:
         lo, hi = self._action_starts[self.action], self._action_ends[self.action]
         return self._peak_act_seen < CALL_OFF_RATIO * float(self._peak_act[lo:hi, 1].min())
 
-    def _decide(self, scores: np.ndarray, events: list[dict]) -> None:
+    def _decide(self, scores: np.ndarray, events: list) -> None:
         best = int(np.argmin(scores))
         if self.action is None and self._is_adapted[best]:
             # The first decision comes from the trained templates while one of them fits under
             # its threshold: an adopted motion is whole, wind-up included, and the next punch's
             # wind-up of another kind matched it (a full uppercut adopted, the following jabs
-            # started as uppercuts: mixed right fast -> slow first 80.7 % without adaptation,
-            # 57.9 % with it). A player drifted beyond every trained template still starts
+            # started as uppercuts; docs/recognition.md, ninth round). A player drifted beyond every trained template still starts
             # from the adopted ones; switches and the final decision use them all.
             trained = np.where(self._is_adapted, np.inf, scores)
             k = int(np.argmin(trained))
@@ -238,7 +225,7 @@ class DecisionRules:
         best_score = float(scores[best])
         bar = self._action_bar[best_action]
         strong = not self.reject or self._peak_act_seen >= ENERGY_RATIO * bar
-        if self.reject and self.action is None and self._peak_act_seen < GATE_FLOOR * self.noise_g:
+        if self.reject and self.action is None and self._peak_act_seen < GATE_FLOOR * self.gate.noise_g:
             strong = False  # barely over the gate: see GATE_FLOOR
         if not strong and self.action is None:
             # still rising (this frame is the motion's strongest so far): RISING_RATIO will do
@@ -269,7 +256,7 @@ class DecisionRules:
         # template's rejection threshold only while the current action still fits under its
         # own: once the current decision no longer fits either (the player's style has drifted
         # from the training trials: uWave days 2-7 against day-1 templates), the better match
-        # is the better answer (uWave 85.3 -> 88.7 %); while it fits, no flicker to a misfit.
+        # is the better answer; while it fits, no flicker to a misfit.
         if best_action == self.action or not strong:
             return
         if self._beats_current(scores, best_score, ok, self.switch_margin):
@@ -278,7 +265,7 @@ class DecisionRules:
                 self._event("switch", self.action_names[best_action], best_score, from_frame=self.frame - self.start_frame)
             )
 
-    def _late_switch(self, scores: np.ndarray, events: list[dict]) -> None:
+    def _late_switch(self, scores: np.ndarray, events: list) -> None:
         """A motion longer than the supplementary buffer: its DTW kept growing past it, so at
         the end the whole motion (up to where the hand stopped) is scored against whole
         templates. A different action that is now better by LATE_SWITCH_MARGIN (with the same
@@ -325,8 +312,8 @@ class DecisionRules:
             return False
         # ... and the motion so far, taken as whole, fits this template at least as well as
         # any other action's whole template (a long gesture pausing after a stretch that
-        # looks like a shorter action's whole is not over; uWave +0.2, novice +0.4 points,
-        # phone recall unchanged; requiring a margin here costs phone recall).
+        # looks like a shorter action's whole is not over; requiring a margin here costs
+        # phone recall).
         closed = self.dtw.closed_scores()
         return bool(closed[k] <= np.min(np.where(self._tmpl_action == self.action, np.inf, closed)))
 

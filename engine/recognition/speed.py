@@ -1,5 +1,6 @@
 """Motion estimates beyond the paper (its future work): speed, direction and peak acceleration of
-the hand since the onset, reported on `start` and `switch` events. Mixed into DualBufferRecognizer."""
+the hand since the onset, reported on `start` and `switch` events. DualBufferRecognizer owns one
+(`self.speed`) and resets it at each motion's onset."""
 
 from __future__ import annotations
 
@@ -11,20 +12,32 @@ G = 9.81
 
 
 class SpeedEstimate:
-    """A rough hand velocity integrated from the gravity-removed acceleration (plain floats)."""
+    """A rough hand velocity integrated from the gravity-removed acceleration since the onset
+    (plain floats: a few sensors a frame), with its peak speed, direction and acceleration."""
 
-    def _track_speed(self) -> None:
-        """Integrate the gravity-removed acceleration since the onset: a rough hand velocity,
-        enough to tell a hard punch from a soft one (the paper's future work). Plain floats."""
-        xs, g0, v = self._xs, self._g0_list, self._velocity
+    def __init__(self, dim: int):
+        self.dim = dim
+        self.reset()
+
+    def reset(self) -> None:
+        """A new motion: nothing integrated yet."""
+        self.velocity = [0.0] * self.dim
+        self.peak_speed = 0.0
+        self.peak_dir = [0.0, 0.0, 0.0]
+        self.peak_g = 0.0
+
+    def track(self, xs: list[float], g0: list[float]) -> None:
+        """Integrate one frame (`xs`, gravity included) against the onset's gravity `g0`: enough
+        to tell a hard punch from a soft one (the paper's future work)."""
+        v = self.velocity
         k_dt = G / STEP_HZ
         for k in range(0, len(xs), 3):
             dx, dy, dz = xs[k] - g0[k], xs[k + 1] - g0[k + 1], xs[k + 2] - g0[k + 2]
-            self._peak_g = max(self._peak_g, math.sqrt(dx * dx + dy * dy + dz * dz))
+            self.peak_g = max(self.peak_g, math.sqrt(dx * dx + dy * dy + dz * dz))
             v[k] += dx * k_dt
             v[k + 1] += dy * k_dt
             v[k + 2] += dz * k_dt
             sp = math.sqrt(v[k] * v[k] + v[k + 1] * v[k + 1] + v[k + 2] * v[k + 2])
-            if sp > self._peak_speed:
-                self._peak_speed = sp
-                self._peak_dir = [v[k] / sp, v[k + 1] / sp, v[k + 2] / sp]
+            if sp > self.peak_speed:
+                self.peak_speed = sp
+                self.peak_dir = [v[k] / sp, v[k + 1] / sp, v[k + 2] / sp]

@@ -39,7 +39,7 @@ class TemplateSet:
         self._action_bar = np.minimum.reduceat(self._peak_act[:, 0], self._action_starts)  # per action
         self._turn_bar = np.minimum.reduceat(self._template_lin_share(templates, order), self._action_starts)  # per action
         self.template_lengths = np.array([len(c) for c in cut])
-        self._strokes = shaken_actions(templates, self.action_names, self.noise_g)  # a relaunch ends none of these
+        self._strokes = shaken_actions(templates, self.action_names, self.gate.noise_g)  # a relaunch ends none of these
         self.dtw = IncrementalDTW(cut, method=self._dtw_method, min_progress=self.min_progress)
         # A decided motion that outlasts the supplementary buffer keeps its DTW growing (one
         # row a frame, as before) up to this many frames, for a final decision over the whole
@@ -55,7 +55,7 @@ class TemplateSet:
         (the energy rule of a start) and over `window` frames (a motion that never gets near it
         is called off)."""
         return np.array([
-            self._peaks(activity(templates.signals[k], templates.gravity[k])[self._gate_start(templates, k) :]) for k in order
+            self._peaks(activity(templates.signals[k], templates.gravity[k])[self.gate.start_on(templates, k) :]) for k in order
         ])
 
     def _template_lin_share(self, templates: Templates, order: np.ndarray) -> np.ndarray:
@@ -64,7 +64,7 @@ class TemplateSet:
         explains (see rules.TURN_RATIO)."""
         out = []
         for k in order:
-            on = self._gate_start(templates, k)
+            on = self.gate.start_on(templates, k)
             act = activity(templates.signals[k], templates.gravity[k])[on : on + ENERGY_FRAMES]
             lin = linear(templates.signals[k], templates.gravity[k])[on : on + ENERGY_FRAMES]
             out.append(float(lin.max() / act.max()) if len(act) and act.max() > 0 else 0.0)
@@ -79,7 +79,7 @@ class TemplateSet:
     def _cut_at_gate(self, templates: Templates, k: int) -> np.ndarray:
         """Template k from its gate onset, in the recognizer's feature space."""
         sig, g = templates.signals[k], templates.gravity[k]
-        return features(sig[self._gate_start(templates, k) :], g, self.feature)
+        return features(sig[self.gate.start_on(templates, k) :], g, self.feature)
 
     def _adopt(self, motion: np.ndarray, peak: tuple[float, float]) -> None:
         """The current action's newest adapted template: in place of its oldest once `adapt`

@@ -43,7 +43,7 @@ REST_FRAMES = 3  # frames at a trial's start used as the resting gravity estimat
 TRIM_FRACTION = 0.1  # activity below this fraction of the trial's peak is rest
 LEAD_IN = 4  # frames kept before the trimmed onset (the recognizer re-cuts at its own gate)
 REJECT_K = 2.0  # threshold = mean + REJECT_K * std of same-action training scores ...
-REJECT_RATIO = 2.0  # ... and at least REJECT_RATIO * their max (1.5 -> 2.0: uWave +1.6, synth session +12 points; see docs)
+REJECT_RATIO = 2.0  # ... and at least REJECT_RATIO * their max (docs/recognition.md)
 REJECT_FLOOR_G = 0.05  # and never below this (g): identical trials must not reject all noise
 CUT_OFF_FRACTION = 0.5  # representative_trials(): shorter or fainter than this x the median: cut off
 REST_NOISE_QUANTILE = 90  # resting_noise(): this percentile of the resting activity ...

@@ -54,7 +54,7 @@ def events(rec: DualBufferRecognizer, frames: np.ndarray) -> list[str]:
     for i, f in enumerate(frames):
         if i % 45 == 44:
             rec.character_finished()
-        out += [json.dumps(e, sort_keys=True) for e in rec.push(f, t=i / 60)]
+        out += [json.dumps(e.to_dict(), sort_keys=True) for e in rec.push(f, t=i / 60)]
     return out
 
 
