@@ -122,10 +122,10 @@ class LaunchTracker:
         self.n = 0
         self.action: int | None = None  # the motion's decided action (kept through its discard)
 
-    def step(self, a: list[float], valid: bool = True) -> bool:
+    def step(self, a: list[float] | None, valid: bool = True) -> bool:
         """True when this frame launches the hand along the launch again just after a stop. Only
         frames over the gate (`valid`) launch, stop or relaunch: a launch taken from the motion's
-        first faint frames would make any wobble a stop."""
+        first faint frames would make any wobble a stop. `a` is only read when `valid`."""
         self.n += 1
         if not valid:
             return False
@@ -170,13 +170,13 @@ class DecisionRules:
         if self.state == IDLE:
             if valid:  # the onset: against the gravity the motion is about to take as its rest
                 self._launch = LaunchTracker()
-                self._launch.step([v - g for v, g in zip(self._xs, self.gate.gravity.tolist(), strict=True)], valid)
+                self._launch.step(self._gravity_removed(self.gate.gravity.tolist()), valid)
             return
         if self.state == ACTIVE and self.action is not None:
             self._launch.action = self.action  # kept through the discard
         action = self._launch.action
         if not (
-            self._launch.step([v - g for v, g in zip(self._xs, self._g0_list, strict=True)], valid)
+            self._launch.step(self._gravity_removed(self._g0_list) if valid else None, valid)
             and self._launch.norm >= RELAUNCH_MIN * self.gate.noise_g
             and action is not None
             and not self._strokes[action]
@@ -192,7 +192,11 @@ class DecisionRules:
         self.state = IDLE
         self._n_recent = 0  # no back-dating into the previous motion
         self._launch = LaunchTracker()
-        self._launch.step([v - g for v, g in zip(self._xs, self._g0_list, strict=True)], valid)
+        self._launch.step(self._gravity_removed(self._g0_list) if valid else None, valid)
+
+    def _gravity_removed(self, g: list[float]) -> list[float]:
+        """This frame's acceleration less gravity `g`, all sensors' axes together (plain floats)."""
+        return [v - w for v, w in zip(self._xs, g, strict=True)]
 
     def _paused(self) -> bool:
         """A started motion under the null signal that is too short or too weak to be over yet
