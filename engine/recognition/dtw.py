@@ -317,7 +317,7 @@ class IncrementalDTW(TemplateEdits):
     def position(self, k: int) -> int:
         """Template k's position aligned to the query's newest frame (unconstrained open end)."""
         n_k = int(self.lengths[k])
-        return int(np.argmin(self._row[:n_k, k] / (self._steps[:n_k, 0] + self.n)))
+        return int((self._row[:n_k, k] / (self._steps[:n_k, 0] + self.n)).argmin())
 
 
 def dtw_rows(query: np.ndarray, template: np.ndarray) -> np.ndarray:

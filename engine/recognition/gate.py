@@ -126,23 +126,24 @@ class NoiseGate:
             self._mean = list(xs)
         g, last, mean = self.gravity.tolist(), self._last, self._mean
         still_now, unchanged_now, steady_now, act, lin = True, True, True, 0.0, 0.0
-        a = STEADY_ALPHA
+        a, still_d2, steady2 = STEADY_ALPHA, STILL_DELTA_G**2, STEADY_G**2  # (globals: read once)
         for k in range(0, len(xs), 3):
             ax, ay, az = xs[k], xs[k + 1], xs[k + 2]
             dx, dy, dz = ax - last[k], ay - last[k + 1], az - last[k + 2]
-            if dx * dx + dy * dy + dz * dz >= STILL_DELTA_G**2:
+            size = math.sqrt(ax * ax + ay * ay + az * az)
+            if dx * dx + dy * dy + dz * dz >= still_d2:
                 still_now = unchanged_now = False
-            elif abs(math.sqrt(ax * ax + ay * ay + az * az) - 1.0) >= STILL_NORM_TOL:
+            elif abs(size - 1.0) >= STILL_NORM_TOL:
                 still_now = False
             mx, my, mz = mean[k] + a * (ax - mean[k]), mean[k + 1] + a * (ay - mean[k + 1]), mean[k + 2] + a * (az - mean[k + 2])
             mean[k], mean[k + 1], mean[k + 2] = mx, my, mz
             ex, ey, ez = ax - mx, ay - my, az - mz
-            if ex * ex + ey * ey + ez * ez >= STEADY_G**2:
+            if ex * ex + ey * ey + ez * ez >= steady2:
                 steady_now = False
             gx, gy, gz = ax - g[k], ay - g[k + 1], az - g[k + 2]
             act += math.sqrt(gx * gx + gy * gy + gz * gz)
             # how far the reading's magnitude is from gravity's (a turn of the hand keeps it)
-            lin += abs(math.sqrt(ax * ax + ay * ay + az * az) - math.sqrt(g[k] * g[k] + g[k + 1] * g[k + 1] + g[k + 2] * g[k + 2]))
+            lin += abs(size - math.sqrt(g[k] * g[k] + g[k + 1] * g[k + 1] + g[k + 2] * g[k + 2]))
         self._last = self.xs = xs
         self._still = self._still + 1 if still_now else 0
         self.unchanged = self.unchanged + 1 if unchanged_now else 0

@@ -4,6 +4,8 @@ and when it is over. Mixed into DualBufferRecognizer; they read its motion state
 
 from __future__ import annotations
 
+from operator import mul, sub
+
 import numpy as np
 
 from engine.recognition.templates import activity
@@ -129,13 +131,14 @@ class LaunchTracker:
         self.n += 1
         if not valid:
             return False
-        norm = sum(v * v for v in a) ** 0.5
+        if self.stopped_at is not None and self.n - self.stopped_at > RELAUNCH_WITHIN:
+            return False  # the punch's own stop passed without a new launch: no double
+        # sum over map(mul): the generator's sums, the same products added in the same order
+        norm = sum(map(mul, a, a)) ** 0.5
         if self.launch is None or self.norm <= 0:
             self.launch, self.norm = a, norm
             return False
-        if self.stopped_at is not None and self.n - self.stopped_at > RELAUNCH_WITHIN:
-            return False  # the punch's own stop passed without a new launch: no double
-        proj = sum(v * w for v, w in zip(a, self.launch, strict=True)) / self.norm
+        proj = sum(map(mul, a, self.launch)) / self.norm
         if proj <= -RELAUNCH_RATIO * self.norm:
             self.stop_run += 1
             if self.stop_run >= RELAUNCH_STOP:
@@ -196,7 +199,7 @@ class DecisionRules:
 
     def _gravity_removed(self, g: list[float]) -> list[float]:
         """This frame's acceleration less gravity `g`, all sensors' axes together (plain floats)."""
-        return [v - w for v, w in zip(self._xs, g, strict=True)]
+        return list(map(sub, self._xs, g))
 
     def _paused(self) -> bool:
         """A started motion under the null signal that is too short or too weak to be over yet
@@ -214,7 +217,7 @@ class DecisionRules:
         return self._peak_act_seen < CALL_OFF_RATIO * float(self._peak_act[lo:hi, 1].min())
 
     def _decide(self, scores: np.ndarray, events: list) -> None:
-        best = int(np.argmin(scores))
+        best = int(scores.argmin())  # the method: no fromnumeric wrapper
         if self.action is None and self._is_adapted[best]:
             # The first decision comes from the trained templates while one of them fits under
             # its threshold: an adopted motion is whole, wind-up included, and the next punch's
@@ -275,7 +278,7 @@ class DecisionRules:
         templates. A different action that is now better by LATE_SWITCH_MARGIN (with the same
         threshold rules as a switch) becomes the final decision: a `switch` flagged
         `whole_motion` (from_frame = n_p, frames since the start, as for any switch) before `end`."""
-        best = int(np.argmin(scores))
+        best = int(scores.argmin())  # the method: no fromnumeric wrapper
         best_action = int(self._tmpl_action[best])
         if best_action == self.action:
             return

@@ -31,13 +31,16 @@ class SpeedEstimate:
         to tell a hard punch from a soft one (the paper's future work)."""
         v = self.velocity
         k_dt = G / STEP_HZ
+        peak_g, peak_speed = self.peak_g, self.peak_speed  # (locals: this runs every frame)
         for k in range(0, len(xs), 3):
             dx, dy, dz = xs[k] - g0[k], xs[k + 1] - g0[k + 1], xs[k + 2] - g0[k + 2]
-            self.peak_g = max(self.peak_g, math.sqrt(dx * dx + dy * dy + dz * dz))
-            v[k] += dx * k_dt
-            v[k + 1] += dy * k_dt
-            v[k + 2] += dz * k_dt
-            sp = math.sqrt(v[k] * v[k] + v[k + 1] * v[k + 1] + v[k + 2] * v[k + 2])
-            if sp > self.peak_speed:
-                self.peak_speed = sp
-                self.peak_dir = [v[k] / sp, v[k + 1] / sp, v[k + 2] / sp]
+            size = math.sqrt(dx * dx + dy * dy + dz * dz)
+            if size > peak_g:
+                peak_g = size
+            vx, vy, vz = v[k] + dx * k_dt, v[k + 1] + dy * k_dt, v[k + 2] + dz * k_dt
+            v[k], v[k + 1], v[k + 2] = vx, vy, vz
+            sp = math.sqrt(vx * vx + vy * vy + vz * vz)
+            if sp > peak_speed:
+                peak_speed = sp
+                self.peak_dir = [vx / sp, vy / sp, vz / sp]
+        self.peak_g, self.peak_speed = peak_g, peak_speed
