@@ -31,6 +31,10 @@ class TemplateSet:
         order = np.argsort([index[a] for a in templates.actions], kind="stable")
         self._order = order
         self._cut_gate = self.gate.noise_g  # the gate the trained templates are cut at (see _recut)
+        # each template's activity and features, whole: a cut is a slice of them (see _recut)
+        self._whole = [
+            (activity(s, g), features(s, g, self.feature)) for s, g in zip(templates.signals, templates.gravity, strict=True)
+        ]
         self.action_names = names
         self._tmpl_action = np.array([index[templates.actions[k]] for k in order])
         self._action_starts = np.flatnonzero(np.r_[True, np.diff(self._tmpl_action) != 0])
@@ -96,8 +100,8 @@ class TemplateSet:
 
     def _cut_at_gate(self, templates: Templates, k: int) -> np.ndarray:
         """Template k from its gate onset, in the recognizer's feature space."""
-        sig, g = templates.signals[k], templates.gravity[k]
-        return features(sig[self.gate.start_on(templates, k) :], g, self.feature)
+        act, whole = self._whole[k]
+        return whole[self.gate.start_on(templates, k, act) :]
 
     def _adopt(self, motion: np.ndarray, peak: tuple[float, float]) -> None:
         """The current action's newest adapted template: in place of its oldest once `adapt`
