@@ -274,6 +274,8 @@ class DualBufferRecognizer(TemplateSet, DecisionRules, Adaptation):
                 return events
             self.state = ACTIVE
             self._idle_quiet = 0
+            if self.gate.noise_g != self._cut_gate:
+                self._recut()  # the gate learnt since the templates were cut
             self.dtw.reset()
             self._g0 = self.gate.gravity.copy()
             self._g0_list = self._g0.tolist()

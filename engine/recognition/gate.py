@@ -80,13 +80,14 @@ class NoiseGate:
     def auto_gate(noise: float) -> float:
         return float(min(max(AUTO_K * noise, AUTO_MIN_G), AUTO_MAX_G))
 
-    def start_on(self, templates: Templates, k: int) -> int:
+    def start_on(self, templates: Templates, k: int, act: np.ndarray | None = None) -> int:
         """Where this gate's onset would be on template k: the start of the run of
         above-gate frames that holds the template's trimmed onset (earlier wiggles separated by
         quiet frames are not the motion); the first above-gate frame after the onset when the
         onset itself is gentler than the gate; the onset when the gate never opens. Then
-        back-dated as the recognizer does (`backdate`)."""
-        act = activity(templates.signals[k], templates.gravity[k])
+        back-dated as the recognizer does (`backdate`). `act`: the template's activity, if known."""
+        if act is None:
+            act = activity(templates.signals[k], templates.gravity[k])
         on = int(templates.onsets[k])
         if act[on] < self.noise_g:
             later = np.flatnonzero(act[on:] >= self.noise_g)

@@ -29,6 +29,12 @@ class TemplateSet:
         names = templates.action_names
         index = {a: i for i, a in enumerate(names)}
         order = np.argsort([index[a] for a in templates.actions], kind="stable")
+        self._order = order
+        self._cut_gate = self.gate.noise_g  # the gate the trained templates are cut at (see _recut)
+        # each template's activity and features, whole: a cut is a slice of them (see _recut)
+        self._whole = [
+            (activity(s, g), features(s, g, self.feature)) for s, g in zip(templates.signals, templates.gravity, strict=True)
+        ]
         self.action_names = names
         self._tmpl_action = np.array([index[templates.actions[k]] for k in order])
         self._action_starts = np.flatnonzero(np.r_[True, np.diff(self._tmpl_action) != 0])
@@ -49,6 +55,22 @@ class TemplateSet:
         self._base_starts = self._action_starts.copy()
         self._is_adapted = np.zeros(len(order), dtype=bool)
         self._adapted: dict[int, list[tuple[np.ndarray, tuple[float, float]]]] = {}  # (motion, (early, window) peaks)
+
+    def _recut(self) -> None:
+        """The trained templates cut again for the DTW at the gate now. A live motion starts where
+        the gate opens, so the templates must start where the same gate opens on them: with
+        noise_g="auto" the gate learnt from the player's rest differs from the one the templates
+        were first cut at, and a template cut at a higher gate starts later in its motion than the
+        live query (docs/recognition.md, fourteenth round). Called at an onset when the gate has
+        changed since the last cut; adopted templates are live motions and stay as they are."""
+        t, order = self.templates, self._order
+        cut = [self._cut_at_gate(t, k) for k in order]
+        # Only the DTW's cut: the energy and turn bars (and which actions are shakes) stay the
+        # trained motions' own at the gate they were first cut at (bars following the gate down
+        # let a wiggle at rest start: the phone-boxing stream's false starts 1 -> 2).
+        self._base = (cut, *self._base[1:])
+        self._cut_gate = self.gate.noise_g
+        self._set_templates()
 
     def _template_peaks(self, templates: Templates, order: np.ndarray) -> np.ndarray:
         """(T, 2) each template's peak activity from its onset over its first ENERGY_FRAMES frames
@@ -78,8 +100,8 @@ class TemplateSet:
 
     def _cut_at_gate(self, templates: Templates, k: int) -> np.ndarray:
         """Template k from its gate onset, in the recognizer's feature space."""
-        sig, g = templates.signals[k], templates.gravity[k]
-        return features(sig[self.gate.start_on(templates, k) :], g, self.feature)
+        act, whole = self._whole[k]
+        return whole[self.gate.start_on(templates, k, act) :]
 
     def _adopt(self, motion: np.ndarray, peak: tuple[float, float]) -> None:
         """The current action's newest adapted template: in place of its oldest once `adapt`

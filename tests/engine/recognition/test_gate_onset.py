@@ -100,6 +100,30 @@ def test_auto_gate_is_frozen_after_the_first_motion(templates):
     assert rec.noise_g == gate
 
 
+def test_templates_are_cut_again_at_the_gate_learnt_from_the_rest():
+    # Trained on a noisy sensor (a gate near 0.8 g), played on a quiet one (the gate learns 0.3 g):
+    # the live motion's onset is at its gentle 0.5 g wind-up, so the templates must start there
+    # too, as if the recognizer had been built at the learnt gate.
+    rng = np.random.default_rng(5)
+    wind_up = rest(20)
+    wind_up[:, 0] += 0.5
+    trials = {
+        name: [np.vstack([rest(30, 0.15, rng), wind_up, bump(axis, 8.0), rest(10)]) for _ in range(3)]
+        for name, axis in (("jab", 0), ("upper", 2))
+    }
+    noisy = Templates.from_trials(trials)
+    rec = DualBufferRecognizer(noisy, main=6, adapt=0)
+    assert rec.noise_g > 0.6
+    built = rec.template_lengths.copy()
+    run(rec, rest(120, 0.01, rng))
+    assert rec.noise_g == db.AUTO_MIN_G
+    events = run(rec, np.vstack([wind_up, bump(0, 8.0), rest(30)]))
+    at_learnt_gate = DualBufferRecognizer(noisy, noise_g=db.AUTO_MIN_G, adapt=0).template_lengths
+    assert list(rec.template_lengths) == list(at_learnt_gate)
+    assert (rec.template_lengths >= built).all() and rec.template_lengths.sum() > built.sum()  # wind-up frames in
+    assert [e["action"] for e in events if e["event"] == "start"] == ["jab"]
+
+
 def test_start_counts_main_frames_from_where_the_motion_left_the_rest(templates, monkeypatch):
     # a slow rise: 0.1 g more each frame, so a 1.0 g gate opens 9 frames after 0.1 g
     ramp = np.tile(G, (30, 1))
