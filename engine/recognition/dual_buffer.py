@@ -52,7 +52,7 @@ Per 60 Hz frame (`push`):
   action's templates; the `adapt` (3) most recent per action are kept beside the trained ones,
   across `reset()`, until `forget_adaptation()`. `adapt=0` turns it off. The adopted templates take part in switches and
   the final decision; the first decision takes an adopted template only when no trained one
-  fits under its threshold.
+  fits under its threshold, or when it scores ADOPTED_LEAD lower than the best trained one.
 - Relaunch (a double): just after a punch's stop, the hand launching along that punch's launch
   again (RELAUNCH_*) ends the decided motion (`complete`) or the discard; that frame is the next
   motion's onset. Not for actions whose own templates relaunch (a shake). A first decision needs

@@ -100,6 +100,11 @@ RELAUNCH_STOP = 2
 # crosses the gate (the hand settling after a blow, a wiggle) is within reach of the sensor's noise,
 # however well its shape fits a template's gentle first frames.
 GATE_FLOOR = 1.3
+# An adopted template (the player's own recent motion) gives a first decision over a trained one
+# that fits under its threshold only when it scores ADOPTED_LEAD lower: an adopted motion is whole,
+# wind-up included, and another kind's opening can look like that wind-up (docs/recognition.md,
+# ninth and fourteenth rounds).
+ADOPTED_LEAD = 0.4
 
 # A decided motion that outlasts the supplementary buffer keeps its DTW growing up to
 # EXTEND_FACTOR x max(window, longest template) frames; at its end a different action whose whole
@@ -220,13 +225,12 @@ class DecisionRules:
         best = int(scores.argmin())  # the method: no fromnumeric wrapper
         if self.action is None and self._is_adapted[best]:
             # The first decision comes from the trained templates while one of them fits under
-            # its threshold: an adopted motion is whole, wind-up included, and the next punch's
-            # wind-up of another kind matched it (a full uppercut adopted, the following jabs
-            # started as uppercuts; docs/recognition.md, ninth round). A player drifted beyond every trained template still starts
-            # from the adopted ones; switches and the final decision use them all.
+            # its threshold, unless the adopted one is clearly better (see ADOPTED_LEAD): a
+            # player drifted from the trials starts from the own recent motions; switches and the
+            # final decision use them all.
             trained = np.where(self._is_adapted, np.inf, scores)
             k = int(np.argmin(trained))
-            if trained[k] <= self.thresholds[k]:
+            if trained[k] <= self.thresholds[k] and scores[best] > trained[k] * (1.0 - ADOPTED_LEAD):
                 best = k
         best_action = int(self._tmpl_action[best])
         best_score = float(scores[best])

@@ -389,6 +389,36 @@ def test_adopted_motions_do_not_give_the_first_decision(templates):
     assert [e["action"] for e in events if e["event"] == "start"] == ["jab"]
 
 
+@pytest.mark.parametrize("lead", [True, False])
+def test_an_adopted_motion_that_fits_clearly_better_gives_the_first_decision(lead, monkeypatch):
+    """The player's jab opens with a short rise along z, the trained uppercut's axis: the first
+    decision is `upper` (a trained template fits under its threshold), corrected to jab by a
+    switch, and the jab is adopted. The next such jabs fit the adopted one far better
+    (rules.ADOPTED_LEAD) and start as jab; with an adopted template never first while a trained
+    one fits (the ninth round's rule alone), they start as `upper` every time."""
+    import engine.recognition.rules as rules
+
+    if not lead:
+        monkeypatch.setattr(rules, "ADOPTED_LEAD", 1.0)
+    rng = np.random.default_rng(0)
+    trials = {
+        name: [np.vstack([rest(5), bump(axis, a) + rng.normal(0, 0.02, (24, 3)), rest(5)]) for a in (2.2, 3.0, 3.8)]
+        for name, axis in (("jab", 0), ("upper", 2))
+    }
+    rec = DualBufferRecognizer(Templates.from_trials(trials))
+    opening = rest(8)
+    opening[:, 2] += np.sin(np.linspace(0, np.pi, 8))
+    mine = np.vstack([opening, bump(0, 3.0)])
+    firsts, finals = [], []
+    for k in range(3):
+        events = run(rec, np.vstack([rest(10), mine + np.random.default_rng(k).normal(0, 0.03, mine.shape), rest(20)]))
+        decided = [e["action"] for e in events if e["event"] in ("start", "switch")]
+        firsts.append(decided[0])
+        finals.append(decided[-1])
+    assert finals == ["jab"] * 3 and rec.dtw.T == 6 + 3  # each one adopted
+    assert firsts == (["upper", "jab", "jab"] if lead else ["upper"] * 3)
+
+
 @pytest.mark.parametrize("rule", [True, False])
 def test_a_turn_of_the_hand_does_not_start_a_punch(rule, monkeypatch):
     """A guard change turns the sensor: its activity (|a - g|) rises as a punch's first frames do,
