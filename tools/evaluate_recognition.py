@@ -254,6 +254,7 @@ def score_stream(
     main: int | str,
     tolerance: int = EARLY_TOLERANCE,
     frames: np.ndarray | None = None,
+    onsets: Sequence[int] | None = None,
 ) -> Summary:
     """Match starts to intervals, in order: each interval takes the first start not yet taken
     inside [first - tolerance, end) (hand-labelled intervals begin after the wind-up the sensor
@@ -261,13 +262,14 @@ def score_stream(
     next punch's). Starts outside every (widened) interval are false starts; the other starts
     not taken, inside a (widened) interval, are `extra_starts` (a player sees a second punch, e.g.
     the return of a full blow after the character's clip ended). The lag is counted from each
-    interval's true onset (`stream_onset`, the rest after the previous interval) when the
-    `frames` are given, else from its first labelled frame."""
+    interval's true onset: `onsets[i]` when given (a spliced stream's, see `mixed_stream`), else
+    `stream_onset` (the rest after the previous interval) when the `frames` are given, else its
+    first labelled frame."""
     s = Summary(main)
     starts = [e for e in events if e["event"] == "start"]
     used: set[int] = set()
     prev_end = 0
-    for action, a, b in ivs:
+    for i, (action, a, b) in enumerate(ivs):
         prev, prev_end = prev_end, b
         mine = [k for k, e in enumerate(starts) if a - tolerance <= e["frame"] < b and k not in used]
         if not mine:
@@ -278,7 +280,7 @@ def score_stream(
         e = starts[k]
         after = [x for x in events if x["frame"] >= e["frame"]]
         first, final, last_np, at = _decisions(after)
-        onset = a if frames is None else stream_onset(frames, a, b, prev)
+        onset = onsets[i] if onsets is not None else a if frames is None else stream_onset(frames, a, b, prev)
         s.outcomes.append(Outcome(action, first, final, last_np, at - onset))
     labelled = np.zeros(n_frames, dtype=bool)
     for _, a, b in ivs:
@@ -412,7 +414,7 @@ def punch_files(root: str | Path) -> dict[tuple[str, str], dict[str, Path]]:
 
 def evaluate_cross_session(
     train: Mapping[str, tuple[np.ndarray, Sequence[str]]],
-    test: Sequence[tuple[np.ndarray, Sequence[str]]],
+    test: Sequence[tuple[np.ndarray, Sequence[str]] | tuple[np.ndarray, Sequence[str], Sequence[int]]],
     mains: Sequence[int | str],
     trials: int = 3,
     template_kwargs: Mapping | None = None,
@@ -422,18 +424,20 @@ def evaluate_cross_session(
     """Templates from the first `trials` labelled intervals of each action's training recording
     (`{action: (frames, labels)}`, each interval cut with its lead-in as `stream_trials` does),
     then every test recording replayed whole as a stream (a fresh recognizer per recording) and
-    scored with `score_stream`. Pooled over the test recordings."""
+    scored with `score_stream`; a spliced stream (`mixed_stream`) brings its punches' true onsets
+    as a third item. Pooled over the test recordings."""
     cut = {}
     for action, (frames, labels) in train.items():
         ivs = [iv for iv in intervals(labels) if iv[0] == action][:trials]
         cut[action] = stream_trials(frames, ivs)[action]
     templates = Templates.from_trials(cut, **(template_kwargs or {}))
     pooled = [Summary(m) for m in mains]
-    for frames, labels in test:
+    for frames, labels, *onsets in test:
         ivs = intervals(labels)
         for m, pool in zip(mains, pooled, strict=True):
             rec = DualBufferRecognizer(templates, main=m, **rec_kwargs)
-            s = score_stream(replay_stream(rec, frames, clip_frames), ivs, len(frames), m, frames=frames)
+            events = replay_stream(rec, frames, clip_frames)
+            s = score_stream(events, ivs, len(frames), m, frames=frames, onsets=onsets[0] if onsets else None)
             pool.outcomes += s.outcomes
             pool.false_starts += s.false_starts
             pool.extra_starts += s.extra_starts
@@ -492,17 +496,19 @@ def _stillest_window(x: np.ndarray, lo: int, hi: int, w: int = REST_WINDOW) -> i
     return lo + int(np.argmin(spread))
 
 
-def punch_segments(frames: np.ndarray, labels: Sequence[str]) -> list[tuple[np.ndarray, list[str], np.ndarray, int]]:
-    """Every labelled punch of a recording with the rest around it: (frames, labels, rest, cut),
+def punch_segments(frames: np.ndarray, labels: Sequence[str]) -> list[tuple[np.ndarray, list[str], np.ndarray, int, int]]:
+    """Every labelled punch of a recording with the rest around it: (frames, labels, rest, cut,
+    onset), onset being the punch's true onset in the recording (`stream_onset`),
     cut at frame `cut` in the middle of the stillest REST_WINDOW frames of the gap before it, up to
     the middle of those of the gap after it (at most REST_SEARCH frames from the label; the label's
     own edge when the gap is shorter); `rest` is the mean of the window before the punch (its guard)."""
     x = np.asarray(frames, dtype=np.float64)
     labels = list(labels)
     ivs = intervals(labels)
-    cuts, rests = [], []
+    cuts, rests, onsets = [], [], []
     prev_end = 0
     for _, a, b in ivs:
+        onsets.append(stream_onset(x, a, b, prev_end))
         k = _stillest_window(x, max(prev_end, a - REST_SEARCH), a)
         k = k if k is not None else max(prev_end, a - REST_WINDOW)
         cuts.append(min(k + REST_WINDOW // 2, a))
@@ -511,7 +517,7 @@ def punch_segments(frames: np.ndarray, labels: Sequence[str]) -> list[tuple[np.n
     b = ivs[-1][2] if ivs else len(x)
     k = _stillest_window(x, b, min(len(x), b + REST_SEARCH))
     cuts.append(k + REST_WINDOW // 2 if k is not None else min(len(x), b + REST_WINDOW))
-    return [(x[cuts[i] : cuts[i + 1]], labels[cuts[i] : cuts[i + 1]], rests[i], cuts[i]) for i in range(len(ivs))]
+    return [(x[cuts[i] : cuts[i + 1]], labels[cuts[i] : cuts[i + 1]], rests[i], cuts[i], onsets[i]) for i in range(len(ivs))]
 
 
 def _turn(frames: np.ndarray, src: np.ndarray, dst: np.ndarray) -> np.ndarray:
@@ -530,11 +536,14 @@ def _turn(frames: np.ndarray, src: np.ndarray, dst: np.ndarray) -> np.ndarray:
 
 def mixed_stream(
     recordings: Sequence[tuple[np.ndarray, Sequence[str]]], seed: int = 0, one_guard: bool = False
-) -> tuple[np.ndarray, list[str]]:
+) -> tuple[np.ndarray, list[str], list[int]]:
     """One labelled stream of every punch of `recordings` (single-kind files), each with the rest
     around it (`punch_segments`), in an order shuffled with `seed`; SPLICE_FRAMES of linear ramp
     between two segments; the stream opens with LEAD_REST frames of the rest before one recording's
-    first punch, then that punch.
+    first punch, then that punch. Returns the frames, the labels and each punch's true onset: the
+    one in its own recording (`stream_onset` there), not one measured in the stream, where the
+    rest before a punch may lie before a splice's ramp (a guard change the splice made, not the
+    player) and the onset would fall on the ramp.
     With `one_guard`, every segment is turned (`_turn`) so that its guard matches the mean guard of
     all segments: a player who starts every kind from the same guard, so the resting tilt no
     longer tells the kinds apart (in single-kind files it does: e.g. the left uppercut's rest is
@@ -556,13 +565,15 @@ def mixed_stream(
     if one_guard:
         guard = np.mean([s[2] for s in segs], axis=0)
         lead = _turn(lead, segs[first][2], guard) if len(lead) else lead
-        segs = [(_turn(f, r, guard), lab, guard, c) for f, lab, r, c in segs]
+        segs = [(_turn(f, r, guard), lab, guard, c, on) for f, lab, r, c, on in segs]
     if not len(lead):
         lead = segs[first][0][:1]
-    parts, labels = [lead], [""] * len(lead)
+    parts, labels, onsets = [lead], [""] * len(lead), []
     for n, i in enumerate(order):
-        f, lab = segs[i][:2]
+        f, lab, _, cut, onset = segs[i]
         ramp = np.linspace(parts[-1][-1], f[0], SPLICE_FRAMES + 2)[1:-1] if n else f[:0]
         parts += [ramp, f]
-        labels += [""] * len(ramp) + list(lab)
-    return np.vstack(parts), labels
+        labels += [""] * len(ramp)
+        onsets.append(len(labels) + onset - cut)  # a turn keeps the distances from the rest
+        labels += list(lab)
+    return np.vstack(parts), labels, onsets

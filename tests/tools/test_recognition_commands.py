@@ -223,7 +223,7 @@ def test_mixed_stream_splices_every_punch_once_in_a_seeded_order():
 
     tilted = np.array([0.0, np.sin(1.0), np.cos(1.0)])  # this kind's guard is 57 degrees off
     recs = [recording("jab", 0, G), recording("upper", 1, tilted)]
-    frames, labels = mixed_stream(recs, seed=1)
+    frames, labels, _ = mixed_stream(recs, seed=1)
     ivs = intervals(labels)
     assert sorted(a for a, _, _ in ivs) == ["jab"] * 4 + ["upper"] * 4
     assert all(b - a == 24 for _, a, b in ivs)  # each punch whole, none merged with another
@@ -233,12 +233,53 @@ def test_mixed_stream_splices_every_punch_once_in_a_seeded_order():
     # the splices are ramps, not steps: no jump bigger than the punches' own
     assert np.abs(np.diff(frames, axis=0)).max() < 1.0
     # one guard: the rest just before every punch points the same way
-    frames, labels = mixed_stream(recs, seed=1, one_guard=True)
+    frames, labels, _ = mixed_stream(recs, seed=1, one_guard=True)
     rests = np.array([frames[a - REST_WINDOW // 2 : a].mean(axis=0) for _, a, _ in intervals(labels)])
     rests /= np.linalg.norm(rests, axis=1, keepdims=True)
     assert np.allclose(rests, rests[0], atol=0.05)
-    plain = np.array([f[a - 4 : a].mean(axis=0) for f, lab in [mixed_stream(recs, seed=1)] for _, a, _ in intervals(lab)])
+    plain = np.array([f[a - 4 : a].mean(axis=0) for f, lab, _ in [mixed_stream(recs, seed=1)] for _, a, _ in intervals(lab)])
     assert np.ptp(plain[:, 1]) > 0.5  # as recorded the two kinds' guards differ
+
+
+def test_mixed_stream_onsets_are_the_punches_own_not_the_splice_ramps():
+    """A punch after a guard change: the stream's rest before it may lie before the splice's ramp,
+    and the onset measured in the stream would fall on the ramp. mixed_stream gives each punch the
+    true onset of its own recording, on the same frame of the punch."""
+    from tools.evaluate_recognition import SPLICE_FRAMES, intervals, mixed_stream, stream_onset
+
+    rng = np.random.default_rng(3)
+
+    def recording(label, axis, guard):
+        parts, labels = [], []
+        for _ in range(3):
+            still = np.tile(guard, (30, 1)) + rng.normal(0, 0.005, (30, 3))
+            punch = np.vstack([np.tile(guard, (6, 1)), still[:18] + bump(axis)[:18] - G])  # 6 frames still under the label
+            parts += [still, punch]
+            labels += [""] * 30 + [label] * 24
+        parts.append(np.tile(guard, (30, 1)))
+        labels += [""] * 30
+        return np.vstack(parts), labels
+
+    tilted = np.array([0.0, np.sin(1.0), np.cos(1.0)])
+    recs = [recording("jab", 0, G), recording("upper", 1, tilted)]
+    own = {}  # each recording's punches: the frames from their true onset on
+    for frames, labels in recs:
+        prev = 0
+        for _, a, b in intervals(labels):
+            on = stream_onset(frames, a, b, prev)
+            own.setdefault(round(float(frames[b - 1].sum()), 9), frames[on : on + 8])
+            prev = b
+    frames, labels, onsets = mixed_stream(recs, seed=1)
+    ivs = intervals(labels)
+    assert len(onsets) == len(ivs)
+    on_ramp = 0
+    prev = 0
+    for (_, a, b), on in zip(ivs, onsets, strict=True):
+        assert np.allclose(frames[on : on + 8], own[round(float(frames[b - 1].sum()), 9)])  # the same frame of the punch
+        assert on >= prev + SPLICE_FRAMES or prev == 0  # after the ramp
+        on_ramp += stream_onset(frames, a, b, prev) < on - 2  # measured in the stream: earlier
+        prev = b
+    assert on_ramp >= 1  # the guard changes would have moved some onsets onto their ramps
 
 
 def test_evaluate_phone_punches_mixed(capsys):
