@@ -62,7 +62,9 @@ class TemplateSet:
         noise_g="auto" the gate learnt from the player's rest differs from the one the templates
         were first cut at, and a template cut at a higher gate starts later in its motion than the
         live query (docs/recognition.md, fourteenth round). Called at an onset when the gate has
-        changed since the last cut; adopted templates are live motions and stay as they are."""
+        changed since the last cut; adopted templates are live motions and stay as they are. What
+        was sized at construction stays: `_extend_to` (from the templates' first-cut lengths) and
+        the motion buffers sized by it: a motion's DTW still grows for at most that many frames."""
         t, order = self.templates, self._order
         cut = [self._cut_at_gate(t, k) for k in order]
         # Only the DTW's cut: the energy and turn bars (and which actions are shakes) stay the

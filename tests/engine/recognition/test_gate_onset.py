@@ -124,6 +124,33 @@ def test_templates_are_cut_again_at_the_gate_learnt_from_the_rest():
     assert [e["action"] for e in events if e["event"] == "start"] == ["jab"]
 
 
+def test_a_recut_keeps_the_adopted_motions_and_cuts_the_trained_ones_as_at_that_gate():
+    # A motion adopted (adaptation), then the gate moves (forced here: a session's gate freezes at
+    # its first start) and the next onset recuts: the trained templates are those of a recognizer
+    # built at the new gate, the adopted one is the live motion as it was adopted.
+    rng = np.random.default_rng(6)
+    wind_up = rest(20)
+    wind_up[:, 0] += 0.5
+    trials = {
+        name: [np.vstack([rest(30, 0.15, rng), wind_up, bump(axis, 8.0), rest(10)]) for _ in range(3)]
+        for name, axis in (("jab", 0), ("upper", 2))
+    }
+    noisy = Templates.from_trials(trials)
+    rec = DualBufferRecognizer(noisy, main=6, adapt=3)
+    run(rec, np.vstack([rest(120, 0.01, rng), bump(0, 8.0), rest(40)]))
+    assert rec._is_adapted.sum() == 1  # the jab was adopted
+    adopted = [src.copy() for src, a in zip(rec.dtw.sources, rec._is_adapted, strict=True) if a]
+    rec.gate.noise_g = 0.9  # as if learnt again
+    run(rec, np.vstack([bump(2, 8.0), rest(40)]))
+    trained = [src for src, a in zip(rec.dtw.sources, rec._is_adapted, strict=True) if not a]
+    at_gate = DualBufferRecognizer(noisy, noise_g=0.9, adapt=0).dtw.sources
+    assert len(trained) == len(at_gate) and all(np.array_equal(a, b) for a, b in zip(trained, at_gate, strict=True))
+    still = [src for src, a in zip(rec.dtw.sources, rec._is_adapted, strict=True) if a]
+    assert any(np.array_equal(adopted[0], s) for s in still)
+    at_first_gate = DualBufferRecognizer(noisy, noise_g=db.AUTO_MIN_G, adapt=0).dtw.sources
+    assert any(len(a) != len(b) for a, b in zip(at_gate, at_first_gate, strict=True))  # the recut changed them
+
+
 def test_start_counts_main_frames_from_where_the_motion_left_the_rest(templates, monkeypatch):
     # a slow rise: 0.1 g more each frame, so a 1.0 g gate opens 9 frames after 0.1 g
     ramp = np.tile(G, (30, 1))
