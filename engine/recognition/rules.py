@@ -98,7 +98,9 @@ RELAUNCH_MIN = 3.0
 RELAUNCH_STOP = 2
 # A first decision needs the motion to have reached GATE_FLOOR x the gate: a motion that barely
 # crosses the gate (the hand settling after a blow, a wiggle) is within reach of the sensor's noise,
-# however well its shape fits a template's gentle first frames.
+# however well its shape fits a template's gentle first frames. A motion still rising may start
+# under it (RISING_RATIO): the floor applied to it too held punches back (L fast -> slow per file
+# first 79 -> 67 %, lag 100 -> 167 ms; docs/recognition.md, fifteenth round).
 GATE_FLOOR = 1.3
 # An adopted template (the player's own recent motion) gives a first decision over a trained one
 # that fits under its threshold only when it scores ADOPTED_LEAD lower: an adopted motion is whole,
