@@ -451,8 +451,9 @@ def evaluate_phone_punches(
     """Per hand, fast -> slow and slow -> fast: templates from the first trials of each punch in
     one set's files, tested on every punch of the other set's files (see evaluate_cross_session).
     With `mixed`, also on the other set's punches of all kinds spliced into one stream
-    (`mixed_stream`, shuffled with `seed`): as recorded ("mixed") and from one guard ("mixed,
-    one guard")."""
+    (`mixed_stream`, shuffled with `seed`): as recorded ("mixed"), every punch turned to one guard
+    ("mixed, one guard"), and resting in one guard with the fist turned into each punch's own as
+    it starts ("mixed, one guard, turned in")."""
     files = punch_files(root)
     loaded: dict[Path, tuple[np.ndarray, list[str]]] = {}
 
@@ -471,8 +472,9 @@ def evaluate_phone_punches(
             test = [load(f) for f in files[(hand, dst)].values()]
             out[f"phone-punches {hand} {src} -> {dst}"] = evaluate_cross_session(train, test, mains, **kwargs)
             if mixed:
-                for name, guard in (("mixed", False), ("mixed, one guard", True)):
-                    stream = mixed_stream(test, seed, one_guard=guard)
+                variants = (("mixed", False, 0), ("mixed, one guard", True, 0), ("mixed, one guard, turned in", True, TURN_IN))
+                for name, guard, turn_in in variants:
+                    stream = mixed_stream(test, seed, one_guard=guard, turn_in=turn_in)
                     out[f"phone-punches {hand} {src} -> {dst} {name}"] = evaluate_cross_session(train, [stream], mains, **kwargs)
     return out
 
@@ -483,6 +485,7 @@ def evaluate_phone_punches(
 # set's files, with the rest around it, spliced into one stream in a seeded shuffled order.
 SPLICE_FRAMES = 20  # a linear ramp between two spliced rests: a guard change of 1/3 s
 LEAD_REST = 120  # frames of rest before the first punch (the auto gate learns from them)
+TURN_IN = 10  # "one guard, turned in": the fist turns from the guard into the punch's own in 1/6 s
 
 
 def _stillest_window(x: np.ndarray, lo: int, hi: int, w: int = REST_WINDOW) -> int | None:
@@ -520,22 +523,47 @@ def punch_segments(frames: np.ndarray, labels: Sequence[str]) -> list[tuple[np.n
     return [(x[cuts[i] : cuts[i + 1]], labels[cuts[i] : cuts[i + 1]], rests[i], cuts[i], onsets[i]) for i in range(len(ivs))]
 
 
-def _turn(frames: np.ndarray, src: np.ndarray, dst: np.ndarray) -> np.ndarray:
+def _turn(frames: np.ndarray, src: np.ndarray, dst: np.ndarray, share: np.ndarray | None = None) -> np.ndarray:
     """`frames` turned per sensor by the smallest rotation taking the direction of `src` to that
-    of `dst` (Rodrigues): a punch held with another grip, from another guard."""
+    of `dst` (Rodrigues): a punch held with another grip, from another guard. `share`: per frame,
+    the part of that rotation's angle to apply (default all of it)."""
     out = np.asarray(frames, dtype=np.float64).reshape(len(frames), -1, 3).copy()
+    share = np.ones(len(out)) if share is None else np.asarray(share, dtype=np.float64)
     for s in range(out.shape[1]):
         u = src[3 * s : 3 * s + 3] / max(np.linalg.norm(src[3 * s : 3 * s + 3]), 1e-9)
         v = dst[3 * s : 3 * s + 3] / max(np.linalg.norm(dst[3 * s : 3 * s + 3]), 1e-9)
         axis, c = np.cross(u, v), float(np.dot(u, v))
-        k = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
-        rot = np.eye(3) + k + k @ k / (1.0 + c) if c > -1 + 1e-9 else -np.eye(3)
-        out[:, s] = out[:, s] @ rot.T
+        sin = float(np.linalg.norm(axis))
+        if sin < 1e-12:
+            if c < 0:  # opposite: half a turn about any axis across u
+                out[:, s] = -out[:, s]
+            continue
+        k = axis / sin
+        angle = share * np.arctan2(sin, c)  # (n,)
+        kx = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
+        rot = np.eye(3) + np.sin(angle)[:, None, None] * kx + (1.0 - np.cos(angle))[:, None, None] * (kx @ kx)
+        out[:, s] = np.einsum("nij,nj->ni", rot, out[:, s])
     return out.reshape(len(frames), -1)
 
 
+def _turned_in(
+    frames: np.ndarray, labels: Sequence[str], rest: np.ndarray, guard: np.ndarray, cut: int, onset: int, turn_in: int
+) -> tuple[np.ndarray, list[str], np.ndarray, int, int]:
+    """A punch segment (`punch_segments`) whose rest is turned into `guard`, the turn undone over
+    the `turn_in` frames before its own onset, the punch as recorded; and its true onset: the
+    first frame of the turn or after it ONSET_G away from the turned rest. A segment whose rest
+    before the turn is shorter than REST_WINDOW frames starts with copies of its first frame."""
+    pad = max(0, turn_in + REST_WINDOW - (onset - cut))
+    frames = np.vstack([np.repeat(frames[:1], pad, axis=0), frames])
+    labels, cut = [""] * pad + list(labels), cut - pad
+    at = onset - cut  # the punch's own onset in the segment
+    turned = _turn(frames, rest, guard, np.clip((at - np.arange(len(frames))) / turn_in, 0.0, 1.0))
+    away = _away_from_rest(turned[at - turn_in : at], _turn(rest[None], rest, guard)[0])
+    return turned, labels, guard, cut, cut + (at - turn_in + int(away[0]) if len(away) else at)
+
+
 def mixed_stream(
-    recordings: Sequence[tuple[np.ndarray, Sequence[str]]], seed: int = 0, one_guard: bool = False
+    recordings: Sequence[tuple[np.ndarray, Sequence[str]]], seed: int = 0, one_guard: bool = False, turn_in: int = 0
 ) -> tuple[np.ndarray, list[str], list[int]]:
     """One labelled stream of every punch of `recordings` (single-kind files), each with the rest
     around it (`punch_segments`), in an order shuffled with `seed`; SPLICE_FRAMES of linear ramp
@@ -547,7 +575,11 @@ def mixed_stream(
     With `one_guard`, every segment is turned (`_turn`) so that its guard matches the mean guard of
     all segments: a player who starts every kind from the same guard, so the resting tilt no
     longer tells the kinds apart (in single-kind files it does: e.g. the left uppercut's rest is
-    ~60 degrees from the jab's)."""
+    ~60 degrees from the jab's). That turns the whole punch, so it is thrown in another direction
+    too. With `turn_in` frames as well, only the rest is turned: over the `turn_in` frames before
+    its onset the hand turns from the mean guard into the punch's own, and the punch is as
+    recorded (a player who rests in one guard and turns the fist into each kind as it starts);
+    its true onset is then measured in its segment, on the turn."""
     segs, origin = [], []  # origin: (recording, its first punch's segment index)
     for r, (frames, labels) in enumerate(recordings):
         mine = punch_segments(frames, labels)
@@ -565,7 +597,10 @@ def mixed_stream(
     if one_guard:
         guard = np.mean([s[2] for s in segs], axis=0)
         lead = _turn(lead, segs[first][2], guard) if len(lead) else lead
-        segs = [(_turn(f, r, guard), lab, guard, c, on) for f, lab, r, c, on in segs]
+        if turn_in > 0:
+            segs = [_turned_in(f, lab, r, guard, c, on, turn_in) for f, lab, r, c, on in segs]
+        else:
+            segs = [(_turn(f, r, guard), lab, guard, c, on) for f, lab, r, c, on in segs]
     if not len(lead):
         lead = segs[first][0][:1]
     parts, labels, onsets = [lead], [""] * len(lead), []

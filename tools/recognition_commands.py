@@ -166,7 +166,7 @@ def _register_evaluate(sub: argparse._SubParsersAction) -> None:
     e.add_argument("--trials", type=arguments.int_range(1, 1000), default=3, help="--phone-punches: training trials per punch (default 3)")
     e.add_argument("--mixed", action="store_true",
                    help="--phone-punches: also the other set's punches of all kinds spliced into one shuffled stream "
-                        "(as recorded, and turned to one guard)")
+                        "(as recorded; turned to one guard; and from one guard, the fist turned in as each punch starts)")
     e.add_argument("--seed", type=arguments.seed, default=0, help="--mixed: the shuffle's seed (default 0)")
     e.add_argument("--keep", type=arguments.int_range(1, 1000), default=None,
                    help="templates: keep each action's KEEP most representative trials (e.g. --trials 5 --keep 3)")

@@ -282,6 +282,47 @@ def test_mixed_stream_onsets_are_the_punches_own_not_the_splice_ramps():
     assert on_ramp >= 1  # the guard changes would have moved some onsets onto their ramps
 
 
+def test_mixed_stream_turned_in_rests_in_one_guard_and_throws_each_punch_as_recorded():
+    """One guard, turned in: every punch's rest points along the common guard, the fist turns into
+    the punch's own guard over the TURN_IN frames before its onset, and the punch itself is the
+    recording's (not turned, unlike plain one guard); its true onset lies on that turn."""
+    from tools.evaluate_recognition import TURN_IN, intervals, mixed_stream, stream_onset
+
+    rng = np.random.default_rng(4)
+
+    def recording(label, axis, guard):
+        parts, labels = [], []
+        for _ in range(3):
+            still = np.tile(guard, (40, 1)) + rng.normal(0, 0.005, (40, 3))
+            parts += [still, still[:24] + bump(axis)[:24] - G]
+            labels += [""] * 40 + [label] * 24
+        parts.append(np.tile(guard, (40, 1)))
+        labels += [""] * 40
+        return np.vstack(parts), labels
+
+    tilted = np.array([0.0, np.sin(1.0), np.cos(1.0)])
+    recs = [recording("jab", 0, G), recording("upper", 1, tilted)]
+    peaks = {}  # each recording's punches, by their peak frame's values: (frames from the own onset)
+    for frames, labels in recs:
+        prev = 0
+        for _, a, b in intervals(labels):
+            on = stream_onset(frames, a, b, prev)
+            peaks[round(float(frames[a + 12].sum()), 9)] = (frames[on:b], b - on)
+            prev = b
+    frames, labels, onsets = mixed_stream(recs, seed=1, one_guard=True, turn_in=TURN_IN)
+    turned, turned_labels, _ = mixed_stream(recs, seed=1, one_guard=True)
+    guards = []
+    for (_, a, b), on in zip(intervals(labels), onsets, strict=True):
+        own, n = peaks[round(float(frames[a + 12].sum()), 9)]  # the punch as recorded, unturned
+        assert np.allclose(frames[b - n : b], own)
+        assert b - n - TURN_IN <= on < b - n  # the true onset: on the turn into the punch
+        rest = frames[b - n - TURN_IN - 4 : b - n - TURN_IN].mean(axis=0)
+        guards.append(rest / np.linalg.norm(rest))
+    assert np.allclose(guards, guards[0], atol=0.05)  # every rest in the same guard
+    # plain one guard turns the punches themselves: their peaks are no longer the recordings'
+    assert not all(round(float(turned[a + 12].sum()), 9) in peaks for _, a, _ in intervals(turned_labels))
+
+
 def test_evaluate_phone_punches_mixed(capsys):
     from pathlib import Path
 
@@ -293,6 +334,6 @@ def test_evaluate_phone_punches_mixed(capsys):
     for h in ("left", "right"):
         for a, b in (("fast", "slow"), ("slow", "fast")):
             one = rows[f"phone-punches {h} {a} -> {b}"]
-            for kind in ("mixed", "mixed, one guard"):
+            for kind in ("mixed", "mixed, one guard", "mixed, one guard, turned in"):
                 r = rows[f"phone-punches {h} {a} -> {b} {kind}"]
                 assert r["n"] == one["n"] and r["started"] >= 0.9  # every punch is there, and starts
