@@ -78,9 +78,7 @@ class TemplateSet:
         """(T, 2) each template's peak activity from its onset over its first ENERGY_FRAMES frames
         (the energy rule of a start) and over `window` frames (a motion that never gets near it
         is called off)."""
-        return np.array([
-            self._peaks(activity(templates.signals[k], templates.gravity[k])[self.gate.start_on(templates, k) :]) for k in order
-        ])
+        return np.array([self._peaks(self._whole[k][0][self.gate.start_on(templates, k, self._whole[k][0]) :]) for k in order])
 
     def _template_lin_share(self, templates: Templates, order: np.ndarray) -> np.ndarray:
         """(T,) each template's peak of `linear` over its peak activity, both over its first
@@ -88,8 +86,9 @@ class TemplateSet:
         explains (see rules.TURN_RATIO)."""
         out = []
         for k in order:
-            on = self.gate.start_on(templates, k)
-            act = activity(templates.signals[k], templates.gravity[k])[on : on + ENERGY_FRAMES]
+            whole = self._whole[k][0]
+            on = self.gate.start_on(templates, k, whole)
+            act = whole[on : on + ENERGY_FRAMES]
             lin = linear(templates.signals[k], templates.gravity[k])[on : on + ENERGY_FRAMES]
             out.append(float(lin.max() / act.max()) if len(act) and act.max() > 0 else 0.0)
         return np.array(out)
