@@ -609,6 +609,6 @@ def mixed_stream(
         ramp = np.linspace(parts[-1][-1], f[0], SPLICE_FRAMES + 2)[1:-1] if n else f[:0]
         parts += [ramp, f]
         labels += [""] * len(ramp)
-        onsets.append(len(labels) + onset - cut)  # a turn keeps the distances from the rest
+        onsets.append(len(labels) + onset - cut)  # its own (a whole turn keeps the distances from the rest)
         labels += list(lab)
     return np.vstack(parts), labels, onsets

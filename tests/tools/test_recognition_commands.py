@@ -204,25 +204,30 @@ def test_evaluate_takes_recognizer_settings_like_its_flags(tmp_path, trials_dir,
     assert "unknown recognizer setting 'nope'" in capsys.readouterr().err
 
 
+def single_kind_recording(
+    rng: np.random.Generator, label: str, axis: int, guard: np.ndarray, reps: int, rest: int, sigma: float, still: int = 0
+) -> tuple[np.ndarray, list[str]]:
+    """A labelled single-kind recording: `reps` times `rest` frames resting in `guard` (noise
+    `sigma`) then a 24-frame punch along `axis` (its first `still` labelled frames still), and a
+    last rest."""
+    parts, labels = [], []
+    for _ in range(reps):
+        quiet = np.tile(guard, (rest, 1)) + rng.normal(0, sigma, (rest, 3))
+        parts += [quiet, np.vstack([np.tile(guard, (still, 1)), quiet[: 24 - still] + bump(axis)[: 24 - still] - G])]
+        labels += [""] * rest + [label] * 24
+    parts.append(np.tile(guard, (rest, 1)))
+    labels += [""] * rest
+    return np.vstack(parts), labels
+
+
 def test_mixed_stream_splices_every_punch_once_in_a_seeded_order():
     """The mixed protocol: every labelled punch of the single-kind recordings, with its rest, in
     one shuffled stream; with one guard, every punch's rest is turned to the same tilt."""
     from tools.evaluate_recognition import REST_WINDOW, intervals, mixed_stream
 
     rng = np.random.default_rng(0)
-
-    def recording(label, axis, guard):
-        parts, labels = [], []
-        for _ in range(4):
-            still = np.tile(guard, (40, 1)) + rng.normal(0, 0.01, (40, 3))
-            parts += [still, still[:24] + bump(axis)[:24] - G]
-            labels += [""] * 40 + [label] * 24
-        parts.append(np.tile(guard, (40, 1)))
-        labels += [""] * 40
-        return np.vstack(parts), labels
-
     tilted = np.array([0.0, np.sin(1.0), np.cos(1.0)])  # this kind's guard is 57 degrees off
-    recs = [recording("jab", 0, G), recording("upper", 1, tilted)]
+    recs = [single_kind_recording(rng, "jab", 0, G, 4, 40, 0.01), single_kind_recording(rng, "upper", 1, tilted, 4, 40, 0.01)]
     frames, labels, _ = mixed_stream(recs, seed=1)
     ivs = intervals(labels)
     assert sorted(a for a, _, _ in ivs) == ["jab"] * 4 + ["upper"] * 4
@@ -248,20 +253,9 @@ def test_mixed_stream_onsets_are_the_punches_own_not_the_splice_ramps():
     from tools.evaluate_recognition import SPLICE_FRAMES, intervals, mixed_stream, stream_onset
 
     rng = np.random.default_rng(3)
-
-    def recording(label, axis, guard):
-        parts, labels = [], []
-        for _ in range(3):
-            still = np.tile(guard, (30, 1)) + rng.normal(0, 0.005, (30, 3))
-            punch = np.vstack([np.tile(guard, (6, 1)), still[:18] + bump(axis)[:18] - G])  # 6 frames still under the label
-            parts += [still, punch]
-            labels += [""] * 30 + [label] * 24
-        parts.append(np.tile(guard, (30, 1)))
-        labels += [""] * 30
-        return np.vstack(parts), labels
-
     tilted = np.array([0.0, np.sin(1.0), np.cos(1.0)])
-    recs = [recording("jab", 0, G), recording("upper", 1, tilted)]
+    # 6 frames still under each label
+    recs = [single_kind_recording(rng, "jab", 0, G, 3, 30, 0.005, 6), single_kind_recording(rng, "upper", 1, tilted, 3, 30, 0.005, 6)]
     own = {}  # each recording's punches: the frames from their true onset on
     for frames, labels in recs:
         prev = 0
@@ -289,19 +283,8 @@ def test_mixed_stream_turned_in_rests_in_one_guard_and_throws_each_punch_as_reco
     from tools.evaluate_recognition import TURN_IN, intervals, mixed_stream, stream_onset
 
     rng = np.random.default_rng(4)
-
-    def recording(label, axis, guard):
-        parts, labels = [], []
-        for _ in range(3):
-            still = np.tile(guard, (40, 1)) + rng.normal(0, 0.005, (40, 3))
-            parts += [still, still[:24] + bump(axis)[:24] - G]
-            labels += [""] * 40 + [label] * 24
-        parts.append(np.tile(guard, (40, 1)))
-        labels += [""] * 40
-        return np.vstack(parts), labels
-
     tilted = np.array([0.0, np.sin(1.0), np.cos(1.0)])
-    recs = [recording("jab", 0, G), recording("upper", 1, tilted)]
+    recs = [single_kind_recording(rng, "jab", 0, G, 3, 40, 0.005), single_kind_recording(rng, "upper", 1, tilted, 3, 40, 0.005)]
     peaks = {}  # each recording's punches, by their peak frame's values: (frames from the own onset)
     for frames, labels in recs:
         prev = 0
@@ -318,6 +301,8 @@ def test_mixed_stream_turned_in_rests_in_one_guard_and_throws_each_punch_as_reco
         assert b - n - TURN_IN <= on < b - n  # the true onset: on the turn into the punch
         rest = frames[b - n - TURN_IN - 4 : b - n - TURN_IN].mean(axis=0)
         guards.append(rest / np.linalg.norm(rest))
+        # 0.3 g away from the rest first there (within the resting noise: this rest is a local mean)
+        assert np.linalg.norm(frames[on] - rest) >= 0.27 and np.linalg.norm(frames[on - 1] - rest) < 0.33
     assert np.allclose(guards, guards[0], atol=0.05)  # every rest in the same guard
     # plain one guard turns the punches themselves: their peaks are no longer the recordings'
     assert not all(round(float(turned[a + 12].sum()), 9) in peaks for _, a, _ in intervals(turned_labels))

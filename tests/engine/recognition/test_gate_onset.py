@@ -100,18 +100,24 @@ def test_auto_gate_is_frozen_after_the_first_motion(templates):
     assert rec.noise_g == gate
 
 
-def test_templates_are_cut_again_at_the_gate_learnt_from_the_rest():
-    # Trained on a noisy sensor (a gate near 0.8 g), played on a quiet one (the gate learns 0.3 g):
-    # the live motion's onset is at its gentle 0.5 g wind-up, so the templates must start there
-    # too, as if the recognizer had been built at the learnt gate.
-    rng = np.random.default_rng(5)
+def noisy_templates_with_a_wind_up(rng: np.random.Generator) -> tuple[Templates, np.ndarray]:
+    """Templates trained on a noisy sensor (rest noise 0.15 g: a gate near 0.8 g) whose punches
+    start with a gentle 0.5 g wind-up; and that wind-up."""
     wind_up = rest(20)
     wind_up[:, 0] += 0.5
     trials = {
         name: [np.vstack([rest(30, 0.15, rng), wind_up, bump(axis, 8.0), rest(10)]) for _ in range(3)]
         for name, axis in (("jab", 0), ("upper", 2))
     }
-    noisy = Templates.from_trials(trials)
+    return Templates.from_trials(trials), wind_up
+
+
+def test_templates_are_cut_again_at_the_gate_learnt_from_the_rest():
+    # Trained on a noisy sensor (a gate near 0.8 g), played on a quiet one (the gate learns 0.3 g):
+    # the live motion's onset is at its gentle 0.5 g wind-up, so the templates must start there
+    # too, as if the recognizer had been built at the learnt gate.
+    rng = np.random.default_rng(5)
+    noisy, wind_up = noisy_templates_with_a_wind_up(rng)
     rec = DualBufferRecognizer(noisy, main=6, adapt=0)
     assert rec.noise_g > 0.6
     built = rec.template_lengths.copy()
@@ -129,13 +135,7 @@ def test_a_recut_keeps_the_adopted_motions_and_cuts_the_trained_ones_as_at_that_
     # its first start) and the next onset recuts: the trained templates are those of a recognizer
     # built at the new gate, the adopted one is the live motion as it was adopted.
     rng = np.random.default_rng(6)
-    wind_up = rest(20)
-    wind_up[:, 0] += 0.5
-    trials = {
-        name: [np.vstack([rest(30, 0.15, rng), wind_up, bump(axis, 8.0), rest(10)]) for _ in range(3)]
-        for name, axis in (("jab", 0), ("upper", 2))
-    }
-    noisy = Templates.from_trials(trials)
+    noisy, _ = noisy_templates_with_a_wind_up(rng)
     rec = DualBufferRecognizer(noisy, main=6, adapt=3)
     run(rec, np.vstack([rest(120, 0.01, rng), bump(0, 8.0), rest(40)]))
     assert rec._is_adapted.sum() == 1  # the jab was adopted
