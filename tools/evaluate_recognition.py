@@ -434,6 +434,8 @@ def evaluate_cross_session(
     pooled = [Summary(m) for m in mains]
     for frames, labels, *onsets in test:
         ivs = intervals(labels)
+        if onsets and len(onsets[0]) != len(ivs):
+            raise ValueError(f"{len(onsets[0])} onsets for {len(ivs)} labelled intervals")
         for m, pool in zip(mains, pooled, strict=True):
             rec = DualBufferRecognizer(templates, main=m, **rec_kwargs)
             events = replay_stream(rec, frames, clip_frames)
@@ -534,11 +536,11 @@ def _turn(frames: np.ndarray, src: np.ndarray, dst: np.ndarray, share: np.ndarra
         v = dst[3 * s : 3 * s + 3] / max(np.linalg.norm(dst[3 * s : 3 * s + 3]), 1e-9)
         axis, c = np.cross(u, v), float(np.dot(u, v))
         sin = float(np.linalg.norm(axis))
-        if sin < 1e-12:
-            if c < 0:  # opposite: half a turn about any axis across u
-                out[:, s] = -out[:, s]
-            continue
-        k = axis / sin
+        if sin < 1e-12 and c > 0:
+            continue  # the same direction: no turn
+        if sin < 1e-12:  # opposite: half a turn about an axis across u
+            axis = np.cross(u, np.eye(3)[int(np.argmin(np.abs(u)))])
+        k = axis / np.linalg.norm(axis)
         angle = share * np.arctan2(sin, c)  # (n,)
         kx = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
         rot = np.eye(3) + np.sin(angle)[:, None, None] * kx + (1.0 - np.cos(angle))[:, None, None] * (kx @ kx)
@@ -551,10 +553,14 @@ def _turned_in(
 ) -> tuple[np.ndarray, list[str], np.ndarray, int, int]:
     """A punch segment (`punch_segments`) whose rest is turned into `guard`, the turn undone over
     the `turn_in` frames before its own onset, the punch as recorded; and its true onset: the
-    first frame of the turn or after it ONSET_G away from the turned rest. A segment whose rest
-    before the turn is shorter than REST_WINDOW frames starts with copies of its first frame."""
+    first frame of the turn or after it ONSET_G away from the turned rest (the punch's own onset
+    when the turn is too small to get there). A segment whose rest before the turn is shorter than
+    REST_WINDOW frames starts with more rest: its first REST_WINDOW // 2 frames (the stillest
+    window's second half, see `punch_segments`) played back and forth, so it keeps its noise."""
     pad = max(0, turn_in + REST_WINDOW - (onset - cut))
-    frames = np.vstack([np.repeat(frames[:1], pad, axis=0), frames])
+    half = min(REST_WINDOW // 2, len(frames))
+    back_and_forth = np.r_[np.arange(1, half), np.arange(half - 2, -1, -1)] if half > 1 else np.zeros(1, dtype=int)
+    frames = np.vstack([frames[np.resize(back_and_forth, pad)[::-1]], frames])  # ..., 2, 1, then 0, 1, 2, ...
     labels, cut = [""] * pad + list(labels), cut - pad
     at = onset - cut  # the punch's own onset in the segment
     turned = _turn(frames, rest, guard, np.clip((at - np.arange(len(frames))) / turn_in, 0.0, 1.0))

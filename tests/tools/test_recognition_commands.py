@@ -220,6 +220,21 @@ def single_kind_recording(
     return np.vstack(parts), labels
 
 
+@pytest.mark.parametrize("dst", [[0.0, np.sin(1.0), np.cos(1.0)], [0.0, 0.0, -1.0]])  # 57 degrees; opposite
+def test_turn_is_a_rotation_by_its_share_of_the_angle(dst):
+    from tools.evaluate_recognition import _turn
+
+    src, dst = np.array([0.0, 0.0, 1.0]), np.array(dst)
+    x = np.random.default_rng(1).normal(0, 1, (5, 3)) + src
+    assert np.allclose(_turn(src[None], src, dst)[0], dst)  # the rest goes to the guard
+    turned = _turn(x, src, dst, np.array([0.0, 0.25, 0.5, 0.75, 1.0]))
+    assert np.allclose(np.linalg.norm(turned, axis=1), np.linalg.norm(x, axis=1))  # lengths kept
+    assert np.allclose(turned[0], x[0]) and np.allclose(turned[4], _turn(x[4:], src, dst)[0])
+    half = _turn(src[None], src, dst, np.array([0.5]))[0]  # half the angle
+    full = np.arccos(np.clip(dst @ src, -1, 1))
+    assert np.isclose(np.arccos(np.clip(half @ src, -1, 1)), full / 2)
+
+
 def test_mixed_stream_splices_every_punch_once_in_a_seeded_order():
     """The mixed protocol: every labelled punch of the single-kind recordings, with its rest, in
     one shuffled stream; with one guard, every punch's rest is turned to the same tilt."""
