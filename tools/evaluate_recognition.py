@@ -400,15 +400,19 @@ def plot(rows_by_title: Mapping[str, Sequence[dict]], path: str) -> dict:
 
 # -- cross-session: phone-punches -----------------------------------------------------------------
 PUNCH_SETS = ("fast", "slow")
+RECORDED_MIXED = "mixed"  # <hand>_mixed_<name>.csv: a recorded sequence of all kinds, every punch labelled
 
 
 def punch_files(root: str | Path) -> dict[tuple[str, str], dict[str, Path]]:
-    """{(hand, set): {punch: file}} of `<root>/<hand>_<punch>_<fast|slow>.csv`."""
+    """{(hand, set): {punch: file}} of `<root>/<hand>_<punch>_<fast|slow>.csv`, and
+    {(hand, "mixed"): {name: file}} of `<root>/<hand>_mixed_<name>.csv`."""
     out: dict[tuple[str, str], dict[str, Path]] = {}
     for f in sorted(Path(root).glob("*_*_*.csv")):
         hand, punch, kind = f.stem.split("_", 2)
         if kind in PUNCH_SETS:
             out.setdefault((hand, kind), {})[punch] = f
+        elif punch == RECORDED_MIXED:
+            out.setdefault((hand, RECORDED_MIXED), {})[kind] = f
     return out
 
 
@@ -455,7 +459,9 @@ def evaluate_phone_punches(
     With `mixed`, also on the other set's punches of all kinds spliced into one stream
     (`mixed_stream`, shuffled with `seed`): as recorded ("mixed"), every punch turned to one guard
     ("mixed, one guard"), and resting in one guard with the fist turned into each punch's own as
-    it starts ("mixed, one guard, turned in")."""
+    it starts ("mixed, one guard, turned in"). Recorded mixed sequences of a hand
+    (`<hand>_mixed_<name>.csv`) are tested too, with each set's templates ("fast -> recorded
+    mixed", "slow -> recorded mixed"), whether or not `mixed` is given."""
     files = punch_files(root)
     loaded: dict[Path, tuple[np.ndarray, list[str]]] = {}
 
@@ -468,16 +474,20 @@ def evaluate_phone_punches(
     out = {}
     for hand in sorted({h for h, _ in files}):
         for src, dst in (("fast", "slow"), ("slow", "fast")):
-            if (hand, src) not in files or (hand, dst) not in files:
+            if (hand, src) not in files:
                 continue
             train = {p: load(f) for p, f in files[(hand, src)].items()}
-            test = [load(f) for f in files[(hand, dst)].values()]
-            out[f"phone-punches {hand} {src} -> {dst}"] = evaluate_cross_session(train, test, mains, **kwargs)
-            if mixed:
-                variants = (("mixed", False, 0), ("mixed, one guard", True, 0), ("mixed, one guard, turned in", True, TURN_IN))
-                for name, guard, turn_in in variants:
-                    stream = mixed_stream(test, seed, one_guard=guard, turn_in=turn_in)
-                    out[f"phone-punches {hand} {src} -> {dst} {name}"] = evaluate_cross_session(train, [stream], mains, **kwargs)
+            if (hand, dst) in files:
+                test = [load(f) for f in files[(hand, dst)].values()]
+                out[f"phone-punches {hand} {src} -> {dst}"] = evaluate_cross_session(train, test, mains, **kwargs)
+                if mixed:
+                    variants = (("mixed", False, 0), ("mixed, one guard", True, 0), ("mixed, one guard, turned in", True, TURN_IN))
+                    for name, guard, turn_in in variants:
+                        stream = mixed_stream(test, seed, one_guard=guard, turn_in=turn_in)
+                        out[f"phone-punches {hand} {src} -> {dst} {name}"] = evaluate_cross_session(train, [stream], mains, **kwargs)
+            if (hand, RECORDED_MIXED) in files:
+                recorded = [load(f) for f in files[(hand, RECORDED_MIXED)].values()]
+                out[f"phone-punches {hand} {src} -> recorded mixed"] = evaluate_cross_session(train, recorded, mains, **kwargs)
     return out
 
 

@@ -162,7 +162,8 @@ def _register_evaluate(sub: argparse._SubParsersAction) -> None:
                    help="trials: a fresh recognizer for every trial (forget the adaptation); default: one player's session")
     e.add_argument("--phone-punches", default=None, metavar="DIR",
                    help="cross-session: DIR/<hand>_<punch>_<fast|slow>.csv; per hand, templates from the first "
-                        "--trials punches of each kind in one set, tested on every punch of the other set")
+                        "--trials punches of each kind in one set, tested on every punch of the other set, and on "
+                        "the hand's recorded mixed sequences DIR/<hand>_mixed_<name>.csv when there are any")
     e.add_argument("--trials", type=arguments.int_range(1, 1000), default=3, help="--phone-punches: training trials per punch (default 3)")
     e.add_argument("--mixed", action="store_true",
                    help="--phone-punches: also the other set's punches of all kinds spliced into one shuffled stream "

@@ -323,6 +323,35 @@ def test_mixed_stream_turned_in_rests_in_one_guard_and_throws_each_punch_as_reco
     assert not all(round(float(turned[a + 12].sum()), 9) in peaks for _, a, _ in intervals(turned_labels))
 
 
+def test_evaluate_phone_punches_tests_recorded_mixed_sequences(tmp_path, capsys):
+    """A hand's recorded mixed sequences (<hand>_mixed_<name>.csv beside the single-kind files) are
+    tested with each set's templates: here one built from the left full blows and written as a
+    recording (the real sequences are held out)."""
+    from pathlib import Path
+
+    from engine.recording import Recording, read_recording, write_recording
+    from tools.evaluate_recognition import intervals, mixed_stream, punch_files
+    from tools.trial_files import recording_frames
+
+    root = Path(__file__).resolve().parents[2].parent / "shared" / "data" / "phone-punches"
+    if not root.is_dir():
+        pytest.skip("../shared/data/phone-punches is not here")
+    for f in root.glob("*.csv"):
+        (tmp_path / f.name).symlink_to(f)  # read in place, not copied
+
+    slow = [recording_frames(read_recording(f))[1:] for f in punch_files(root)[("left", "slow")].values()]
+    frames, labels, _ = mixed_stream(slow, seed=2)
+    t = np.arange(len(frames)) / 60.0
+    write_recording(tmp_path / "left_mixed_a.csv", Recording(t, frames.reshape(len(frames), 1, 3), labels))
+    assert main(["evaluate", "--phone-punches", str(tmp_path), "--mains", "6", "--json"]) == 0
+    rows = {json.loads(line)["set"]: json.loads(line) for line in capsys.readouterr().out.splitlines()}
+    for src in ("fast", "slow"):
+        r = rows[f"phone-punches left {src} -> recorded mixed"]
+        assert r["n"] == len(intervals(labels)) and r["started"] >= 0.9
+    assert not any(k.startswith("phone-punches right") and "recorded" in k for k in rows)  # no right-hand sequence
+    assert "phone-punches left fast -> slow" in rows  # the single-kind rows as before
+
+
 def test_evaluate_phone_punches_mixed(capsys):
     from pathlib import Path
 
