@@ -27,7 +27,8 @@ Per 60 Hz frame (`push`):
   peak activity over its first ENERGY_FRAMES frames (a wiggle is not a punch; a first decision
   while the activity is still rising needs RISING_RATIO of it). If not, nothing
   starts; the decision may still come later in the supplementary buffer, else the motion is
-  `reject`ed when the buffer is full. A started motion that ends without ever reaching
+  `reject`ed when the buffer is full, and that motion ends there (the next frame above the gate
+  is a new onset, whether or not the hand came to rest). A started motion that ends without ever reaching
   CALL_OFF_RATIO of its action's peak is called off: `reject` with `called_off`, no `end`.
   A first decision also needs the motion's peak of ||a| - |g|| to reach TURN_RATIO of the
   action's templates' share of it (their gentlest, over their first ENERGY_FRAMES) times the
@@ -334,7 +335,11 @@ class DualBufferRecognizer(TemplateSet, DecisionRules, Adaptation):
                 self._extended = True
         if self.quiet >= self.null_frames and not complete and self._paused():
             return  # a wind-up's pause: the blow may follow
-        if self.quiet >= self.null_frames or complete:
+        # A motion rejected at the end of its window (nothing fitted) ends there, at rest or not:
+        # a player who never stops moving (a boxer bouncing on the feet) would otherwise hold the
+        # one rejected motion open, and lose every punch thrown in it, until the hand rests.
+        rejected = self.action is None and self.count > self.window
+        if self.quiet >= self.null_frames or complete or rejected:
             if self.action is not None and self._called_off():
                 events.append(self._event("reject", self.action_names[self.action], None, called_off=True))
             elif self.action is not None:

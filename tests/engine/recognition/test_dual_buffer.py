@@ -201,7 +201,9 @@ def test_motion_unlike_any_template_is_rejected(templates):
     shake[:, 1] += 4.0 * np.sign(np.sin(np.arange(80) * 1.3))
     events = run(rec, np.vstack([rest(10), shake, rest(20)]))
     assert not [e for e in events if e["event"] in ("start", "switch")]
-    assert [e["event"] for e in events].count("reject") == 1
+    # rejected when the supplementary buffer is full; the 20 shaking frames after that are a
+    # motion of their own, rejected when the hand rests
+    assert [e["event"] for e in events].count("reject") == 2
 
 
 def test_auto_main_decides_early_on_a_clear_motion(templates):
@@ -309,6 +311,25 @@ def test_a_motion_longer_than_the_supplementary_buffer_is_decided_over_its_whole
         assert late[0]["frame"] == ends[0]["frame"] and late[0]["from_frame"] == late[0]["frame"] - start["frame"]
     else:
         assert late == [] and ends[0]["action"] == "a"
+
+
+def test_a_rejected_motion_ends_with_its_window_while_the_hand_keeps_moving(templates):
+    # A hand that never comes to rest (a boxer bouncing on the feet: a sway above the gate, like
+    # no template) and a jab thrown 250 frames into it. The sway is rejected when its window is
+    # full, and that motion ends there, so the jab is a motion of its own and starts; before, the
+    # rejected motion stayed open until the hand rested and the jab was lost in it.
+    sway = rest(400)
+    sway[:, 1] += 0.5 * np.sin(np.arange(400) * 0.35)
+    frames = np.vstack([rest(60), sway])
+    jab_at = 60 + 250
+    frames[jab_at : jab_at + 24] += bump(0, 3.0) - G
+    rec = DualBufferRecognizer(templates, noise_g=0.3)
+    events = run(rec, frames)
+    starts = [e for e in events if e["event"] == "start"]
+    assert [e["action"] for e in starts] == ["jab"]
+    assert jab_at <= starts[0]["frame"] <= jab_at + 12
+    rejects = [e["frame"] for e in events if e["event"] == "reject" and e["frame"] < jab_at]
+    assert len(rejects) >= 3 and all(b - a <= rec.supplementary + 5 for a, b in zip(rejects, rejects[1:]))
 
 
 def test_the_extended_dtw_is_bounded_when_the_hand_never_rests(templates):
