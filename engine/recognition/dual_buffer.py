@@ -61,7 +61,10 @@ Per 60 Hz frame (`push`):
 - After `character_finished()` (IV-C) frames are discarded until a null signal or until
   `discard_frames` frames have passed, so the hand's return does not launch a new action; past
   `discard_frames`, only once the hand has calmed under DISCARD_HOLD_RATIO of the discarded
-  motion's peak activity (at most DISCARD_HOLD x `discard_frames` frames).
+  motion's peak activity (at most DISCARD_HOLD x `discard_frames` frames). With two or more
+  sensors, the other hand's punch is not that return: a sensor the discarded action barely
+  moves that moves past the gate and OTHER_HAND_RATIO of the discarded motion's own peak ends
+  the discard (OTHER_HAND_*), and that frame is the next motion's onset (a combo).
 
 Events are dicts with the keys of docs/formats.md ("event", "action", "frame", "t" when the caller
 passes it, "from_frame" on switches, "score"), plus estimates of the motion's speed (m/s),
@@ -190,6 +193,7 @@ class DualBufferRecognizer(TemplateSet, DecisionRules, Adaptation):
         self._after_peak = 0.0  # the previous motion's peak (fading) while the hand has not rested since
         self._idle_quiet = 0  # quiet idle frames in a row
         self._begin_motion_state()
+        self._hand_g0: np.ndarray | None = None  # see _other_hand
 
     def _begin_motion_state(self) -> None:
         self.count = 0  # frames in the buffer since the onset
@@ -251,6 +255,8 @@ class DualBufferRecognizer(TemplateSet, DecisionRules, Adaptation):
         valid = self.gate.step(x, self.state == ACTIVE, self.count >= self.window)
         self._xs, self._act, self._lin = self.gate.xs, self.gate.act, self.gate.lin
         self._relaunch(valid, events)  # a double: the previous motion is over, this frame is an onset
+        if self._hands > 1:
+            self._other_hand()  # the other hand's punch ends the discard: this frame is an onset
         if self.state == DISCARD:
             self.discarded += 1
             self.quiet = 0 if valid else self.quiet + 1

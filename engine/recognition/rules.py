@@ -4,6 +4,7 @@ and when it is over. Mixed into DualBufferRecognizer; they read its motion state
 
 from __future__ import annotations
 
+import math
 from operator import mul, sub
 
 import numpy as np
@@ -65,6 +66,14 @@ RETURN_DECAY = 0.95
 # discards "up to 20 frames"; measured: see docs/recognition.md).
 DISCARD_HOLD_RATIO = 0.5
 DISCARD_HOLD = 1.5
+# The other hand (two or more sensors, sixteenth round): the discard ignores the return of the
+# hand that punched, not the other hand's punch (a left hook right after a right hook, 0.3-0.6 s
+# apart on the two-glove recordings, was lost in the clip and the discard). A sensor carrying less
+# than OTHER_HAND_SHARE of the discarded action's templates' activity, whose own activity (against
+# the motion's onset gravity) passes the gate and OTHER_HAND_RATIO of the discarded motion's peak
+# on the action's sensors, ends the discard; that frame is the next motion's onset.
+OTHER_HAND_SHARE = 0.35
+OTHER_HAND_RATIO = 0.5
 UNCHANGED_FRAMES = 2
 # A first decision needs the motion's peak of `linear` (||a| - |g||, summed over sensors: what a
 # turn of the hand does not make) to reach TURN_RATIO x the action's templates' share of it (the
@@ -203,6 +212,33 @@ class DecisionRules:
         self._n_recent = 0  # no back-dating into the previous motion
         self._launch = LaunchTracker()
         self._launch.step(self._gravity_removed(self._g0_list) if valid else None, valid)
+
+    def _other_hand(self) -> None:
+        """Each sensor's peak activity over the decided motion (from its start, against its onset
+        gravity) and, in the discard that follows it, the other hand's launch (OTHER_HAND_*): the
+        discard ends and the state goes back to idle, so that this frame is the next onset. Plain
+        floats: two or three sensors a frame, where numpy's per-call cost is most of the work."""
+        if self.state == ACTIVE and self.action is not None:
+            if self._hand_g0 is None:
+                self._hand_g0 = list(self._g0_list)
+                self._hand_peak = [0.0] * self._hands
+            self._hand_action = self.action
+        elif self.state != DISCARD or self._hand_g0 is None:
+            self._hand_g0 = None
+            return
+        xs, g0 = self._xs, self._hand_g0
+        dev = [math.dist(xs[i : i + 3], g0[i : i + 3]) for i in range(0, 3 * self._hands, 3)]
+        other = self._other_hands[self._hand_action]
+        own_peak = max((p for p, o in zip(self._hand_peak, other, strict=True) if not o), default=0.0)  # before this frame
+        self._hand_peak = [max(p, d) for p, d in zip(self._hand_peak, dev, strict=True)]
+        if self.state != DISCARD or own_peak <= 0.0:
+            return
+        launch = max((d for d, o in zip(dev, other, strict=True) if o), default=0.0)
+        if launch >= OTHER_HAND_RATIO * own_peak and launch >= self.gate.noise_g:
+            self._begin_motion_state()
+            self.state = IDLE
+            self._n_recent = 0  # no back-dating into the discarded motion
+            self._hand_g0 = None
 
     def _gravity_removed(self, g: list[float]) -> list[float]:
         """This frame's acceleration less gravity `g`, all sensors' axes together (plain floats)."""

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from engine.recognition import rules
 from engine.recognition.dtw import IncrementalDTW
 from engine.recognition.rules import ENERGY_FRAMES, EXTEND_FACTOR, shaken_actions
 from engine.recognition.templates import Templates, activity, features, linear
@@ -16,6 +17,18 @@ def _inserted(a: np.ndarray, i: int, value) -> np.ndarray:
     """np.insert(a, i, value, axis=0) for one row, in one concatenate (np.insert's own
     bookkeeping costs ~10x more on these short arrays)."""
     return np.concatenate((a[:i], np.array([value], dtype=a.dtype), a[i:]))
+
+
+def hand_shares(templates: Templates, names: list[str]) -> np.ndarray:
+    """(actions, sensors): each sensor's share of an action's activity, the mean over its
+    templates of each sensor's summed |a - g| over the template's share of the total."""
+    hands = templates.dim // 3
+    share = np.zeros((len(names), hands))
+    index = {a: i for i, a in enumerate(names)}
+    for s, g, action in zip(templates.signals, templates.gravity, templates.actions, strict=True):
+        per_sensor = np.linalg.norm((np.asarray(s, dtype=np.float64) - g).reshape(len(s), hands, 3), axis=2).sum(axis=0)
+        share[index[action]] += per_sensor / max(float(per_sensor.sum()), 1e-12)
+    return share / np.maximum(share.sum(axis=1, keepdims=True), 1e-12)
 
 
 class TemplateSet:
@@ -36,6 +49,9 @@ class TemplateSet:
             (activity(s, g), features(s, g, self.feature)) for s, g in zip(templates.signals, templates.gravity, strict=True)
         ]
         self.action_names = names
+        self._hands = templates.dim // 3
+        self._hand_share = hand_shares(templates, names)
+        self._other_hands = (self._hand_share < rules.OTHER_HAND_SHARE).tolist()  # per action, per sensor
         self._tmpl_action = np.array([index[templates.actions[k]] for k in order])
         self._action_starts = np.flatnonzero(np.r_[True, np.diff(self._tmpl_action) != 0])
         self._action_ends = np.r_[self._action_starts[1:], len(order)]

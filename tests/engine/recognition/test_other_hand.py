@@ -1,0 +1,108 @@
+"""Two hands (two sensors, D = 6): the discard after a punch ignores that hand's return, not the
+other hand's punch (OTHER_HAND_*: a combo)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from engine.recognition import DualBufferRecognizer, Templates, rules
+
+G = np.array([0.0, 0.0, 1.0])
+
+
+def bump(axis: int, amp: float, n: int = 24) -> np.ndarray:
+    x = np.tile(G, (n, 1))
+    x[:, axis] += amp * np.sin(np.linspace(0, 2 * np.pi, n))
+    return x
+
+
+def rest(n: int) -> np.ndarray:
+    return np.tile(G, (n, 1))
+
+
+def hands(right: np.ndarray, left: np.ndarray) -> np.ndarray:
+    return np.hstack([right, left])
+
+
+def make_templates() -> Templates:
+    rng = np.random.default_rng(0)
+
+    def trials(right_moves: bool) -> list[np.ndarray]:
+        out = []
+        for _ in range(3):
+            m = np.vstack([rest(5), bump(0, 3.0), rest(5)])
+            m = m + rng.normal(0, 0.02, m.shape)
+            still = rest(len(m)) + rng.normal(0, 0.02, m.shape)
+            out.append(hands(m, still) if right_moves else hands(still, m))
+        return out
+
+    return Templates.from_trials({"hook_r": trials(True), "hook_l": trials(False)})
+
+
+def combo(gap: int) -> tuple[np.ndarray, int]:
+    """A right punch, then `gap` frames after its beginning a left one, and rest; (frames, the
+    left punch's first frame)."""
+    right = np.vstack([rest(40), bump(0, 3.0), rest(60)])
+    left = rest(len(right))
+    at = 40 + gap
+    left[at : at + 24] = bump(0, 3.0)
+    return hands(right, left), at
+
+
+def play(rec: DualBufferRecognizer, frames: np.ndarray, clip: int) -> tuple[list[dict], list[str]]:
+    """Events and states, with a character whose clip ends `clip` frames after each start."""
+    events, states, clip_end = [], [], None
+    for i, f in enumerate(frames):
+        evs = rec.push(f)
+        events += evs
+        if any(e["event"] == "start" for e in evs):
+            clip_end = i + clip
+        if clip_end is not None and i >= clip_end:
+            rec.character_finished()
+            clip_end = None
+        states.append(rec.state)
+    return events, states
+
+
+def test_the_hand_shares_name_the_sensor_each_action_moves(templates):
+    rec = DualBufferRecognizer(templates, noise_g=0.5)
+    share = {a: rec._hand_share[i] for i, a in enumerate(rec.action_names)}
+    assert share["hook_r"][0] > 0.8 and share["hook_l"][1] > 0.8
+
+
+def test_the_other_hands_punch_ends_the_discard_and_starts(templates):
+    frames, left_at = combo(gap=22)  # the left punch begins while the right one is discarded
+    events, states = play(DualBufferRecognizer(templates, noise_g=0.5), frames, clip=8)
+    starts = [(e["action"], e["frame"]) for e in events if e["event"] == "start"]
+    assert [a for a, _ in starts] == ["hook_r", "hook_l"]
+    assert starts[1][1] - left_at <= 10  # within the main buffer and a few frames of the launch
+    assert "discard" in states[40:left_at]
+
+
+def test_without_the_rule_the_combos_second_punch_is_lost_or_late(templates, monkeypatch):
+    monkeypatch.setattr(rules, "OTHER_HAND_SHARE", 0.0)  # no sensor counts as the other hand
+    frames, left_at = combo(gap=22)
+    events, _ = play(DualBufferRecognizer(templates, noise_g=0.5), frames, clip=8)
+    left = [e["frame"] for e in events if e["event"] == "start" and e["action"] == "hook_l"]
+    assert not left or left[0] - left_at > 10
+
+
+def test_the_punching_hands_own_return_is_still_discarded(templates, monkeypatch):
+    # the right hand keeps swinging after its clip (its return, 2 g) and the left one sways
+    # under the gate: the discard holds as with one sensor (DISCARD_HOLD x discard_frames), and
+    # everything happens as with the rule off
+    right = np.vstack([rest(40), bump(0, 3.0)[:12], np.tile(G + [2.0, 0, 0], (40, 1))])
+    right[52::2, 0] -= 4.0
+    left = rest(len(right))
+    left[:, 1] += 0.3 * np.sin(np.arange(len(right)) * 0.5)
+    events, states = play(DualBufferRecognizer(templates, noise_g=0.5), hands(right, left), clip=4)
+    first = states.index("discard")
+    held = int(rules.DISCARD_HOLD * 20)
+    assert states[first : first + held] == ["discard"] * held and states[first + held] != "discard"
+    monkeypatch.setattr(rules, "OTHER_HAND_SHARE", 0.0)
+    assert play(DualBufferRecognizer(templates, noise_g=0.5), hands(right, left), clip=4) == (events, states)
+
+@pytest.fixture(scope="module")
+def templates() -> Templates:
+    return make_templates()
