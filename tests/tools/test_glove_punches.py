@@ -1,19 +1,24 @@
 """The two-glove punchbuddy set (tools/glove_punches.py): punches found as bursts of one glove,
-their onsets on that glove, the file names, and the real recordings' punch counts
-(../shared/data/punchbuddy; skipped when absent)."""
+their onsets on that glove, the file names, and `quickjab evaluate --punchbuddy` on the real
+recordings (../shared/data/punchbuddy; skipped when absent)."""
 
 from __future__ import annotations
 
+import json
+import os
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from engine.frames import recording_frames
-from engine.recording import read_recording
+from engine.recording import Recording, read_recording, write_recording
 from tools.evaluate_recognition import stream_onset
 from tools.glove_punches import GLOVE_GAP, GLOVE_NAME, glove_bursts, glove_files, glove_intervals
 
+REPO = Path(__file__).resolve().parents[2]
 PEAK = np.array([1.5, 2.5, 4.0, 2.5, 1.5])  # |a| - 1 g of a short punch: >= 1 g on 5 frames, > 3 g on its third
 
 
@@ -138,3 +143,56 @@ def test_real_files_burst_counts_are_within_10_percent_of_their_names(punchbuddy
                 n = sum(iv[0] == action for iv in ivs)
                 assert abs(n - count) <= 0.1 * count, (f.name, action, n)
             assert len(onsets) == len(ivs) and all(a - 45 <= o <= a + 30 for o, (_, a, _) in zip(onsets, ivs, strict=True))
+
+
+def quickjab(*args: str) -> subprocess.CompletedProcess:
+    env = {**os.environ, "PYTHONPATH": str(REPO), "SDL_VIDEODRIVER": "dummy", "SDL_AUDIODRIVER": "dummy"}
+    return subprocess.run([sys.executable, "-m", "tools.cli", *args], cwd=REPO, env=env,
+                          capture_output=True, text=True, timeout=300)
+
+
+def expected_rows(root: Path) -> dict[str, int]:
+    """Row name -> punches tested, by the protocols' file rules (each test file's intervals counted)."""
+    files = glove_files(root)
+    n = {f: len(glove_intervals(recording_frames(read_recording(f))[1], left, right)[0])
+         for fs in files.values() for f, left, right in fs}  # by path
+    out = {}
+    for person, fs in files.items():  # templates from one session, tested on the others it covers
+        tested = sum(n[g[0]] for f in fs for g in fs if g is not f and set(g[1:]) <= set(f[1:]))
+        if tested:
+            out[f"punchbuddy {person} across sessions"] = tested
+    for a, train in files.items():
+        covered = {act for f in train for act in f[1:]}
+        for b, tests in files.items():
+            if a != b and any(set(g[1:]) <= covered for g in tests):
+                out[f"punchbuddy {a} -> {b}"] = sum(n[g[0]] for g in tests if set(g[1:]) <= covered)
+    return out
+
+
+def test_evaluate_punchbuddy_prints_one_row_per_protocol(punchbuddy):
+    r = quickjab("evaluate", "--punchbuddy", str(punchbuddy), "--mains", "6", "--json")
+    assert r.returncode == 0, r.stderr
+    rows = [json.loads(line) for line in r.stdout.splitlines()]
+    expected = expected_rows(punchbuddy)
+    assert set(expected) >= {"punchbuddy matt across sessions", "punchbuddy egor -> matt", "punchbuddy matt -> egor"}
+    assert {row["set"]: row["n"] for row in rows} == expected
+    assert len(rows) == len(expected) and all(row["main"] == 6 and "false_starts" in row for row in rows)
+
+
+@pytest.mark.parametrize("make", ["missing", "empty", "other files", "one session"])
+def test_evaluate_punchbuddy_without_recordings_names_the_folder(tmp_path, make):
+    folder = tmp_path / "no-gloves-here"
+    if make != "missing":
+        folder.mkdir()
+    if make == "other files":
+        (folder / "left_jab_fast.csv").write_text("t,rx,ry,rz\n0,0,0,1\n")
+    if make == "one session":  # a file to learn from, none to test on
+        x = resting(600)
+        for at in range(50, 550, 100):
+            punch(x, 0, at)
+            punch(x, 1, at + 50)
+        write_recording(folder / "right-hook-5-amy-combo-lh-0.csv", Recording(np.arange(600) / 60.0, x.reshape(600, 2, 3)))
+    r = quickjab("evaluate", "--punchbuddy", str(folder), "--mains", "6")
+    assert r.returncode != 0
+    assert "no-gloves-here" in r.stderr and "Traceback" not in r.stderr
+    assert r.stdout == ""
