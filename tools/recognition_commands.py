@@ -16,6 +16,7 @@ from engine.recognition.config import layered, parse_assignments
 from engine.recognition.templates import FEATURES, METHODS
 from engine.recording import read_recording
 from tools import evaluate_recognition as ev
+from tools import glove_punches
 from tools.trial_files import load_trials_dir
 
 MAX_BUFFER = 6000  # frames (100 s at 60 Hz): any recognizer buffer or count of frames
@@ -148,7 +149,8 @@ def _register_evaluate(sub: argparse._SubParsersAction) -> None:
             "outcome groups, first-decision accuracy and lag from the true onset. Inputs: "
             "--templates T.npz with trial dirs or labelled CSVs; or --train TRIALS_DIR; or "
             "--uwave DIR (per user: templates from day 1 reps 1-3, test days 2-7); or "
-            "--phone-punches DIR (cross-session, per hand fast -> slow and slow -> fast); or a labelled "
+            "--phone-punches DIR (cross-session, per hand fast -> slow and slow -> fast); or --punchbuddy DIR "
+            "(two gloves, unlabelled: punches found in the signal; across sessions and across people); or a labelled "
             "CSV alone with --folds K (templates from the other folds' intervals). The lag is counted "
             "from the true onset: the first frame 0.3 g away from the rest before the motion."
         ),
@@ -164,7 +166,13 @@ def _register_evaluate(sub: argparse._SubParsersAction) -> None:
                    help="cross-session: DIR/<hand>_<punch>_<fast|slow>.csv; per hand, templates from the first "
                         "--trials punches of each kind in one set, tested on every punch of the other set, and on "
                         "the hand's recorded mixed sequences DIR/<hand>_mixed_<name>.csv when there are any")
-    e.add_argument("--trials", type=arguments.int_range(1, 1000), default=3, help="--phone-punches: training trials per punch (default 3)")
+    e.add_argument("--punchbuddy", default=None, metavar="DIR",
+                   help="two gloves: DIR/right-<kind>-<count>-<person>-combo-l<h|j|c|u>-<n>.csv, each punch a burst of "
+                        "one glove; templates from the first --trials punches per hand of one person's session, tested "
+                        "on the person's other sessions ('<person> across sessions') and from a person's sessions, "
+                        "tested on another's ('<A> -> <B>')")
+    e.add_argument("--trials", type=arguments.int_range(1, 1000), default=3,
+                   help="--phone-punches, --punchbuddy: training trials per punch (default 3)")
     e.add_argument("--mixed", action="store_true",
                    help="--phone-punches: also the other set's punches of all kinds spliced into one shuffled stream "
                         "(as recorded; turned to one guard; and from one guard, the fist turned in as each punch starts)")
@@ -244,6 +252,8 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         if not res:
             raise InputError(f"{args.phone_punches}: no <hand>_<punch>_<fast|slow>.csv recordings")
         results.update({title: [s.row() for s in summaries] for title, summaries in res.items()})
+    if args.punchbuddy:
+        results.update(_evaluate_punchbuddy(args, kw, tk))
     templates = Templates.load(args.templates) if args.templates else None
     if args.train:
         templates = Templates.from_trials(load_trials_dir(args.train), **tk)
@@ -252,7 +262,7 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     for inp in args.inputs:
         results[Path(inp).name] = _evaluate_input(args, inp, templates, kw, tk)
     if not results:
-        raise InputError("nothing to evaluate: give INPUTs, --uwave DIR, or see --help")
+        raise InputError("nothing to evaluate: give INPUTs, --uwave DIR, --phone-punches DIR, --punchbuddy DIR, or see --help")
     _print_results(args, results)
     if args.plot:
         ev.plot(results, args.plot)
@@ -277,6 +287,19 @@ def _evaluate_uwave(args: argparse.Namespace, kw: dict, tk: dict) -> dict[str, l
                 p.outcomes += r.outcomes
     order = "fresh recognizer per trial" if args.fresh else "session order"
     return {f"uWave users {args.users}, noise_g {kw['noise_g']}, {order}": [s.row() for s in pooled]}
+
+
+def _evaluate_punchbuddy(args: argparse.Namespace, kw: dict, tk: dict) -> dict[str, list[dict]]:
+    """The two-glove rows (tools/glove_punches.py): across each person's sessions and across people."""
+    if not glove_punches.glove_files(args.punchbuddy):
+        raise InputError(f"{args.punchbuddy}: no right-<kind>-<count>-<person>-combo-l<h|j|c|u>-<n>.csv recordings")
+    res = glove_punches.evaluate_gloves(
+        args.punchbuddy, args.mains, trials=args.trials, template_kwargs=tk, clip_frames=args.clip_frames, **kw
+    )
+    if not res:
+        raise InputError(f"{args.punchbuddy}: no recording to test: a person's other session, or another person's, "
+                         "with the punch kinds of the templates")
+    return {title: [s.row() for s in summaries] for title, summaries in res.items()}
 
 
 def _evaluate_input(args: argparse.Namespace, inp: str, templates: Templates | None, kw: dict,
