@@ -193,7 +193,6 @@ class DualBufferRecognizer(TemplateSet, DecisionRules, Adaptation):
         self._after_peak = 0.0  # the previous motion's peak (fading) while the hand has not rested since
         self._idle_quiet = 0  # quiet idle frames in a row
         self._begin_motion_state()
-        self._hand_g0: np.ndarray | None = None  # see _other_hand
 
     def _begin_motion_state(self) -> None:
         self.count = 0  # frames in the buffer since the onset
@@ -254,9 +253,7 @@ class DualBufferRecognizer(TemplateSet, DecisionRules, Adaptation):
             return events  # a malformed frame is dropped, not a crash
         valid = self.gate.step(x, self.state == ACTIVE, self.count >= self.window)
         self._xs, self._act, self._lin = self.gate.xs, self.gate.act, self.gate.lin
-        self._relaunch(valid, events)  # a double: the previous motion is over, this frame is an onset
-        if self._hands > 1:
-            self._other_hand()  # the other hand's punch ends the discard: this frame is an onset
+        self._relaunch(valid, events)  # a double or the other hand's punch: this frame is an onset
         if self.state == DISCARD:
             self.discarded += 1
             self.quiet = 0 if valid else self.quiet + 1

@@ -182,6 +182,13 @@ class DecisionRules:
     the call-off (DualBufferRecognizer's state: `action`, `count`, `quiet`, the templates)."""
 
     def _relaunch(self, valid: bool, events: list[dict]) -> None:
+        """A double (`_double`) or, with two or more sensors, the other hand's punch in the discard
+        (`_other_hand`) ends the previous motion: this frame is the next motion's onset."""
+        self._double(valid, events)
+        if self._hands > 1:
+            self._other_hand()
+
+    def _double(self, valid: bool, events: list[dict]) -> None:
         """A double (see RELAUNCH_RATIO): just after the punch's stop, the hand launches along the
         punch's launch again. The decided motion ends there (`complete`) or the discard does, and
         the state goes back to idle so that this frame is the next motion's onset. Idle: a fresh
