@@ -44,6 +44,13 @@ AUTO_START_G = 1.0
 AUTO_FRAMES = 120
 AUTO_MIN_FRAMES = 30
 AUTO_EVERY = 10
+# One exception to the freeze (sixteenth round): a hand that has not once dropped under the gate
+# for BUSY_FRAMES frames (10 s) moves all the time (a boxer bouncing on the feet, after standing
+# still while the gate was learnt), so the gate is under the player's floor of motion and no
+# motion ever ends by the null signal. It is raised to AUTO_K x the BUSY_QUANTILE percentile of
+# those frames' activity (within the AUTO bounds, never lowered).
+BUSY_FRAMES = 600
+BUSY_QUANTILE = 25
 
 
 class NoiseGate:
@@ -62,6 +69,7 @@ class NoiseGate:
         self.noise_g = noise_g
         self._idle_acts = np.empty(AUTO_FRAMES)  # the activity on the last idle frames (ring), for "auto"
         self._n_idle = 0
+        self._busy_acts = np.empty(BUSY_FRAMES)  # the activity on the last frames (ring), see BUSY_FRAMES
         self.reset()
 
     def reset(self) -> None:
@@ -72,6 +80,7 @@ class NoiseGate:
         self._still = 0
         self._steady = 0
         self.unchanged = 0  # frames in a row whose reading has not changed (UNCHANGED_FRAMES)
+        self._busy = 0  # frames in a row over the gate
         self.xs: list[float] = []
         self.act = 0.0
         self.lin = 0.0
@@ -156,6 +165,12 @@ class NoiseGate:
             self.gravity[:] = mean
             act = lin = 0.0
         valid = act >= self.noise_g
+        if self.auto:
+            self._busy_acts[self._busy % BUSY_FRAMES] = act
+            self._busy = self._busy + 1 if valid else 0
+            if self._busy >= BUSY_FRAMES:
+                self.noise_g = max(self.noise_g, self.auto_gate(float(np.percentile(self._busy_acts, BUSY_QUANTILE))))
+                self._busy = 0
         self.act = act
         self.lin = lin
         if not valid and not in_motion:

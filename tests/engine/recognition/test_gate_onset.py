@@ -100,6 +100,29 @@ def test_auto_gate_is_frozen_after_the_first_motion(templates):
     assert rec.noise_g == gate
 
 
+@pytest.mark.parametrize("rests_now_and_then", [False, True])
+def test_auto_gate_rises_when_the_hand_never_drops_under_it(templates, rests_now_and_then):
+    # learnt at rest, frozen by the first motion, then a hand that sways 0.4-1.0 g away from
+    # rest for BUSY_FRAMES + 10 frames (a boxer bouncing on the feet): the gate rises to AUTO_K x
+    # the sway's BUSY_QUANTILE percentile; with one frame at rest every 500 frames it stays
+    rng = np.random.default_rng(4)
+    rec = DualBufferRecognizer(templates)
+    run(rec, rest(60, 0.01, rng))
+    run(rec, bump(0, 3.0))
+    low = rec.noise_g
+    n = gate.BUSY_FRAMES + 10
+    sway = rest(n)
+    sway[:, 1] += 0.7 + 0.3 * np.sin(np.arange(n) * 0.4)
+    if rests_now_and_then:
+        sway[::500] = G
+    run(rec, sway)
+    if rests_now_and_then:
+        assert rec.noise_g == low
+    else:
+        act = np.abs(0.7 + 0.3 * np.sin(np.arange(gate.BUSY_FRAMES) * 0.4))
+        assert low < 0.5 and rec.noise_g == pytest.approx(gate.AUTO_K * np.percentile(act, gate.BUSY_QUANTILE), rel=0.05)
+
+
 def noisy_templates_with_a_wind_up(rng: np.random.Generator) -> tuple[Templates, np.ndarray]:
     """Templates trained on a noisy sensor (rest noise 0.15 g: a gate near 0.8 g) whose punches
     start with a gentle 0.5 g wind-up; and that wind-up."""
