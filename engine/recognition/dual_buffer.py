@@ -301,11 +301,6 @@ class DualBufferRecognizer(TemplateSet, DecisionRules, Adaptation):
         return events
 
     def _step_active(self, x: np.ndarray, valid: bool, events: list[RecognizerEvent], backdated: bool = False) -> None:
-        if self.gate.auto and not self._moved and self.action is None and self.count >= self.window:
-            # Nothing has ever started and this motion was rejected (or outlasted the buffer
-            # undecided): the sensor's noise crossing a gate set too low (e.g. from quieter
-            # training trials) holds the gate open, so these frames count as rest too.
-            self.gate.learn(self._act)
         self.count += 1
         self.quiet = 0 if valid else self.quiet + 1
         self._peak_act_seen = max(self._peak_act_seen, self._act)
@@ -354,7 +349,10 @@ class DualBufferRecognizer(TemplateSet, DecisionRules, Adaptation):
             elif self.pending:
                 events.append(self._event("reject", None, None))
             if self.action is None and self.gate.auto and not self._moved:
-                for a in self._acts[: min(self.dtw.n, self.window)]:  # as above: it was rest
+                # Nothing has ever started and this motion was rejected: the sensor's noise
+                # crossing a gate set too low (e.g. from quieter training trials) holds the gate
+                # open, so its frames count as rest too.
+                for a in self._acts[: min(self.dtw.n, self.window)]:
                     self.gate.learn(float(a))
             self._after_peak = self._peak_act_seen if complete else 0.0
             self._begin_motion_state()

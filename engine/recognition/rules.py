@@ -221,10 +221,12 @@ class DecisionRules:
         self._launch.step(self._gravity_removed(self._g0_list) if valid else None, valid)
 
     def _other_hand(self) -> None:
-        """Each sensor's peak activity over the decided motion (from its start, against its onset
-        gravity) and, in the discard that follows it, the other hand's launch (OTHER_HAND_*): the
-        discard ends and the state goes back to idle, so that this frame is the next onset. Plain
-        floats: two or three sensors a frame, where numpy's per-call cost is most of the work."""
+        """Each sensor's peak activity over the decided motion (from the frame after its start,
+        against its onset gravity) and, in the discard that follows it, the other hand's launch
+        (OTHER_HAND_*): the discard ends and the state goes back to idle, so that this frame is the
+        next onset. (A clip that ends on the start frame itself leaves nothing tracked: the rule
+        is off for that motion.) Plain floats: two or three sensors a frame, where numpy's
+        per-call cost is most of the work."""
         if self.state == ACTIVE and self.action is not None:
             if self._hand_g0 is None:
                 self._hand_g0 = list(self._g0_list)
@@ -243,8 +245,7 @@ class DecisionRules:
         launch = max((d for d, o in zip(dev, other, strict=True) if o), default=0.0)
         if launch >= OTHER_HAND_RATIO * own_peak and launch >= self.gate.noise_g:
             self._begin_motion_state()
-            self.state = IDLE
-            self._n_recent = 0  # no back-dating into the discarded motion
+            self.state = IDLE  # (nothing to back-date: no idle frame since the discarded motion)
             self._hand_g0 = None
 
     def _gravity_removed(self, g: list[float]) -> list[float]:

@@ -53,6 +53,8 @@ class TemplateSet:
         self._hand_share = hand_shares(templates, names)
         self._other_hands = (self._hand_share < rules.OTHER_HAND_SHARE).tolist()  # per action, per sensor
         self._hand_g0: list[float] | None = None  # the decided motion's onset gravity (_other_hand)
+        self._hand_peak = [0.0] * self._hands  # its peak activity per sensor so far
+        self._hand_action = 0  # its action
         self._tmpl_action = np.array([index[templates.actions[k]] for k in order])
         self._action_starts = np.flatnonzero(np.r_[True, np.diff(self._tmpl_action) != 0])
         self._action_ends = np.r_[self._action_starts[1:], len(order)]

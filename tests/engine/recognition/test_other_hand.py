@@ -88,6 +88,41 @@ def test_without_the_rule_the_combos_second_punch_is_lost_or_late(templates, mon
     assert not left or left[0] - left_at > 10
 
 
+def right_swinging_on(left_g: float) -> np.ndarray:
+    """A right punch whose hand swings on at 2 g after it (the discard holds while it does), and a
+    left move of `left_g` in that discard."""
+    right = np.vstack([rest(40), bump(0, 3.0)[:12], np.tile(G + [2.0, 0, 0], (40, 1)), rest(30)])
+    right[52:92:2, 0] -= 4.0
+    left = rest(len(right))
+    left[58:82] = bump(0, left_g)
+    return hands(right, left)
+
+
+@pytest.mark.parametrize("bar", ["ratio", "gate"])
+def test_a_smaller_move_of_the_other_hand_does_not_end_the_discard(templates, monkeypatch, bar):
+    # The left hand moves while the right punch (3 g) is discarded, under one of the two bars:
+    # "ratio", 1.0 g, over the 0.5 g gate but under OTHER_HAND_RATIO of the right punch's peak;
+    # "gate", 1.6 g, over that share of the peak but under a 1.8 g gate (the right hand swings on
+    # over it, so the discard holds). Everything happens as with the rule off.
+    if bar == "ratio":
+        frames, left_at = combo(gap=22)
+        frames[left_at : left_at + 24, 3:] = bump(0, 1.0)
+        noise_g, clip = 0.5, 8
+    else:
+        frames, noise_g, clip = right_swinging_on(1.6), 1.8, 4
+    events, states = play(DualBufferRecognizer(templates, noise_g=noise_g), frames, clip)
+    assert [e["action"] for e in events if e["event"] == "start"][:1] == ["hook_r"]
+    assert states[60:70] == ["discard"] * 10
+    monkeypatch.setattr(rules, "OTHER_HAND_SHARE", 0.0)
+    assert play(DualBufferRecognizer(templates, noise_g=noise_g), frames, clip) == (events, states)
+
+
+def test_a_move_over_both_bars_does_end_that_discard(templates):
+    # the "gate" case above with the left hand at 2.2 g: over the gate too, so the discard ends
+    _, states = play(DualBufferRecognizer(templates, noise_g=1.8), right_swinging_on(2.2), 4)
+    assert "discard" in states[50:60] and states[62:70] == ["active"] * 8
+
+
 def test_the_punching_hands_own_return_is_still_discarded(templates, monkeypatch):
     # the right hand keeps swinging after its clip (its return, 2 g) and the left one sways
     # under the gate: the discard holds as with one sensor (DISCARD_HOLD x discard_frames), and
@@ -102,6 +137,7 @@ def test_the_punching_hands_own_return_is_still_discarded(templates, monkeypatch
     assert states[first : first + held] == ["discard"] * held and states[first + held] != "discard"
     monkeypatch.setattr(rules, "OTHER_HAND_SHARE", 0.0)
     assert play(DualBufferRecognizer(templates, noise_g=0.5), hands(right, left), clip=4) == (events, states)
+
 
 @pytest.fixture(scope="module")
 def templates() -> Templates:
