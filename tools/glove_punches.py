@@ -16,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
+from engine.errors import InputError
 from engine.frames import recording_frames
 from engine.recognition import DualBufferRecognizer, Templates
 from engine.recording import read_recording
@@ -54,13 +55,16 @@ def glove_bursts(frames: np.ndarray, sensor: int) -> list[tuple[int, int]]:
             groups[-1][1] = int(i)
         else:
             groups.append([int(i), int(i)])
-    out = []
+    out: list[tuple[int, int]] = []
     for a, b in groups:
         while a > 0 and dev[a - 1] >= GLOVE_END_G:
             a -= 1
         while b + 1 < len(dev) and dev[b + 1] >= GLOVE_END_G:
             b += 1
-        out.append((a, b + 1))
+        if out and a < out[-1][1]:  # widened into the previous burst: one punch
+            out[-1] = (out[-1][0], b + 1)
+        else:
+            out.append((a, b + 1))
     return out
 
 
@@ -104,6 +108,8 @@ class _Loaded:
         path, left, right = f
         if path not in self._cache:
             _, frames, _ = recording_frames(read_recording(path))
+            if frames.shape[1] != 6:
+                raise InputError(f"{path}: {frames.shape[1] // 3} sensor(s); a two-glove recording has 2 (right, left)")
             self._cache[path] = (frames, *glove_intervals(frames, left, right))
         return self._cache[path]
 
@@ -127,7 +133,7 @@ def _test(train: Sequence[GloveFile], tests: Sequence[GloveFile], load: _Loaded,
     through a fresh recognizer per main size (`pooled`: one Summary per main), scored from each
     punch's own onset. Returns how many files were tested."""
     cut = _training_trials(train, load, trials)
-    tested = [f for f in tests if set(f[1:]) <= cut.keys()]
+    tested = [f for f in tests if set(f[1:]) <= cut.keys() and load(f)[1]]  # its actions, and punches
     if not tested:
         return 0
     templates = Templates.from_trials(cut, **(template_kwargs or {}))

@@ -179,20 +179,41 @@ def test_evaluate_punchbuddy_prints_one_row_per_protocol(punchbuddy):
     assert len(rows) == len(expected) and all(row["main"] == 6 and "false_starts" in row for row in rows)
 
 
-@pytest.mark.parametrize("make", ["missing", "empty", "other files", "one session"])
+def test_glove_bursts_widened_into_each_other_are_one_punch():
+    # two peaks 20 frames apart (more than GLOVE_GAP), the frames between them 1.5 g off: both
+    # widen over the same frames, so they are one punch, not the same interval twice
+    x = resting(100)
+    punch(x, 0, 30)
+    x[35:52, 2] = 2.5
+    punch(x, 0, 50)
+    assert glove_bursts(x, 0) == [(30, 55)]
+
+
+def amy_session(folder: Path, n: int, punches: bool = True, sensors: int = 2) -> None:
+    x = resting(600)
+    if punches:
+        for at in range(50, 550, 100):
+            punch(x, 0, at)
+            punch(x, 1, at + 50)
+    write_recording(folder / f"right-hook-5-amy-combo-lh-{n}.csv", Recording(np.arange(600) / 60.0, x.reshape(600, 2, 3)[:, :sensors]))
+
+
+@pytest.mark.parametrize("make", ["missing", "empty", "other files", "one session", "no punches to test", "one glove"])
 def test_evaluate_punchbuddy_without_recordings_names_the_folder(tmp_path, make):
     folder = tmp_path / "no-gloves-here"
     if make != "missing":
         folder.mkdir()
     if make == "other files":
         (folder / "left_jab_fast.csv").write_text("t,rx,ry,rz\n0,0,0,1\n")
-    if make == "one session":  # a file to learn from, none to test on
-        x = resting(600)
-        for at in range(50, 550, 100):
-            punch(x, 0, at)
-            punch(x, 1, at + 50)
-        write_recording(folder / "right-hook-5-amy-combo-lh-0.csv", Recording(np.arange(600) / 60.0, x.reshape(600, 2, 3)))
+    if make in ("one session", "no punches to test", "one glove"):  # a file to learn from ...
+        amy_session(folder, 0)
+    if make == "no punches to test":  # ... and one with no punch to test on
+        amy_session(folder, 1, punches=False)
+    if make == "one glove":  # ... and one from a single glove
+        amy_session(folder, 1, sensors=1)
     r = quickjab("evaluate", "--punchbuddy", str(folder), "--mains", "6")
-    assert r.returncode != 0
+    assert r.returncode == 2
     assert "no-gloves-here" in r.stderr and "Traceback" not in r.stderr
     assert r.stdout == ""
+    if make == "one glove":
+        assert "right-hook-5-amy-combo-lh-1.csv: 1 sensor(s)" in r.stderr
