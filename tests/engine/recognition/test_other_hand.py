@@ -7,18 +7,7 @@ import numpy as np
 import pytest
 
 from engine.recognition import DualBufferRecognizer, Templates, rules
-
-G = np.array([0.0, 0.0, 1.0])
-
-
-def bump(axis: int, amp: float, n: int = 24) -> np.ndarray:
-    x = np.tile(G, (n, 1))
-    x[:, axis] += amp * np.sin(np.linspace(0, 2 * np.pi, n))
-    return x
-
-
-def rest(n: int) -> np.ndarray:
-    return np.tile(G, (n, 1))
+from tests.engine.recognition.test_dual_buffer import G, bump, rest  # one sensor's frames
 
 
 def hands(right: np.ndarray, left: np.ndarray) -> np.ndarray:
