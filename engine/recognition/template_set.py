@@ -10,7 +10,7 @@ import numpy as np
 from engine.recognition import rules
 from engine.recognition.dtw import IncrementalDTW
 from engine.recognition.rules import ENERGY_FRAMES, EXTEND_FACTOR, shaken_actions
-from engine.recognition.templates import Templates, activity, features, linear
+from engine.recognition.templates import Templates, activity, features, linear, sensor_activity
 
 
 def _inserted(a: np.ndarray, i: int, value) -> np.ndarray:
@@ -22,11 +22,10 @@ def _inserted(a: np.ndarray, i: int, value) -> np.ndarray:
 def hand_shares(templates: Templates, names: list[str]) -> np.ndarray:
     """(actions, sensors): each sensor's share of an action's activity, the mean over its
     templates of each sensor's summed |a - g| over the template's share of the total."""
-    hands = templates.dim // 3
-    share = np.zeros((len(names), hands))
+    share = np.zeros((len(names), templates.dim // 3))
     index = {a: i for i, a in enumerate(names)}
     for s, g, action in zip(templates.signals, templates.gravity, templates.actions, strict=True):
-        per_sensor = np.linalg.norm((np.asarray(s, dtype=np.float64) - g).reshape(len(s), hands, 3), axis=2).sum(axis=0)
+        per_sensor = sensor_activity(s, g).sum(axis=0)
         share[index[action]] += per_sensor / max(float(per_sensor.sum()), 1e-12)
     return share / np.maximum(share.sum(axis=1, keepdims=True), 1e-12)
 

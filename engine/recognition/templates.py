@@ -64,10 +64,15 @@ def rest_gravity(trial: np.ndarray, frames: int = REST_FRAMES) -> np.ndarray:
     return np.asarray(trial[: max(1, min(frames, len(trial)))], dtype=np.float64).mean(axis=0)
 
 
+def sensor_activity(frames: np.ndarray, gravity: np.ndarray) -> np.ndarray:
+    """(n, sensors): each sensor's |a - g| (g per sensor)."""
+    dev = (np.asarray(frames, dtype=np.float64) - gravity).reshape(len(frames), -1, 3)
+    return np.linalg.norm(dev, axis=2)
+
+
 def activity(frames: np.ndarray, gravity: np.ndarray) -> np.ndarray:
     """(n,) the gate signal of IV-A: the sum over sensors of |a - g| (g per sensor)."""
-    dev = (np.asarray(frames, dtype=np.float64) - gravity).reshape(len(frames), -1, 3)
-    return np.linalg.norm(dev, axis=2).sum(axis=1)
+    return sensor_activity(frames, gravity).sum(axis=1)
 
 
 def linear(frames: np.ndarray, gravity: np.ndarray) -> np.ndarray:
