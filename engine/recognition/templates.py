@@ -40,6 +40,8 @@ DEFAULT_FEATURE = "log"  # measured: see docs/recognition.md
 LOG_SCALE_G = 0.5  # "log" feature: sign(a) * log(1 + |a| / LOG_SCALE_G)
 MIN_PROGRESS = 1.25  # open-end scoring constraint (dtw.IncrementalDTW.min_progress); measured
 REST_FRAMES = 3  # frames at a trial's start used as the resting gravity estimate
+REST_WINDOW = 8  # trial_rest(): a trial's rest is the first window of this many frames before ...
+REST_SPREAD_RATIO = 2.0  # ... its motion that is at most this x as spread as the stillest one
 TRIM_FRACTION = 0.1  # activity below this fraction of the trial's peak is rest
 LEAD_IN = 4  # frames kept before the trimmed onset (the recognizer re-cuts at its own gate)
 REJECT_K = 2.0  # threshold = mean + REJECT_K * std of same-action training scores ...
@@ -62,6 +64,39 @@ class TemplateFileError(InputError):
 def rest_gravity(trial: np.ndarray, frames: int = REST_FRAMES) -> np.ndarray:
     """(D,) the per-sensor gravity estimate: the mean of the trial's first frames."""
     return np.asarray(trial[: max(1, min(frames, len(trial)))], dtype=np.float64).mean(axis=0)
+
+
+def trial_rest(trial: np.ndarray, window: int = REST_WINDOW) -> tuple[np.ndarray, int]:
+    """(D,) the trial's resting gravity and the frame its rest begins. A trial cut from a stream
+    with a long lead-in begins on the tail of the motion before it, and then its first frames are
+    not the rest the motion left. The rest: of the `window`-frame windows before the trial's
+    sharpest change (the motion), the first whose spread (summed over the sensors, of the readings
+    about their mean, as the evaluation's true onset measures it) is at most REST_SPREAD_RATIO x
+    the least. When that is the first window (a trial that starts at rest, as `train` records
+    them), the mean of the first REST_FRAMES frames, as before."""
+    x = np.asarray(trial, dtype=np.float64)
+    hi = int(np.argmax(np.linalg.norm(np.diff(x, axis=0), axis=1))) + 1 if len(x) > 1 else 0
+    w = min(window, hi)
+    if w < REST_FRAMES:
+        return rest_gravity(x), 0
+    win = np.lib.stride_tricks.sliding_window_view(x[:hi], w, axis=0)  # (n, D, w)
+    dev = win - win.mean(axis=2, keepdims=True)
+    spread = np.sqrt((dev.reshape(len(win), -1, 3, w) ** 2).sum(axis=2).mean(axis=2)).sum(axis=1)
+    # The earliest window about as still as the stillest: the slow crest of a motion can be a
+    # little stiller than a short rest before it, and a trial that starts at rest keeps its rest.
+    k = int(np.flatnonzero(spread <= REST_SPREAD_RATIO * spread.min())[0])
+    if k == 0:
+        return rest_gravity(x), 0
+    return x[k : k + w].mean(axis=0), k
+
+
+def motion_activity(trial: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
+    """The trial's resting gravity (`trial_rest`), its activity against it with the frames before
+    the rest zeroed (they are another motion's), and the frame the rest begins."""
+    gravity, rest = trial_rest(trial)
+    act = activity(trial, gravity)
+    act[:rest] = 0.0
+    return gravity, act, rest
 
 
 def sensor_activity(frames: np.ndarray, gravity: np.ndarray) -> np.ndarray:
@@ -108,10 +143,10 @@ def resting_noise(trials: Iterable[Sequence[np.ndarray]], quantile: float = REST
     for items in trials:
         for t in items:
             t = np.asarray(t, dtype=np.float64)
-            act = activity(t, rest_gravity(t))
+            _, act, rest = motion_activity(t)
             peak = float(act.max())
             first = int(np.flatnonzero(act >= TRIM_FRACTION * peak)[0]) if peak > 0 else len(t)
-            pre.append(act[REST_FRAMES:first])
+            pre.append(act[rest + REST_FRAMES : first])
     pre = np.concatenate(pre) if pre else np.array([])
     return float(np.percentile(pre, quantile)) if len(pre) >= REST_NOISE_MIN_FRAMES else float("nan")
 
@@ -135,18 +170,19 @@ def trim_rest(trial: np.ndarray, fraction: float = TRIM_FRACTION, lead_in: int =
     """The trial without its resting frames at both ends (keeping `lead_in` frames before the
     onset), and the index of the onset inside the returned array."""
     trial = np.asarray(trial, dtype=np.float64)
-    act = activity(trial, rest_gravity(trial))
+    _, act, rest = motion_activity(trial)
     peak = float(act.max())
     if peak <= 0:
-        return trial, 0
+        return trial[rest:], 0
     above = np.flatnonzero(act >= fraction * peak)
     first = int(above[0])
     # The end: the last frame that still changes (the hand may stop in a new orientation, so
     # "rest" at the end is stillness, not closeness to the starting gravity).
     change = np.r_[0.0, np.linalg.norm(np.diff(trial, axis=0), axis=1)]
+    change[:rest] = 0.0  # another motion's
     moving = np.flatnonzero(change >= fraction * max(float(change.max()), 1e-9))
     last = max(int(moving[-1]) if len(moving) else len(trial) - 1, first)
-    start = max(0, first - lead_in)
+    start = max(rest, first - lead_in)
     return trial[start : last + 1], first - start
 
 
@@ -208,9 +244,9 @@ def representative_trials(trials: Sequence[np.ndarray], keep: int = 3, feature: 
     motions = []
     for t in trials:
         sig, on = trim_rest(t)
-        motions.append(features(sig[on:], rest_gravity(t), feature))
+        motions.append(features(sig[on:], trial_rest(t)[0], feature))
     lengths = np.array([len(m) for m in motions], dtype=float)
-    peaks = np.array([activity(t, rest_gravity(t)).max() for t in trials])
+    peaks = np.array([motion_activity(t)[1].max() for t in trials])
     ok = (lengths >= CUT_OFF_FRACTION * np.median(lengths)) & (peaks >= CUT_OFF_FRACTION * np.median(peaks))
     cand = list(np.flatnonzero(ok)) if ok.sum() >= keep else list(range(len(trials)))
     d = np.zeros((len(trials), len(trials)))
@@ -343,7 +379,7 @@ class Templates:
         actions, signals, gravity, onsets, thresholds = [], [], [], [], []
         for action, items in trials.items():
             trimmed = [trim_rest(t) for t in items]
-            grav = [rest_gravity(t) for t in items]
+            grav = [trial_rest(t)[0] for t in items]
             # Combine on the motion itself; the lead-in is put back from the medoid afterwards.
             motions = [s[k:] for s, k in trimmed]
             if method == "trials" or len(items) == 1:

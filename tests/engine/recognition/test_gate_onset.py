@@ -128,8 +128,8 @@ def noisy_templates_with_a_wind_up(rng: np.random.Generator) -> tuple[Templates,
     start with a gentle 0.5 g wind-up; and that wind-up."""
     wind_up = rest(20)
     wind_up[:, 0] += 0.5
-    trials = {
-        name: [np.vstack([rest(30, 0.15, rng), wind_up, bump(axis, 8.0), rest(10)]) for _ in range(3)]
+    trials = {  # the sensor's noise on every frame, the wind-up's too
+        name: [np.vstack([rest(30, 0.15, rng), wind_up + rng.normal(0.0, 0.15, wind_up.shape), bump(axis, 8.0), rest(10)]) for _ in range(3)]
         for name, axis in (("jab", 0), ("upper", 2))
     }
     return Templates.from_trials(trials), wind_up

@@ -7,7 +7,7 @@ import pytest
 
 from engine.errors import InputError
 from engine.recognition import TemplateFileError, Templates
-from engine.recognition.templates import average_eq1, dba, trim_rest
+from engine.recognition.templates import average_eq1, dba, rest_gravity, trial_rest, trim_rest
 
 G = np.array([0.0, 0.0, 1.0, 0.0, -1.0, 0.0])
 
@@ -38,6 +38,37 @@ def test_trim_keeps_the_motion_and_a_short_lead_in():
     trimmed, onset = trim_rest(x)
     assert len(trimmed) < len(x) and 0 < onset <= 4
     assert np.abs(trimmed[onset:, 0]).max() == pytest.approx(np.abs(x[:, 0]).max())
+
+
+def with_tail(x, n=20):
+    """`x` cut with a long lead-in: the tail of the motion before it (the hand returning, turned
+    30 degrees and shaking) comes first."""
+    t = np.arange(n)
+    tail = np.tile(G, (n, 1))
+    tail[:, :3] = [0.0, np.sin(np.pi / 6), np.cos(np.pi / 6)]
+    tail[:, 1] += 0.6 * np.exp(-t / 6) * np.sin(t / 2)  # gentler than the punch
+    return np.vstack([tail, x])
+
+
+def test_a_trial_cut_with_the_previous_motions_tail_keeps_its_rest():
+    rng = np.random.default_rng(3)
+    x = trial(rng, lead=15)
+    g, rest = trial_rest(with_tail(x))
+    np.testing.assert_allclose(g, G, atol=0.02)  # the rest before the punch, not the tail's first frames
+    assert rest >= 20
+    trimmed, onset = trim_rest(with_tail(x))
+    clean, clean_onset = trim_rest(x)
+    np.testing.assert_array_equal(trimmed[onset:], clean[clean_onset:])  # the same motion ...
+    assert onset == clean_onset  # ... and lead-in: nothing of the tail
+    built = Templates.from_trials({"hook_r": [with_tail(trial(rng, lead=15)) for _ in range(3)]})
+    np.testing.assert_allclose(built.gravity, np.tile(G, (3, 1)), atol=0.02)
+
+
+def test_a_trial_that_starts_at_rest_keeps_its_first_frames_as_rest():
+    x = trial(np.random.default_rng(4), lead=10)
+    g, rest = trial_rest(x)
+    assert rest == 0
+    np.testing.assert_array_equal(g, rest_gravity(x))
 
 
 def test_averages_of_identical_trials_are_the_trial():
