@@ -273,18 +273,25 @@ class SerialSource(Source):
         sample_frames: list[protocol.Frame] = []
         latest = None
         for f in frames:
-            if f.msg_type == protocol.HELLO:
-                if sample_frames:  # SAMPLEs before this HELLO keep the scales and clock they came with
-                    self.devclock.observe(now, latest)
-                    out += self._map(times, sample_frames)
-                    times, sample_frames, latest = [], [], None
-                if not self._apply_hello(f):
-                    continue
-            elif f.jump:  # a reboot whose HELLO was lost: the device clock restarted
-                self.devclock.reset(self.devclock.mask.bit_length())
+            # A HELLO may bring new scales or a new clock, and a seq jump (a reboot whose HELLO was
+            # lost) restarts the device clock: the SAMPLEs before it are mapped first, with the
+            # scales and clock offset they came with. Mapped with the new offset, an old boot's
+            # samples land as far in the future as it had been up (PROTOCOL.md "Host time").
+            if f.msg_type == protocol.HELLO or f.jump:
+                out += self._flush(times, sample_frames, latest, now)
+                times, sample_frames, latest = [], [], None
+                if f.msg_type == protocol.HELLO:
+                    if not self._apply_hello(f):
+                        continue
+                else:
+                    self.devclock.reset(self.devclock.mask.bit_length())
             dev = self.devclock.unwrap(f.t_us)
             if dev is None:  # device clock went back without a HELLO: start the mapping over
                 self.count("time_jumps")
+                # the same as above: what came before the jump keeps the clock it came with
+                # (a single frame with a wild t_us ahead is then mapped no later than `now`)
+                out += self._flush(times, sample_frames, latest, now)
+                times, sample_frames, latest = [], [], None
                 self.devclock.reset(self.devclock.mask.bit_length())
                 dev = self.devclock.unwrap(f.t_us)
             latest = dev
@@ -300,11 +307,15 @@ class SerialSource(Source):
                     self.count("device_overruns")
                 times.append(dev)
                 sample_frames.append(f)
+        return out + self._flush(times, sample_frames, latest, now)
+
+    def _flush(self, times: list[float], sample_frames: list[protocol.Frame], latest: float | None,
+               now: float) -> list[Sample]:
+        """Samples for one run of frames under one device clock: everything up to device time
+        `latest` had arrived by `now`, so none is mapped later than `now`."""
         if latest is not None:
             self.devclock.observe(now, latest)
-        if times:
-            out += self._map(times, sample_frames)
-        return out
+        return self._map(times, sample_frames) if times else []
 
     def _map(self, times: list[float], sample_frames: list[protocol.Frame]) -> list[Sample]:
         """Samples for SAMPLE frames of one layout and clock, at device times `times`."""
