@@ -16,7 +16,10 @@ Hostile or broken input is counted and dropped, never raised: the decoder reject
 fields make no sense (protocol.hello_problem) and frames replayed from earlier (same boot and
 seq). A board that reboots with another sensor count changes `sensors` (counted as
 `sensor_changes`); from then on its samples have the new shape, which is how the frames stage
-(engine.frames.FrameResampler) and the recorder (tools/record.py) learn of it.
+(engine.frames.FrameResampler) and the recorder (tools/record.py) learn of it. Only a reboot
+does: a HELLO that announces other sensors than its boot's earlier HELLO is counted as
+`sensor_conflicts` and dropped (the boot's first sensors stay; a boot that announced none yet,
+before finding its IMUs, may announce them).
 """
 
 from __future__ import annotations
@@ -254,7 +257,14 @@ class SerialSource(Source):
             self.count("bad_hellos")
             return False
         hello = protocol.Hello(f)
-        changed = self.hello is None or hello.boot_id != self.hello.boot_id or hello.ts_bits != self.hello.ts_bits
+        same_boot = self.hello is not None and hello.boot_id == self.hello.boot_id
+        if same_boot and self.hello.sensors and hello.flags & protocol.FLAGS_SENSORS != self.hello.flags & protocol.FLAGS_SENSORS:
+            # A boot's sensors are found once, at boot (PROTOCOL.md, HELLO): only a reboot changes
+            # them. A board that announces others within one boot is broken; taking each such
+            # HELLO would reshape the samples, and `record` would start a new file, every second.
+            self.count("sensor_conflicts")
+            return False
+        changed = not same_boot or hello.ts_bits != self.hello.ts_bits
         if hello.sensors and hello.sensors != self.sensors and self.hello is not None:
             self.count("sensor_changes")
         self.hello = hello

@@ -346,3 +346,39 @@ def test_one_sample_with_a_wild_timestamp_inside_one_read_keeps_host_time():
     batch = (protocol.encode_sample(seq, t0 + 2_000_000_000, (0, 0, 4096), (2048, -4096, 0))
              + samples(2, start_seq=seq + 1, t0=t0 + 5000))
     _clock_restart_run(batch, 3, next_seq=seq + 3, next_t0=t0 + 15_000)
+
+
+def test_a_hello_that_changes_sensors_within_one_boot_is_dropped_and_record_keeps_one_file(tmp_path, capsys):
+    # a broken board whose HELLOs alternate sensor A and A|B under one boot_id: a boot's
+    # sensors are fixed once announced, so each flipped HELLO is counted and dropped, its
+    # one-sensor SAMPLEs hold B's last value, and the recording stays in one file
+    master, slave = os.openpty()
+    tty.setraw(slave)
+    out = tmp_path / "rec.csv"
+
+    def board():
+        time.sleep(0.2)
+        seq = 0
+        for k in range(10):
+            flags = protocol.FLAG_SENSOR_A if k % 2 else 3
+            os.write(master, hello(seq=seq, boot=7, flags=flags, t_us=5000 * seq)
+                     + samples(10, start_seq=seq + 1, t0=5000 * (seq + 1), sensors=1 if k % 2 else 2))
+            seq += 11
+            time.sleep(0.05)
+
+    th = threading.Thread(target=board)
+    th.start()
+    try:
+        rows = record(f"serial://{os.ttyname(slave)}", str(out), 1.0)
+    finally:
+        th.join()
+        os.close(master)
+        os.close(slave)
+    assert rows == 100
+    rec = read_recording(out)
+    assert rec.sensors == 2 and len(rec) == 100
+    assert not (tmp_path / "rec.2.csv").exists()
+    err = capsys.readouterr().err
+    assert "continuing in a new file" not in err
+    link = next(line for line in err.splitlines() if line.startswith("link:"))
+    assert "sensor changes 0" in link and "sensor conflicts 5" in link
