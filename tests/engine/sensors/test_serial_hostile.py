@@ -382,3 +382,22 @@ def test_a_hello_that_changes_sensors_within_one_boot_is_dropped_and_record_keep
     assert "continuing in a new file" not in err
     link = next(line for line in err.splitlines() if line.startswith("link:"))
     assert "sensor changes 0" in link and "sensor conflicts 5" in link
+
+
+def test_a_text_frame_with_flags_set_is_malformed():
+    # PROTOCOL.md: "TEXT frames carry flags 0"; the firmware's encode_text sends 0
+    master, slave, src = _pty_source()
+    try:
+        for seq, flags in ((1, 0x0F), (2, protocol.FLAG_SENSOR_A), (3, 0)):
+            os.write(master, protocol.encode_frame(protocol.TEXT, seq, 5000 * seq, flags, b"flags %d" % flags))
+        for _ in range(50):
+            src.poll()
+            if src.stats["frames_ok"] + src.stats["malformed"] == 3:
+                break
+            time.sleep(0.01)
+    finally:
+        src.close()
+        os.close(master)
+        os.close(slave)
+    assert list(src.messages) == ["flags 0"]
+    assert src.stats["malformed"] == 2 and src.stats["frames_ok"] == 1 and src.stats["texts"] == 1
