@@ -270,7 +270,7 @@ def parse_body(body):
     elif msg_type == HELLO:
         if len(payload) != HELLO_SIZE or hello_problem(payload, flags) is not None:
             return None, "malformed"
-    elif len(payload) > MAX_TEXT:
+    elif flags or len(payload) > MAX_TEXT:  # TEXT frames carry flags 0 (PROTOCOL.md)
         return None, "malformed"
     return Frame(msg_type, seq, t_us, flags, payload), None
 

@@ -16,7 +16,10 @@ Hostile or broken input is counted and dropped, never raised: the decoder reject
 fields make no sense (protocol.hello_problem) and frames replayed from earlier (same boot and
 seq). A board that reboots with another sensor count changes `sensors` (counted as
 `sensor_changes`); from then on its samples have the new shape, which is how the frames stage
-(engine.frames.FrameResampler) and the recorder (tools/record.py) learn of it.
+(engine.frames.FrameResampler) and the recorder (tools/record.py) learn of it. Only a reboot
+does: a HELLO that announces other sensors than its boot's earlier HELLO is counted as
+`sensor_conflicts` and dropped (the boot's first sensors stay; a boot that announced none yet,
+before finding its IMUs, may announce them).
 """
 
 from __future__ import annotations
@@ -254,7 +257,14 @@ class SerialSource(Source):
             self.count("bad_hellos")
             return False
         hello = protocol.Hello(f)
-        changed = self.hello is None or hello.boot_id != self.hello.boot_id or hello.ts_bits != self.hello.ts_bits
+        same_boot = self.hello is not None and hello.boot_id == self.hello.boot_id
+        if same_boot and self.hello.sensors and hello.flags & protocol.FLAGS_SENSORS != self.hello.flags & protocol.FLAGS_SENSORS:
+            # A boot's sensors are found once, at boot (PROTOCOL.md, HELLO): only a reboot changes
+            # them. A board that announces others within one boot is broken; taking each such
+            # HELLO would reshape the samples, and `record` would start a new file, every second.
+            self.count("sensor_conflicts")
+            return False
+        changed = not same_boot or hello.ts_bits != self.hello.ts_bits
         if hello.sensors and hello.sensors != self.sensors and self.hello is not None:
             self.count("sensor_changes")
         self.hello = hello
@@ -273,18 +283,25 @@ class SerialSource(Source):
         sample_frames: list[protocol.Frame] = []
         latest = None
         for f in frames:
-            if f.msg_type == protocol.HELLO:
-                if sample_frames:  # SAMPLEs before this HELLO keep the scales and clock they came with
-                    self.devclock.observe(now, latest)
-                    out += self._map(times, sample_frames)
-                    times, sample_frames, latest = [], [], None
-                if not self._apply_hello(f):
-                    continue
-            elif f.jump:  # a reboot whose HELLO was lost: the device clock restarted
-                self.devclock.reset(self.devclock.mask.bit_length())
+            # A HELLO may bring new scales or a new clock, and a seq jump (a reboot whose HELLO was
+            # lost) restarts the device clock: the SAMPLEs before it are mapped first, with the
+            # scales and clock offset they came with. Mapped with the new offset, an old boot's
+            # samples land as far in the future as it had been up (PROTOCOL.md "Host time").
+            if f.msg_type == protocol.HELLO or f.jump:
+                out += self._flush(times, sample_frames, latest, now)
+                times, sample_frames, latest = [], [], None
+                if f.msg_type == protocol.HELLO:
+                    if not self._apply_hello(f):
+                        continue
+                else:
+                    self.devclock.reset(self.devclock.mask.bit_length())
             dev = self.devclock.unwrap(f.t_us)
             if dev is None:  # device clock went back without a HELLO: start the mapping over
                 self.count("time_jumps")
+                # the same as above: what came before the jump keeps the clock it came with
+                # (a single frame with a wild t_us ahead is then mapped no later than `now`)
+                out += self._flush(times, sample_frames, latest, now)
+                times, sample_frames, latest = [], [], None
                 self.devclock.reset(self.devclock.mask.bit_length())
                 dev = self.devclock.unwrap(f.t_us)
             latest = dev
@@ -300,11 +317,15 @@ class SerialSource(Source):
                     self.count("device_overruns")
                 times.append(dev)
                 sample_frames.append(f)
+        return out + self._flush(times, sample_frames, latest, now)
+
+    def _flush(self, times: list[float], sample_frames: list[protocol.Frame], latest: float | None,
+               now: float) -> list[Sample]:
+        """Samples for one run of frames under one device clock: everything up to device time
+        `latest` had arrived by `now`, so none is mapped later than `now`."""
         if latest is not None:
             self.devclock.observe(now, latest)
-        if times:
-            out += self._map(times, sample_frames)
-        return out
+        return self._map(times, sample_frames) if times else []
 
     def _map(self, times: list[float], sample_frames: list[protocol.Frame]) -> list[Sample]:
         """Samples for SAMPLE frames of one layout and clock, at device times `times`."""

@@ -75,7 +75,7 @@ class Client:
             return
         _, seq, t_us, flags = struct.unpack("<BHIB", body[:8])
         payload = body[8:-4]
-        if flags & 0xF0:
+        if flags & 0xF0 or (kind == TEXT and flags):  # TEXT frames carry flags 0
             self.bad += 1
             return
         sensors = (flags & 1) + (flags >> 1 & 1)

@@ -82,8 +82,10 @@ def test_unknown_flag_bits_and_wrong_lengths_are_malformed():
     assert dec.feed(raw(protocol.SAMPLE, 0x11, b"\x00" * 6)) == []  # unknown bit 4
     assert dec.feed(raw(protocol.SAMPLE, 0x03, b"\x00" * 6)) == []  # two sensors, one's data
     assert dec.feed(raw(protocol.HELLO, 0x03, b"\x00" * 13)) == []
-    assert dec.malformed == 3
+    assert dec.feed(raw(protocol.TEXT, 0x0F, b"hi")) == []  # TEXT frames carry flags 0
+    assert dec.malformed == 4
     assert len(dec.feed(raw(protocol.SAMPLE, 0x03, b"\x00" * 12))) == 1
+    assert len(protocol.Decoder().feed(raw(protocol.TEXT, 0, b"hi"))) == 1
 
 
 def test_values_hello_and_text_decode():

@@ -270,3 +270,134 @@ def test_a_reboot_whose_hello_was_lost_counts_once():
     assert got == 805
     stats = src.stats
     assert stats["seq_jumps"] == 1 and stats["reboots"] == 0 and stats["lost"] == 0
+
+
+# -- the device clock restarting inside one read, on a real port ----------------------------
+
+UP_US = 600_000_000  # the board has been up 600 s: its clock is far from a fresh boot's
+
+
+def _pty_source():
+    master, slave = os.openpty()
+    tty.setraw(slave)
+    return master, slave, open_source(f"serial://{os.ttyname(slave)}")
+
+
+def _poll_all(src, want: int) -> list[tuple[float, float]]:
+    """(sample t, host time right after the poll that returned it) until `want` samples came."""
+    got: list[tuple[float, float]] = []
+    for _ in range(100):
+        samples = src.poll()
+        now = time.perf_counter()
+        got += [(s.t, now) for s in samples]
+        if len(got) >= want:
+            break
+        time.sleep(0.005)
+    assert len(got) == want
+    return got
+
+
+def _clock_restart_run(batch: bytes, batch_samples: int, next_seq: int, next_t0: int) -> list[tuple[float, float]]:
+    """A board streams for 0.2 s, then one write holds `batch` (in which its clock restarts),
+    then it streams on from `next_seq` / `next_t0` for 0.3 s; every sample with its poll's time."""
+    master, slave, src = _pty_source()
+    got = []
+    try:
+        os.write(master, hello(seq=999, boot=7, ts_bits=32, t_us=UP_US))
+        seq = 1000
+        for _ in range(10):  # steady streaming at 200 Hz, a read every 20 ms
+            os.write(master, samples(4, start_seq=seq, t0=UP_US + 5000 * seq))
+            seq += 4
+            time.sleep(0.02)
+            got += _poll_all(src, 4)
+        time.sleep(0.02)
+        os.write(master, batch)
+        time.sleep(0.02)
+        got += _poll_all(src, batch_samples)
+        for k in range(10):
+            os.write(master, samples(6, start_seq=next_seq + 6 * k, t0=next_t0 + 30_000 * k))
+            time.sleep(0.03)
+            got += _poll_all(src, 6)
+    finally:
+        src.close()
+        os.close(master)
+        os.close(slave)
+    t = np.array([s for s, _ in got])
+    assert np.all(np.diff(t) >= 0)
+    late = [round(s - now, 3) for s, now in got if s > now]
+    assert late == []  # PROTOCOL.md, host time: never later than the poll that saw the sample
+    after = t[-60:]  # the last 0.3 s of streaming: spread over it, not frozen at one time
+    assert after[-1] - after[0] > 0.15
+    return got
+
+
+def test_a_reboot_whose_hello_is_lost_inside_one_read_keeps_host_time():
+    # the old boot's last two samples and the new boot's first three (seq 0, its clock at 1 ms,
+    # its HELLO lost) arrive in one read: the old ones keep the old boot's clock offset
+    seq = 1040
+    batch = samples(2, start_seq=seq, t0=UP_US + 5000 * seq) + samples(3, start_seq=0, t0=1000)
+    _clock_restart_run(batch, 5, next_seq=3, next_t0=1000 + 3 * 5000)
+
+
+def test_one_sample_with_a_wild_timestamp_inside_one_read_keeps_host_time():
+    # one CRC-valid SAMPLE whose t_us is 2000 s ahead, then the stream as it was
+    seq = 1040
+    t0 = UP_US + 5000 * seq
+    batch = (protocol.encode_sample(seq, t0 + 2_000_000_000, (0, 0, 4096), (2048, -4096, 0))
+             + samples(2, start_seq=seq + 1, t0=t0 + 5000))
+    _clock_restart_run(batch, 3, next_seq=seq + 3, next_t0=t0 + 15_000)
+
+
+def test_a_hello_that_changes_sensors_within_one_boot_is_dropped_and_record_keeps_one_file(tmp_path, capsys):
+    # a broken board whose HELLOs alternate sensor A and A|B under one boot_id: a boot's
+    # sensors are fixed once announced, so each flipped HELLO is counted and dropped, its
+    # one-sensor SAMPLEs hold B's last value, and the recording stays in one file
+    master, slave = os.openpty()
+    tty.setraw(slave)
+    out = tmp_path / "rec.csv"
+
+    def board():
+        time.sleep(0.2)
+        seq = 0
+        for k in range(10):
+            flags = protocol.FLAG_SENSOR_A if k % 2 else 3
+            os.write(master, hello(seq=seq, boot=7, flags=flags, t_us=5000 * seq)
+                     + samples(10, start_seq=seq + 1, t0=5000 * (seq + 1), sensors=1 if k % 2 else 2))
+            seq += 11
+            time.sleep(0.05)
+
+    th = threading.Thread(target=board)
+    th.start()
+    try:
+        rows = record(f"serial://{os.ttyname(slave)}", str(out), 1.0)
+    finally:
+        th.join()
+        os.close(master)
+        os.close(slave)
+    assert rows == 100
+    rec = read_recording(out)
+    assert rec.sensors == 2 and len(rec) == 100
+    assert not (tmp_path / "rec.2.csv").exists()
+    err = capsys.readouterr().err
+    assert "continuing in a new file" not in err
+    link = next(line for line in err.splitlines() if line.startswith("link:"))
+    assert "sensor changes 0" in link and "sensor conflicts 5" in link
+
+
+def test_a_text_frame_with_flags_set_is_malformed():
+    # PROTOCOL.md: "TEXT frames carry flags 0"; the firmware's encode_text sends 0
+    master, slave, src = _pty_source()
+    try:
+        for seq, flags in ((1, 0x0F), (2, protocol.FLAG_SENSOR_A), (3, 0)):
+            os.write(master, protocol.encode_frame(protocol.TEXT, seq, 5000 * seq, flags, b"flags %d" % flags))
+        for _ in range(50):
+            src.poll()
+            if src.stats["frames_ok"] + src.stats["malformed"] == 3:
+                break
+            time.sleep(0.01)
+    finally:
+        src.close()
+        os.close(master)
+        os.close(slave)
+    assert list(src.messages) == ["flags 0"]
+    assert src.stats["malformed"] == 2 and src.stats["frames_ok"] == 1 and src.stats["texts"] == 1
