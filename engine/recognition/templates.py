@@ -41,7 +41,8 @@ LOG_SCALE_G = 0.5  # "log" feature: sign(a) * log(1 + |a| / LOG_SCALE_G)
 MIN_PROGRESS = 1.25  # open-end scoring constraint (dtw.IncrementalDTW.min_progress); measured
 REST_FRAMES = 3  # frames at a trial's start used as the resting gravity estimate
 REST_WINDOW = 8  # trial_rest(): a trial's rest is the first window of this many frames before ...
-REST_SPREAD_RATIO = 2.0  # ... its motion that is at most this x as spread as the stillest one
+REST_SPREAD_RATIO = 2.0  # ... its motion that is at most this x as spread as the stillest one,
+TAIL_RATIO = 0.75  # ... and what comes before it is a tail: under this x the motion's peak activity
 TRIM_FRACTION = 0.1  # activity below this fraction of the trial's peak is rest
 LEAD_IN = 4  # frames kept before the trimmed onset (the recognizer re-cuts at its own gate)
 REJECT_K = 2.0  # threshold = mean + REJECT_K * std of same-action training scores ...
@@ -72,8 +73,10 @@ def trial_rest(trial: np.ndarray, window: int = REST_WINDOW) -> tuple[np.ndarray
     not the rest the motion left. The rest: of the `window`-frame windows before the trial's
     sharpest change (the motion), the first whose spread (summed over the sensors, of the readings
     about their mean, as the evaluation's true onset measures it) is at most REST_SPREAD_RATIO x
-    the least. When that is the first window (a trial that starts at rest, as `train` records
-    them), the mean of the first REST_FRAMES frames, as before."""
+    the least, and whose frames before it move less than TAIL_RATIO x the motion's peak (else
+    that window is a hold inside the motion). When that is the first window (a trial that starts
+    at rest, as `train` records them) or there is none, the mean of the first REST_FRAMES frames,
+    as before."""
     x = np.asarray(trial, dtype=np.float64)
     hi = int(np.argmax(np.linalg.norm(np.diff(x, axis=0), axis=1))) + 1 if len(x) > 1 else 0
     w = min(window, hi)
@@ -87,7 +90,13 @@ def trial_rest(trial: np.ndarray, window: int = REST_WINDOW) -> tuple[np.ndarray
     k = int(np.flatnonzero(spread <= REST_SPREAD_RATIO * spread.min())[0])
     if k == 0:
         return rest_gravity(x), 0
-    return x[k : k + w].mean(axis=0), k
+    gravity = x[k : k + w].mean(axis=0)
+    act = activity(x, gravity)
+    if act[:k].max() >= TAIL_RATIO * act[k:].max():
+        # about as strong before that window as after it: the window is a hold inside the motion
+        # (a block's), not a rest after another motion's tail, and the trial starts moving
+        return rest_gravity(x), 0
+    return gravity, k
 
 
 def motion_activity(trial: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:

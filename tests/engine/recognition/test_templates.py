@@ -71,6 +71,17 @@ def test_a_trial_that_starts_at_rest_keeps_its_first_frames_as_rest():
     np.testing.assert_array_equal(g, rest_gravity(x))
 
 
+def test_a_hold_inside_a_motion_is_not_its_rest():
+    # a block: arms up, held still, and down again, cut without any rest before it
+    up = np.linspace(0.0, 1.0, 10)[:, None] * np.array([0.0, 1.5, -0.5, 0.0, 1.5, -0.5])
+    hold = np.tile(up[-1], (12, 1))
+    down = up[::-1]
+    x = G + np.vstack([up, hold, down]) + np.random.default_rng(5).normal(0, 0.01, (32, 6))
+    g, rest = trial_rest(x)
+    assert rest == 0
+    np.testing.assert_array_equal(g, rest_gravity(x))
+
+
 def test_averages_of_identical_trials_are_the_trial():
     x = np.cumsum(np.random.default_rng(2).normal(size=(15, 3)), axis=0)
     np.testing.assert_allclose(average_eq1([x, x, x]), x)
