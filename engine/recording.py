@@ -27,6 +27,10 @@ FLUSH_EVERY_S = 0.25  # fsync at least this often: a crashed machine loses at mo
 MAX_RECORDING_BYTES = 256 * 2**20  # an hour at 430 Hz with two hands is about 100 MB
 MAX_DURATION_S = 4 * 3600.0  # 4 h at 60 Hz is 864,000 frames (41 MB for two hands)
 MAX_GAP_S = 600.0  # no sample for 10 minutes: not one recording any more
+# |acceleration| in g: no sensor a player wears reads more (wearable IMUs saturate at 16 g, high-g
+# ones at 200-400 g); a larger value is a file not in g or a corrupt one, and squares near 1e300
+# overflow in the recognizer (thresholds of inf, NaN activity)
+MAX_ACCEL_G = 1000.0
 MAX_LINE_CHARS = 1 << 20  # metadata and header lines
 CHUNK_ROWS = 8192  # rows converted to numbers at once
 
@@ -195,6 +199,12 @@ def _numbers(path: Path, fields: list[list[str]], linenos: list[int]) -> np.ndar
     finite = np.isfinite(values).all(axis=1)
     if not finite.all():
         raise RecordingError(path, linenos[int(np.argmin(finite))], "not a finite number")
+    plausible = (np.abs(values[:, 1:]) <= MAX_ACCEL_G).all(axis=1)  # column 0 is t
+    if not plausible.all():
+        k = int(np.argmin(plausible))
+        g = float(np.abs(values[k, 1:]).max())
+        raise RecordingError(path, linenos[k], f"an acceleration of {g:.6g} g, over the {MAX_ACCEL_G:g} g "
+                                               "a sensor can read (accelerations are in g)")
     return values
 
 

@@ -25,16 +25,18 @@ its template's length and then calls `character_finished()`, as the game does.
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
+from engine.errors import InputError
 from engine.frames import recording_frames
 from engine.recognition import DualBufferRecognizer, Templates
 from engine.recognition.templates import activity, rest_gravity
 from engine.recording import read_recording
+from tools.trial_files import templates_from_trials
 
 UNNOTICEABLE_FRAMES = 6
 PAD_BEFORE, PAD_AFTER = 20, 40
@@ -299,10 +301,12 @@ def evaluate_stream_folds(
     folds: int = 2,
     template_kwargs: Mapping | None = None,
     clip_frames: int = CLIP_FRAMES,
+    where: str = "the labelled stream",
     **rec_kwargs,
 ) -> list[Summary]:
     """K contiguous folds: templates from the intervals of the other folds, tested on this
-    fold's stretch of the stream. Pooled over folds."""
+    fold's stretch of the stream. Pooled over folds. A fold whose templates cannot be built (no
+    interval in the other folds, one too short) is an InputError naming `where` (the file)."""
     ivs = intervals(labels)
     n = len(frames)
     bounds = np.linspace(0, n, folds + 1).astype(int)
@@ -311,7 +315,11 @@ def evaluate_stream_folds(
         lo, hi = bounds[k], bounds[k + 1]
         train = [iv for iv in ivs if not (lo <= iv[1] < hi)]
         test = [(a, s - lo, e - lo) for a, s, e in ivs if lo <= s < hi]
-        templates = Templates.from_trials(stream_trials(frames, train), **(template_kwargs or {}))
+        if not train:
+            raise InputError(f"{where}: fold {k + 1} of {folds} has no labelled interval in the other folds "
+                             "to build templates from (fewer --folds, or --templates)")
+        templates = templates_from_trials(stream_trials(frames, train), f"{where} (fold {k + 1} of {folds})",
+                                          **(template_kwargs or {}))
         for m, pool in zip(mains, pooled, strict=True):
             rec = DualBufferRecognizer(templates, main=m, **rec_kwargs)
             events = replay_stream(rec, frames[lo:hi], clip_frames)
@@ -423,18 +431,22 @@ def evaluate_cross_session(
     trials: int = 3,
     template_kwargs: Mapping | None = None,
     clip_frames: int = CLIP_FRAMES,
+    where: str = "the training recordings",
     **rec_kwargs,
 ) -> list[Summary]:
     """Templates from the first `trials` labelled intervals of each action's training recording
     (`{action: (frames, labels)}`, each interval cut with its lead-in as `stream_trials` does),
     then every test recording replayed whole as a stream (a fresh recognizer per recording) and
     scored with `score_stream`; a spliced stream (`mixed_stream`) brings its punches' true onsets
-    as a third item. Pooled over the test recordings."""
+    as a third item. Pooled over the test recordings. Training recordings that give no templates
+    (no interval of their action, one too short) are an InputError naming `where`."""
     cut = {}
     for action, (frames, labels) in train.items():
         ivs = [iv for iv in intervals(labels) if iv[0] == action][:trials]
+        if not ivs:
+            raise InputError(f"{where}: no interval labelled {action!r} to build its template from")
         cut[action] = stream_trials(frames, ivs)[action]
-    templates = Templates.from_trials(cut, **(template_kwargs or {}))
+    templates = templates_from_trials(cut, where, **(template_kwargs or {}))
     pooled = [Summary(m) for m in mains]
     for frames, labels, *onsets in test:
         ivs = intervals(labels)
@@ -473,22 +485,49 @@ def evaluate_phone_punches(
 
     out = {}
     for hand in sorted({h for h, _ in files}):
+        _check_punch_files(hand, files, load)
         for src, dst in (("fast", "slow"), ("slow", "fast")):
             if (hand, src) not in files:
                 continue
             train = {p: load(f) for p, f in files[(hand, src)].items()}
+            kw = {"where": f"{Path(root) / f'{hand}_*_{src}.csv'}", **kwargs}
             if (hand, dst) in files:
                 test = [load(f) for f in files[(hand, dst)].values()]
-                out[f"phone-punches {hand} {src} -> {dst}"] = evaluate_cross_session(train, test, mains, **kwargs)
+                out[f"phone-punches {hand} {src} -> {dst}"] = evaluate_cross_session(train, test, mains, **kw)
                 if mixed:
                     variants = (("mixed", False, 0), ("mixed, one guard", True, 0), ("mixed, one guard, turned in", True, TURN_IN))
                     for name, guard, turn_in in variants:
                         stream = mixed_stream(test, seed, one_guard=guard, turn_in=turn_in)
-                        out[f"phone-punches {hand} {src} -> {dst} {name}"] = evaluate_cross_session(train, [stream], mains, **kwargs)
+                        out[f"phone-punches {hand} {src} -> {dst} {name}"] = evaluate_cross_session(train, [stream], mains, **kw)
             if (hand, RECORDED_MIXED) in files:
                 recorded = [load(f) for f in files[(hand, RECORDED_MIXED)].values()]
-                out[f"phone-punches {hand} {src} -> recorded mixed"] = evaluate_cross_session(train, recorded, mains, **kwargs)
+                out[f"phone-punches {hand} {src} -> recorded mixed"] = evaluate_cross_session(train, recorded, mains, **kw)
     return out
+
+
+def _check_punch_files(
+    hand: str,
+    files: Mapping[tuple[str, str], Mapping[str, Path]],
+    load: Callable[[Path], tuple[np.ndarray, list[str]]],
+) -> None:
+    """A hand's recordings, when it has a fast or a slow set, must all be of one D (its
+    templates are tested on each of them), and each `<hand>_<punch>_<fast|slow>.csv` must label
+    some rows `<punch>` (its template is cut from them): else an InputError naming the file."""
+    if not any((hand, kind) in files for kind in PUNCH_SETS):
+        return
+    first: tuple[int, Path] | None = None  # the hand's first recording: its D and file
+    for (h, kind), mine in sorted(files.items()):
+        if h != hand:
+            continue
+        for punch, f in mine.items():
+            frames, labels = load(f)
+            if kind != RECORDED_MIXED and punch not in labels:
+                raise InputError(f"{f}: no row labelled {punch!r}: its {punch} template is cut from them")
+            if first is None:
+                first = (frames.shape[1], f)
+            elif frames.shape[1] != first[0]:
+                raise InputError(f"{f}: {frames.shape[1]} values per frame, {first[1].name} has {first[0]} "
+                                 "(one- and two-hand recordings mixed)")
 
 
 # -- mixed streams: the punch kinds interleaved -----------------------------------------------------

@@ -18,7 +18,7 @@ import numpy as np
 
 from engine.errors import InputError
 from engine.frames import recording_frames
-from engine.recognition import DualBufferRecognizer, Templates
+from engine.recognition import DualBufferRecognizer
 from engine.recording import read_recording
 from tools.evaluate_recognition import (
     CLIP_FRAMES,
@@ -28,6 +28,7 @@ from tools.evaluate_recognition import (
     stream_onset,
     stream_trials,
 )
+from tools.trial_files import templates_from_trials
 
 GLOVE_PEAK_G = 3.0  # a punch: the glove's |a| at least this far (g) from 1 g ...
 GLOVE_END_G = 1.0  # ... widened to the frames around it at least this far
@@ -114,17 +115,21 @@ class _Loaded:
         return self._cache[path]
 
 
-def _training_trials(train: Sequence[GloveFile], load: _Loaded, trials: int) -> dict[str, list[np.ndarray]]:
+def _training_trials(train: Sequence[GloveFile], load: _Loaded, trials: int) -> tuple[dict[str, list[np.ndarray]], list[Path]]:
     """Each action's first `trials` intervals (with LEAD frames before them, as `stream_trials`
-    cuts them) from the first training file, in name order, that has intervals of the action."""
+    cuts them) from the first training file, in name order, that has intervals of the action;
+    and the files they were cut from."""
     cut: dict[str, list[np.ndarray]] = {}
+    used: list[Path] = []
     for f in train:
         frames, ivs, _ = load(f)
         for action in f[1:]:
             mine = [iv for iv in ivs if iv[0] == action][:trials]
             if action not in cut and mine:
                 cut[action] = stream_trials(frames, mine, LEAD)[action]
-    return cut
+                if f[0] not in used:
+                    used.append(f[0])
+    return cut, used
 
 
 def _test(train: Sequence[GloveFile], tests: Sequence[GloveFile], load: _Loaded, pooled: Sequence[Summary],
@@ -132,11 +137,11 @@ def _test(train: Sequence[GloveFile], tests: Sequence[GloveFile], load: _Loaded,
     """Templates from `train`, then each test file whose actions they all have replayed whole
     through a fresh recognizer per main size (`pooled`: one Summary per main), scored from each
     punch's own onset. Returns how many files were tested."""
-    cut = _training_trials(train, load, trials)
+    cut, used = _training_trials(train, load, trials)
     tested = [f for f in tests if set(f[1:]) <= cut.keys() and load(f)[1]]  # its actions, and punches
     if not tested:
         return 0
-    templates = Templates.from_trials(cut, **(template_kwargs or {}))
+    templates = templates_from_trials(cut, ", ".join(map(str, used)), **(template_kwargs or {}))
     for f in tested:
         frames, ivs, onsets = load(f)
         for pool in pooled:

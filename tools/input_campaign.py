@@ -77,6 +77,8 @@ def bad_recordings(d: Path, big_mb: int) -> dict[str, str]:
         "gap-1e7": _write(d, "rec/gap.csv", _rec([f"0,{row}", f"10000000,{row}"])),
         "equal-t": _write(d, "rec/equal.csv", _rec([f"1.5,{row}"] * 5)),
         "nan": _write(d, "rec/nan.csv", _rec([f"0,{row}", "0.1,nan,0,1,0,0,1,"])),
+        "accel-1e300": _write(d, "rec/accel1e300.csv", _rec([f"0,{row}", "0.1,1e300,0,1,0,0,1,", f"0.2,{row}"])),
+        "accel-1e154": _write(d, "rec/accel1e154.csv", _rec([f"0,{row}", "0.1,0,-1e154,1,0,0,1,", f"0.2,{row}"])),
         "inf-t": _write(d, "rec/inf.csv", _rec([f"0,{row}", f"inf,{row}"])),
         "huge-t": _write(d, "rec/huge_t.csv", _rec([f"1e300,{row}", f"1.0000001e300,{row}"])),
         "backwards": _write(d, "rec/back.csv", _rec([f"1,{row}", f"0.5,{row}"])),
@@ -155,6 +157,8 @@ def bad_templates(d: Path, bomb_gb: float = 1.5) -> dict[str, str]:
 
     g = good["gravity"]
     variant("nan-gravity", gravity=np.full_like(g, np.nan))
+    variant("huge-gravity", gravity=np.full_like(g, 1e300))
+    variant("signals-1e200", signals=good["signals"] * 1e200)  # finite, absurd: overflowed in the recognizer
     variant("nan-threshold", thresholds=np.full_like(good["thresholds"], np.nan))
     variant("neg-threshold", thresholds=-np.ones_like(good["thresholds"]))
     variant("gravity-shape", gravity=g[:, :3])
@@ -448,11 +452,70 @@ def build_cases(d: Path, big_mb: int, bomb_gb: float = 1.5) -> list[Case]:
     cases = _recording_cases(q, d, recs, tpl, out)
     cases += _bad_file_cases(q, d, tpls, graphs, good_rec, tpl, out)
     cases += _url_cases(q, good_rec, out)
+    cases += [Case(f"eval/{name}", q + argv) for name, argv in bad_evaluate_inputs(d, tpl, out).items()]
     args = {**_bad_game_args(q, d, good_rec, tpl, out), **_bad_tool_args(q, d, out)}
     for name, argv in args.items():
         cases.append(Case(f"arg/{name}", argv))
     cases += _valid_cases(q, d, good_rec, tpl, out)
     return cases
+
+
+def _bump_rows(label: str = "", hands: int = 2, amp: float = 3.0) -> list[str]:
+    """Rows of 20 frames of rest, a 24-frame punch of `amp` g on the right hand (labelled), 20 of rest."""
+    rows = []
+    for i in range(64):
+        x = amp * float(np.sin(np.pi * (i - 20) / 24)) if 20 <= i < 44 else 0.0
+        left = ",0.0,0.01,0.99" if hands == 2 else ""
+        rows.append(f"{i / 60:.6f},{x:.4f},0.02,{1.0 + x:.4f}{left},{label if 20 <= i < 44 else ''}")
+    return rows
+
+
+def bad_evaluate_inputs(d: Path, tpl: str, out: Path) -> dict[str, list[str]]:
+    """name -> the quickjab arguments of a bad input to `evaluate` (and the commands next to it):
+    data it cannot build templates from, or whose values per frame are not the templates' D,
+    or values no sensor reads. Each must end in one line naming the file or folder, exit 2."""
+    e = d / "eval"
+    one_hand = "t,rx,ry,rz,label"
+    stream_1 = _write(e, "stream-1-label.csv", _rec(["0,0,0,1,0,0,1,jab_r"]))
+    stream_all = _write(e, "stream-all-label.csv", _rec([f"{i / 60:.6f},0,0,1,0,0,1,jab_r" for i in range(120)]))
+    stream_1h = _write(e, "stream-onehand.csv", _rec(_bump_rows("straight_r", hands=1), header=one_hand))
+    for action in ("straight_r", "hook_r"):
+        _write(e, f"trials-ok/{action}/1.csv", _rec(_bump_rows(action)))
+        _write(e, f"trials-one-row/{action}/1.csv", _rec([f"0,0,0,1,0,0,1,{action}"]))
+        _write(e, f"trials-onehand/{action}/1.csv", _rec(_bump_rows(action, hands=1), header=one_hand))
+        _write(e, f"trials-huge/{action}/1.csv", _rec(_bump_rows(action, amp=1e300 if action == "hook_r" else 3.0)))
+    pp = {  # phone-punches folders: right_jab_fast.csv, right_jab_slow.csv
+        "unlabelled": (_rec(_bump_rows()), _rec(_bump_rows("jab"))),
+        "otherlabel": (_rec(_bump_rows("hook")), _rec(_bump_rows("jab"))),
+        "onerow": (_rec(["0,0,0,1,0,0,1,jab"]), _rec(["0,0,0,1,0,0,1,jab"])),
+        "onehand": (_rec(_bump_rows("jab", hands=1), header=one_hand), _rec(_bump_rows("jab"))),
+    }
+    for name, (fast, slow) in pp.items():
+        _write(e, f"pp-{name}/right_jab_fast.csv", fast)
+        _write(e, f"pp-{name}/right_jab_slow.csv", slow)
+    for n in (1, 2):  # two gloves, one row: a punch (9 g) of one frame
+        _write(e, f"pb-onerow/right-hook-50-a-combo-lh-{n}.csv", _rec(["0,9,0,1,9,0,1,"]))
+    _write(e, "uw-onerow/U1/gesture1/d1-r01.csv", _rec(["0,0,0,1,x"], header=one_hand))
+    _write(e, "uw-onerow/U1/gesture1/d2-r01.csv", _rec(_bump_rows("x", hands=1), header=one_hand))
+    _write(e, "uw-mismatch/U1/gesture1/d1-r01.csv", _rec(_bump_rows("x", hands=1), header=one_hand))
+    _write(e, "uw-mismatch/U1/gesture1/d2-r01.csv", _rec(_bump_rows("x")))
+    accel = _write(e, "accel-1e306.csv", _rec([f"{i / 60:.5f},1e306,0,1,0,0,1," for i in range(3)]))
+    m6 = ["--mains", "6"]
+    return {
+        "stream-1-label/folds": ["evaluate", stream_1, *m6],
+        "stream-all-label/folds": ["evaluate", stream_all, *m6],
+        "train-one-row": ["evaluate", str(e / "trials-ok"), "--train", str(e / "trials-one-row"), *m6],
+        "stream-onehand/templates": ["evaluate", stream_1h, "--templates", tpl, *m6],
+        "trials-onehand/templates": ["evaluate", str(e / "trials-onehand"), "--templates", tpl, *m6],
+        "trials-onehand/train": ["evaluate", str(e / "trials-onehand"), "--train", str(e / "trials-ok"), *m6],
+        **{f"pp-{name}": ["evaluate", "--phone-punches", str(e / f"pp-{name}"), *m6] for name in pp},
+        "pb-onerow": ["evaluate", "--punchbuddy", str(e / "pb-onerow"), *m6],
+        "uw-onerow": ["evaluate", "--uwave", str(e / "uw-onerow"), "--users", "1", *m6],
+        "uw-mismatch": ["evaluate", "--uwave", str(e / "uw-mismatch"), "--users", "1", *m6],
+        "trials-huge/build": ["templates", "build", str(e / "trials-huge"), "-o", str(out / "huge.npz")],
+        "trials-huge/train": ["evaluate", str(e / "trials-ok"), "--train", str(e / "trials-huge"), *m6],
+        "accel-1e306/bridge-emulate": ["bridge", "emulate", "--replay", accel, "--seconds", "2"],
+    }
 
 
 def _recording_cases(q: list[str], d: Path, recs: dict[str, str], tpl: str, out: Path) -> list[Case]:
@@ -483,8 +546,11 @@ def _bad_file_cases(q: list[str], d: Path, tpls: dict[str, str], graphs: dict[st
     cases: list[Case] = []
     for name, path in tpls.items():
         cases.append(Case(f"tpl/{name}/recognize", q + ["recognize", good_rec, "--templates", path]))
-    for name in ("nan-gravity", "zip-bomb", "npy", "recognizer-unknown"):
+    for name in ("nan-gravity", "zip-bomb", "npy", "recognizer-unknown", "signals-1e200"):
         cases.append(Case(f"tpl/{name}/play", q + ["play", "--headless", "--frames", "2", "--templates", tpls[name]]))
+    labelled = _write(d, "labelled.csv", _rec(_bump_rows("straight_r")))
+    for name in ("signals-1e200", "huge-gravity"):
+        cases.append(Case(f"tpl/{name}/evaluate", q + ["evaluate", labelled, "--templates", tpls[name], "--mains", "6"]))
     for name, home in bad_config_files(d).items():
         cases.append(Case(f"config/{name}/play", q + ["play", "--headless", "--frames", "2"], env={"XDG_CONFIG_HOME": home}))
         cases.append(Case(f"config/{name}/recognize", q + ["recognize", good_rec, "--templates", tpl], env={"XDG_CONFIG_HOME": home}))

@@ -17,7 +17,7 @@ from engine.recognition.templates import FEATURES, METHODS
 from engine.recording import read_recording
 from tools import evaluate_recognition as ev
 from tools import glove_punches
-from tools.trial_files import load_trials_dir
+from tools.trial_files import load_trials_dir, templates_from_trials, trials_dim
 
 MAX_BUFFER = 6000  # frames (100 s at 60 Hz): any recognizer buffer or count of frames
 MAX_FOLDS = 50  # contiguous folds of one labelled stream; each needs intervals to learn from
@@ -196,10 +196,7 @@ def cmd_build(args: argparse.Namespace) -> int:
     settings = parse_assignments(args.recognizer)
     trials = load_trials_dir(args.trials_dir, args.glob)
     kwargs = {k: v for k, v in (("method", args.method), ("feature", args.feature)) if v}
-    try:
-        templates = Templates.from_trials(trials, **kwargs)
-    except ValueError as exc:
-        raise InputError(f"{args.trials_dir}: {exc}") from None
+    templates = templates_from_trials(trials, args.trials_dir, **kwargs)
     if args.mirror:
         templates = templates.mirrored()
     templates.recognizer = settings
@@ -255,12 +252,13 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     if args.punchbuddy:
         results.update(_evaluate_punchbuddy(args, kw, tk))
     templates = Templates.load(args.templates) if args.templates else None
+    source = args.templates  # what the templates came from, for messages
     if args.train:
-        templates = Templates.from_trials(load_trials_dir(args.train), **tk)
+        templates, source = templates_from_trials(load_trials_dir(args.train), args.train, **tk), f"built from {args.train}"
     if templates is not None:
         kw = _rec_kwargs(args, templates.recognizer)  # a --templates file's saved settings under the command line's
     for inp in args.inputs:
-        results[Path(inp).name] = _evaluate_input(args, inp, templates, kw, tk)
+        results[Path(inp).name] = _evaluate_input(args, inp, templates, kw, tk, source)
     if not results:
         raise InputError("nothing to evaluate: give INPUTs, --uwave DIR, --phone-punches DIR, --punchbuddy DIR, or see --help")
     _print_results(args, results)
@@ -277,8 +275,11 @@ def _evaluate_uwave(args: argparse.Namespace, kw: dict, tk: dict) -> dict[str, l
     pooled = None
     for u in users:
         root = Path(args.uwave) / f"U{u}"
-        templates = Templates.from_trials(load_trials_dir(root, "d1-r0[1-3].csv"), **tk)
+        templates = templates_from_trials(load_trials_dir(root, "d1-r0[1-3].csv"), f"{root} (d1-r0[1-3].csv)", **tk)
         tests = {a: ts[:: args.every] for a, ts in load_trials_dir(root, "d[2-7]-*.csv").items()}
+        if trials_dim(tests) != templates.dim:
+            raise InputError(f"{root}: the test trials d[2-7]-*.csv have {trials_dim(tests)} values per frame, "
+                             f"the templates from d1-r0[1-3].csv have D = {templates.dim} (one- and two-hand recordings mixed)")
         res = ev.evaluate_trials(templates, tests, args.mains, fresh=args.fresh, **kw)
         if pooled is None:
             pooled = res
@@ -303,14 +304,16 @@ def _evaluate_punchbuddy(args: argparse.Namespace, kw: dict, tk: dict) -> dict[s
 
 
 def _evaluate_input(args: argparse.Namespace, inp: str, templates: Templates | None, kw: dict,
-                    tk: dict) -> list[dict]:
+                    tk: dict, source: str | None = None) -> list[dict]:
     """One INPUT's rows: a trial directory against the templates, or a labelled recording
-    against the templates or, without them, in folds that learn from the rest of it."""
+    against the templates or, without them, in folds that learn from the rest of it. `source`
+    names the templates in messages (the --templates file, or what --train built them from)."""
     path = Path(inp)
     if path.is_dir():
         if templates is None:
             raise InputError(f"{inp}: trial directories need --templates or --train")
         tests = {a: ts[:: args.every] for a, ts in load_trials_dir(path).items()}
+        _check_dim(inp, trials_dim(tests), templates, source)
         res = ev.evaluate_trials(templates, tests, args.mains, fresh=args.fresh, **kw)
     else:
         _, frames, labels = recording_frames(read_recording(path))
@@ -318,11 +321,19 @@ def _evaluate_input(args: argparse.Namespace, inp: str, templates: Templates | N
             raise InputError(f"{inp}: no labelled intervals (label column empty)")
         if templates is None:
             res = ev.evaluate_stream_folds(
-                frames, labels, args.mains, folds=args.folds, template_kwargs=tk, clip_frames=args.clip_frames, **kw
+                frames, labels, args.mains, folds=args.folds, template_kwargs=tk, clip_frames=args.clip_frames,
+                where=inp, **kw
             )
         else:
+            _check_dim(inp, frames.shape[1], templates, source)
             res = ev.evaluate_stream(templates, frames, labels, args.mains, clip_frames=args.clip_frames, **kw)
     return [s.row() for s in res]
+
+
+def _check_dim(inp: str, dim: int, templates: Templates, source: str | None) -> None:
+    """As `recognize` checks: the input's values per frame must be the templates' D."""
+    if dim != templates.dim:
+        raise InputError(f"{inp}: {dim} values per frame, templates {source} have D = {templates.dim}")
 
 
 def _print_results(args: argparse.Namespace, results: dict[str, list[dict]]) -> None:

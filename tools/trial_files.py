@@ -3,12 +3,15 @@
 from __future__ import annotations
 
 import fnmatch
+from collections.abc import Mapping, Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from engine.errors import InputError
 from engine.frames import recording_frames
+from engine.recognition import Templates
 from engine.recording import read_recording
 
 
@@ -35,3 +38,18 @@ def load_trials_dir(root: str | Path, pattern: str = "*.csv") -> dict[str, list[
     if len(dims) != 1:
         raise InputError(f"{root}: trials mix one- and two-hand recordings (D = {sorted(dims)})")
     return out
+
+
+def templates_from_trials(trials: Mapping[str, Sequence[np.ndarray]], where: str | Path, **kwargs: Any) -> Templates:
+    """`Templates.from_trials` for a command: the ValueError it raises over the trials themselves
+    (none given, a trial under 2 frames, trials of different D) becomes an InputError naming
+    `where` they came from (a file, a folder), one line and exit code 2."""
+    try:
+        return Templates.from_trials(trials, **kwargs)
+    except ValueError as exc:
+        raise InputError(f"{where}: cannot build templates: {exc}") from None
+
+
+def trials_dim(trials: Mapping[str, Sequence[np.ndarray]]) -> int:
+    """The values per frame of `load_trials_dir`'s trials (one D for all: it checks that)."""
+    return next(t.shape[1] for ts in trials.values() for t in ts)

@@ -506,6 +506,12 @@ class Templates:
                 raise ValueError("non-finite values in the signals")
             if not np.isfinite(data["gravity"]).all() or not (data["thresholds"] >= 0).all():  # inf: never reject
                 raise ValueError("gravity must be finite and thresholds >= 0")
+            # the recording reader's limit: signals and gravity are in g too
+            from engine.recording import MAX_ACCEL_G
+
+            peak = max(float(np.abs(signals).max(initial=0.0)), float(np.abs(data["gravity"]).max(initial=0.0)))
+            if peak > MAX_ACCEL_G:
+                raise ValueError(f"an acceleration of {peak:.6g} g in the signals or gravity, over the {MAX_ACCEL_G:g} g a sensor can read")
             cuts = np.cumsum(lengths)[:-1]
             meta = dict(zip(data["meta_keys"].tolist(), data["meta_values"].tolist(), strict=True))
             t = cls(

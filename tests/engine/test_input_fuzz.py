@@ -25,7 +25,7 @@ from engine.errors import InputError
 from engine.frames import recording_frames
 from engine.npz_files import NpzFileError, read_npz
 from engine.recognition.templates import TemplateFileError, Templates
-from engine.recording import MAX_DURATION_S, RecordingError, read_recording
+from engine.recording import MAX_ACCEL_G, MAX_DURATION_S, RecordingError, read_recording
 from engine.sensors.source import SourceError, SourceState, open_source
 from engine.trace import TraceError, read_chrome_trace
 from tools.profile import profile_summary
@@ -63,7 +63,7 @@ def test_recording_reader_gives_a_valid_recording_or_a_clean_error(tmp_path_fact
     except RecordingError as exc:
         assert str(path) in str(exc) and "\n" not in str(exc)
         return
-    assert np.isfinite(rec.t).all() and np.isfinite(rec.accel).all()
+    assert np.isfinite(rec.t).all() and (np.abs(rec.accel) <= MAX_ACCEL_G).all()
     assert (np.diff(rec.t) >= 0).all() and rec.t[-1] - rec.t[0] <= MAX_DURATION_S
     assert len(rec) == 1 or rec.t[-1] > rec.t[0]
     times, frames, labels = recording_frames(rec)  # the resampler copes with anything accepted

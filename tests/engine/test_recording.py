@@ -110,6 +110,8 @@ BAD_FILES = {
     "short_row.csv": ("t,rx,ry,rz\n0.0,1,2,3\n0.1,1\n", 3, "fields"),
     "half_left_hand.csv": ("t,rx,ry,rz,lx\n0.0,1,2,3,4\n", 1, "lx,ly,lz"),
     "nan.csv": ("t,rx,ry,rz\n0.0,1,nan,3\n", 2, "finite"),
+    "huge_accel.csv": ("t,rx,ry,rz,lx,ly,lz\n0.0,0,0,1,0,0,1\n0.1,0,0,1,0,-1e300,1\n", 3, "over the 1000 g"),
+    "accel_over_limit.csv": ("t,rx,ry,rz\n0.0,0,0,1\n0.1,1000.5,0,1\n", 3, "1000.5 g"),
     "empty.csv": ("# rate_hz: 60\n", None, "header"),
     "no_rows.csv": ("t,rx,ry,rz\n", None, "no samples"),
 }
@@ -127,6 +129,14 @@ def test_bad_files_raise_an_error_naming_file_and_line(tmp_path, name):
     assert err.value.line == line
     if line:
         assert f"{path}:{line}:" in msg
+
+
+def test_accelerations_up_to_the_limit_are_read_and_time_is_not_one(tmp_path):
+    """MAX_ACCEL_G bounds |rx..lz| only: t may be large, and +-1000 g itself is still read."""
+    path = tmp_path / "edge.csv"
+    path.write_text("t,rx,ry,rz\n5000.0,-1000,0,1000\n5000.1,0,0,1\n")
+    rec = read_recording(path)
+    assert recording.MAX_ACCEL_G == 1000.0 and rec.accel[0, 0].tolist() == [-1000.0, 0.0, 1000.0]
 
 
 def test_binary_and_missing_files(tmp_path):

@@ -19,6 +19,8 @@ SAMPLE = [  # one or two per input kind
     "bvh/ftime-1e9/cut", "url/demo-rate-1e9/record", "url/emu-drop-2/record",
     "arg/eval-folds-huge", "arg/synth-session-nan", "ok/record-emu-400k",
     "config/wrong-type/play", "tpl/recognizer-unknown/recognize", "arg/play-recognizer-unknown",
+    "rec/accel-1e300/recognize", "tpl/signals-1e200/evaluate", "eval/pp-unlabelled", "eval/stream-all-label/folds",
+    "eval/trials-huge/build", "eval/accel-1e306/bridge-emulate",
 ]
 
 
