@@ -29,7 +29,13 @@ from engine import arguments
 from engine.clock import STEP_HZ
 from engine.errors import InputError
 from engine.sensors.source import PLAYABLE
-from game.launch import check_visible_window, headless_env, open_player_source, parse_size
+from game.launch import (
+    KEYBOARD_SOURCE,
+    check_visible_window,
+    headless_env,
+    open_player_source,
+    parse_size,
+)
 
 if TYPE_CHECKING:  # pygame loads only when the screen opens (the CLI imports this module)
     import pygame
@@ -362,8 +368,11 @@ def _chosen_actions(args: argparse.Namespace) -> list[str]:
 
 def _open_source(args: argparse.Namespace, clock):
     """The player's source, said on the console; (source, playable, auto): whether a virtual
-    player behind it performs the moves, and whether it does so by itself."""
-    source, fallback = open_player_source(args.source, False, args.seed, clock.seconds)
+    player behind it performs the moves, and whether it does so by itself. `--demo` without
+    `--source` is the virtual player (keyboard://): it never looks for a Wiimote, which would
+    train from the Wiimote instead when one is connected."""
+    url = KEYBOARD_SOURCE if args.demo and args.source is None else args.source
+    source, fallback = open_player_source(url, False, args.seed, clock.seconds)
     if args.demo:
         print("quickjab train: demo: the virtual player performs every move by itself", file=sys.stderr)
     elif fallback:

@@ -7,7 +7,9 @@ import argparse
 import importlib
 
 # target name -> module; each is imported when the parser is built (for its arguments),
-# so a target module imports its heavy dependencies inside run()
+# so a target module imports what it measures (the recognizer, the physics, the Wiimote driver,
+# the serial bridge, the game) inside run() and the functions run() calls, never at its top:
+# `bench --help` and `bench startup` load none of it (tests/tools/test_startup.py)
 TARGETS = {
     "loop": "tools.bench_loop",
     "synth": "tools.bench_synth",

@@ -17,12 +17,15 @@ import argparse
 import json
 import math
 import time
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from engine.clock import STEP_DT
 from engine.errors import InputError
-from engine.physics import World
+
+if TYPE_CHECKING:
+    from engine.physics import World
 
 DT = STEP_DT
 
@@ -36,6 +39,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def _world(gap: float, iterations: int, solver: str = "jacobi") -> tuple[World, list]:
     """Two humanoids facing each other, roots `gap` metres apart, pulled to their guard."""
+    from engine.physics import World
     from game.actions import load_library
     from game.body import add_boxer_body
     from game.skeleton import local_to_world

@@ -22,8 +22,6 @@ from collections.abc import Callable
 import numpy as np
 
 from engine.errors import InputError
-from engine.recognition import DualBufferRecognizer, Templates
-from engine.recognition.dtw import IncrementalDTW, jit_available, native_available
 
 # Issue 3's speed targets: templates -> (max us per frame, min x faster than the peer).
 TARGETS = {13: (30.0, 10.0), 1000: (600.0, 30.0)}
@@ -63,11 +61,15 @@ def _time_frames(reset: Callable[[], object], push: Callable[[np.ndarray], objec
 
 
 def _time_incremental(templates: list[np.ndarray], query: np.ndarray, method: str, repeat: int) -> float:
+    from engine.recognition.dtw import IncrementalDTW
+
     dtw = IncrementalDTW(templates, method=method)
     return _time_frames(dtw.reset, dtw.push, query, repeat)
 
 
 def _time_push(templates: list[np.ndarray], query: np.ndarray, repeat: int, per_action: int = 1) -> float:
+    from engine.recognition import DualBufferRecognizer, Templates
+
     actions = [f"a{k // per_action}" for k in range(len(templates))]
     tm = Templates(actions, templates, np.zeros((len(templates), templates[0].shape[1])),
                    np.zeros(len(templates), dtype=int), np.full(len(templates), np.inf), feature="raw")
@@ -112,6 +114,8 @@ def _size(text: str) -> tuple[int, int]:
 
 
 def run(args: argparse.Namespace) -> int:
+    from engine.recognition.dtw import IncrementalDTW, jit_available, native_available
+
     rng = np.random.default_rng(0)
     try:
         sizes = [(_size(s), s.strip()) for s in args.sizes.split(",")]

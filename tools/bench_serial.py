@@ -17,12 +17,14 @@ import subprocess
 import sys
 import tempfile
 import time
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from engine.clock import RealClock
-from engine.sensors import open_source
-from firmware_bridge import protocol
+
+if TYPE_CHECKING:
+    from firmware_bridge import protocol
 
 TICK_MASK = (1 << 30) - 1
 
@@ -43,12 +45,16 @@ class NaiveReader:
     """The peer: reads what is waiting, then a Python loop over every byte, one frame at a time."""
 
     def __init__(self, port):
+        from firmware_bridge import protocol
+
+        self.protocol = protocol
         self.port = port
         self.buf = bytearray()
         self.hello: protocol.Hello | None = None
         self.frames = 0
 
     def poll(self, clock) -> list[tuple[float, np.ndarray, int]]:
+        protocol = self.protocol
         out = []
         n = self.port.in_waiting
         data = self.port.read(n) if n else b""
@@ -134,6 +140,7 @@ def run_readers(readers: dict, seconds: float) -> list[dict]:
 
 def decode_only_us_per_frame(n: int = 4000, repeats: int = 5) -> tuple[float, float]:
     """Decoder.feed vs the naive bytewise loop on the same bytes in 4-frame chunks (best of)."""
+    from firmware_bridge import protocol
     from firmware_bridge.faults import make_frames
 
     frames = make_frames(n, seed=1, hello_every=n)
@@ -163,6 +170,8 @@ def decode_only_us_per_frame(n: int = 4000, repeats: int = 5) -> tuple[float, fl
 def timed_source_poll(src):
     """A reader (see run_readers) for the serial:// source: its decoder is tapped to see the
     t_us of each frame it decodes."""
+    from firmware_bridge import protocol
+
     captured: list[protocol.Frame] = []
     feed = src.decoder.feed
 
@@ -203,6 +212,8 @@ def measure_both_readers(seconds: float, rate: int) -> tuple[dict, dict, dict]:
     """Both readers on their own pty, each fed by an emulated board: (the serial:// source's
     summary, the peer's summary, the source's counters)."""
     import serial
+
+    from engine.sensors import open_source
 
     with tempfile.TemporaryDirectory(prefix="qj-bench-serial-") as tmp:
         link_a, link_b = os.path.join(tmp, "a"), os.path.join(tmp, "b")

@@ -17,8 +17,6 @@ import numpy as np
 from engine import arguments
 from engine.clock import VirtualClock
 from engine.recording import Recording
-from engine.sensors.wiimote import WiimoteSource, decode_report
-from engine.sensors.wiimote.emulator import EmulatedBus, EmulatedWiimote
 
 STEP_NS = 16_666_667
 
@@ -38,6 +36,9 @@ def _recording() -> Recording:
 
 
 def driver_poll_us(seconds: float) -> tuple[np.ndarray, int]:
+    from engine.sensors.wiimote import WiimoteSource
+    from engine.sensors.wiimote.emulator import EmulatedBus, EmulatedWiimote
+
     vc = VirtualClock()
     src = WiimoteSource(clock=vc.seconds, backend=EmulatedBus([EmulatedWiimote(_recording(), vc.seconds)]))
     steps = int(seconds * 60)
@@ -52,6 +53,8 @@ def driver_poll_us(seconds: float) -> tuple[np.ndarray, int]:
 
 
 def emulator_only_us(seconds: float) -> np.ndarray:
+    from engine.sensors.wiimote.emulator import EmulatedWiimote
+
     vc = VirtualClock()
     emu = EmulatedWiimote(_recording(), vc.seconds)
     emu.handle_output(bytes([0x12, 0x04, 0x35]))
@@ -67,6 +70,8 @@ def emulator_only_us(seconds: float) -> np.ndarray:
 
 
 def decode_us(reps: int = 20000) -> float:
+    from engine.sensors.wiimote import decode_report
+
     report = bytes([0x35, 0x60, 0x20, 0x80, 0x81, 0x9A]) + bytes(range(16))
     t0 = time.perf_counter_ns()
     for _ in range(reps):

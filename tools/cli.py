@@ -14,7 +14,6 @@ import sys
 from typing import NoReturn
 
 from engine import __version__
-from game.command import run_command
 
 # command -> (module whose register() adds it, the one line `--help` shows), in `--help` order.
 # A module may add several commands (tools.recognition_commands: templates, recognize, evaluate).
@@ -92,7 +91,12 @@ def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
     command = command_word(argv)
     parser = build_parser(command) if command is not None else listing_parser()
-    return run_command(parser, parser.parse_args(argv))
+    args = parser.parse_args(argv)  # `--help`, `--version` and a bad argument exit here
+    # imported after parsing: `import game` registers keyboard:// (engine.sensors.source), which
+    # `quickjab --help` does not need
+    from game.command import run_command
+
+    return run_command(parser, args)
 
 
 if __name__ == "__main__":

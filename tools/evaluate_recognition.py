@@ -36,11 +36,11 @@ from engine.frames import recording_frames
 from engine.recognition import DualBufferRecognizer, Templates
 from engine.recognition.templates import activity, rest_gravity
 from engine.recording import read_recording
+from tools.evaluation_settings import CLIP_FRAMES
 from tools.trial_files import templates_from_trials
 
 UNNOTICEABLE_FRAMES = 6
 PAD_BEFORE, PAD_AFTER = 20, 40
-CLIP_FRAMES = 24  # the simulated character's punch clip: 0.4 s (0 = never finishes)
 ONSET_G = 0.3  # the true onset: this far (g) from the rest before the motion
 REST_FRAMES = 5  # a trial's rest: the mean of its first frames
 REST_WINDOW = 8  # a stream interval's rest: the stillest window of this many frames ...

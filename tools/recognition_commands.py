@@ -15,9 +15,11 @@ from engine.recognition import DualBufferRecognizer, Templates
 from engine.recognition.config import layered, parse_assignments
 from engine.recognition.templates import FEATURES, METHODS
 from engine.recording import read_recording
-from tools import evaluate_recognition as ev
-from tools import glove_punches
-from tools.trial_files import load_trials_dir, templates_from_trials, trials_dim
+from tools.evaluation_settings import CLIP_FRAMES
+
+# Start-up (issue 14): the evaluation's modules (tools.evaluate_recognition, glove_punches,
+# trial_files) are imported inside the commands that use them, so `recognize` and every `--help`
+# load none of them; the parser's defaults come from tools.evaluation_settings.
 
 MAX_BUFFER = 6000  # frames (100 s at 60 Hz): any recognizer buffer or count of frames
 MAX_FOLDS = 50  # contiguous folds of one labelled stream; each needs intervals to learn from
@@ -185,14 +187,16 @@ def _register_evaluate(sub: argparse._SubParsersAction) -> None:
     e.add_argument("--method", choices=METHODS, default=None, help="template method when building")
     e.add_argument("--feature", choices=FEATURES, default=None, help="template feature when building (default log)")
     e.add_argument("--plot", default=None, metavar="PNG", help="draw Figs. 8-9 style bars")
-    e.add_argument("--clip-frames", type=arguments.int_range(0, MAX_BUFFER), default=ev.CLIP_FRAMES,
-                   help=f"streams: the simulated character's clip length, then character_finished() (default {ev.CLIP_FRAMES}; 0 = never)")
+    e.add_argument("--clip-frames", type=arguments.int_range(0, MAX_BUFFER), default=CLIP_FRAMES,
+                   help=f"streams: the simulated character's clip length, then character_finished() (default {CLIP_FRAMES}; 0 = never)")
     e.add_argument("--json", action="store_true", help="print the rows as JSON lines instead of a table")
     _recognizer_args(e)
     e.set_defaults(func=cmd_evaluate)
 
 
 def cmd_build(args: argparse.Namespace) -> int:
+    from tools.trial_files import load_trials_dir, templates_from_trials
+
     settings = parse_assignments(args.recognizer)
     trials = load_trials_dir(args.trials_dir, args.glob)
     kwargs = {k: v for k, v in (("method", args.method), ("feature", args.feature)) if v}
@@ -231,6 +235,9 @@ def cmd_recognize(args: argparse.Namespace) -> int:
 
 
 def cmd_evaluate(args: argparse.Namespace) -> int:
+    from tools import evaluate_recognition as ev
+    from tools.trial_files import load_trials_dir, templates_from_trials
+
     if args.plot:  # said before minutes of evaluation, not after
         try:
             import matplotlib  # noqa: F401
@@ -271,6 +278,9 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
 def _evaluate_uwave(args: argparse.Namespace, kw: dict, tk: dict) -> dict[str, list[dict]]:
     """The uWave users' rows pooled: each user's first three day-1 trials are the templates,
     days 2-7 the tests."""
+    from tools import evaluate_recognition as ev
+    from tools.trial_files import load_trials_dir, templates_from_trials, trials_dim
+
     users = [int(u) for u in _mains(args.users)]
     pooled = None
     for u in users:
@@ -292,6 +302,8 @@ def _evaluate_uwave(args: argparse.Namespace, kw: dict, tk: dict) -> dict[str, l
 
 def _evaluate_punchbuddy(args: argparse.Namespace, kw: dict, tk: dict) -> dict[str, list[dict]]:
     """The two-glove rows (tools/glove_punches.py): across each person's sessions and across people."""
+    from tools import glove_punches
+
     if not glove_punches.glove_files(args.punchbuddy):
         raise InputError(f"{args.punchbuddy}: no right-<kind>-<count>-<person>-combo-l<h|j|c|u>-<n>.csv recordings")
     res = glove_punches.evaluate_gloves(
@@ -308,6 +320,9 @@ def _evaluate_input(args: argparse.Namespace, inp: str, templates: Templates | N
     """One INPUT's rows: a trial directory against the templates, or a labelled recording
     against the templates or, without them, in folds that learn from the rest of it. `source`
     names the templates in messages (the --templates file, or what --train built them from)."""
+    from tools import evaluate_recognition as ev
+    from tools.trial_files import load_trials_dir, trials_dim
+
     path = Path(inp)
     if path.is_dir():
         if templates is None:
@@ -338,6 +353,8 @@ def _check_dim(inp: str, dim: int, templates: Templates, source: str | None) -> 
 
 def _print_results(args: argparse.Namespace, results: dict[str, list[dict]]) -> None:
     """Each set's rows as JSON lines (--json) or a table."""
+    from tools import evaluate_recognition as ev
+
     for title, rows in results.items():
         if args.json:
             for r in rows:

@@ -76,6 +76,33 @@ def test_training_saves_templates_that_play_then_uses(tmp_path, monkeypatch) -> 
     assert [e["action"] for e in events if e["event"] == "start"][:1] == ["hook_l"]
 
 
+def test_train_demo_is_the_virtual_player_and_never_opens_a_wiimote(tmp_path, monkeypatch, capsys) -> None:
+    # `train --demo`: the virtual player performs every move. It used to open wiimote:// first
+    # (the keyboard only when no Wiimote answered), so with a Wiimote connected the demo trained
+    # from the Wiimote, and without one it paid the probe (driver, HID enumeration) at start-up.
+    from engine.sensors.demo import DemoSource
+
+    opened = []
+
+    def connected_wiimote(url, clock):
+        opened.append(url)
+        return DemoSource(url=url, clock=clock)  # a connected remote no virtual player drives
+
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "xdg"))
+    monkeypatch.setitem(source_mod._factories, "wiimote", connected_wiimote)
+    assert main(["train", "--headless", "--demo", "--actions", "straight_r", "--size", "320x180"]) == 0
+    assert opened == []
+    assert "demo: the virtual player performs every move" in capsys.readouterr().err
+    from engine.recognition import Templates
+
+    saved = Templates.load(tmp_path / "xdg" / "quickjab" / "templates.npz")
+    assert saved.meta.get("trained") == "straight_r"
+    # the player's own device, named with --source, is still what a demo trains from
+    assert main(["train", "--headless", "--demo", "--source", "wiimote://", "--actions", "straight_r",
+                 "--size", "320x180", "--frames", "2", "-o", str(tmp_path / "w.npz")]) == 0
+    assert opened == ["wiimote://"]
+
+
 def test_left_handed_play_mirrors_a_right_handed_set(tmp_path, monkeypatch) -> None:
     monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "xdg"))
     from game.session import load_templates

@@ -1,10 +1,15 @@
 """Start-up (issue 14): what a command imports. Each check runs a fresh interpreter and looks at
 sys.modules: `import engine.recognition`, `quickjab --help` and `quickjab play` never load numba
 or matplotlib; `--help` and `import game` load none of the command modules or numpy; one
-command loads its own module only. `quickjab bench startup` prints its figures and verdicts."""
+command loads its own module only; every command that draws nothing (recognize, templates
+build, evaluate, record, devices, bridge, synth, actions list) loads no pygame, numba or
+matplotlib, and the `--help` of every command and subcommand none of those nor the evaluation's
+modules; `bench --help` and `bench startup` load no other benchmark's dependencies; `train
+--demo` never probes for a Wiimote. `quickjab bench startup` prints its figures and verdicts."""
 
 from __future__ import annotations
 
+import argparse
 import json
 import os
 import subprocess
@@ -18,6 +23,12 @@ from tools.cli import COMMAND_MODULES, COMMANDS, build_parser, main
 
 REPO = Path(__file__).resolve().parents[2]
 HEAVY = ("numba", "matplotlib")
+DRAWING = {"pygame", "numba", "matplotlib"}  # what only a command that draws (or plots) may load
+# the evaluation's modules: `evaluate` and (trial_files) `templates build` only
+EVALUATION = {"tools.evaluate_recognition", "tools.glove_punches", "tools.trial_files"}
+# what the benchmarks measure (packages), each imported by its own target's run() only
+BENCH_HEAVY = ("engine.recognition.", "engine.physics.", "engine.sensors.wiimote.", "firmware_bridge.",
+               "dtaidistance.", "serial.", "game.")
 
 
 def loaded_after(code: str) -> set[str]:
@@ -33,6 +44,21 @@ def loaded_after(code: str) -> set[str]:
 
 def top_level(modules: set[str]) -> set[str]:
     return {m.split(".")[0] for m in modules}
+
+
+def run_in_fresh(argv: list[str], code: int = 0) -> set[str]:
+    """The modules a fresh interpreter has loaded after `quickjab ARGV` returned `code`."""
+    return loaded_after(f"""
+        from tools.cli import main
+        code = main({argv!r})
+        assert code == {code}, code
+    """)
+
+
+def bench_heavy(modules: set[str]) -> set[str]:
+    """The modules of BENCH_HEAVY's packages among `modules`; `game` and game.command run every
+    command (tools/cli.py), so they are not counted."""
+    return {m for m in modules if (m + ".").startswith(BENCH_HEAVY)} - {"game", "game.command"}
 
 
 def test_import_engine_recognition_loads_no_numba_or_matplotlib():
@@ -52,6 +78,7 @@ def test_help_loads_no_command_module_no_numpy_no_numba():
     assert "tools.cli" in mods
     assert not top_level(mods) & {*HEAVY, "numpy", "pygame"}
     assert not mods & set(COMMAND_MODULES)
+    assert not mods & {"game", "engine.sensors.source"}  # keyboard://'s registration: for a command only
 
 
 def test_a_command_imports_its_module_only():
@@ -61,7 +88,8 @@ def test_a_command_imports_its_module_only():
     """)
     assert "tools.bench" in mods and "tools.bench_startup" in mods
     assert not mods & (set(COMMAND_MODULES) - {"tools.bench"})
-    assert not top_level(mods) & set(HEAVY)
+    assert not top_level(mods) & DRAWING
+    assert not bench_heavy(mods)  # the other targets' dependencies: imported by their run() only
 
 
 def test_play_loads_no_numba_or_matplotlib():
@@ -72,6 +100,115 @@ def test_play_loads_no_numba_or_matplotlib():
     assert {"game.play", "game.session", "engine.recognition.dual_buffer"} <= mods
     assert not top_level(mods) & set(HEAVY)
     assert not mods & (set(COMMAND_MODULES) - {"game.play"})
+
+
+def test_train_demo_opens_the_virtual_player_without_looking_for_a_wiimote():
+    mods = run_in_fresh(["train", "--demo", "--headless", "--frames", "1", "--actions", "straight_r"])
+    assert {"game.training", "game.keyboard_source"} <= mods
+    assert not {m for m in mods if m.startswith("engine.sensors.wiimote")}  # no driver, no HID enumeration
+    assert not top_level(mods) & set(HEAVY)
+
+
+@pytest.fixture(scope="module")
+def recognition_files(tmp_path_factory) -> dict[str, Path]:
+    """Two actions' trials, their templates and a labelled recording of both (1 sensor)."""
+    import numpy as np
+
+    from engine.recording import Recording, write_recording
+
+    root = tmp_path_factory.mktemp("startup")
+    g, rng = np.array([0.0, 0.0, 1.0]), np.random.default_rng(0)
+
+    def bump(axis: int) -> np.ndarray:
+        x = np.tile(g, (24, 1))
+        x[:, axis] += 3.0 * np.sin(np.linspace(0, 2 * np.pi, 24))
+        return x
+
+    def write(path: Path, frames: np.ndarray, labels: list[str]) -> None:
+        write_recording(path, Recording(np.arange(len(frames)) / 60.0, frames.reshape(-1, 1, 3), labels))
+
+    for action, axis in (("jab", 0), ("upper", 2)):
+        (root / "trials" / action).mkdir(parents=True)
+        for k in range(3):
+            x = np.vstack([np.tile(g, (8, 1)), bump(axis) + rng.normal(0, 0.03, (24, 3)), np.tile(g, (8, 1))])
+            write(root / "trials" / action / f"{k}.csv", x, [action] * len(x))
+    frames = np.vstack([np.tile(g, (20, 1)), bump(2), np.tile(g, (30, 1)), bump(0), np.tile(g, (30, 1))])
+    write(root / "rec.csv", frames, [""] * 20 + ["upper"] * 24 + [""] * 30 + ["jab"] * 24 + [""] * 30)
+    assert main(["templates", "build", str(root / "trials"), "-o", str(root / "t.npz")]) == 0
+    (root / "empty").mkdir()
+    return {"trials": root / "trials", "recording": root / "rec.csv", "templates": root / "t.npz",
+            "empty": root / "empty", "out": root}
+
+
+# Commands that draw nothing, each with {its modules that show it ran} and the evaluation's
+# modules it may load; files named by key from recognition_files.
+QUIET_COMMANDS = {
+    "recognize": (["recognize", "--templates", "{templates}", "{recording}", "-o", "{out}/events.jsonl"], 0,
+                  {"engine.recognition.dual_buffer"}, set()),
+    "templates build": (["templates", "build", "{trials}", "-o", "{out}/built.npz"], 0,
+                        {"engine.recognition.templates"}, {"tools.trial_files"}),
+    "evaluate": (["evaluate", "--templates", "{templates}", "{trials}", "{recording}", "--mains", "6"], 0,
+                 {"tools.evaluate_recognition"}, {"tools.evaluate_recognition", "tools.trial_files"}),
+    "evaluate --punchbuddy": (["evaluate", "--punchbuddy", "{empty}"], 2,  # none there: one line, exit 2
+                              {"tools.glove_punches"}, EVALUATION),
+    "record": (["record", "--source", "replay://{recording}", "-o", "{out}/recorded.csv", "--seconds", "0.2"], 0,
+               {"engine.sensors.replay"}, set()),
+    "devices": (["devices", "--json"], 0, {"engine.sensors.wiimote.transport"}, set()),
+    "bridge faults": (["bridge", "faults", "--random-mb", "0.01", "--corrupted", "100", "--frames", "300",
+                       "--events", "10"], 0, {"firmware_bridge.faults"}, set()),
+    "synth": (["synth", "--trials", "1", "--actions", "straight_r", "-o", "{out}/synth"], 0,
+              {"game.virtual_player"}, set()),
+    "actions list": (["actions", "list"], 0, {"game.actions"}, set()),
+}
+
+
+@pytest.mark.parametrize("name", QUIET_COMMANDS)
+def test_a_command_that_draws_nothing_loads_no_pygame_numba_or_matplotlib(name, recognition_files):
+    argv, code, ran, evaluation = QUIET_COMMANDS[name]
+    files = {k: str(v) for k, v in recognition_files.items()}
+    mods = run_in_fresh([a.format(**files) for a in argv], code)
+    assert ran <= mods  # the check is not vacuous: the command did its work
+    assert not top_level(mods) & DRAWING
+    assert mods & EVALUATION == evaluation
+
+
+def help_paths(command: str) -> list[list[str]]:
+    """[command], then every subcommand under it (`templates build`, `bench startup`, ...)."""
+    def walk(parser, path):
+        yield path
+        for action in parser._actions:
+            if isinstance(action, argparse._SubParsersAction):
+                for name, sub in action.choices.items():
+                    yield from walk(sub, [*path, name])
+
+    top = next(a for a in build_parser(command)._actions if isinstance(a, argparse._SubParsersAction))
+    return list(walk(top.choices[command], [command]))
+
+
+def test_help_paths_reach_the_subcommands():
+    assert help_paths("templates") == [["templates"], ["templates", "build"]]
+    assert ["bench", "startup"] in help_paths("bench") and ["graph", "duel"] in help_paths("graph")
+
+
+@pytest.mark.parametrize("module", COMMAND_MODULES)
+def test_help_of_every_command_and_subcommand_loads_nothing_it_does_not_need(module):
+    # one interpreter per command module, which then prints every --help of its commands:
+    # whatever any of them loads is in sys.modules at the end
+    paths = [p for command, (m, _) in COMMANDS.items() if m == module for p in help_paths(command)]
+    mods = loaded_after(f"""
+        from tools.cli import main
+        for path in {paths!r}:
+            try:
+                main([*path, "--help"])
+            except SystemExit as exc:
+                assert exc.code == 0, path
+    """)
+    assert module in mods
+    assert not top_level(mods) & DRAWING
+    assert not mods & EVALUATION
+    if module == "tools.bench":  # every target's --help, not only `bench --help`
+        assert {f"tools.bench_{name}" for name in ("frame", "recognition", "serial", "startup")} <= mods
+        assert not bench_heavy(mods)
 
 
 def test_command_table_matches_what_the_modules_register():
