@@ -10,13 +10,14 @@ then it loads with `allow_pickle=False`, so object arrays are refused too.
 from __future__ import annotations
 
 import os
-import stat
 import zipfile
 import zlib
 from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
+
+from engine.errors import not_a_regular_file
 
 MAX_MEMBERS = 256
 
@@ -45,8 +46,8 @@ def read_npz(path: str | os.PathLike, max_bytes: int, keep: Callable[[str], bool
     NpzFileError for everything else that is wrong."""
     path = Path(path)
     st = os.stat(path)  # FileNotFoundError passes through: the loaders word it themselves
-    if not stat.S_ISREG(st.st_mode):
-        raise NpzFileError("a directory" if stat.S_ISDIR(st.st_mode) else "not a regular file (a pipe or a device?)")
+    if why := not_a_regular_file(st):
+        raise NpzFileError(why)
     try:
         with open(path, "rb") as fh:
             head = fh.read(6)

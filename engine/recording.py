@@ -10,7 +10,6 @@ from __future__ import annotations
 import csv
 import io
 import os
-import stat
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -18,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from engine.clock import STEP_HZ
-from engine.errors import InputError
+from engine.errors import InputError, not_a_regular_file
 from engine.sample import Sample
 
 HAND_COLUMNS = (("rx", "ry", "rz"), ("lx", "ly", "lz"))
@@ -77,9 +76,8 @@ def _open_regular(path: Path):
         st = os.stat(path)
     except OSError as exc:
         raise RecordingError(path, None, f"cannot read: {exc.strerror or exc}") from None
-    if not stat.S_ISREG(st.st_mode):
-        kind = "a directory" if stat.S_ISDIR(st.st_mode) else "not a regular file (a pipe or a device?)"
-        raise RecordingError(path, None, f"cannot read: {kind}")
+    if why := not_a_regular_file(st):
+        raise RecordingError(path, None, f"cannot read: {why}")
     if st.st_size > MAX_RECORDING_BYTES:
         raise RecordingError(path, None, f"{st.st_size / 2**20:.0f} MiB is over the {MAX_RECORDING_BYTES // 2**20} MiB "
                                          "limit for a recording: split it into shorter files")

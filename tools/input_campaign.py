@@ -423,12 +423,20 @@ def bad_config_files(d: Path) -> dict[str, str]:
         "binary": b"\xff\xfe\x00[recognizer]",
         "big": "# " + "x" * (2 << 20) + "\n",
         "directory": None,
+        "fifo": None,  # size 0: passes the size limit, and opening it blocks
+        "dev-zero": None,  # a symlink to /dev/zero: size 0, and reading it never ends
     }
     out = {}
     for name, content in files.items():
         path = d / "config" / name / "quickjab" / "config.toml"
         path.parent.mkdir(parents=True, exist_ok=True)
-        if content is None:
+        if name == "fifo":
+            if not path.exists():
+                os.mkfifo(path)
+        elif name == "dev-zero":
+            if not path.is_symlink():
+                path.symlink_to("/dev/zero")
+        elif content is None:
             path.mkdir(exist_ok=True)
         elif isinstance(content, bytes):
             path.write_bytes(content)

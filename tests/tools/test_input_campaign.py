@@ -18,7 +18,7 @@ SAMPLE = [  # one or two per input kind
     "graph/grid-distance_step-zero/info", "trace/deep/profile", "trace/args-int/profile",
     "bvh/ftime-1e9/cut", "url/demo-rate-1e9/record", "url/emu-drop-2/record",
     "arg/eval-folds-huge", "arg/synth-session-nan", "ok/record-emu-400k",
-    "config/wrong-type/play", "tpl/recognizer-unknown/recognize", "arg/play-recognizer-unknown",
+    "config/wrong-type/play", "config/fifo/recognize", "config/dev-zero/play", "tpl/recognizer-unknown/recognize", "arg/play-recognizer-unknown",
 ]
 
 
