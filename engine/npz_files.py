@@ -9,6 +9,7 @@ then it loads with `allow_pickle=False`, so object arrays are refused too.
 
 from __future__ import annotations
 
+import json
 import os
 import zipfile
 import zlib
@@ -73,3 +74,15 @@ def read_npz(path: str | os.PathLike, max_bytes: int, keep: Callable[[str], bool
         raise
     except (OSError, ValueError, EOFError, KeyError, zipfile.BadZipFile, zlib.error, NotImplementedError) as exc:
         raise NpzFileError(f"{exc.__class__.__name__}: {exc}") from None
+
+
+def read_json(array: np.ndarray) -> object:
+    """The JSON text an .npz stores as a string array (a file's settings or meta record),
+    parsed. NpzFileError (a ValueError) for text that is not JSON, holds an integer of over 4300
+    digits or nests deeper than the parser recurses (`[` x 100,000 raised RecursionError)."""
+    try:
+        return json.loads(str(array))
+    except RecursionError:
+        raise NpzFileError("JSON nested too deeply") from None
+    except ValueError as exc:
+        raise NpzFileError(str(exc)) from None

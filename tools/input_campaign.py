@@ -155,6 +155,7 @@ def bad_templates(d: Path, bomb_gb: float = 1.5) -> dict[str, str]:
 
     g = good["gravity"]
     variant("nan-gravity", gravity=np.full_like(g, np.nan))
+    variant("recognizer-deep", recognizer=np.array("[" * 100_000))  # json.loads: RecursionError
     variant("nan-threshold", thresholds=np.full_like(good["thresholds"], np.nan))
     variant("neg-threshold", thresholds=-np.ones_like(good["thresholds"]))
     variant("gravity-shape", gravity=g[:, :3])
@@ -230,6 +231,7 @@ def bad_graphs(d: Path, bomb_gb: float = 1.5) -> dict[str, str]:
     S = len(good["key_steps"])
     E = len(good["edge_action"])
     variant("nan-reward", edge_reward=np.full(E, np.nan, np.float32))
+    variant("meta-deep", meta=np.array("[" * 100_000))  # json.loads: RecursionError
     variant("inf-reward", edge_reward=np.full(E, np.inf, np.float32))
     variant("neg-visits", visits=-np.ones(S, np.int32))
     variant("other-action-range", other_action=np.full(S, 999, np.int16))
@@ -493,6 +495,10 @@ def _bad_file_cases(q: list[str], d: Path, tpls: dict[str, str], graphs: dict[st
         cases.append(Case(f"tpl/{name}/recognize", q + ["recognize", good_rec, "--templates", path]))
     for name in ("nan-gravity", "zip-bomb", "npy", "recognizer-unknown"):
         cases.append(Case(f"tpl/{name}/play", q + ["play", "--headless", "--frames", "2", "--templates", tpls[name]]))
+    own = d / "data" / "recognizer-deep"  # the player's own templates, which play loads unasked
+    (own / "quickjab").mkdir(parents=True, exist_ok=True)
+    (own / "quickjab" / "templates.npz").write_bytes(Path(tpls["recognizer-deep"]).read_bytes())
+    cases.append(Case("tpl/recognizer-deep/own-play", q + ["play", "--headless", "--frames", "2"], env={"XDG_DATA_HOME": str(own)}))
     for name, home in bad_config_files(d).items():
         cases.append(Case(f"config/{name}/play", q + ["play", "--headless", "--frames", "2"], env={"XDG_CONFIG_HOME": home}))
         cases.append(Case(f"config/{name}/recognize", q + ["recognize", good_rec, "--templates", tpl], env={"XDG_CONFIG_HOME": home}))

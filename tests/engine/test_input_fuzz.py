@@ -187,6 +187,13 @@ def test_npy_instead_of_npz_is_named(tmp_path):
         Templates.load(path)
 
 
+def test_deeply_nested_settings_are_a_corrupt_file_not_a_recursion_error(tmp_path):
+    path = tmp_path / "deep.npz"
+    _save(path, {**_good_template_arrays(), "recognizer": np.array("[" * 100_000)})
+    with pytest.raises(TemplateFileError, match="nested too deeply"):
+        Templates.load(path)
+
+
 def test_shipped_templates_still_load():
     t = Templates.load(TEMPLATES)
     assert len(t) > 0 and np.isfinite(t.gravity).all()

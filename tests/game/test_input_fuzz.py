@@ -174,6 +174,14 @@ def test_graph_npy_and_bomb_are_clean_errors(tmp_path, graph_arrays):
         GraphTable.load(big)
 
 
+def test_a_deeply_nested_meta_is_a_corrupt_file_not_a_recursion_error(tmp_path, graph_arrays):
+    path = tmp_path / "deep.npz"
+    with open(path, "wb") as f:
+        np.savez(f, **{**graph_arrays, "meta": np.array("[" * 100_000)})
+    with pytest.raises(GraphFileError, match="nested too deeply"):
+        GraphTable.load(path)
+
+
 def test_the_shipped_graph_loads():
     g = GraphTable.load(GRAPH)
     assert g.n_states > 1000 and issubclass(GraphFileError, InputError)
