@@ -357,6 +357,13 @@ def bad_bvh(d: Path) -> dict[str, str]:
     out["deep"] = _write(d, "bvh/deep.bvh", "HIERARCHY\nROOT a\n" + "{\nJOINT b\n" * 20000 + "}\n" * 20000)
     out["channels-huge"] = _write(d, "bvh/chan.bvh", BVH_HEAD.replace("CHANNELS 3", "CHANNELS 100000000"))
     out["binary"] = _write(d, "bvh/binary.bvh", bytes(range(256)) * 16)
+    out["joints-10001"] = _write(d, "bvh/joints.bvh", "HIERARCHY\nROOT a\n{\n" + "JOINT b\n{\n}\n" * 10_001 + "}\nMOTION\n")
+    out["end-site-outside"] = _write(d, "bvh/endsite.bvh", "HIERARCHY\nEnd Site\n{\nOFFSET 0 0 0\n}\n")
+    unmapped = d / "bvh" / "unmapped.bvh"  # 24 MB of motion under a hierarchy without our joints
+    if not unmapped.exists():  # (read as Python floats before map_joints refused it: 0.9 GB)
+        rows = 1_300_000
+        unmapped.write_text(BVH_HEAD + f"Frames: {rows}\nFrame Time: 0.001\n" + "0 0 0 0 0 0 0 0 0\n" * rows)
+    out["unmapped-24mb"] = str(unmapped)
     fifo = d / "bvh" / "fifo.bvh"
     if not fifo.exists():
         os.mkfifo(fifo)
