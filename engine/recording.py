@@ -113,6 +113,13 @@ def _count_lines(path: Path) -> int:
     return n
 
 
+def _row_bound(f: io.TextIOBase, lines: int, numbers: int) -> int:
+    """Rows the file can hold: one a line, and one per 2 * numbers bytes (a character and a
+    separator per number). The line count alone let 250 MB of bare '\r' (262 million line
+    ends, two rows) ask np.empty for 13.7 GiB."""
+    return min(lines, os.fstat(f.fileno()).st_size // (2 * numbers) + 1)
+
+
 def _read_rows(path: Path, f: io.TextIOBase, max_rows: int) -> Recording:
     meta: dict[str, str] = {}
     lineno = 0
@@ -142,6 +149,7 @@ def _read_rows(path: Path, f: io.TextIOBase, max_rows: int) -> Recording:
     numeric = [header.index(c) for c in _header_columns(sensors)]
     label_col = header.index("label") if "label" in header else None
 
+    max_rows = _row_bound(f, max_rows, len(numeric))
     values = np.empty((max_rows, len(numeric)), dtype=np.float64)
     lines = np.empty(max_rows, dtype=np.int32)  # each row's line in the file, for messages
     n = 0

@@ -107,6 +107,10 @@ def bad_recordings(d: Path, big_mb: int) -> dict[str, str]:
                 for start in range(0, n, 100_000):
                     f.write("".join(f"{i / 430:.6f},{line}" for i in range(start, min(n, start + 100_000))))
         out[f"big-{big_mb}mb"] = str(p)
+        p = d / "rec" / f"big-cr{big_mb}.csv"  # two rows and a flood of bare '\r': one line end each
+        if not p.exists():
+            p.write_bytes(b"t,rx,ry,rz\n0,0,0,1\n" + b"\r" * (big_mb * 2**20) + b"1,0,0,1\n")
+        out[f"big-cr-{big_mb}mb"] = str(p)
     return out
 
 
