@@ -609,6 +609,10 @@ def _bad_game_args(q: list[str], d: Path, good_rec: str, tpl: str, out: Path) ->
         "train-recognizer-type": q + ["train", "--headless", "--frames", "2", "--recognizer", "reject=maybe"],
         "templates-build-recognizer-bad": q + ["templates", "build", str(d / "trials"), "-o", str(out / "t.npz"), "--recognizer", "adapt=-1"],
         "evaluate-recognizer-unknown": ev_base + ["--recognizer", "x=1"],
+        "evaluate-plot-xyz": ev_base + ["--mains", "6", "--plot", str(out / "fig.xyz")],
+        "play-screenshot-no-dir": q + ["play", "--headless", "--frames", "2", "--screenshot", str(out / "no" / "s.png")],
+        "play-trace-a-dir": q + ["play", "--headless", "--frames", "2", "--trace", str(out)],
+        "scope-screenshot-no-dir": q + ["scope", "--headless", "--frames", "2", "--screenshot", str(out / "no" / "s.png")],
     }
 
 
