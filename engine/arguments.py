@@ -9,7 +9,9 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 from collections.abc import Callable
+from pathlib import Path
 
 SEED_MAX = 2**63 - 1  # numpy's generators take any non-negative int; this keeps it a C long
 SIZE_MIN = (160, 120)
@@ -84,3 +86,37 @@ def window_size(text: str) -> str:
 
 
 window_size.__name__ = "size"
+
+
+def output_file(text: str) -> str:
+    """An argparse type for a file a command writes at its end (a screenshot, a trace, a plot):
+    a folder that is missing or not writable is said before the work, not in a traceback after."""
+    folder = Path(text).parent
+    if Path(text).is_dir():
+        raise argparse.ArgumentTypeError(f"{text} is a directory, not a file name")
+    if not folder.is_dir():
+        raise argparse.ArgumentTypeError(f"{text}: no directory {folder}")
+    if not os.access(folder, os.W_OK):
+        raise argparse.ArgumentTypeError(f"{text}: cannot write in {folder}")
+    return text
+
+
+output_file.__name__ = "file"
+
+
+def plot_file(text: str) -> str:
+    """output_file, in a format matplotlib writes (it goes by the suffix; none is PNG). Imports
+    matplotlib, so only commands given a plot pay for it."""
+    output_file(text)
+    try:
+        from matplotlib.backend_bases import FigureCanvasBase
+    except ImportError:  # the command says "--plot needs matplotlib" itself
+        return text
+    formats = FigureCanvasBase.get_supported_filetypes()
+    suffix = Path(text).suffix[1:].lower()
+    if suffix and suffix not in formats:
+        raise argparse.ArgumentTypeError(f"{text}: matplotlib writes no .{suffix} (" + ", ".join(sorted(formats)) + ")")
+    return text
+
+
+plot_file.__name__ = "plot file"

@@ -9,14 +9,16 @@ then it loads with `allow_pickle=False`, so object arrays are refused too.
 
 from __future__ import annotations
 
+import json
 import os
-import stat
 import zipfile
 import zlib
 from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
+
+from engine.errors import not_a_regular_file
 
 MAX_MEMBERS = 256
 
@@ -45,8 +47,8 @@ def read_npz(path: str | os.PathLike, max_bytes: int, keep: Callable[[str], bool
     NpzFileError for everything else that is wrong."""
     path = Path(path)
     st = os.stat(path)  # FileNotFoundError passes through: the loaders word it themselves
-    if not stat.S_ISREG(st.st_mode):
-        raise NpzFileError("a directory" if stat.S_ISDIR(st.st_mode) else "not a regular file (a pipe or a device?)")
+    if why := not_a_regular_file(st):
+        raise NpzFileError(why)
     try:
         with open(path, "rb") as fh:
             head = fh.read(6)
@@ -72,3 +74,15 @@ def read_npz(path: str | os.PathLike, max_bytes: int, keep: Callable[[str], bool
         raise
     except (OSError, ValueError, EOFError, KeyError, zipfile.BadZipFile, zlib.error, NotImplementedError) as exc:
         raise NpzFileError(f"{exc.__class__.__name__}: {exc}") from None
+
+
+def read_json(array: np.ndarray) -> object:
+    """The JSON text an .npz stores as a string array (a file's settings or meta record),
+    parsed. NpzFileError (a ValueError) for text that is not JSON, holds an integer of over 4300
+    digits or nests deeper than the parser recurses (`[` x 100,000 raised RecursionError)."""
+    try:
+        return json.loads(str(array))
+    except RecursionError:
+        raise NpzFileError("JSON nested too deeply") from None
+    except ValueError as exc:
+        raise NpzFileError(str(exc)) from None

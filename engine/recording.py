@@ -10,7 +10,6 @@ from __future__ import annotations
 import csv
 import io
 import os
-import stat
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -18,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from engine.clock import STEP_HZ
-from engine.errors import InputError
+from engine.errors import InputError, not_a_regular_file
 from engine.sample import Sample
 
 HAND_COLUMNS = (("rx", "ry", "rz"), ("lx", "ly", "lz"))
@@ -81,9 +80,8 @@ def _open_regular(path: Path):
         st = os.stat(path)
     except OSError as exc:
         raise RecordingError(path, None, f"cannot read: {exc.strerror or exc}") from None
-    if not stat.S_ISREG(st.st_mode):
-        kind = "a directory" if stat.S_ISDIR(st.st_mode) else "not a regular file (a pipe or a device?)"
-        raise RecordingError(path, None, f"cannot read: {kind}")
+    if why := not_a_regular_file(st):
+        raise RecordingError(path, None, f"cannot read: {why}")
     if st.st_size > MAX_RECORDING_BYTES:
         raise RecordingError(path, None, f"{st.st_size / 2**20:.0f} MiB is over the {MAX_RECORDING_BYTES // 2**20} MiB "
                                          "limit for a recording: split it into shorter files")
@@ -119,6 +117,13 @@ def _count_lines(path: Path) -> int:
     return n
 
 
+def _row_bound(f: io.TextIOBase, lines: int, numbers: int) -> int:
+    """Rows the file can hold: one a line, and one per 2 * numbers bytes (a character and a
+    separator per number). The line count alone let 250 MB of bare '\r' (262 million line
+    ends, two rows) ask np.empty for 13.7 GiB."""
+    return min(lines, os.fstat(f.fileno()).st_size // (2 * numbers) + 1)
+
+
 def _read_rows(path: Path, f: io.TextIOBase, max_rows: int) -> Recording:
     meta: dict[str, str] = {}
     lineno = 0
@@ -148,6 +153,7 @@ def _read_rows(path: Path, f: io.TextIOBase, max_rows: int) -> Recording:
     numeric = [header.index(c) for c in _header_columns(sensors)]
     label_col = header.index("label") if "label" in header else None
 
+    max_rows = _row_bound(f, max_rows, len(numeric))
     values = np.empty((max_rows, len(numeric)), dtype=np.float64)
     lines = np.empty(max_rows, dtype=np.int32)  # each row's line in the file, for messages
     n = 0

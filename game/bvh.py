@@ -18,15 +18,18 @@ back.
 
 from __future__ import annotations
 
+import io
 import os
-import stat
+import warnings
+from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TextIO
 
 import numpy as np
 
 from engine.clock import STEP_HZ
-from engine.errors import InputError
+from engine.errors import InputError, not_a_regular_file
 from game.actions import FPS, Action
 from game.hits import Hit
 from game.skeleton import (
@@ -46,6 +49,8 @@ MAX_FILE_BYTES = 256 * 2**20
 MIN_FRAME_TIME, MAX_FRAME_TIME = 1e-4, 1.0  # 10 kHz to 1 Hz
 MAX_DURATION_S = 4 * 3600.0
 MAX_VALUE = 1e6  # |channel or offset value|: centimetres or degrees
+MAX_JOINTS = 10_000  # a rig with fingers and a face has a few hundred
+MAX_LINE_CHARS = 1 << 20  # a motion line of 300 joints is some 20 KB
 
 
 class BVHError(InputError):
@@ -86,40 +91,58 @@ class BVH:
 # ------------------------------------------------------------------------------ reading
 
 
-def read_bvh(path: str | os.PathLike) -> BVH:
+def read_bvh(path: str | os.PathLike, mappable: bool = False) -> BVH:
+    """A BVH file. With `mappable`, a hierarchy without a joint for one of ours (map_joints) is
+    refused before the motion is read: `bvh info` and `bvh cut` need every one."""
     path = Path(path)
     try:
         st = os.stat(path)
-        if not stat.S_ISREG(st.st_mode):
-            raise BVHError(f"{path}: cannot read (not a regular file)")
+        if why := not_a_regular_file(st):
+            raise BVHError(f"{path}: cannot read: {why}")
         if st.st_size > MAX_FILE_BYTES:
             raise BVHError(f"{path}: {st.st_size / 2**20:.0f} MiB is over the {MAX_FILE_BYTES // 2**20} MiB limit for a BVH file")
-        text = path.read_text(encoding="utf-8", errors="replace")
+        with open(path, encoding="utf-8", errors="replace") as f:
+            return _parse(f, str(path), mappable)
     except OSError as exc:
         raise BVHError(f"{path}: cannot read ({exc})") from None
-    return parse_bvh(text, str(path))
 
 
-def parse_bvh(text: str, name: str = "<bvh>") -> BVH:
-    lines = text.splitlines()
+def parse_bvh(text: str, name: str = "<bvh>", mappable: bool = False) -> BVH:
+    return _parse(io.StringIO(text, newline=None), name, mappable)
+
+
+def _parse(f: TextIO, name: str, mappable: bool) -> BVH:
+    """Streams the file: the hierarchy line by line, then the motion straight into one array
+    (the whole text split into lines and Python floats took 37 times the file's size)."""
+    lines = enumerate(_lines(f, name))
     h = _Hierarchy(name)
-    i = 0
-    while i < len(lines):
-        tok = lines[i].split()
+    for i, line in lines:
+        tok = line.split()
         if tok and not h.feed(tok, i):
             break  # MOTION
-        i += 1
+    else:
+        i = None  # the file ended first
     if not h.joints:
         raise BVHError(f"{name}: no HIERARCHY joints")
-    if i >= len(lines):
+    if i is None:
         raise BVHError(f"{name}: no MOTION section")
-    frames, frame_time, i = _motion_header(lines, i + 1, name)
-    total = sum(len(j.channels) for j in h.joints)
-    motion = _motion_values(lines[i:], frames, total, name)
     if not all((np.abs(j.offset) <= MAX_VALUE).all() and (j.end_site is None or (np.abs(j.end_site) <= MAX_VALUE).all())
                for j in h.joints):
         raise BVHError(f"{name}: an OFFSET that is not a finite number up to {MAX_VALUE:g}")
-    return BVH(h.joints, motion.reshape(frames, total), frame_time, name)
+    if mappable:
+        map_joints(BVH(h.joints, np.empty((0, 0)), 1.0, name))
+    frames, frame_time = _motion_header(lines, name)
+    total = sum(len(j.channels) for j in h.joints)
+    motion = _motion_values((line for _, line in lines), frames, total, name)
+    return BVH(h.joints, motion, frame_time, name)
+
+
+def _lines(f: TextIO, name: str) -> Iterator[str]:
+    """The file's lines, refusing a huge one: splitting a line of 100 MB takes gigabytes."""
+    while line := f.readline(MAX_LINE_CHARS + 1):
+        if len(line) > MAX_LINE_CHARS:
+            raise BVHError(f"{name}: a line of over {MAX_LINE_CHARS} characters")
+        yield line
 
 
 class _Hierarchy:
@@ -145,6 +168,8 @@ class _Hierarchy:
             self._joint(key, tok, i)
         elif key == "END":
             self.in_end, self.end_owner = True, self.stack[-1] if self.stack else -1
+            if self.end_owner < 0:  # its OFFSET would go to joints[-1] or [-2]: none, or not its own
+                raise self.fail("End Site outside a joint", i)
         elif key == "{":
             self._open(i)
         elif key == "}":
@@ -165,6 +190,8 @@ class _Hierarchy:
     def _joint(self, key: str, tok: list[str], i: int) -> None:
         if len(tok) < 2:
             raise self.fail(f"{key} without a name", i)
+        if len(self.joints) >= MAX_JOINTS:  # 36 MB of 'JOINT b { }' lines took 1.4 GB
+            raise self.fail(f"over {MAX_JOINTS} joints", i)
         parent = self.stack[-1] if self.stack else -1
         if key == "JOINT" and parent < 0:
             raise self.fail("JOINT outside a ROOT", i)
@@ -206,11 +233,11 @@ class _Hierarchy:
         self.joints[self.stack[-1]].channels = [c.lower() for c in chans]
 
 
-def _motion_header(lines: list[str], i: int, name: str) -> tuple[int, float, int]:
-    """'Frames:' and 'Frame Time:' from line i on, checked; returns them and the next line."""
+def _motion_header(lines: Iterator[tuple[int, str]], name: str) -> tuple[int, float]:
+    """'Frames:' and 'Frame Time:', the next lines of `lines` (numbered), checked."""
     frames = frame_time = None
-    while i < len(lines) and (frames is None or frame_time is None):
-        t = lines[i].strip()
+    for i, line in lines:
+        t = line.strip()
         try:
             if t.lower().startswith("frames:"):
                 frames = int(t.split(":", 1)[1])
@@ -220,7 +247,8 @@ def _motion_header(lines: list[str], i: int, name: str) -> tuple[int, float, int
                 raise BVHError(f"{name}:{i + 1}: expected 'Frames:' and 'Frame Time:'")
         except ValueError:
             raise BVHError(f"{name}:{i + 1}: {t[:40]!r} is not a number") from None
-        i += 1
+        if frames is not None and frame_time is not None:
+            break
     if frames is None or frame_time is None:
         raise BVHError(f"{name}: missing 'Frames:'/'Frame Time:'")
     if frames < 1:
@@ -229,22 +257,26 @@ def _motion_header(lines: list[str], i: int, name: str) -> tuple[int, float, int
         raise BVHError(f"{name}: 'Frame Time: {frame_time}' (from {MIN_FRAME_TIME} to {MAX_FRAME_TIME} s)")
     if frames * frame_time > MAX_DURATION_S:
         raise BVHError(f"{name}: {frames * frame_time:.6g} s of motion, over the {MAX_DURATION_S / 3600:g} h limit")
-    return frames, frame_time, i
+    return frames, frame_time
 
 
-def _motion_values(lines: list[str], frames: int, total: int, name: str) -> np.ndarray:
-    """The (frames, total) motion lines as numbers, each a finite value up to MAX_VALUE."""
-    rows = [ln for ln in lines if ln.strip()]
-    if len(rows) < frames:
-        raise BVHError(f"{name}: {frames} frames announced, {len(rows)} found")
-    try:
-        motion = np.array([[float(v) for v in r.split()] for r in rows[:frames]], dtype=np.float64)
-    except ValueError:
-        raise BVHError(f"{name}: a motion line is not numbers") from None
-    if motion.ndim != 2 or motion.shape[1] != total:
+def _motion_values(lines: Iterator[str], frames: int, total: int, name: str) -> np.ndarray:
+    """The first `frames` non-blank motion lines as a (frames, total) array, each a finite value
+    up to MAX_VALUE. numpy's parser grows the array as rows come: memory is the numbers', not
+    what `frames` announces."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # loadtxt's notes on skipped blank lines and on no data
+        try:
+            motion = np.loadtxt(lines, dtype=np.float64, comments=None, ndmin=2, max_rows=frames)
+        except ValueError:  # a field that is not a number, or a row of another length
+            raise BVHError(f"{name}: a motion line is not {total} numbers") from None
+    if len(motion) < frames:
+        raise BVHError(f"{name}: {frames} frames announced, {len(motion)} found")
+    if motion.shape[1] != total:
         raise BVHError(f"{name}: motion lines need {total} values each")
-    if not (np.abs(motion) <= MAX_VALUE).all():  # also refuses nan
-        row = int(np.argmin((np.abs(motion) <= MAX_VALUE).all(axis=1)))
+    if not (motion.max() <= MAX_VALUE and motion.min() >= -MAX_VALUE):  # nan too; no copy made
+        np.abs(motion, out=motion)  # refused: its values are not needed any more
+        row = int(np.argmin((motion <= MAX_VALUE).all(axis=1)))
         raise BVHError(f"{name}: motion frame {row} has a value that is not a finite number up to {MAX_VALUE:g}")
     return motion
 

@@ -18,7 +18,7 @@ import os
 from collections.abc import Sequence
 from pathlib import Path
 
-from engine.errors import InputError
+from engine.errors import InputError, not_a_regular_file
 from engine.recognition.config import check_settings, parse_assignments
 
 CONFIG_NAME = "config.toml"
@@ -38,7 +38,11 @@ def read_config(path: str | os.PathLike | None = None) -> dict[str, dict[str, ob
         return {}
     tomllib = _toml_reader(path)
     try:
-        if path.stat().st_size > MAX_CONFIG_BYTES:
+        st = path.stat()
+        why = not_a_regular_file(st)  # a FIFO would hang here, /dev/zero fill the memory
+        if why:
+            raise InputError(f"{path}: cannot read the config file: {why}")
+        if st.st_size > MAX_CONFIG_BYTES:
             raise InputError(f"{path}: a config file of over {MAX_CONFIG_BYTES >> 20} MiB; expected a few lines")
         with open(path, "rb") as f:
             data = tomllib.load(f)

@@ -56,7 +56,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run_info(args: argparse.Namespace) -> int:
-    bvh = read_bvh(args.file)
+    bvh = read_bvh(args.file, mappable=True)
     print(f"{args.file}: {len(bvh.joints)} joints, {bvh.frames} frames at {1 / bvh.frame_time:.1f} Hz")
     idx = map_joints(bvh)
     from game.skeleton import JOINTS
@@ -67,7 +67,7 @@ def run_info(args: argparse.Namespace) -> int:
 
 
 def run_cut(args: argparse.Namespace) -> int:
-    bvh = read_bvh(args.file)
+    bvh = read_bvh(args.file, mappable=True)
     motion = retarget(bvh)
     guard = None if args.no_guard_blend else load_library()["guard"].posture(0)
     action = cut_action(motion, args.start, args.end, args.name, args.kind, guard)

@@ -109,6 +109,10 @@ def bad_recordings(d: Path, big_mb: int) -> dict[str, str]:
                 for start in range(0, n, 100_000):
                     f.write("".join(f"{i / 430:.6f},{line}" for i in range(start, min(n, start + 100_000))))
         out[f"big-{big_mb}mb"] = str(p)
+        p = d / "rec" / f"big-cr{big_mb}.csv"  # two rows and a flood of bare '\r': one line end each
+        if not p.exists():
+            p.write_bytes(b"t,rx,ry,rz\n0,0,0,1\n" + b"\r" * (big_mb * 2**20) + b"1,0,0,1\n")
+        out[f"big-cr-{big_mb}mb"] = str(p)
     return out
 
 
@@ -159,6 +163,7 @@ def bad_templates(d: Path, bomb_gb: float = 1.5) -> dict[str, str]:
     variant("nan-gravity", gravity=np.full_like(g, np.nan))
     variant("huge-gravity", gravity=np.full_like(g, 1e300))
     variant("signals-1e200", signals=good["signals"] * 1e200)  # finite, absurd: overflowed in the recognizer
+    variant("recognizer-deep", recognizer=np.array("[" * 100_000))  # json.loads: RecursionError
     variant("nan-threshold", thresholds=np.full_like(good["thresholds"], np.nan))
     variant("neg-threshold", thresholds=-np.ones_like(good["thresholds"]))
     variant("gravity-shape", gravity=g[:, :3])
@@ -234,6 +239,7 @@ def bad_graphs(d: Path, bomb_gb: float = 1.5) -> dict[str, str]:
     S = len(good["key_steps"])
     E = len(good["edge_action"])
     variant("nan-reward", edge_reward=np.full(E, np.nan, np.float32))
+    variant("meta-deep", meta=np.array("[" * 100_000))  # json.loads: RecursionError
     variant("inf-reward", edge_reward=np.full(E, np.inf, np.float32))
     variant("neg-visits", visits=-np.ones(S, np.int32))
     variant("other-action-range", other_action=np.full(S, 999, np.int16))
@@ -359,6 +365,13 @@ def bad_bvh(d: Path) -> dict[str, str]:
     out["deep"] = _write(d, "bvh/deep.bvh", "HIERARCHY\nROOT a\n" + "{\nJOINT b\n" * 20000 + "}\n" * 20000)
     out["channels-huge"] = _write(d, "bvh/chan.bvh", BVH_HEAD.replace("CHANNELS 3", "CHANNELS 100000000"))
     out["binary"] = _write(d, "bvh/binary.bvh", bytes(range(256)) * 16)
+    out["joints-10001"] = _write(d, "bvh/joints.bvh", "HIERARCHY\nROOT a\n{\n" + "JOINT b\n{\n}\n" * 10_001 + "}\nMOTION\n")
+    out["end-site-outside"] = _write(d, "bvh/endsite.bvh", "HIERARCHY\nEnd Site\n{\nOFFSET 0 0 0\n}\n")
+    unmapped = d / "bvh" / "unmapped.bvh"  # 24 MB of motion under a hierarchy without our joints
+    if not unmapped.exists():  # (read as Python floats before map_joints refused it: 0.9 GB)
+        rows = 1_300_000
+        unmapped.write_text(BVH_HEAD + f"Frames: {rows}\nFrame Time: 0.001\n" + "0 0 0 0 0 0 0 0 0\n" * rows)
+    out["unmapped-24mb"] = str(unmapped)
     fifo = d / "bvh" / "fifo.bvh"
     if not fifo.exists():
         os.mkfifo(fifo)
@@ -427,12 +440,20 @@ def bad_config_files(d: Path) -> dict[str, str]:
         "binary": b"\xff\xfe\x00[recognizer]",
         "big": "# " + "x" * (2 << 20) + "\n",
         "directory": None,
+        "fifo": None,  # size 0: passes the size limit, and opening it blocks
+        "dev-zero": None,  # a symlink to /dev/zero: size 0, and reading it never ends
     }
     out = {}
     for name, content in files.items():
         path = d / "config" / name / "quickjab" / "config.toml"
         path.parent.mkdir(parents=True, exist_ok=True)
-        if content is None:
+        if name == "fifo":
+            if not path.exists():
+                os.mkfifo(path)
+        elif name == "dev-zero":
+            if not path.is_symlink():
+                path.symlink_to("/dev/zero")
+        elif content is None:
             path.mkdir(exist_ok=True)
         elif isinstance(content, bytes):
             path.write_bytes(content)
@@ -551,6 +572,10 @@ def _bad_file_cases(q: list[str], d: Path, tpls: dict[str, str], graphs: dict[st
     labelled = _write(d, "labelled.csv", _rec(_bump_rows("straight_r")))
     for name in ("signals-1e200", "huge-gravity"):
         cases.append(Case(f"tpl/{name}/evaluate", q + ["evaluate", labelled, "--templates", tpls[name], "--mains", "6"]))
+    own = d / "data" / "recognizer-deep"  # the player's own templates, which play loads unasked
+    (own / "quickjab").mkdir(parents=True, exist_ok=True)
+    (own / "quickjab" / "templates.npz").write_bytes(Path(tpls["recognizer-deep"]).read_bytes())
+    cases.append(Case("tpl/recognizer-deep/own-play", q + ["play", "--headless", "--frames", "2"], env={"XDG_DATA_HOME": str(own)}))
     for name, home in bad_config_files(d).items():
         cases.append(Case(f"config/{name}/play", q + ["play", "--headless", "--frames", "2"], env={"XDG_CONFIG_HOME": home}))
         cases.append(Case(f"config/{name}/recognize", q + ["recognize", good_rec, "--templates", tpl], env={"XDG_CONFIG_HOME": home}))
@@ -650,6 +675,10 @@ def _bad_game_args(q: list[str], d: Path, good_rec: str, tpl: str, out: Path) ->
         "train-recognizer-type": q + ["train", "--headless", "--frames", "2", "--recognizer", "reject=maybe"],
         "templates-build-recognizer-bad": q + ["templates", "build", str(d / "trials"), "-o", str(out / "t.npz"), "--recognizer", "adapt=-1"],
         "evaluate-recognizer-unknown": ev_base + ["--recognizer", "x=1"],
+        "evaluate-plot-xyz": ev_base + ["--mains", "6", "--plot", str(out / "fig.xyz")],
+        "play-screenshot-no-dir": q + ["play", "--headless", "--frames", "2", "--screenshot", str(out / "no" / "s.png")],
+        "play-trace-a-dir": q + ["play", "--headless", "--frames", "2", "--trace", str(out)],
+        "scope-screenshot-no-dir": q + ["scope", "--headless", "--frames", "2", "--screenshot", str(out / "no" / "s.png")],
     }
 
 

@@ -13,6 +13,7 @@ from collections import Counter
 
 import numpy as np
 
+from engine import arguments
 from engine.budget import UNACCOUNTED, WAIT, percentiles_ms
 from engine.clock import STEP_MS
 from engine.errors import InputError
@@ -174,7 +175,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("profile", help="summarize a frame-budget Chrome trace (table, --plot, --json)",
                        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("trace", metavar="TRACE.json", help="a Chrome trace written by the loop (e.g. `quickjab scope --trace`)")
-    p.add_argument("--plot", metavar="PNG", help="draw the frame-time histogram and stacked per-stage bars here")
+    p.add_argument("--plot", type=arguments.plot_file, metavar="PNG", help="draw the frame-time histogram and stacked per-stage bars here")
     p.add_argument("--json", action="store_true", help="print the summary as JSON")
     p.set_defaults(func=run)
 

@@ -186,7 +186,7 @@ def _register_evaluate(sub: argparse._SubParsersAction) -> None:
     e.add_argument("--mains", type=_mains, default=_mains("1-12"), help="main-buffer sizes (default 1-12; e.g. 6 or 1-12,auto)")
     e.add_argument("--method", choices=METHODS, default=None, help="template method when building")
     e.add_argument("--feature", choices=FEATURES, default=None, help="template feature when building (default log)")
-    e.add_argument("--plot", default=None, metavar="PNG", help="draw Figs. 8-9 style bars")
+    e.add_argument("--plot", type=arguments.plot_file, default=None, metavar="PNG", help="draw Figs. 8-9 style bars")
     e.add_argument("--clip-frames", type=arguments.int_range(0, MAX_BUFFER), default=CLIP_FRAMES,
                    help=f"streams: the simulated character's clip length, then character_finished() (default {CLIP_FRAMES}; 0 = never)")
     e.add_argument("--json", action="store_true", help="print the rows as JSON lines instead of a table")

@@ -28,7 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from engine.errors import InputError
-from engine.npz_files import NpzFileError, read_npz
+from engine.npz_files import NpzFileError, read_json, read_npz
 from engine.recognition.config import RecognizerConfigError, check_settings
 from engine.recognition.dtw import IncrementalDTW, dtw_distance
 
@@ -545,7 +545,7 @@ def _saved_settings(data: Mapping[str, np.ndarray], path: Path) -> dict[str, obj
     if "recognizer" not in data:
         return {}
     try:
-        values = json.loads(str(data["recognizer"]))
+        values = read_json(data["recognizer"])
     except ValueError as exc:
         raise ValueError(f"recognizer settings are not JSON ({exc})") from None
     try:

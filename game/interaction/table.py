@@ -45,7 +45,7 @@ from pathlib import Path
 import numpy as np
 
 from engine.errors import InputError
-from engine.npz_files import read_npz
+from engine.npz_files import read_json, read_npz
 
 from .bout import BoutRules, Rewards
 from .state import StateGrid
@@ -325,7 +325,7 @@ def _read_meta(a: dict, bad) -> tuple[dict, StateGrid, BoutRules, Rewards]:
     if "meta" not in a:
         raise bad("missing meta")
     try:
-        meta = json.loads(str(a["meta"]))
+        meta = read_json(a["meta"])
         if meta.get("format") != FORMAT:
             raise bad(f"format is {meta.get('format')!r}, expected {FORMAT!r}")
         version = meta.get("version")

@@ -114,6 +114,20 @@ def test_reading_a_big_recording_streams(tmp_path):
     assert peak < rows * 56 * 1.5 + 8 * 2**20 < 3 * size, (peak, size)
 
 
+def test_a_flood_of_line_ends_does_not_size_the_array(tmp_path):
+    path = tmp_path / "cr.csv"  # every '\r' a line end: the line count said a million rows
+    path.write_bytes(b"t,rx,ry,rz,lx,ly,lz,label\n0,0,0,1,0,0,1,\n" + b"\r" * 2**20 + b"1,0,0,1,0,0,1,\n")
+    tracemalloc.start()
+    try:
+        rec = read_recording(path)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert len(rec) == 2
+    # room for the rows the bytes can hold, 60 bytes of numbers per 14 bytes of text (was 60x)
+    assert peak < 5 * path.stat().st_size, (peak, path.stat().st_size)
+
+
 @pytest.mark.parametrize("kind", ["fifo", "dir"])
 def test_non_regular_files_are_refused_at_once(tmp_path, kind):
     path = tmp_path / "x.csv"
@@ -184,6 +198,13 @@ def test_npy_instead_of_npz_is_named(tmp_path):
     path = tmp_path / "a.npy"
     np.save(path, np.zeros(3))
     with pytest.raises(TemplateFileError, match=r"\.npy"):
+        Templates.load(path)
+
+
+def test_deeply_nested_settings_are_a_corrupt_file_not_a_recursion_error(tmp_path):
+    path = tmp_path / "deep.npz"
+    _save(path, {**_good_template_arrays(), "recognizer": np.array("[" * 100_000)})
+    with pytest.raises(TemplateFileError, match="nested too deeply"):
         Templates.load(path)
 
 

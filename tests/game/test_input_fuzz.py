@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import io
 import json
+import tracemalloc
 import zipfile
 from datetime import timedelta
 from pathlib import Path
@@ -15,8 +16,9 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from engine.errors import InputError
-from game.bvh import BVHError, parse_bvh, retarget
+from game.bvh import BVHError, parse_bvh, read_bvh, retarget
 from game.interaction.table import GraphFileError, GraphTable
+from tools.cli import main
 
 REPO = Path(__file__).resolve().parents[2]
 GRAPH = REPO / "game" / "assets" / "graph.npz"
@@ -83,6 +85,43 @@ def test_bad_bvh_headers_are_named(header, words):
 def test_nan_pose_is_refused_not_exported():
     text = BVH_TEXT.replace("0 91 0 10", "0 nan 0 10")
     with pytest.raises(BVHError, match="finite"):
+        parse_bvh(text, "x.bvh")
+
+
+def test_bvh_motion_takes_the_memory_of_its_numbers_not_of_its_text(tmp_path):
+    """A Python float per value took 37 times the file (8.7 GB for 234 MB)."""
+    head, _ = BVH_TEXT.split("Frames:")
+    rows = 50_000
+    path = tmp_path / "long.bvh"
+    path.write_text(head + f"Frames: {rows}\nFrame Time: 0.01\n"
+                    + "".join(" ".join(f"{(i * k) % 90:.6f}" for k in range(9)) + "\n" for i in range(rows)))
+    tracemalloc.start()
+    try:
+        bvh = read_bvh(path)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert bvh.motion.shape == (rows, 9) and bvh.motion[7, 2] == 14.0
+    assert peak < 3 * path.stat().st_size, (peak, path.stat().st_size)  # numbers: 0.8 x the text
+
+
+def test_bvh_info_refuses_a_hierarchy_it_cannot_map_before_reading_the_motion(tmp_path, capsys):
+    path = tmp_path / "unmapped.bvh"  # motion that cannot be read: the hierarchy must say no first
+    path.write_text(BVH_TEXT.replace("0 91 0 10", "not numbers"))
+    for command in (["info", str(path)], ["cut", str(path), "--start", "0", "--end", "1", "--name", "x", "-o", str(tmp_path / "x.json")]):
+        assert main(["bvh", *command]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and "no joint for spine" in err[0], err
+
+
+@pytest.mark.parametrize("text, says", [
+    ("HIERARCHY\nROOT a\n{\n" + "JOINT b\n{\n}\n" * 10_001 + "}\nMOTION\n", "over 10000 joints"),
+    (BVH_TEXT.replace("OFFSET 0 5 0", "OFFSET 0 5 0 " + "0 " * 2**20, 1), "a line of over"),
+    (BVH_TEXT.replace("0 91 0 10", "0 " * 2**20), "a line of over"),
+    ("HIERARCHY\nEnd Site\n{\nOFFSET 0 0 0\n}\n", "End Site outside a joint"),  # was an IndexError
+])
+def test_too_many_joints_a_huge_line_or_a_stray_end_site_is_refused(text, says):
+    with pytest.raises(BVHError, match=says):
         parse_bvh(text, "x.bvh")
 
 
@@ -172,6 +211,14 @@ def test_graph_npy_and_bomb_are_clean_errors(tmp_path, graph_arrays):
             f.write(bytes(4 * 2**20))
     with pytest.raises(GraphFileError, match="limit"):
         GraphTable.load(big)
+
+
+def test_a_deeply_nested_meta_is_a_corrupt_file_not_a_recursion_error(tmp_path, graph_arrays):
+    path = tmp_path / "deep.npz"
+    with open(path, "wb") as f:
+        np.savez(f, **{**graph_arrays, "meta": np.array("[" * 100_000)})
+    with pytest.raises(GraphFileError, match="nested too deeply"):
+        GraphTable.load(path)
 
 
 def test_the_shipped_graph_loads():

@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pygame
+import pytest
 
 import engine.sensors.source as source_mod
 from engine.sensors import SourceError
@@ -47,6 +48,14 @@ def test_bad_input_is_one_line_and_exit_2(tmp_path, capsys) -> None:
     assert len(err) == 1 and "nosuch" in err[0]
     assert main(["play", "--headless", "--graph", str(tmp_path / "missing.npz"), "--frames", "1", "--source", "keyboard://"]) == 2
     assert "missing.npz" in capsys.readouterr().err
+
+
+def test_a_screenshot_or_trace_in_a_missing_folder_is_refused_before_the_match(tmp_path, capsys) -> None:
+    for option in ("--screenshot", "--trace"):  # were a pygame.error traceback, an exit 2 after the match
+        with pytest.raises(SystemExit) as exit_:
+            main(["play", "--headless", "--frames", "5", "--source", "keyboard://", option, str(tmp_path / "no" / "s.png")])
+        err = capsys.readouterr().err.strip().splitlines()
+        assert exit_.value.code == 2 and len(err) == 1 and "no directory" in err[0], err
 
 
 def test_training_saves_templates_that_play_then_uses(tmp_path, monkeypatch) -> None:

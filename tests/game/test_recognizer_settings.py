@@ -4,6 +4,8 @@ set in the user's config file and on `play`'s command line, in that order of pre
 
 from __future__ import annotations
 
+import os
+import signal
 import subprocess
 import sys
 from pathlib import Path
@@ -74,6 +76,24 @@ def test_a_config_file_that_is_not_text_or_not_a_file():
     path.mkdir()
     with pytest.raises(InputError, match="cannot read the config file"):
         read_config()
+
+
+def test_a_fifo_config_file_is_refused_without_opening_it():
+    path = config_path()
+    path.parent.mkdir(parents=True)
+    os.mkfifo(path)  # size 0, and opening it blocks until a writer comes
+
+    def hung(*_):
+        raise TimeoutError("read_config opened the FIFO and waited")
+
+    old = signal.signal(signal.SIGALRM, hung)
+    signal.alarm(5)
+    try:
+        with pytest.raises(InputError, match="cannot read the config file: .*pipe"):
+            read_config()
+    finally:
+        signal.alarm(0)
+        signal.signal(signal.SIGALRM, old)
 
 
 def test_play_with_a_bad_config_file_exits_2_with_one_line_and_no_traceback(tmp_path):

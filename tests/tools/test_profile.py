@@ -76,6 +76,14 @@ def test_plot_draws_a_png(traced, tmp_path, capsys):
     assert np.unique(img.reshape(-1, img.shape[2]), axis=0).shape[0] > 20  # more than a blank canvas
 
 
+def test_a_plot_matplotlib_cannot_write_is_refused_before_the_summary(traced, tmp_path, capsys):
+    _, path = traced
+    with pytest.raises(SystemExit) as exit_:  # was a ValueError traceback after the summary
+        main(["profile", str(path), "--plot", str(tmp_path / "p.xyz")])
+    out, err = capsys.readouterr()
+    assert exit_.value.code == 2 and out == "" and len(err.strip().splitlines()) == 1 and "p.xyz" in err, err
+
+
 @pytest.mark.parametrize("content", ["{broken", '{"traceEvents": []}', "[]", '{"foo": 1}'])
 def test_bad_trace_is_one_line_and_exit_2(tmp_path, capsys, content):
     path = tmp_path / "bad_trace.json"

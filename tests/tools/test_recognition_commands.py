@@ -76,6 +76,13 @@ def test_bad_files_exit_2_with_one_line(tmp_path, capsys):
     assert main(["templates", "build", str(tmp_path / "nowhere"), "-o", str(tmp_path / "x.npz")]) == 2
 
 
+def test_a_plot_matplotlib_cannot_write_is_refused_before_the_evaluation(tmp_path, trials_dir, capsys):
+    with pytest.raises(SystemExit) as exit_:  # was a ValueError traceback after the evaluation
+        main(["evaluate", "--train", str(trials_dir), str(trials_dir), "--mains", "6", "--plot", str(tmp_path / "fig.xyz")])
+    out, err = capsys.readouterr()
+    assert exit_.value.code == 2 and out == "" and len(err.strip().splitlines()) == 1 and "fig.xyz" in err, err
+
+
 def test_stream_scoring_matches_starts_to_intervals_in_order():
     from tools.evaluate_recognition import intervals, score_stream
 
