@@ -15,6 +15,28 @@ ADAPT_PER_ACTION = 3
 class Adaptation:
     """When a motion ends: adopt it as one of its action's templates if it fits confidently."""
 
+    def _usable(self, scores: np.ndarray) -> np.ndarray:
+        """The scores the decisions see. An adopted motion brings the player's present style
+        (speed, strength, grip) to its own action alone: against an action that has no adopted
+        templates, a motion of that action in the present style is nearer the adopted ones (full
+        blows against templates from quick punches: the one kind adopted took the others'
+        punches). So an action with adopted templates is weighed against an action without them
+        by the trained templates: its adopted ones are left out where its best trained template
+        is worse than the best of an action without adopted ones. Among actions that both have
+        them, all templates count. For switches and the end; the first decision has its own rule
+        for adopted templates (rules.ADOPTED_LEAD)."""
+        if not self._adapted:
+            return scores
+        adopted = np.zeros(len(self._action_starts), dtype=bool)
+        adopted[self._tmpl_action[self._is_adapted]] = True
+        if adopted.all():
+            return scores
+        trained = np.minimum.reduceat(np.where(self._is_adapted, np.inf, scores), self._action_starts)
+        behind = adopted & (trained > trained[~adopted].min())
+        if not behind.any():
+            return scores
+        return np.where(self._is_adapted & behind[self._tmpl_action], np.inf, scores)
+
     def _adapt(self) -> None:
         """A player drifts from the trials the templates came from (uWave: day-1 templates, days
         2-7 tested). When a motion ends whose whole, up to where the hand stopped, fits its final

@@ -327,8 +327,9 @@ class DualBufferRecognizer(TemplateSet, DecisionRules, Adaptation):
                 self._stopped = True
             self._was_closed = closed
             if in_window:
-                self._decide(scores, events)
-                complete = self._complete(scores)
+                usable = scores if self.action is None else self._usable(scores)  # the first decision: ADOPTED_LEAD
+                self._decide(usable, events)
+                complete = self._complete(usable)
             else:
                 self._extended = True
         if self.quiet >= self.null_frames and not complete and self._paused():
@@ -342,7 +343,7 @@ class DualBufferRecognizer(TemplateSet, DecisionRules, Adaptation):
                 events.append(self._event("reject", self.action_names[self.action], None, called_off=True))
             elif self.action is not None:
                 if self._extended:
-                    self._late_switch(self._stop_scores if self._stopped else self.dtw.scores, events)
+                    self._late_switch(self._usable(self._stop_scores if self._stopped else self.dtw.scores), events)
                 if self.adapt and self.count <= max(self.window, self._extend_to):
                     self._adapt()
                 events.append(self._event("end", self.action_names[self.action], None, reason="complete" if complete else None))

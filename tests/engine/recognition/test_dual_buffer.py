@@ -371,8 +371,16 @@ def test_adaptation_follows_a_player_drifting_away_from_the_trials(templates):
     drift = [tilted_bump(d) for d in range(0, 61, 10)]
     fixed = DualBufferRecognizer(templates, adapt=0)
     assert final_actions(fixed, drift) == ["jab"] * 4 + [None] * 3
+    # A player who throws uppercuts too: both actions have the player's motions, and the jab is
+    # followed all the way (at 60 degrees it is nearer the trained uppercut than the trained jab).
+    both = DualBufferRecognizer(templates)
+    played = [m for d in drift for m in (d, bump(2, 3.0))]
+    assert final_actions(both, played) == ["jab", "upper"] * len(drift)
+    # Jabs alone: followed while nearer the trained jab than the trained uppercut (to 50 degrees);
+    # past that, with no uppercut of the player's to weigh it against, the trained templates
+    # decide (Adaptation._usable)
     rec = DualBufferRecognizer(templates)
-    assert final_actions(rec, drift) == ["jab"] * len(drift)
+    assert final_actions(rec, drift) == ["jab"] * (len(drift) - 1) + ["upper"]
     # the trained templates stay; at most `adapt` recent motions are kept per action
     assert rec.dtw.T == len(templates.actions) + 3 and rec.dtw.T == len(rec._tmpl_action)
     assert sorted(rec.action_names[a] for a in rec._tmpl_action).count("jab") == 3 + 3
