@@ -440,13 +440,7 @@ def evaluate_cross_session(
     scored with `score_stream`; a spliced stream (`mixed_stream`) brings its punches' true onsets
     as a third item. Pooled over the test recordings. Training recordings that give no templates
     (no interval of their action, one too short) are an InputError naming `where`."""
-    cut = {}
-    for action, (frames, labels) in train.items():
-        ivs = [iv for iv in intervals(labels) if iv[0] == action][:trials]
-        if not ivs:
-            raise InputError(f"{where}: no interval labelled {action!r} to build its template from")
-        cut[action] = stream_trials(frames, ivs)[action]
-    templates = templates_from_trials(cut, where, **(template_kwargs or {}))
+    templates = first_trials_templates(train, trials, template_kwargs, where)
     pooled = [Summary(m) for m in mains]
     for frames, labels, *onsets in test:
         ivs = intervals(labels)
@@ -463,8 +457,54 @@ def evaluate_cross_session(
     return pooled
 
 
+def first_trials_templates(
+    train: Mapping[str, tuple[np.ndarray, Sequence[str]]],
+    trials: int = 3,
+    template_kwargs: Mapping | None = None,
+    where: str = "the training recordings",
+) -> Templates:
+    """Templates from the first `trials` labelled intervals of each action's training recording
+    (`{action: (frames, labels)}`), each cut with its lead-in as `stream_trials` does."""
+    cut = {}
+    for action, (frames, labels) in train.items():
+        ivs = [iv for iv in intervals(labels) if iv[0] == action][:trials]
+        if not ivs:
+            raise InputError(f"{where}: no interval labelled {action!r} to build its template from")
+        cut[action] = stream_trials(frames, ivs)[action]
+    return templates_from_trials(cut, where, **(template_kwargs or {}))
+
+
+def evaluate_isolated(
+    train: Mapping[str, tuple[np.ndarray, Sequence[str]]],
+    test: Sequence[tuple[np.ndarray, Sequence[str]]],
+    mains: Sequence[int | str],
+    trials: int = 3,
+    template_kwargs: Mapping | None = None,
+    where: str = "the training recordings",
+    fresh: bool = False,
+    lead: int = 10,
+    **rec_kwargs,
+) -> list[Summary]:
+    """The templates of `evaluate_cross_session`, tested on every labelled punch of the test
+    recordings replayed as an isolated trial (cut with `lead` frames before and after it, as the
+    training punches are cut), in session order through one recognizer (`evaluate_trials`; with
+    `fresh`, a fresh one per trial): "the rest" of a person's punches, one at a time."""
+    templates = first_trials_templates(train, trials, template_kwargs, where)
+    tests: dict[str, list[np.ndarray]] = {}
+    for frames, labels in test:
+        for action, a, b in intervals(labels):
+            tests.setdefault(action, []).append(frames[max(0, a - lead) : b + lead])
+    return evaluate_trials(templates, tests, mains, fresh=fresh, **rec_kwargs)
+
+
 def evaluate_phone_punches(
-    root: str | Path, mains: Sequence[int | str], mixed: bool = False, seed: int = 0, **kwargs
+    root: str | Path,
+    mains: Sequence[int | str],
+    mixed: bool = False,
+    seed: int = 0,
+    isolated: bool = False,
+    fresh: bool = False,
+    **kwargs,
 ) -> dict[str, list[Summary]]:
     """Per hand, fast -> slow and slow -> fast: templates from the first trials of each punch in
     one set's files, tested on every punch of the other set's files (see evaluate_cross_session).
@@ -473,7 +513,9 @@ def evaluate_phone_punches(
     ("mixed, one guard"), and resting in one guard with the fist turned into each punch's own as
     it starts ("mixed, one guard, turned in"). Recorded mixed sequences of a hand
     (`<hand>_mixed_<name>.csv`) are tested too, with each set's templates ("fast -> recorded
-    mixed", "slow -> recorded mixed"), whether or not `mixed` is given."""
+    mixed", "slow -> recorded mixed"), whether or not `mixed` is given. With `isolated`, also each
+    punch of the other set as an isolated trial ("isolated", `evaluate_isolated`; with `fresh`,
+    "isolated, fresh recognizer per trial")."""
     files = punch_files(root)
     loaded: dict[Path, tuple[np.ndarray, list[str]]] = {}
 
@@ -499,6 +541,10 @@ def evaluate_phone_punches(
                     for name, guard, turn_in in variants:
                         stream = mixed_stream(test, seed, one_guard=guard, turn_in=turn_in)
                         out[f"phone-punches {hand} {src} -> {dst} {name}"] = evaluate_cross_session(train, [stream], mains, **kw)
+                if isolated:
+                    ikw = {k: v for k, v in kw.items() if k != "clip_frames"}  # no character: one trial at a time
+                    name = "isolated, fresh recognizer per trial" if fresh else "isolated"
+                    out[f"phone-punches {hand} {src} -> {dst} {name}"] = evaluate_isolated(train, test, mains, fresh=fresh, **ikw)
             if (hand, RECORDED_MIXED) in files:
                 recorded = [load(f) for f in files[(hand, RECORDED_MIXED)].values()]
                 out[f"phone-punches {hand} {src} -> recorded mixed"] = evaluate_cross_session(train, recorded, mains, **kw)

@@ -163,7 +163,7 @@ def _register_evaluate(sub: argparse._SubParsersAction) -> None:
     e.add_argument("--uwave", default=None, metavar="DIR", help="the uWave protocol on DIR/U<n>/gesture<k>/d<day>-r<rep>.csv")
     e.add_argument("--users", type=_users, default="1-6", help="uWave users (default 1-6)")
     e.add_argument("--fresh", action="store_true",
-                   help="trials: a fresh recognizer for every trial (forget the adaptation); default: one player's session")
+                   help="trials (and --isolated): a fresh recognizer for every trial (forget the adaptation); default: one player's session")
     e.add_argument("--phone-punches", default=None, metavar="DIR",
                    help="cross-session: DIR/<hand>_<punch>_<fast|slow>.csv; per hand, templates from the first "
                         "--trials punches of each kind in one set, tested on every punch of the other set, and on "
@@ -178,6 +178,9 @@ def _register_evaluate(sub: argparse._SubParsersAction) -> None:
     e.add_argument("--mixed", action="store_true",
                    help="--phone-punches: also the other set's punches of all kinds spliced into one shuffled stream "
                         "(as recorded; turned to one guard; and from one guard, the fist turned in as each punch starts)")
+    e.add_argument("--isolated", action="store_true",
+                   help="--phone-punches: also every punch of the other set as an isolated trial (10 frames of rest "
+                        "before and after), in session order through one recognizer (--fresh: a fresh one per trial)")
     e.add_argument("--seed", type=arguments.seed, default=0, help="--mixed: the shuffle's seed (default 0)")
     e.add_argument("--keep", type=arguments.int_range(1, 1000), default=None,
                    help="templates: keep each action's KEEP most representative trials (e.g. --trials 5 --keep 3)")
@@ -250,7 +253,8 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         results.update(_evaluate_uwave(args, kw, tk))
     if args.phone_punches:
         res = ev.evaluate_phone_punches(
-            args.phone_punches, args.mains, mixed=args.mixed, seed=args.seed, trials=args.trials, template_kwargs=tk,
+            args.phone_punches, args.mains, mixed=args.mixed, seed=args.seed, isolated=args.isolated, fresh=args.fresh,
+            trials=args.trials, template_kwargs=tk,
             clip_frames=args.clip_frames, **kw
         )
         if not res:

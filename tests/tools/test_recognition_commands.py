@@ -373,3 +373,31 @@ def test_evaluate_phone_punches_mixed(capsys):
             for kind in ("mixed", "mixed, one guard", "mixed, one guard, turned in"):
                 r = rows[f"phone-punches {h} {a} -> {b} {kind}"]
                 assert r["n"] == one["n"] and r["started"] >= 0.9  # every punch is there, and starts
+
+
+def test_evaluate_phone_punches_isolated_trials(tmp_path, capsys):
+    """--isolated: every punch of the other set replayed alone, in session order through one
+    recognizer. Quick punches train, full blows test (tests/engine/recognition/
+    test_adaptation_balance.py's motions): the adopted full jabs must not take the full hooks."""
+    import numpy as np
+
+    from engine.recording import Recording, write_recording
+    from tests.engine.recognition.test_adaptation_balance import move
+
+    rng = np.random.default_rng(0)
+    kinds = {"jab": {"fast": (3.0, 0.0, 16), "slow": (6.0, 0.0, 40)}, "hook": {"fast": (2.5, 0.8, 16), "slow": (6.0, 0.6, 40)}}
+    for punch, speeds in kinds.items():
+        for speed, (ax, ay, n) in speeds.items():
+            parts, labels = [np.tile([0.0, 0.0, 1.0], (60, 1))], [""] * 60
+            for _ in range(6):
+                parts += [move(ax, ay, n) + rng.normal(0, 0.02, (n, 3)), np.tile([0.0, 0.0, 1.0], (60, 1))]
+                labels += [punch] * n + [""] * 60
+            x = np.vstack(parts)
+            write_recording(tmp_path / f"right_{punch}_{speed}.csv", Recording(np.arange(len(x)) / 60, x, labels))
+    assert main(["evaluate", "--phone-punches", str(tmp_path), "--mains", "6", "--isolated", "--json"]) == 0
+    rows = {r["set"]: r for r in map(json.loads, capsys.readouterr().out.splitlines())}
+    assert list(rows) == [f"phone-punches right {a} -> {b}{s}" for a, b in (("fast", "slow"), ("slow", "fast")) for s in ("", " isolated")]
+    iso = rows["phone-punches right fast -> slow isolated"]
+    assert iso["n"] == 12 and iso["final_correct"] == 1.0
+    assert main(["evaluate", "--phone-punches", str(tmp_path), "--mains", "6", "--isolated", "--fresh", "--json"]) == 0
+    assert "phone-punches right fast -> slow isolated, fresh recognizer per trial" in capsys.readouterr().out
