@@ -74,6 +74,13 @@ class Summary:
     idle_minutes: float = 0.0
     extra_starts: int = 0  # starts inside a labelled interval that already had its own
 
+    def add(self, other: Summary) -> None:
+        """Pool `other` (the same main buffer, other punches) into this one."""
+        self.outcomes += other.outcomes
+        self.false_starts += other.false_starts
+        self.extra_starts += other.extra_starts
+        self.idle_minutes += other.idle_minutes
+
     def counts(self) -> np.ndarray:
         c = np.zeros(4, dtype=int)
         for o in self.outcomes:
@@ -324,10 +331,7 @@ def evaluate_stream_folds(
             rec = DualBufferRecognizer(templates, main=m, **rec_kwargs)
             events = replay_stream(rec, frames[lo:hi], clip_frames)
             s = score_stream(events, test, hi - lo, m, frames=frames[lo:hi])
-            pool.outcomes += s.outcomes
-            pool.false_starts += s.false_starts
-            pool.extra_starts += s.extra_starts
-            pool.idle_minutes += s.idle_minutes
+            pool.add(s)
     return pooled
 
 
@@ -432,6 +436,7 @@ def evaluate_cross_session(
     template_kwargs: Mapping | None = None,
     clip_frames: int = CLIP_FRAMES,
     where: str = "the training recordings",
+    draw: int = 0,
     **rec_kwargs,
 ) -> list[Summary]:
     """Templates from the first `trials` labelled intervals of each action's training recording
@@ -440,7 +445,7 @@ def evaluate_cross_session(
     scored with `score_stream`; a spliced stream (`mixed_stream`) brings its punches' true onsets
     as a third item. Pooled over the test recordings. Training recordings that give no templates
     (no interval of their action, one too short) are an InputError naming `where`."""
-    templates = first_trials_templates(train, trials, template_kwargs, where)
+    templates = first_trials_templates(train, trials, template_kwargs, where, draw)
     pooled = [Summary(m) for m in mains]
     for frames, labels, *onsets in test:
         ivs = intervals(labels)
@@ -450,10 +455,7 @@ def evaluate_cross_session(
             rec = DualBufferRecognizer(templates, main=m, **rec_kwargs)
             events = replay_stream(rec, frames, clip_frames)
             s = score_stream(events, ivs, len(frames), m, frames=frames, onsets=onsets[0] if onsets else None)
-            pool.outcomes += s.outcomes
-            pool.false_starts += s.false_starts
-            pool.extra_starts += s.extra_starts
-            pool.idle_minutes += s.idle_minutes
+            pool.add(s)
     return pooled
 
 
@@ -462,14 +464,17 @@ def first_trials_templates(
     trials: int = 3,
     template_kwargs: Mapping | None = None,
     where: str = "the training recordings",
+    draw: int = 0,
 ) -> Templates:
     """Templates from the first `trials` labelled intervals of each action's training recording
-    (`{action: (frames, labels)}`), each cut with its lead-in as `stream_trials` does."""
+    (`{action: (frames, labels)}`), each cut with its lead-in as `stream_trials` does; with
+    `draw` k, the k-th next `trials` of them instead (draw 1: intervals 4-6 of 3 per draw)."""
     cut = {}
     for action, (frames, labels) in train.items():
-        ivs = [iv for iv in intervals(labels) if iv[0] == action][:trials]
+        ivs = [iv for iv in intervals(labels) if iv[0] == action][draw * trials : (draw + 1) * trials]
         if not ivs:
-            raise InputError(f"{where}: no interval labelled {action!r} to build its template from")
+            has = sum(iv[0] == action for iv in intervals(labels))
+            raise InputError(f"{where}: {has} intervals labelled {action!r}, too few for template draw {draw + 1} of {trials}")
         cut[action] = stream_trials(frames, ivs)[action]
     return templates_from_trials(cut, where, **(template_kwargs or {}))
 
@@ -483,13 +488,14 @@ def evaluate_isolated(
     where: str = "the training recordings",
     fresh: bool = False,
     lead: int = 10,
+    draw: int = 0,
     **rec_kwargs,
 ) -> list[Summary]:
     """The templates of `evaluate_cross_session`, tested on every labelled punch of the test
     recordings replayed as an isolated trial (cut with `lead` frames before and after it, as the
     training punches are cut), in session order through one recognizer (`evaluate_trials`; with
     `fresh`, a fresh one per trial): "the rest" of a person's punches, one at a time."""
-    templates = first_trials_templates(train, trials, template_kwargs, where)
+    templates = first_trials_templates(train, trials, template_kwargs, where, draw)
     tests: dict[str, list[np.ndarray]] = {}
     for frames, labels in test:
         for action, a, b in intervals(labels):
@@ -504,6 +510,7 @@ def evaluate_phone_punches(
     seed: int = 0,
     isolated: bool = False,
     fresh: bool = False,
+    draws: int = 1,
     **kwargs,
 ) -> dict[str, list[Summary]]:
     """Per hand, fast -> slow and slow -> fast: templates from the first trials of each punch in
@@ -515,7 +522,16 @@ def evaluate_phone_punches(
     (`<hand>_mixed_<name>.csv`) are tested too, with each set's templates ("fast -> recorded
     mixed", "slow -> recorded mixed"), whether or not `mixed` is given. With `isolated`, also each
     punch of the other set as an isolated trial ("isolated", `evaluate_isolated`; with `fresh`,
-    "isolated, fresh recognizer per trial")."""
+    "isolated, fresh recognizer per trial"). With `draws` k > 1, every row pools k disjoint
+    draws of templates (the first `trials` punches of each kind, the next `trials`, ...): one draw
+    of 3 moves a row by 10-30 points (docs/recognition.md, seventeenth round)."""
+    if draws > 1:
+        out: dict[str, list[Summary]] = {}
+        for d in range(draws):
+            for title, rows in evaluate_phone_punches(root, mains, mixed, seed, isolated, fresh, draw=d, **kwargs).items():
+                for a, b in zip(out.setdefault(title, [Summary(m) for m in mains]), rows, strict=True):
+                    a.add(b)
+        return out
     files = punch_files(root)
     loaded: dict[Path, tuple[np.ndarray, list[str]]] = {}
 

@@ -148,10 +148,7 @@ def _test(train: Sequence[GloveFile], tests: Sequence[GloveFile], load: _Loaded,
             rec = DualBufferRecognizer(templates, main=pool.main, **rec_kwargs)
             events = replay_stream(rec, frames, clip_frames)
             s = score_stream(events, ivs, len(frames), pool.main, frames=frames, onsets=onsets)
-            pool.outcomes += s.outcomes
-            pool.false_starts += s.false_starts
-            pool.extra_starts += s.extra_starts
-            pool.idle_minutes += s.idle_minutes
+            pool.add(s)
     return len(tested)
 
 

@@ -181,6 +181,9 @@ def _register_evaluate(sub: argparse._SubParsersAction) -> None:
     e.add_argument("--isolated", action="store_true",
                    help="--phone-punches: also every punch of the other set as an isolated trial (10 frames of rest "
                         "before and after), in session order through one recognizer (--fresh: a fresh one per trial)")
+    e.add_argument("--draws", type=arguments.int_range(1, 100), default=1,
+                   help="--phone-punches: pool this many disjoint draws of --trials templates per kind "
+                        "(punches 1-3, 4-6, ...; default 1)")
     e.add_argument("--seed", type=arguments.seed, default=0, help="--mixed: the shuffle's seed (default 0)")
     e.add_argument("--keep", type=arguments.int_range(1, 1000), default=None,
                    help="templates: keep each action's KEEP most representative trials (e.g. --trials 5 --keep 3)")
@@ -254,6 +257,7 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     if args.phone_punches:
         res = ev.evaluate_phone_punches(
             args.phone_punches, args.mains, mixed=args.mixed, seed=args.seed, isolated=args.isolated, fresh=args.fresh,
+            draws=args.draws,
             trials=args.trials, template_kwargs=tk,
             clip_frames=args.clip_frames, **kw
         )
@@ -299,7 +303,7 @@ def _evaluate_uwave(args: argparse.Namespace, kw: dict, tk: dict) -> dict[str, l
             pooled = res
         else:
             for p, r in zip(pooled, res, strict=True):
-                p.outcomes += r.outcomes
+                p.add(r)
     order = "fresh recognizer per trial" if args.fresh else "session order"
     return {f"uWave users {args.users}, noise_g {kw['noise_g']}, {order}": [s.row() for s in pooled]}
 

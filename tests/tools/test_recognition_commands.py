@@ -375,10 +375,9 @@ def test_evaluate_phone_punches_mixed(capsys):
                 assert r["n"] == one["n"] and r["started"] >= 0.9  # every punch is there, and starts
 
 
-def test_evaluate_phone_punches_isolated_trials(tmp_path, capsys):
-    """--isolated: every punch of the other set replayed alone, in session order through one
-    recognizer. Quick punches train, full blows test (tests/engine/recognition/
-    test_adaptation_balance.py's motions): the adopted full jabs must not take the full hooks."""
+def quick_and_full_punches(root) -> None:
+    """A phone-punches folder: quick punches (fast) and full blows (slow) of two kinds, 6 each per
+    file (tests/engine/recognition/test_adaptation_balance.py's motions)."""
     import numpy as np
 
     from engine.recording import Recording, write_recording
@@ -393,7 +392,14 @@ def test_evaluate_phone_punches_isolated_trials(tmp_path, capsys):
                 parts += [move(ax, ay, n) + rng.normal(0, 0.02, (n, 3)), np.tile([0.0, 0.0, 1.0], (60, 1))]
                 labels += [punch] * n + [""] * 60
             x = np.vstack(parts)
-            write_recording(tmp_path / f"right_{punch}_{speed}.csv", Recording(np.arange(len(x)) / 60, x, labels))
+            write_recording(root / f"right_{punch}_{speed}.csv", Recording(np.arange(len(x)) / 60, x, labels))
+
+
+def test_evaluate_phone_punches_isolated_trials(tmp_path, capsys):
+    """--isolated: every punch of the other set replayed alone, in session order through one
+    recognizer. Quick punches train, full blows test: the adopted full jabs must not take the
+    full hooks."""
+    quick_and_full_punches(tmp_path)
     assert main(["evaluate", "--phone-punches", str(tmp_path), "--mains", "6", "--isolated", "--json"]) == 0
     rows = {r["set"]: r for r in map(json.loads, capsys.readouterr().out.splitlines())}
     assert list(rows) == [f"phone-punches right {a} -> {b}{s}" for a, b in (("fast", "slow"), ("slow", "fast")) for s in ("", " isolated")]
@@ -401,3 +407,17 @@ def test_evaluate_phone_punches_isolated_trials(tmp_path, capsys):
     assert iso["n"] == 12 and iso["final_correct"] == 1.0
     assert main(["evaluate", "--phone-punches", str(tmp_path), "--mains", "6", "--isolated", "--fresh", "--json"]) == 0
     assert "phone-punches right fast -> slow isolated, fresh recognizer per trial" in capsys.readouterr().out
+
+
+def test_evaluate_phone_punches_pools_template_draws(tmp_path, capsys):
+    """--draws 2: templates from punches 1-3 and from 4-6 of each kind, the rows pooled; a third
+    draw has no punches left: one line naming the training files, exit 2."""
+    quick_and_full_punches(tmp_path)
+    assert main(["evaluate", "--phone-punches", str(tmp_path), "--mains", "6", "--isolated", "--json"]) == 0
+    one = {r["set"]: r for r in map(json.loads, capsys.readouterr().out.splitlines())}
+    assert main(["evaluate", "--phone-punches", str(tmp_path), "--mains", "6", "--isolated", "--draws", "2", "--json"]) == 0
+    two = {r["set"]: r for r in map(json.loads, capsys.readouterr().out.splitlines())}
+    assert list(two) == list(one) and all(two[k]["n"] == 2 * one[k]["n"] for k in one)
+    assert main(["evaluate", "--phone-punches", str(tmp_path), "--mains", "6", "--draws", "3"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "right_*_fast.csv" in err[0] and "too few for template draw 3" in err[0]
