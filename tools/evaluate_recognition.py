@@ -34,7 +34,7 @@ import numpy as np
 from engine.errors import InputError
 from engine.frames import recording_frames
 from engine.recognition import DualBufferRecognizer, Templates
-from engine.recognition.templates import activity, rest_gravity
+from engine.recognition.templates import activity, rest_gravity, window_spread
 from engine.recording import read_recording
 from tools.evaluation_settings import CLIP_FRAMES
 from tools.trial_files import templates_from_trials
@@ -141,10 +141,7 @@ def stream_onset(frames: np.ndarray, first: int, end: int, prev_end: int = 0) ->
         lo, w = max(0, first - REST_WINDOW), min(REST_WINDOW, first)
     if w < 1:
         return first
-    win = np.lib.stride_tricks.sliding_window_view(x[lo:first], w, axis=0)  # (n, D, w)
-    dev = win - win.mean(axis=2, keepdims=True)
-    spread = np.sqrt((dev.reshape(len(win), -1, 3, w) ** 2).sum(axis=2).mean(axis=2)).sum(axis=1)
-    k = lo + int(np.argmin(spread))
+    k = lo + int(np.argmin(window_spread(x[lo:first], w)))
     rest = x[k : k + w].mean(axis=0)
     away = _away_from_rest(x[k + w : end], rest)
     return k + w + int(away[0]) if len(away) else first
@@ -492,9 +489,10 @@ def evaluate_isolated(
     **rec_kwargs,
 ) -> list[Summary]:
     """The templates of `evaluate_cross_session`, tested on every labelled punch of the test
-    recordings replayed as an isolated trial (cut with `lead` frames before and after it, as the
-    training punches are cut), in session order through one recognizer (`evaluate_trials`; with
-    `fresh`, a fresh one per trial): "the rest" of a person's punches, one at a time."""
+    recordings replayed as an isolated trial (cut with `lead` frames before it, as the training
+    punches are, and as many after; those frames may hold a neighbouring punch's tail), in session
+    order through one recognizer (`evaluate_trials`; with `fresh`, a fresh one per trial): "the
+    rest" of a person's punches, one at a time."""
     templates = first_trials_templates(train, trials, template_kwargs, where, draw)
     tests: dict[str, list[np.ndarray]] = {}
     for frames, labels in test:
@@ -606,10 +604,7 @@ def _stillest_window(x: np.ndarray, lo: int, hi: int, w: int = REST_WINDOW) -> i
     readings about their mean, as `stream_onset` finds the rest); None when fewer than `w`."""
     if hi - lo < w:
         return None
-    win = np.lib.stride_tricks.sliding_window_view(x[lo:hi], w, axis=0)  # (n, D, w)
-    dev = win - win.mean(axis=2, keepdims=True)
-    spread = np.sqrt((dev.reshape(len(win), -1, 3, w) ** 2).sum(axis=2).mean(axis=2)).sum(axis=1)
-    return lo + int(np.argmin(spread))
+    return lo + int(np.argmin(window_spread(x[lo:hi], w)))
 
 
 def punch_segments(frames: np.ndarray, labels: Sequence[str]) -> list[tuple[np.ndarray, list[str], np.ndarray, int, int]]:

@@ -179,8 +179,8 @@ def _register_evaluate(sub: argparse._SubParsersAction) -> None:
                    help="--phone-punches: also the other set's punches of all kinds spliced into one shuffled stream "
                         "(as recorded; turned to one guard; and from one guard, the fist turned in as each punch starts)")
     e.add_argument("--isolated", action="store_true",
-                   help="--phone-punches: also every punch of the other set as an isolated trial (10 frames of rest "
-                        "before and after), in session order through one recognizer (--fresh: a fresh one per trial)")
+                   help="--phone-punches: also every punch of the other set as an isolated trial (with the 10 frames "
+                        "before and after it), in session order through one recognizer (--fresh: a fresh one per trial)")
     e.add_argument("--draws", type=arguments.int_range(1, 100), default=1,
                    help="--phone-punches: pool this many disjoint draws of --trials templates per kind "
                         "(punches 1-3, 4-6, ...; default 1)")

@@ -371,7 +371,7 @@ class DecisionRules:
         # any other action's whole template (a long gesture pausing after a stretch that
         # looks like a shorter action's whole is not over; requiring a margin here costs
         # phone recall).
-        closed = self.dtw.closed_scores()
+        closed = self._usable(self.dtw.closed_scores())  # as the decisions weigh adopted templates
         return bool(closed[k] <= np.min(np.where(self._tmpl_action == self.action, np.inf, closed)))
 
     def _current_best(self, scores: np.ndarray) -> int:

@@ -67,6 +67,14 @@ def rest_gravity(trial: np.ndarray, frames: int = REST_FRAMES) -> np.ndarray:
     return np.asarray(trial[: max(1, min(frames, len(trial)))], dtype=np.float64).mean(axis=0)
 
 
+def window_spread(x: np.ndarray, w: int) -> np.ndarray:
+    """(n - w + 1,) for each window of `w` frames of `x` (n, D): the summed spread of the sensors'
+    readings about their mean (RMS distance per sensor, summed); small where the sensors rest."""
+    win = np.lib.stride_tricks.sliding_window_view(np.asarray(x, dtype=np.float64), w, axis=0)  # (n, D, w)
+    dev = win - win.mean(axis=2, keepdims=True)
+    return np.sqrt((dev.reshape(len(win), -1, 3, w) ** 2).sum(axis=2).mean(axis=2)).sum(axis=1)
+
+
 def trial_rest(trial: np.ndarray, window: int = REST_WINDOW) -> tuple[np.ndarray, int]:
     """(D,) the trial's resting gravity and the frame its rest begins. A trial cut from a stream
     with a long lead-in begins on the tail of the motion before it, and then its first frames are
@@ -82,9 +90,7 @@ def trial_rest(trial: np.ndarray, window: int = REST_WINDOW) -> tuple[np.ndarray
     w = min(window, hi)
     if w < REST_FRAMES:
         return rest_gravity(x), 0
-    win = np.lib.stride_tricks.sliding_window_view(x[:hi], w, axis=0)  # (n, D, w)
-    dev = win - win.mean(axis=2, keepdims=True)
-    spread = np.sqrt((dev.reshape(len(win), -1, 3, w) ** 2).sum(axis=2).mean(axis=2)).sum(axis=1)
+    spread = window_spread(x[:hi], w)
     # The earliest window about as still as the stillest: the slow crest of a motion can be a
     # little stiller than a short rest before it, and a trial that starts at rest keeps its rest.
     k = int(np.flatnonzero(spread <= REST_SPREAD_RATIO * spread.min())[0])
@@ -155,7 +161,7 @@ def resting_noise(trials: Iterable[Sequence[np.ndarray]], quantile: float = REST
             _, act, rest = motion_activity(t)
             peak = float(act.max())
             first = int(np.flatnonzero(act >= TRIM_FRACTION * peak)[0]) if peak > 0 else len(t)
-            pre.append(act[rest + REST_FRAMES : first])
+            pre.append(act[rest + (REST_WINDOW if rest else REST_FRAMES) : first])  # past what gravity averaged
     pre = np.concatenate(pre) if pre else np.array([])
     return float(np.percentile(pre, quantile)) if len(pre) >= REST_NOISE_MIN_FRAMES else float("nan")
 
@@ -188,7 +194,7 @@ def trim_rest(trial: np.ndarray, fraction: float = TRIM_FRACTION, lead_in: int =
     # The end: the last frame that still changes (the hand may stop in a new orientation, so
     # "rest" at the end is stillness, not closeness to the starting gravity).
     change = np.r_[0.0, np.linalg.norm(np.diff(trial, axis=0), axis=1)]
-    change[:rest] = 0.0  # another motion's
+    change[: rest + 1 if rest else 0] = 0.0  # another motion's, and the step from it into the rest
     moving = np.flatnonzero(change >= fraction * max(float(change.max()), 1e-9))
     last = max(int(moving[-1]) if len(moving) else len(trial) - 1, first)
     start = max(rest, first - lead_in)
@@ -506,7 +512,8 @@ class Templates:
                 raise ValueError("non-finite values in the signals")
             if not np.isfinite(data["gravity"]).all() or not (data["thresholds"] >= 0).all():  # inf: never reject
                 raise ValueError("gravity must be finite and thresholds >= 0")
-            # the recording reader's limit: signals and gravity are in g too
+            # the recording reader's limit: signals and gravity are in g too (imported here:
+            # recognition alone never reads recordings)
             from engine.recording import MAX_ACCEL_G
 
             peak = max(float(np.abs(signals).max(initial=0.0)), float(np.abs(data["gravity"]).max(initial=0.0)))
