@@ -471,7 +471,7 @@ def first_trials_templates(
         ivs = [iv for iv in intervals(labels) if iv[0] == action][draw * trials : (draw + 1) * trials]
         if not ivs:
             has = sum(iv[0] == action for iv in intervals(labels))
-            raise InputError(f"{where}: {has} intervals labelled {action!r}, too few for template draw {draw + 1} of {trials}")
+            raise InputError(f"{where}: {has} intervals labelled {action!r}, too few for template draw {draw + 1} ({trials} per draw)")
         cut[action] = stream_trials(frames, ivs)[action]
     return templates_from_trials(cut, where, **(template_kwargs or {}))
 
