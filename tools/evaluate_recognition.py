@@ -524,12 +524,7 @@ def evaluate_phone_punches(
     draws of templates (the first `trials` punches of each kind, the next `trials`, ...): one draw
     of 3 moves a row by 10-30 points (docs/recognition.md, seventeenth round)."""
     if draws > 1:
-        out: dict[str, list[Summary]] = {}
-        for d in range(draws):
-            for title, rows in evaluate_phone_punches(root, mains, mixed, seed, isolated, fresh, draw=d, **kwargs).items():
-                for a, b in zip(out.setdefault(title, [Summary(m) for m in mains]), rows, strict=True):
-                    a.add(b)
-        return out
+        return pooled_draws(lambda d: evaluate_phone_punches(root, mains, mixed, seed, isolated, fresh, draw=d, **kwargs), draws, mains)
     files = punch_files(root)
     loaded: dict[Path, tuple[np.ndarray, list[str]]] = {}
 
@@ -562,6 +557,18 @@ def evaluate_phone_punches(
             if (hand, RECORDED_MIXED) in files:
                 recorded = [load(f) for f in files[(hand, RECORDED_MIXED)].values()]
                 out[f"phone-punches {hand} {src} -> recorded mixed"] = evaluate_cross_session(train, recorded, mains, **kw)
+    return out
+
+
+def pooled_draws(
+    run: Callable[[int], dict[str, list[Summary]]], draws: int, mains: Sequence[int | str]
+) -> dict[str, list[Summary]]:
+    """`run(draw)`'s rows for draws 0 .. draws - 1, each row pooled over them."""
+    out: dict[str, list[Summary]] = {}
+    for d in range(draws):
+        for title, rows in run(d).items():
+            for a, b in zip(out.setdefault(title, [Summary(m) for m in mains]), rows, strict=True):
+                a.add(b)
     return out
 
 

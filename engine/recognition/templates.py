@@ -512,8 +512,7 @@ class Templates:
                 raise ValueError("non-finite values in the signals")
             if not np.isfinite(data["gravity"]).all() or not (data["thresholds"] >= 0).all():  # inf: never reject
                 raise ValueError("gravity must be finite and thresholds >= 0")
-            # the recording reader's limit: signals and gravity are in g too (imported here:
-            # recognition alone never reads recordings)
+            # the recording reader's limit, in g too (imported here: recognition reads no recordings)
             from engine.recording import MAX_ACCEL_G
 
             peak = max(float(np.abs(signals).max(initial=0.0)), float(np.abs(data["gravity"]).max(initial=0.0)))
