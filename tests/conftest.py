@@ -5,7 +5,10 @@ from __future__ import annotations
 
 import os
 import tempfile
+import tracemalloc
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -24,3 +27,18 @@ def shared_data() -> Path:
     if not SHARED_DATA.is_dir():
         pytest.skip(f"shared data not found at {SHARED_DATA}")
     return SHARED_DATA
+
+
+@pytest.fixture
+def peak_memory() -> Callable[[Callable[[], Any]], tuple[Any, int]]:
+    """`peak_memory(call)`: call() and the peak of the memory Python allocated during it (bytes)."""
+
+    def measure(call: Callable[[], Any]) -> tuple[Any, int]:
+        tracemalloc.start()
+        try:
+            out = call()
+            return out, tracemalloc.get_traced_memory()[1]
+        finally:
+            tracemalloc.stop()
+
+    return measure

@@ -94,7 +94,7 @@ def test_tiny_recording_claiming_a_long_time_is_refused_without_memory(tmp_path)
     assert peak < 5 * 2**20
 
 
-def test_reading_a_big_recording_streams(tmp_path):
+def test_reading_a_big_recording_streams(tmp_path, peak_memory):
     """Memory of a 14 MB CSV: the numbers (56 bytes a row) plus one chunk of rows as text, not
     the text many times over (the whole-text reader peaked at 16x the file)."""
     path = tmp_path / "big.csv"
@@ -104,25 +104,15 @@ def test_reading_a_big_recording_streams(tmp_path):
         for start in range(0, rows, 50_000):
             f.write("".join(f"{i / 100:.2f},0.1,0.2,1.0,0.0,0.1,0.9,jab\n" for i in range(start, start + 50_000)))
     size = path.stat().st_size
-    tracemalloc.start()
-    try:
-        rec = read_recording(path)
-        peak = tracemalloc.get_traced_memory()[1]
-    finally:
-        tracemalloc.stop()
+    rec, peak = peak_memory(lambda: read_recording(path))
     assert len(rec) == rows
     assert peak < rows * 56 * 1.5 + 8 * 2**20 < 3 * size, (peak, size)
 
 
-def test_a_flood_of_line_ends_does_not_size_the_array(tmp_path):
+def test_a_flood_of_line_ends_does_not_size_the_array(tmp_path, peak_memory):
     path = tmp_path / "cr.csv"  # every '\r' a line end: the line count said a million rows
     path.write_bytes(b"t,rx,ry,rz,lx,ly,lz,label\n0,0,0,1,0,0,1,\n" + b"\r" * 2**20 + b"1,0,0,1,0,0,1,\n")
-    tracemalloc.start()
-    try:
-        rec = read_recording(path)
-        peak = tracemalloc.get_traced_memory()[1]
-    finally:
-        tracemalloc.stop()
+    rec, peak = peak_memory(lambda: read_recording(path))
     assert len(rec) == 2
     # room for the rows the bytes can hold, 60 bytes of numbers per 14 bytes of text (was 60x)
     assert peak < 5 * path.stat().st_size, (peak, path.stat().st_size)

@@ -101,10 +101,22 @@ def test_a_reboot_with_one_sensor_fewer_keeps_the_frames_stage_running():
     assert res.resized == 40
 
 
+def record_while(board, master: int, slave: int, out) -> int:
+    """`quickjab record` for 1 s from the pty's slave end while `board()` writes its master end
+    in a thread; both ends closed after. The rows recorded."""
+    th = threading.Thread(target=board)
+    th.start()
+    try:
+        return record(f"serial://{os.ttyname(slave)}", str(out), 1.0)
+    finally:
+        th.join()
+        os.close(master)
+        os.close(slave)
+
+
 def test_record_continues_in_a_new_file_when_the_sensor_count_changes(tmp_path, capsys):
     master, slave = os.openpty()
     tty.setraw(slave)
-    name = os.ttyname(slave)
     out = tmp_path / "rec.csv"
 
     def board():
@@ -115,14 +127,7 @@ def test_record_continues_in_a_new_file_when_the_sensor_count_changes(tmp_path, 
         time.sleep(0.2)
         os.write(master, hello(boot=2, flags=protocol.FLAG_SENSOR_A) + samples(20, sensors=1, t0=9_000_000))
 
-    th = threading.Thread(target=board)
-    th.start()
-    try:
-        rows = record(f"serial://{name}", str(out), 1.0)
-    finally:
-        th.join()
-        os.close(master)
-        os.close(slave)
+    rows = record_while(board, master, slave, out)
     assert rows == 53
     a, b = read_recording(out), read_recording(tmp_path / "rec.2.csv")  # both read back
     assert (a.sensors, len(a), b.sensors, len(b)) == (2, 33, 1, 20)
@@ -366,14 +371,7 @@ def test_a_hello_that_changes_sensors_within_one_boot_is_dropped_and_record_keep
             seq += 11
             time.sleep(0.05)
 
-    th = threading.Thread(target=board)
-    th.start()
-    try:
-        rows = record(f"serial://{os.ttyname(slave)}", str(out), 1.0)
-    finally:
-        th.join()
-        os.close(master)
-        os.close(slave)
+    rows = record_while(board, master, slave, out)
     assert rows == 100
     rec = read_recording(out)
     assert rec.sensors == 2 and len(rec) == 100
