@@ -56,6 +56,10 @@ class Outcome:
     final: str | None  # decision when the motion ended
     last_switch_np: int  # n_p of the last switch, -1 if none
     lag: int | None  # frames from the true onset to the first decision
+    # of which: frames from the true onset to the recognizer's own (back-dated) onset of the motion
+    # it decided; negative when the recognizer's onset came first. The rest of `lag` is the main
+    # buffer filling from there (docs/recognition.md, "Where the lag goes").
+    onset_lag: int | None = None
 
     @property
     def group(self) -> int:
@@ -91,6 +95,7 @@ class Summary:
         n = max(len(self.outcomes), 1)
         c = self.counts() / n
         lags = [o.lag for o in self.outcomes if o.lag is not None]
+        split = [(o.onset_lag, o.lag - o.onset_lag) for o in self.outcomes if o.lag is not None and o.onset_lag is not None]
         started = sum(o.first is not None for o in self.outcomes)
         out = {
             "main": self.main,
@@ -104,6 +109,9 @@ class Summary:
             "lag_ms": round(float(np.median(lags)) * 1000 / 60, 1) if lags else None,
             "lag_p90_ms": round(float(np.percentile(lags, 90)) * 1000 / 60, 1) if lags else None,
         }
+        if split:  # medians of each part: they need not add up to lag_ms
+            out["lag_to_onset_ms"] = round(float(np.median([a for a, _ in split])) * 1000 / 60, 1)
+            out["lag_onset_to_decision_ms"] = round(float(np.median([b for _, b in split])) * 1000 / 60, 1)
         if self.idle_minutes > 0:
             out["false_starts"] = self.false_starts
             out["extra_starts"] = self.extra_starts
@@ -169,6 +177,15 @@ def _decisions(events: Iterable[dict]) -> tuple[str | None, str | None, int, int
     return first, final, last_np, at
 
 
+def _recognizer_onset(events: Iterable[dict], onset: int) -> int | None:
+    """Frames from the true `onset` to the recognizer's own onset of the first decided motion
+    in `events` (its `start` event's `onset_frame`); None without a start."""
+    for e in events:
+        if e["event"] == "start":
+            return None if e.get("onset_frame") is None else e["onset_frame"] - onset
+    return None
+
+
 def replay_trial(rec: DualBufferRecognizer, trial: np.ndarray) -> tuple[list[dict], int]:
     """Events of one isolated trial padded with rest; and the offset of the trial in the stream."""
     rec.reset()
@@ -207,8 +224,9 @@ def evaluate_trials(
                 rec.forget_adaptation()
             events, offset = replay_trial(rec, trial)
             first, final, last_np, at = _decisions(events)
-            lag = None if at is None else at - (offset + true_onset(trial))
-            s.outcomes.append(Outcome(action, first, final, last_np, lag))
+            onset = offset + true_onset(trial)
+            lag = None if at is None else at - onset
+            s.outcomes.append(Outcome(action, first, final, last_np, lag, _recognizer_onset(events, onset)))
         out.append(s)
     return out
 
@@ -287,7 +305,7 @@ def score_stream(
         after = [x for x in events if x["frame"] >= e["frame"]]
         first, final, last_np, at = _decisions(after)
         onset = onsets[i] if onsets is not None else a if frames is None else stream_onset(frames, a, b, prev)
-        s.outcomes.append(Outcome(action, first, final, last_np, at - onset))
+        s.outcomes.append(Outcome(action, first, final, last_np, at - onset, _recognizer_onset(after, onset)))
     labelled = np.zeros(n_frames, dtype=bool)
     for _, a, b in ivs:
         labelled[max(0, a - tolerance) : b] = True
@@ -350,7 +368,8 @@ def evaluate_stream(
 
 
 def format_table(rows: Sequence[dict]) -> str:
-    cols = ["main", "n", *GROUPS, "acceptable", "final_correct", "first_correct", "lag_ms", "lag_p90_ms"]
+    cols = ["main", "n", *GROUPS, "acceptable", "final_correct", "first_correct", "lag_ms", "lag_p90_ms",
+            "lag_to_onset_ms", "lag_onset_to_decision_ms"]
     if any("false_starts" in r for r in rows):
         cols += ["started", "type", "false_starts", "false_starts_per_idle_min", "extra_starts"]
     head = " | ".join(cols)

@@ -101,6 +101,36 @@ def test_stream_scoring_matches_starts_to_intervals_in_order():
     assert s.row()["started"] == round(2 / 3, 4)
 
 
+def test_the_lag_splits_at_the_recognizers_own_onset():
+    """lag = (true onset -> the recognizer's back-dated onset) + (that onset -> the decision); the
+    row reports each part's median, and a start without an onset_frame gives no split."""
+    from tools.evaluate_recognition import score_stream
+
+    labels = [""] * 40 + ["jab"] * 30 + [""] * 40 + ["hook"] * 30 + [""] * 20
+    ivs = [("jab", 40, 70), ("hook", 110, 140)]
+    ev = [
+        {"event": "start", "action": "jab", "frame": 52, "onset_frame": 47},  # gate 7 late, decided 5 on
+        {"event": "start", "action": "hook", "frame": 118, "onset_frame": 104},  # back-dated 6 early, 14 on
+    ]
+    s = score_stream(ev, ivs, len(labels), 6, onsets=[40, 110])
+    assert [(o.lag, o.onset_lag) for o in s.outcomes] == [(12, 7), (8, -6)]
+    row = s.row()
+    assert row["lag_to_onset_ms"] == round(0.5 * (7 - 6) * 1000 / 60, 1)
+    assert row["lag_onset_to_decision_ms"] == round(0.5 * (5 + 14) * 1000 / 60, 1)
+    del ev[0]["onset_frame"], ev[1]["onset_frame"]
+    row = score_stream(ev, ivs, len(labels), 6, onsets=[40, 110]).row()
+    assert "lag_to_onset_ms" not in row and row["lag_ms"] == round(10 * 1000 / 60, 1)
+
+
+def test_evaluate_trials_splits_the_lag_at_the_recognizers_onset(tmp_path, trials_dir, capsys):
+    """Through the recognizer: with main=6 a clear motion is decided 5 frames after the
+    recognizer's onset, and the two parts are what lag_ms is made of."""
+    assert main(["evaluate", "--train", str(trials_dir), str(trials_dir), "--mains", "6", "--json"]) == 0
+    row = json.loads(capsys.readouterr().out.splitlines()[-1])
+    assert row["lag_onset_to_decision_ms"] == round(5 * 1000 / 60, 1)
+    assert row["lag_to_onset_ms"] + row["lag_onset_to_decision_ms"] == pytest.approx(row["lag_ms"], abs=0.2)
+
+
 def test_true_onset_is_the_first_frame_0_3_g_from_the_rest_before():
     from tools.evaluate_recognition import stream_onset, true_onset
 
