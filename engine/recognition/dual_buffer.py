@@ -65,6 +65,10 @@ Per 60 Hz frame (`push`):
   sensors, the other hand's punch is not that return: a sensor the discarded action barely
   moves that moves past the gate and OTHER_HAND_RATIO of the discarded motion's own peak ends
   the discard (OTHER_HAND_*), and that frame is the next motion's onset (a combo).
+- Beyond the paper: with two or more sensors, while one sensor has moved clearly the most since the
+  onset (the others' peaks under MOVING_HAND_RATIO of its), no decision (first, switch or final)
+  names an action that barely moves it (under OTHER_HAND_SHARE of its templates' activity): the
+  DTW weighs both hands' readings alike, and the other hand's tilt could name its action.
 
 Events are dicts with the keys of docs/formats.md ("event", "action", "frame", "t" when the caller
 passes it, "from_frame" on switches, "score"), plus estimates of the motion's speed (m/s),
@@ -307,6 +311,7 @@ class DualBufferRecognizer(TemplateSet, DecisionRules, Adaptation):
         self._peak_lin = max(self._peak_lin, self._lin)
         self._after_peak *= RETURN_DECAY
         self.speed.track(self._xs, self._g0_list)
+        self._track_hands(self._xs)
         complete = False
         in_window = self.count <= self.window
         if in_window or (self.action is not None and self.count <= self._extend_to):
@@ -327,7 +332,7 @@ class DualBufferRecognizer(TemplateSet, DecisionRules, Adaptation):
                 self._stopped = True
             self._was_closed = closed
             if in_window:
-                usable = scores if self.action is None else self._usable(scores)  # the first decision: ADOPTED_LEAD
+                usable = self._moving_hand(scores if self.action is None else self._usable(scores))  # first: ADOPTED_LEAD
                 self._decide(usable, events)
                 complete = self._complete(usable)
             else:
@@ -343,7 +348,7 @@ class DualBufferRecognizer(TemplateSet, DecisionRules, Adaptation):
                 events.append(self._event("reject", self.action_names[self.action], None, called_off=True))
             elif self.action is not None:
                 if self._extended:
-                    self._late_switch(self._usable(self._stop_scores if self._stopped else self.dtw.scores), events)
+                    self._late_switch(self._moving_hand(self._usable(self._stop_scores if self._stopped else self.dtw.scores)), events)
                 if self.adapt and self.count <= max(self.window, self._extend_to):
                     self._adapt()
                 events.append(self._event("end", self.action_names[self.action], None, reason="complete" if complete else None))

@@ -5,6 +5,8 @@ DualBufferRecognizer."""
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from engine.recognition import rules
@@ -50,7 +52,12 @@ class TemplateSet:
         self.action_names = names
         self._hands = templates.dim // 3
         self._hand_share = hand_shares(templates, names)
-        self._other_hands = (self._hand_share < rules.OTHER_HAND_SHARE).tolist()  # per action, per sensor
+        self._barely = self._hand_share < rules.OTHER_HAND_SHARE  # (actions, sensors): the action barely moves it
+        self._other_hands = self._barely.tolist()
+        self._hand_mask: np.ndarray | None = None  # per template, for the sensor in _hand_mask_key (_moving_hand)
+        self._hand_mask_key: tuple[np.ndarray, int] | None = None
+        self._hand_ref: list[float] = []  # each sensor's reading on the motion's first frame (_track_hands)
+        self._sensor_peak = [0.0] * self._hands  # and its peak distance from it since
         self._hand_g0: list[float] | None = None  # the decided motion's onset gravity (_other_hand)
         self._hand_peak = [0.0] * self._hands  # its peak activity per sensor so far
         self._hand_action = 0  # its action
@@ -73,6 +80,37 @@ class TemplateSet:
         self._base_starts = self._action_starts.copy()
         self._is_adapted = np.zeros(len(order), dtype=bool)
         self._adapted: dict[int, list[tuple[np.ndarray, tuple[float, float]]]] = {}  # (motion, (early, window) peaks)
+
+    def _track_hands(self, xs: list[float]) -> None:
+        """Each sensor's peak distance from its reading on the motion's first frame, for
+        `_moving_hand`: how far each hand has moved, whatever the gravity estimate (a first guess
+        taken mid-motion made a still hand look like the moving one). Plain floats: two or three
+        sensors a frame."""
+        if self._hands > 1:
+            if self.count == 1:  # the motion's first frame (a back-dated one included)
+                self._hand_ref = xs
+                self._sensor_peak = [0.0] * self._hands
+            ref = self._hand_ref
+            dev = [math.dist(xs[i : i + 3], ref[i : i + 3]) for i in range(0, 3 * self._hands, 3)]
+            self._sensor_peak = [max(p, d) for p, d in zip(self._sensor_peak, dev, strict=True)]
+
+    def _moving_hand(self, scores: np.ndarray) -> np.ndarray:
+        """`scores` with the templates of the actions that barely move the sensor that has moved
+        clearly the most since the onset set to inf (MOVING_HAND_RATIO); as they are with
+        one sensor, while no sensor leads clearly, or when it would leave no action or mask none."""
+        if self._hands < 2:
+            return scores
+        peaks = self._sensor_peak
+        m = max(range(self._hands), key=peaks.__getitem__)
+        bar = rules.MOVING_HAND_RATIO * peaks[m]
+        if any(p >= bar for i, p in enumerate(peaks) if i != m):
+            return scores
+        key = (self._tmpl_action, m)  # the templates change only when one is adopted
+        if self._hand_mask_key is None or self._hand_mask_key[0] is not key[0] or self._hand_mask_key[1] != m:
+            barely = self._barely[:, m]
+            self._hand_mask = barely[self._tmpl_action] if barely.any() and not barely.all() else None
+            self._hand_mask_key = key
+        return scores if self._hand_mask is None else np.where(self._hand_mask, np.inf, scores)
 
     def _recut(self) -> None:
         """The trained templates cut again for the DTW at the gate now. A live motion starts where
