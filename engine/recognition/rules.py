@@ -75,11 +75,11 @@ DISCARD_HOLD = 1.5
 OTHER_HAND_SHARE = 0.35
 OTHER_HAND_RATIO = 0.5
 # The moving hand (two or more sensors, eighteenth round): while one sensor has moved clearly the
-# most since the onset (every other sensor's peak |a - g| under MOVING_HAND_RATIO of its peak), a
-# decision in the buffers or at the end does not name an action that barely moves that sensor
-# (under OTHER_HAND_SHARE of its templates' activity). The DTW sums both hands' features, and a
-# bouncing boxer's other glove, whose tilt the templates also carry, named the wrong hand's punch
-# in a quarter to a third of the two-glove first decisions.
+# most since the onset (every other sensor's peak distance from its reading on the motion's first
+# frame under MOVING_HAND_RATIO of its own), a decision in the buffers or at the end does not name
+# an action that barely moves that sensor (under OTHER_HAND_SHARE of its templates' activity). The
+# DTW sums both hands' features, and a bouncing boxer's other glove, whose tilt the templates also
+# carry, named the wrong hand's punch in 19-23 % of the two-glove first decisions.
 MOVING_HAND_RATIO = 0.7
 UNCHANGED_FRAMES = 2
 # A first decision needs the motion's peak of `linear` (||a| - |g||, summed over sensors: what a

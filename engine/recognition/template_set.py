@@ -105,11 +105,11 @@ class TemplateSet:
         bar = rules.MOVING_HAND_RATIO * peaks[m]
         if any(p >= bar for i, p in enumerate(peaks) if i != m):
             return scores
-        key = (self._tmpl_action, m)  # the templates change only when one is adopted
-        if self._hand_mask_key is None or self._hand_mask_key[0] is not key[0] or self._hand_mask_key[1] != m:
+        cached = self._hand_mask_key  # the template order changes only when one is adopted (a new array)
+        if cached is None or cached[0] is not self._tmpl_action or cached[1] != m:
             barely = self._barely[:, m]
             self._hand_mask = barely[self._tmpl_action] if barely.any() and not barely.all() else None
-            self._hand_mask_key = key
+            self._hand_mask_key = (self._tmpl_action, m)
         return scores if self._hand_mask is None else np.where(self._hand_mask, np.inf, scores)
 
     def _recut(self) -> None:
