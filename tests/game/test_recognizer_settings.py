@@ -58,6 +58,9 @@ def test_config_file_then_command_line():
     ("noise_g = 0.5\n", "unknown setting or table 'noise_g'"),
     ("[recogniser]\nnoise_g = 0.5\n", "unknown setting or table 'recogniser'"),
     ("recognizer = 3\n", "'recognizer' must be a table"),
+    # nested past the parser's recursion limit (tomllib recurses per level): RecursionError
+    ("[recognizer]\nnoise_g = " + "[" * 100_000 + "]" * 100_000 + "\n", "not a valid TOML file"),
+    ("[recognizer]\nnoise_g = " + "{a = " * 50_000 + "1" + "}" * 50_000 + "\n", "not a valid TOML file"),
 ])
 def test_a_bad_config_file_names_itself_in_one_line(text, says):
     path = write_config(text)
