@@ -88,6 +88,8 @@ def _bad_meta(meta: dict, grid: StateGrid, rules: BoutRules, rewards: Rewards) -
             return f"{name} is {v!r}, not a finite number"
         if v < 0:
             return f"{name} is negative"
+    if not isinstance(meta.get("build", {}), dict):  # `graph info` reads its keys
+        return f"build is {type(meta['build']).__name__}, not an object"
     n = meta.get("n_choices")
     if isinstance(n, bool) or not isinstance(n, int) or n < 1:
         return f"n_choices is {n!r}"

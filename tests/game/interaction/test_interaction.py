@@ -239,7 +239,10 @@ def _corrupt_variants(small_table, tmp_path):
     np.savez(tmp_path / "bad_escape.npz",
              **dict(arrays, edge_dst_steps_big=np.append(arrays["edge_dst_steps_big"], 1)))
     np.savez(tmp_path / "bad_meta.npz", **dict(arrays, meta=np.array("{")))
-    return ["garbage", "truncated", "missing", "bad_dst", "bad_escape", "bad_meta"]
+    meta = json.loads(str(arrays["meta"]))
+    # `graph info` read build's keys with .get: a list was an AttributeError traceback
+    np.savez(tmp_path / "build_list.npz", **dict(arrays, meta=np.array(json.dumps({**meta, "build": [1]}))))
+    return ["garbage", "truncated", "missing", "bad_dst", "bad_escape", "bad_meta", "build_list"]
 
 
 def test_a_corrupt_file_is_a_clear_error(small_table, tmp_path):
