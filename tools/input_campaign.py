@@ -254,6 +254,7 @@ def bad_graphs(d: Path, bomb_gb: float = 1.5) -> dict[str, str]:
     variant("n-choices-huge", {"n_choices": 10**6})
     variant("n-choices-text", {"n_choices": "x"})
     variant("build-list", {"build": [1]})  # graph info read its keys: AttributeError
+    variant("wait-frames-huge", {"rules.wait_frames": 10**12})  # duel: a 568 TiB bout table
     _bad_meta_numbers(meta, variant)
     variant("meta-list", meta=np.array("[1, 2]"))
     variant("meta-2d", meta=np.array([[json.dumps(meta)]]))
