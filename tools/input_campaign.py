@@ -85,6 +85,7 @@ def bad_recordings(d: Path, big_mb: int) -> dict[str, str]:
         "text": _write(d, "rec/text.csv", _rec([f"0,{row}", f"abc,{row}"])),
         "long-field": _write(d, "rec/long.csv", _rec([f"0,{row}", "0.1," + "1" * 200_000 + ",0,1,0,0,1,"])),
         "long-label": _write(d, "rec/longlab.csv", _rec([f"0,{row}", "0.1,0,0,1,0,0,1," + "x" * 200_000])),
+        "wide-row": _write(d, "rec/wide.csv", _rec([f"0,{row}", "0.1,0,0,1,0,0,1," + "0," * 2_000_000])),  # 4M fields, 1 field limit each
         "quote": _write(d, "rec/quote.csv", _rec([f"0,{row}", '0.1,"0,0,1,0,0,1,'])),
         "empty": _write(d, "rec/empty.csv", ""),
         "header-only": _write(d, "rec/header.csv", _rec([])),
