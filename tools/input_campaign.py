@@ -181,6 +181,9 @@ def bad_templates(d: Path, bomb_gb: float = 1.5) -> dict[str, str]:
     variant("recognizer-type", recognizer=np.array('{"supplementary": 1e12}'))
     variant("recognizer-not-json", recognizer=np.array("{noise_g: 0.5"))
     variant("recognizer-list", recognizer=np.array("[1, 2, 3]"))
+    n = 200_000  # 3-frame templates: a 0.1 MB file, 0.35 GB and 10 s once built
+    variant("many-templates", actions=np.array(["jab_r"] * n), lengths=np.full(n, 3), signals=np.tile(good["signals"][:1], (3 * n, 1)),
+            gravity=np.tile(g[:1], (n, 1)), onsets=np.zeros(n, np.int64), thresholds=np.ones(n))
     out["npy"] = str(d / "tpl" / "arr.npy")
     np.save(out["npy"], good["signals"])
     out["truncated"] = _write(d, "tpl/trunc.npz", (ASSETS / "templates.npz").read_bytes()[:2000])
