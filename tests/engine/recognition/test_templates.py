@@ -8,6 +8,7 @@ import pytest
 from engine.errors import InputError
 from engine.recognition import TemplateFileError, Templates
 from engine.recognition.templates import (
+    MAX_FILE_BYTES,
     MAX_TEMPLATES,
     average_eq1,
     dba,
@@ -172,3 +173,17 @@ def test_a_file_of_more_templates_than_a_player_could_train_is_refused(tmp_path,
     with open(path, "wb") as f:
         np.savez_compressed(f, **data)
     assert len(Templates.load(path)) == MAX_TEMPLATES
+
+
+def test_a_file_of_more_signal_than_memory_allows_is_refused_before_it_is_read(tmp_path, trials):
+    """13 templates of 400,000 frames (250 MB of signal, 2.5 MB deflated) took 1.4 GB in
+    recognize, 5.6 x their size: the limit on what a file declares is 64 MiB (the shipped set is
+    under 1 MB)."""
+    path = tmp_path / "long.npz"
+    Templates.from_trials(trials).save(path)
+    data = dict(np.load(path))
+    data["signals"] = np.zeros((MAX_FILE_BYTES // 48 + 1, 6))
+    with open(path, "wb") as f:
+        np.savez_compressed(f, **data)
+    with pytest.raises(TemplateFileError, match="long.npz: .*over the 64 MiB limit"):
+        Templates.load(path)
