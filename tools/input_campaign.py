@@ -635,6 +635,8 @@ def _url_cases(q: list[str], good_rec: str, out: Path) -> list[Case]:
         "replay-speed-inf": f"replay://{good_rec}?speed=inf",
         "replay-speed-tiny": f"replay://{good_rec}?speed=1e-300",
         "replay-speed-huge": f"replay://{good_rec}?speed=1e300",
+        "serial-retry-nan": "serial:///dev/quickjab-none?retry=nan",  # never reopened a lost port
+        "serial-window-inf": "serial:///dev/quickjab-none?window=inf",  # the clock's deque never shrank
         "unknown": "nope://x",
         "no-scheme": "x.csv",
     }
