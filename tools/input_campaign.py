@@ -164,6 +164,7 @@ def bad_templates(d: Path, bomb_gb: float = 1.5) -> dict[str, str]:
     variant("nan-gravity", gravity=np.full_like(g, np.nan))
     variant("huge-gravity", gravity=np.full_like(g, 1e300))
     variant("signals-1e200", signals=good["signals"] * 1e200)  # finite, absurd: overflowed in the recognizer
+    variant("signals-complex", signals=good["signals"] + 1j)  # cast with a ComplexWarning and read
     variant("recognizer-deep", recognizer=np.array("[" * 100_000))  # json.loads: RecursionError
     variant("nan-threshold", thresholds=np.full_like(good["thresholds"], np.nan))
     variant("neg-threshold", thresholds=-np.ones_like(good["thresholds"]))

@@ -541,6 +541,9 @@ def _checked_signals(data: Mapping[str, np.ndarray]) -> tuple[np.ndarray, np.nda
     the template count, finite readings a sensor can give. ValueError says what is wrong."""
     if data["lengths"].dtype.kind not in "iu" or str(data["method"]) not in METHODS:
         raise ValueError("lengths must be integers and method one of " + ", ".join(METHODS))
+    for k in ("signals", "gravity", "thresholds"):  # complex: astype() dropped the imaginary part, with a warning
+        if data[k].dtype.kind not in "iuf":
+            raise ValueError(f"{k} must hold real numbers, not {data[k].dtype}")
     if data["lengths"].ndim == 1 and len(data["lengths"]) > MAX_TEMPLATES:  # before building any
         raise ValueError(f"{len(data['lengths'])} templates, at most {MAX_TEMPLATES}")
     lengths = data["lengths"].astype(np.int64)

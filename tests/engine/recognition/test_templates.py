@@ -187,3 +187,21 @@ def test_a_file_of_more_signal_than_memory_allows_is_refused_before_it_is_read(t
         np.savez_compressed(f, **data)
     with pytest.raises(TemplateFileError, match="long.npz: .*over the 64 MiB limit"):
         Templates.load(path)
+
+
+def _rewritten(path, **changes):
+    data = dict(np.load(path))
+    data.update(changes)
+    with open(path, "wb") as f:
+        np.savez_compressed(f, **data)
+
+
+def test_complex_signals_are_refused_not_cast(tmp_path, trials, recwarn):
+    """astype(float64) dropped the imaginary part with a ComplexWarning (two lines on stderr
+    before the command went on as if the file were fine)."""
+    path = tmp_path / "complex.npz"
+    Templates.from_trials(trials).save(path)
+    _rewritten(path, signals=np.load(path)["signals"] + 1j)
+    with pytest.raises(TemplateFileError, match="complex.npz: .*signals must hold real numbers, not complex128"):
+        Templates.load(path)
+    assert not [w for w in recwarn if issubclass(w.category, np.exceptions.ComplexWarning)]
