@@ -34,7 +34,7 @@ def config_path() -> Path:
 def read_config(path: str | os.PathLike | None = None) -> dict[str, dict[str, object]]:
     """{table: {name: value}} from the config file, checked; {} when there is no file."""
     path = Path(path) if path is not None else config_path()
-    if not path.exists():
+    if not os.path.lexists(path):  # exists() is False for a link that loops or dangles: that is a bad file
         return {}
     tomllib = _toml_reader(path)
     try:

@@ -450,6 +450,7 @@ def bad_config_files(d: Path) -> dict[str, str]:
         "directory": None,
         "fifo": None,  # size 0: passes the size limit, and opening it blocks
         "dev-zero": None,  # a symlink to /dev/zero: size 0, and reading it never ends
+        "link-loop": None,  # a symlink to itself: exists() said no file, and it was ignored
     }
     out = {}
     for name, content in files.items():
@@ -461,6 +462,9 @@ def bad_config_files(d: Path) -> dict[str, str]:
         elif name == "dev-zero":
             if not path.is_symlink():
                 path.symlink_to("/dev/zero")
+        elif name == "link-loop":
+            if not path.is_symlink():
+                path.symlink_to(path.name)
         elif content is None:
             path.mkdir(exist_ok=True)
         elif isinstance(content, bytes):

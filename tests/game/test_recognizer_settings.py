@@ -81,6 +81,16 @@ def test_a_config_file_that_is_not_text_or_not_a_file():
         read_config()
 
 
+@pytest.mark.parametrize("target", ["config.toml", "elsewhere.toml"])
+def test_a_config_link_that_loops_or_dangles_is_refused_not_ignored(target):
+    """Path.exists() is False for both, and the settings were silently the defaults."""
+    path = config_path()
+    path.parent.mkdir(parents=True)
+    path.symlink_to(target)  # itself: a loop; a file that is not there: dangling
+    with pytest.raises(InputError, match=f"{path}: cannot read the config file"):
+        read_config()
+
+
 def test_a_fifo_config_file_is_refused_without_opening_it():
     path = config_path()
     path.parent.mkdir(parents=True)
