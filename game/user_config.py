@@ -34,7 +34,7 @@ def config_path() -> Path:
 def read_config(path: str | os.PathLike | None = None) -> dict[str, dict[str, object]]:
     """{table: {name: value}} from the config file, checked; {} when there is no file."""
     path = Path(path) if path is not None else config_path()
-    if not path.exists():
+    if not os.path.lexists(path):  # exists() is False for a link that loops or dangles: that is a bad file
         return {}
     tomllib = _toml_reader(path)
     try:
@@ -50,6 +50,8 @@ def read_config(path: str | os.PathLike | None = None) -> dict[str, dict[str, ob
         raise InputError(f"{path}: not a valid TOML file ({exc})") from None
     except UnicodeDecodeError:
         raise InputError(f"{path}: not a valid TOML file (not UTF-8 text)") from None
+    except RecursionError:  # tomllib recurses per nesting level: `[` x 100,000 is within the size limit
+        raise InputError(f"{path}: not a valid TOML file (nested too deeply)") from None
     except OSError as exc:
         raise InputError(f"{path}: cannot read the config file ({exc.strerror or exc})") from None
     unknown = [k for k in data if k not in TABLES]

@@ -85,6 +85,7 @@ def bad_recordings(d: Path, big_mb: int) -> dict[str, str]:
         "text": _write(d, "rec/text.csv", _rec([f"0,{row}", f"abc,{row}"])),
         "long-field": _write(d, "rec/long.csv", _rec([f"0,{row}", "0.1," + "1" * 200_000 + ",0,1,0,0,1,"])),
         "long-label": _write(d, "rec/longlab.csv", _rec([f"0,{row}", "0.1,0,0,1,0,0,1," + "x" * 200_000])),
+        "wide-row": _write(d, "rec/wide.csv", _rec([f"0,{row}", "0.1,0,0,1,0,0,1," + "0," * 2_000_000])),  # 4M fields, 1 field limit each
         "quote": _write(d, "rec/quote.csv", _rec([f"0,{row}", '0.1,"0,0,1,0,0,1,'])),
         "empty": _write(d, "rec/empty.csv", ""),
         "header-only": _write(d, "rec/header.csv", _rec([])),
@@ -163,6 +164,7 @@ def bad_templates(d: Path, bomb_gb: float = 1.5) -> dict[str, str]:
     variant("nan-gravity", gravity=np.full_like(g, np.nan))
     variant("huge-gravity", gravity=np.full_like(g, 1e300))
     variant("signals-1e200", signals=good["signals"] * 1e200)  # finite, absurd: overflowed in the recognizer
+    variant("signals-complex", signals=good["signals"] + 1j)  # cast with a ComplexWarning and read
     variant("recognizer-deep", recognizer=np.array("[" * 100_000))  # json.loads: RecursionError
     variant("nan-threshold", thresholds=np.full_like(good["thresholds"], np.nan))
     variant("neg-threshold", thresholds=-np.ones_like(good["thresholds"]))
@@ -180,6 +182,9 @@ def bad_templates(d: Path, bomb_gb: float = 1.5) -> dict[str, str]:
     variant("recognizer-type", recognizer=np.array('{"supplementary": 1e12}'))
     variant("recognizer-not-json", recognizer=np.array("{noise_g: 0.5"))
     variant("recognizer-list", recognizer=np.array("[1, 2, 3]"))
+    n = 200_000  # 3-frame templates: a 0.1 MB file, 0.35 GB and 10 s once built
+    variant("many-templates", actions=np.array(["jab_r"] * n), lengths=np.full(n, 3), signals=np.tile(good["signals"][:1], (3 * n, 1)),
+            gravity=np.tile(g[:1], (n, 1)), onsets=np.zeros(n, np.int64), thresholds=np.ones(n))
     out["npy"] = str(d / "tpl" / "arr.npy")
     np.save(out["npy"], good["signals"])
     out["truncated"] = _write(d, "tpl/trunc.npz", (ASSETS / "templates.npz").read_bytes()[:2000])
@@ -253,6 +258,8 @@ def bad_graphs(d: Path, bomb_gb: float = 1.5) -> dict[str, str]:
     variant("n-choices-neg", {"n_choices": -3})
     variant("n-choices-huge", {"n_choices": 10**6})
     variant("n-choices-text", {"n_choices": "x"})
+    variant("build-list", {"build": [1]})  # graph info read its keys: AttributeError
+    variant("wait-frames-huge", {"rules.wait_frames": 10**12})  # duel: a 568 TiB bout table
     _bad_meta_numbers(meta, variant)
     variant("meta-list", meta=np.array("[1, 2]"))
     variant("meta-2d", meta=np.array([[json.dumps(meta)]]))
@@ -437,11 +444,13 @@ def bad_config_files(d: Path) -> dict[str, str]:
         "wrong-type": "[recognizer]\nnoise_g = true\n",
         "huge-buffer": "[recognizer]\nsupplementary = 100000000000\n",
         "nan": "[recognizer]\nnoise_g = nan\n",
+        "deep": "[recognizer]\nnoise_g = " + "[" * 100_000 + "]" * 100_000 + "\n",  # tomllib: RecursionError
         "binary": b"\xff\xfe\x00[recognizer]",
         "big": "# " + "x" * (2 << 20) + "\n",
         "directory": None,
         "fifo": None,  # size 0: passes the size limit, and opening it blocks
         "dev-zero": None,  # a symlink to /dev/zero: size 0, and reading it never ends
+        "link-loop": None,  # a symlink to itself: exists() said no file, and it was ignored
     }
     out = {}
     for name, content in files.items():
@@ -453,6 +462,9 @@ def bad_config_files(d: Path) -> dict[str, str]:
         elif name == "dev-zero":
             if not path.is_symlink():
                 path.symlink_to("/dev/zero")
+        elif name == "link-loop":
+            if not path.is_symlink():
+                path.symlink_to(path.name)
         elif content is None:
             path.mkdir(exist_ok=True)
         elif isinstance(content, bytes):
@@ -628,6 +640,8 @@ def _url_cases(q: list[str], good_rec: str, out: Path) -> list[Case]:
         "replay-speed-inf": f"replay://{good_rec}?speed=inf",
         "replay-speed-tiny": f"replay://{good_rec}?speed=1e-300",
         "replay-speed-huge": f"replay://{good_rec}?speed=1e300",
+        "serial-retry-nan": "serial:///dev/quickjab-none?retry=nan",  # never reopened a lost port
+        "serial-window-inf": "serial:///dev/quickjab-none?window=inf",  # the clock's deque never shrank
         "unknown": "nope://x",
         "no-scheme": "x.csv",
     }

@@ -51,7 +51,13 @@ REJECT_FLOOR_G = 0.05  # and never below this (g): identical trials must not rej
 CUT_OFF_FRACTION = 0.5  # representative_trials(): shorter or fainter than this x the median: cut off
 REST_NOISE_QUANTILE = 90  # resting_noise(): this percentile of the resting activity ...
 REST_NOISE_MIN_FRAMES = 6  # ... over at least this many resting frames
-MAX_FILE_BYTES = 256 * 2**20  # uncompressed; the shipped set is under 1 MB
+# Uncompressed; the shipped set is under 1 MB, and a template per trial of uWave's 4,480 (one
+# hand, ~2 s each) would be about 13 MB. A loaded set takes ~5.6 x its signal bytes (13 templates
+# of 400,000 frames, 250 MB, took 1.4 GB under the 256 MiB this was): 64 MiB, ~0.36 GB.
+MAX_FILE_BYTES = 64 * 2**20
+# Templates a file may hold: 10x the largest set the benchmarks run (1000), 250x the shipped 39.
+# A million 3-frame templates deflate to 0.5 MB and took 1.7 GB once loaded.
+MAX_TEMPLATES = 10_000
 
 
 class TemplateFileError(InputError):
@@ -502,22 +508,7 @@ class Templates:
             version = int(data["version"])
             if version != FORMAT_VERSION:
                 raise TemplateFileError(path, f"template format version {version}, expected {FORMAT_VERSION}")
-            if data["lengths"].dtype.kind not in "iu" or str(data["method"]) not in METHODS:
-                raise ValueError("lengths must be integers and method one of " + ", ".join(METHODS))
-            lengths = data["lengths"].astype(np.int64)
-            signals = data["signals"].astype(np.float64)
-            if lengths.ndim != 1 or lengths.min() < 1 or lengths.sum() != len(signals) or signals.ndim != 2:
-                raise ValueError("signal lengths do not match the signal data")
-            if not np.all(np.isfinite(signals)):
-                raise ValueError("non-finite values in the signals")
-            if not np.isfinite(data["gravity"]).all() or not (data["thresholds"] >= 0).all():  # inf: never reject
-                raise ValueError("gravity must be finite and thresholds >= 0")
-            # the recording reader's limit, in g too (imported here: recognition reads no recordings)
-            from engine.recording import MAX_ACCEL_G
-
-            peak = max(float(np.abs(signals).max(initial=0.0)), float(np.abs(data["gravity"]).max(initial=0.0)))
-            if peak > MAX_ACCEL_G:
-                raise ValueError(f"an acceleration of {peak:.6g} g in the signals or gravity, over the {MAX_ACCEL_G:g} g a sensor can read")
+            lengths, signals = _checked_signals(data)
             cuts = np.cumsum(lengths)[:-1]
             meta = dict(zip(data["meta_keys"].tolist(), data["meta_values"].tolist(), strict=True))
             t = cls(
@@ -543,6 +534,33 @@ class Templates:
         except (KeyError, ValueError, TypeError, IndexError) as exc:
             raise TemplateFileError(path, f"corrupt template file: {exc}") from None
         return t
+
+
+def _checked_signals(data: Mapping[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+    """A template file's lengths (T,) and signals (frames, D), checked: their types and shapes,
+    the template count, finite readings a sensor can give. ValueError says what is wrong."""
+    if data["lengths"].dtype.kind not in "iu" or str(data["method"]) not in METHODS:
+        raise ValueError("lengths must be integers and method one of " + ", ".join(METHODS))
+    for k in ("signals", "gravity", "thresholds"):  # complex: astype() dropped the imaginary part, with a warning
+        if data[k].dtype.kind not in "iuf":
+            raise ValueError(f"{k} must hold real numbers, not {data[k].dtype}")
+    if data["lengths"].ndim == 1 and len(data["lengths"]) > MAX_TEMPLATES:  # before building any
+        raise ValueError(f"{len(data['lengths'])} templates, at most {MAX_TEMPLATES}")
+    lengths = data["lengths"].astype(np.int64)
+    signals = data["signals"].astype(np.float64)
+    if lengths.ndim != 1 or lengths.min() < 1 or lengths.sum() != len(signals) or signals.ndim != 2:
+        raise ValueError("signal lengths do not match the signal data")
+    if not np.all(np.isfinite(signals)):
+        raise ValueError("non-finite values in the signals")
+    if not np.isfinite(data["gravity"]).all() or not (data["thresholds"] >= 0).all():  # inf: never reject
+        raise ValueError("gravity must be finite and thresholds >= 0")
+    # the recording reader's limit, in g too (imported here: recognition reads no recordings)
+    from engine.recording import MAX_ACCEL_G
+
+    peak = max(float(np.abs(signals).max(initial=0.0)), float(np.abs(data["gravity"]).max(initial=0.0)))
+    if peak > MAX_ACCEL_G:
+        raise ValueError(f"an acceleration of {peak:.6g} g in the signals or gravity, over the {MAX_ACCEL_G:g} g a sensor can read")
+    return lengths, signals
 
 
 def _saved_settings(data: Mapping[str, np.ndarray], path: Path) -> dict[str, object]:

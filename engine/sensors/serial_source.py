@@ -32,7 +32,15 @@ import serial
 from serial.tools import list_ports
 
 from engine.sensors.serial_accel import SampleAccel
-from engine.sensors.source import Clock, Sample, Source, SourceError, SourceState, register_scheme
+from engine.sensors.source import (
+    Clock,
+    Sample,
+    Source,
+    SourceError,
+    SourceState,
+    register_scheme,
+    url_number,
+)
 from firmware_bridge import protocol
 
 # (VID, PID or None for any) of boards the firmware runs on
@@ -47,6 +55,7 @@ LOST = (OSError, serial.SerialException, termios.error)
 MAX_READS_PER_POLL = 32  # bounds one poll's work even if the device outruns us
 BACKLOG = 1024  # a read this big may have left more behind: read again in the same poll
 STALL_S = 2.0  # no byte for this long while connected counts one stall
+MAX_WINDOW_S = 60.0  # `window=`: the clock keeps up to one minimum per poll over it (12,000 at 200 polls/s)
 
 
 class DeviceClock:
@@ -356,16 +365,16 @@ def open_serial(url: str, clock: Clock) -> SerialSource:
     unknown = set(params) - {"baud", "retry", "window", "vid", "pid"}
     if unknown:
         raise SourceError(f"{url}: unknown parameter(s) {', '.join(sorted(unknown))} (known: baud, retry, window, vid, pid)")
+    # finite and in range: nan passed `<= 0`, and a retry of nan never reopened a lost port while
+    # a window of nan or inf never dropped an old minimum from the clock (nor from its deque)
+    baud = int(url_number(url, params, "baud", 115200, 1, 2**31 - 1, integer=True))
+    retry = url_number(url, params, "retry", 0.5, 0, 3600, lo_open=True)
+    window = url_number(url, params, "window", 2.0, 0, MAX_WINDOW_S, lo_open=True)
     try:
-        baud = int(params.get("baud", "115200"))
-        retry = float(params.get("retry", "0.5"))
-        window = float(params.get("window", "2"))
         vid = int(params["vid"], 16) if "vid" in params else None
         pid = int(params["pid"], 16) if "pid" in params else None
     except ValueError:
-        raise SourceError(f"{url}: baud must be an integer, retry and window numbers, vid and pid hex") from None
-    if retry <= 0 or window <= 0:
-        raise SourceError(f"{url}: retry and window must be positive")
+        raise SourceError(f"{url}: vid and pid must be hex") from None
     return SerialSource(url, clock, target, baud=baud, retry=retry, window_s=window, vid=vid, pid=pid)
 
 

@@ -55,6 +55,10 @@ VERSION = 3
 READS = (2, 3)
 FEATURE_SCALE = 65536      # feature_pos units per grid cell
 MAX_FILE_BYTES = 512 * 2**20  # uncompressed, checked before reading; the shipped graph is 13 MB
+# The wait ("guard") is an action of rules.wait_frames frames, and the bout model sizes its
+# per-frame tables by the longest action: no longer than an action file may be
+# (game.actions.MAX_FRAMES, not imported: loading a graph needs no skeleton). 10**12 asked for 568 TiB.
+MAX_WAIT_FRAMES = 3600
 
 # What each array must hold (numpy dtype kinds): integers, numbers, flags, names.
 _INTS = ("key_steps", "keys", "other_action", "other_frame", "visits", "best_action", "edge_count",
@@ -88,6 +92,8 @@ def _bad_meta(meta: dict, grid: StateGrid, rules: BoutRules, rewards: Rewards) -
             return f"{name} is {v!r}, not a finite number"
         if v < 0:
             return f"{name} is negative"
+    if not isinstance(meta.get("build", {}), dict):  # `graph info` reads its keys
+        return f"build is {type(meta['build']).__name__}, not an object"
     n = meta.get("n_choices")
     if isinstance(n, bool) or not isinstance(n, int) or n < 1:
         return f"n_choices is {n!r}"
@@ -97,9 +103,9 @@ def _bad_meta(meta: dict, grid: StateGrid, rules: BoutRules, rewards: Rewards) -
         return "grid steps must be positive"
     if grid.n_distance > 1_000_000 or grid.n_angle > 100_000 or grid.n_phase > 100_000:
         return "grid too fine"
-    if not (isinstance(rules.wait_frames, int) and rules.wait_frames >= 1 and rules.hp > 0
+    if not (isinstance(rules.wait_frames, int) and 1 <= rules.wait_frames <= MAX_WAIT_FRAMES and rules.hp > 0
             and 0 < rewards.discount <= 1):
-        return "wait_frames, hp and discount must be positive (discount at most 1)"
+        return f"wait_frames (at most {MAX_WAIT_FRAMES}), hp and discount must be positive (discount at most 1)"
     return None
 
 

@@ -118,6 +118,17 @@ def test_a_flood_of_line_ends_does_not_size_the_array(tmp_path, peak_memory):
     assert peak < 5 * path.stat().st_size, (peak, path.stat().st_size)
 
 
+def test_a_row_of_millions_of_fields_is_refused_before_it_is_split(tmp_path, peak_memory):
+    """csv's field limit bounds one field, not a row: a 200 MB row of "0," (extra columns,
+    ignored) was split into 100 million fields first, 1 GB of list. A row is a line, held to
+    the header's limit."""
+    path = tmp_path / "wide.csv"
+    path.write_text("t,rx,ry,rz,lx,ly,lz,label\n0,0,0,1,0,0,1,\n0.1,0,0,1,0,0,1" + ",0" * 4_000_000 + "\n")
+    err, peak = peak_memory(lambda: pytest.raises(RecordingError, read_recording, path))
+    assert "line over" in str(err.value) and err.value.line == 3
+    assert peak < 3 * path.stat().st_size, (peak, path.stat().st_size)  # split, the row took 4x
+
+
 @pytest.mark.parametrize("kind", ["fifo", "dir"])
 def test_non_regular_files_are_refused_at_once(tmp_path, kind):
     path = tmp_path / "x.csv"

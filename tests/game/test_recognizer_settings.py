@@ -58,6 +58,9 @@ def test_config_file_then_command_line():
     ("noise_g = 0.5\n", "unknown setting or table 'noise_g'"),
     ("[recogniser]\nnoise_g = 0.5\n", "unknown setting or table 'recogniser'"),
     ("recognizer = 3\n", "'recognizer' must be a table"),
+    # nested past the parser's recursion limit (tomllib recurses per level): RecursionError
+    ("[recognizer]\nnoise_g = " + "[" * 100_000 + "]" * 100_000 + "\n", "not a valid TOML file"),
+    ("[recognizer]\nnoise_g = " + "{a = " * 50_000 + "1" + "}" * 50_000 + "\n", "not a valid TOML file"),
 ])
 def test_a_bad_config_file_names_itself_in_one_line(text, says):
     path = write_config(text)
@@ -75,6 +78,16 @@ def test_a_config_file_that_is_not_text_or_not_a_file():
     path.unlink()
     path.mkdir()
     with pytest.raises(InputError, match="cannot read the config file"):
+        read_config()
+
+
+@pytest.mark.parametrize("target", ["config.toml", "elsewhere.toml"])
+def test_a_config_link_that_loops_or_dangles_is_refused_not_ignored(target):
+    """Path.exists() is False for both, and the settings were silently the defaults."""
+    path = config_path()
+    path.parent.mkdir(parents=True)
+    path.symlink_to(target)  # itself: a loop; a file that is not there: dangling
+    with pytest.raises(InputError, match=f"{path}: cannot read the config file"):
         read_config()
 
 

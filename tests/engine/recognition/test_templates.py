@@ -7,7 +7,15 @@ import pytest
 
 from engine.errors import InputError
 from engine.recognition import TemplateFileError, Templates
-from engine.recognition.templates import average_eq1, dba, rest_gravity, trial_rest, trim_rest
+from engine.recognition.templates import (
+    MAX_FILE_BYTES,
+    MAX_TEMPLATES,
+    average_eq1,
+    dba,
+    rest_gravity,
+    trial_rest,
+    trim_rest,
+)
 
 G = np.array([0.0, 0.0, 1.0, 0.0, -1.0, 0.0])
 
@@ -145,3 +153,55 @@ def test_bad_trials_are_refused():
         Templates.from_trials({"a": [np.zeros((10, 4))]})
     with pytest.raises(ValueError):
         Templates.from_trials({"a": [np.zeros((10, 3))], "b": [np.zeros((10, 6))]})
+
+
+def test_a_file_of_more_templates_than_a_player_could_train_is_refused(tmp_path, trials):
+    """A million 3-frame templates deflate to 0.5 MB, within the size limit: loaded, they took
+    1.7 GB and 47 s to replay 2 s through. The count is checked before any is built."""
+    path = tmp_path / "many.npz"
+    Templates.from_trials(trials).save(path)
+    data = dict(np.load(path))
+    n = MAX_TEMPLATES + 1
+    data.update(actions=np.array(["jab_r"] * n), lengths=np.full(n, 3), signals=np.tile(data["signals"][:1], (3 * n, 1)),
+                gravity=np.tile(data["gravity"][:1], (n, 1)), onsets=np.zeros(n, np.int64), thresholds=np.ones(n))
+    with open(path, "wb") as f:
+        np.savez_compressed(f, **data)
+    with pytest.raises(TemplateFileError, match=f"many.npz: .*{n} templates, at most {MAX_TEMPLATES}"):
+        Templates.load(path)
+    data.update(actions=data["actions"][:-1], lengths=data["lengths"][:-1], signals=data["signals"][:-3],
+                gravity=data["gravity"][:-1], onsets=data["onsets"][:-1], thresholds=data["thresholds"][:-1])
+    with open(path, "wb") as f:
+        np.savez_compressed(f, **data)
+    assert len(Templates.load(path)) == MAX_TEMPLATES
+
+
+def test_a_file_of_more_signal_than_memory_allows_is_refused_before_it_is_read(tmp_path, trials):
+    """13 templates of 400,000 frames (250 MB of signal, 2.5 MB deflated) took 1.4 GB in
+    recognize, 5.6 x their size: the limit on what a file declares is 64 MiB (the shipped set is
+    under 1 MB)."""
+    path = tmp_path / "long.npz"
+    Templates.from_trials(trials).save(path)
+    data = dict(np.load(path))
+    data["signals"] = np.zeros((MAX_FILE_BYTES // 48 + 1, 6))
+    with open(path, "wb") as f:
+        np.savez_compressed(f, **data)
+    with pytest.raises(TemplateFileError, match="long.npz: .*over the 64 MiB limit"):
+        Templates.load(path)
+
+
+def _rewritten(path, **changes):
+    data = dict(np.load(path))
+    data.update(changes)
+    with open(path, "wb") as f:
+        np.savez_compressed(f, **data)
+
+
+def test_complex_signals_are_refused_not_cast(tmp_path, trials, recwarn):
+    """astype(float64) dropped the imaginary part with a ComplexWarning (two lines on stderr
+    before the command went on as if the file were fine)."""
+    path = tmp_path / "complex.npz"
+    Templates.from_trials(trials).save(path)
+    _rewritten(path, signals=np.load(path)["signals"] + 1j)
+    with pytest.raises(TemplateFileError, match="complex.npz: .*signals must hold real numbers, not complex128"):
+        Templates.load(path)
+    assert not [w for w in recwarn if issubclass(w.category, np.exceptions.ComplexWarning)]

@@ -184,7 +184,11 @@ def test_missing_port_is_a_state_not_an_error():
 
 
 @pytest.mark.parametrize("url", ["serial://", "serial:///dev/x?speed=3", "serial:///dev/x?baud=fast",
-                                 "serial:///dev/x?retry=0", "serial://loop://?retry=1", "serial://nosuch://x"])
+                                 "serial:///dev/x?retry=0", "serial://loop://?retry=1", "serial://nosuch://x",
+                                 # nan passed `<= 0`: a retry of nan never reopened a lost port, and a
+                                 # window of nan or inf never let the clock's minimum go (nor its deque)
+                                 "serial:///dev/x?retry=nan", "serial:///dev/x?retry=inf", "serial:///dev/x?window=nan",
+                                 "serial:///dev/x?window=inf", "serial:///dev/x?window=1e9", "serial:///dev/x?baud=0"])
 def test_bad_urls_name_themselves(url):
     with pytest.raises(SourceError, match="serial://"):
         open_source(url)

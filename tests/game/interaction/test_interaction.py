@@ -239,7 +239,13 @@ def _corrupt_variants(small_table, tmp_path):
     np.savez(tmp_path / "bad_escape.npz",
              **dict(arrays, edge_dst_steps_big=np.append(arrays["edge_dst_steps_big"], 1)))
     np.savez(tmp_path / "bad_meta.npz", **dict(arrays, meta=np.array("{")))
-    return ["garbage", "truncated", "missing", "bad_dst", "bad_escape", "bad_meta"]
+    meta = json.loads(str(arrays["meta"]))
+    # `graph info` read build's keys with .get: a list was an AttributeError traceback
+    np.savez(tmp_path / "build_list.npz", **dict(arrays, meta=np.array(json.dumps({**meta, "build": [1]}))))
+    # the wait is an action of wait_frames frames: 10**12 asked the bout model for 568 TiB
+    rules = {**meta["rules"], "wait_frames": 10**12}
+    np.savez(tmp_path / "wait_huge.npz", **dict(arrays, meta=np.array(json.dumps({**meta, "rules": rules}))))
+    return ["garbage", "truncated", "missing", "bad_dst", "bad_escape", "bad_meta", "build_list", "wait_huge"]
 
 
 def test_a_corrupt_file_is_a_clear_error(small_table, tmp_path):
