@@ -252,6 +252,22 @@ def test_a_corrupt_file_is_a_clear_error(small_table, tmp_path):
         InteractionGraph.load(tmp_path / "absent.npz")
 
 
+def test_fill_keys_out_of_order_are_refused_in_any_dtype(small_table, tmp_path):
+    # the fill's steps are checked in their stored dtype (no int64 copy at start-up); a uint64
+    # step past 2**63 is negative as the decode reads it, and refused as before
+    small_table.save(tmp_path / "good.npz")
+    with np.load(tmp_path / "good.npz") as z:
+        arrays = {k: z[k] for k in z.files}
+    steps = arrays["fill_key_steps"].astype(np.uint64)
+    for name, bad in (("zero", np.where(np.arange(len(steps)) == 1, 0, steps).astype(steps.dtype)),
+                      ("wrapped", np.where(np.arange(len(steps)) == 1, np.uint64(2**63 + 1), steps))):
+        np.savez(tmp_path / f"{name}.npz", **dict(arrays, fill_key_steps=bad))
+        with pytest.raises(GraphFileError, match="keys not strictly ascending"):
+            GraphTable.load(tmp_path / f"{name}.npz")
+    np.savez(tmp_path / "u64.npz", **dict(arrays, fill_key_steps=steps))
+    np.testing.assert_array_equal(GraphTable.load(tmp_path / "u64.npz").fill_keys, small_table.fill_keys)
+
+
 def test_cli_reports_a_corrupt_file_in_one_line(tmp_path):
     path = tmp_path / "bad.npz"
     path.write_bytes(b"\x00" * 100)
