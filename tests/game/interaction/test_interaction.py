@@ -317,6 +317,20 @@ def test_lookup_maps_a_live_situation_to_its_nearest_state(small_graph):
         assert g.best_action(s) == g.names[t.best_action[got]]
 
 
+def test_every_sampled_cell_is_in_the_fill_as_its_own_state(small_graph):
+    # what lets `nearest` keep no dict of the state keys: the fill answers a sampled cell too
+    from game.interaction.lookup import neighbour_fill
+
+    idx = small_graph.index
+    for keys, state in ((idx.fill_keys, idx.fill_state), neighbour_fill(idx.grid, idx.keys, radius=0)):
+        pos = np.searchsorted(keys, idx.keys)
+        np.testing.assert_array_equal(keys[pos], idx.keys)
+        np.testing.assert_array_equal(state[pos], np.arange(idx.n))
+    t = small_graph.table
+    for i in range(0, idx.n, max(1, idx.n // 200)):  # a state's own situation finds it
+        assert idx.nearest(*t.features[i], int(t.other_action[i]), int(t.other_frame[i])) == i
+
+
 def test_scalar_and_vectorized_lookup_agree(small_graph):
     g = small_graph
     rng = np.random.default_rng(1)
