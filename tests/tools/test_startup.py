@@ -109,6 +109,15 @@ def test_train_demo_opens_the_virtual_player_without_looking_for_a_wiimote():
     assert not top_level(mods) & set(HEAVY)
 
 
+def test_devices_lists_wiimotes_without_numpy_or_the_driver():
+    # the transport (hidapi enumeration) and the protocol's ids only: the driver, which turns
+    # reports into samples with numpy, loads when a wiimote:// source is opened
+    mods = run_in_fresh(["devices", "--json"])
+    assert {"engine.sensors.wiimote.transport", "serial.tools.list_ports"} <= mods
+    assert "numpy" not in top_level(mods)
+    assert "engine.sensors.wiimote.driver" not in mods
+
+
 def test_the_game_opens_the_audio_device_only_for_sound_and_never_the_joystick():
     # pygame.init() opened both for every match (an audio thread mixing silence with --no-sound)
     loaded_after("""
