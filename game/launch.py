@@ -56,6 +56,29 @@ def headless_env() -> None:
     os.environ["SDL_AUDIODRIVER"] = "dummy"
 
 
+def wants_sound(args: argparse.Namespace) -> bool:
+    """Sound is played unless `--no-sound` or `--headless` (which has no audio device)."""
+    return not args.no_sound and not args.headless
+
+
+def init_pygame(sound: bool) -> None:
+    """What the game uses of pygame: the display (with its events and keys) and fonts, and the
+    mixer only when `sound`. pygame.init() also opened the audio device with `--no-sound` and
+    `--headless` (its thread mixing silence all match long) and the joystick subsystem (which
+    nothing reads), and pygame.quit() then waited ~33 ms for the audio thread. The mixer opens as
+    pygame.init() opened it, with pygame's defaults; where that fails, game.sound.Sounds tries
+    its own settings and else stays silent, as before."""
+    import pygame
+
+    pygame.display.init()
+    pygame.font.init()
+    if sound:
+        try:
+            pygame.mixer.init()
+        except pygame.error:
+            pass
+
+
 def open_player_source(url: str | None, demo: bool, seed: int, clock) -> tuple[object, bool]:
     """The source to play with and whether the keyboard fallback was taken."""
     import game.keyboard_source  # noqa: F401 - registers keyboard://
@@ -101,7 +124,7 @@ def run_session(args: argparse.Namespace, caption: str, open_sources: Callable[[
     sources: list = []
     try:
         sources.extend(open_sources(clock))
-        pygame.init()
+        init_pygame(wants_sound(args))
         flags = pygame.RESIZABLE | (pygame.FULLSCREEN if args.fullscreen and not args.headless else 0)
         pygame.display.set_mode(size, flags)
         if not args.headless:

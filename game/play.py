@@ -26,6 +26,7 @@ from game.launch import (
     KEYBOARD_SOURCE,
     open_player_source,
     run_session,
+    wants_sound,
 )
 from game.launch import DEMO_SOURCE as DEMO_SOURCE
 from game.launch import INVISIBLE_DRIVERS as INVISIBLE_DRIVERS
@@ -99,7 +100,7 @@ def run(args: argparse.Namespace) -> int:
 
         config = SessionConfig(seed=args.seed, size=size, low_power=args.low_power, demo=args.demo,
                                keyboard_banner=fallback, templates=args.templates, graph=args.graph,
-                               sound=not args.no_sound and not args.headless,
+                               sound=wants_sound(args),
                                left_handed=args.left_handed, difficulty=args.difficulty or "normal",
                                recognizer=settings)
         return Session(sources[0], config, clock=clock, surface_provider=surface_provider)

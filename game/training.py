@@ -33,6 +33,7 @@ from game.launch import (
     KEYBOARD_SOURCE,
     check_visible_window,
     headless_env,
+    init_pygame,
     open_player_source,
     parse_size,
 )
@@ -387,7 +388,7 @@ def _open_source(args: argparse.Namespace, clock):
 def _open_window(args: argparse.Namespace, size: tuple[int, int], source) -> None:
     import pygame
 
-    pygame.init()
+    init_pygame(sound=False)  # training plays no sound
     pygame.display.set_mode(size, pygame.RESIZABLE)
     if not args.headless:
         try:

@@ -35,7 +35,7 @@ from game.history import History
 from game.hits import Hit
 from game.hud import HudState, SourceSnapshot
 from game.hud_two_player import TwoPlayerHud
-from game.launch import DEMO_SOURCE, run_session
+from game.launch import DEMO_SOURCE, run_session, wants_sound
 from game.match import Match
 from game.pilot import PILOT_ATTACKS, PILOT_REACH, PILOT_SETTLE_STEPS
 from game.rules import RING_LIMIT, blow_damage
@@ -421,7 +421,7 @@ def run_match(args) -> int:
 
     def session(sources: list[Source], clock, size: tuple[int, int], surface_provider) -> TwoPlayerSession:
         config = SessionConfig(seed=args.seed, size=size, low_power=args.low_power, demo=args.demo,
-                               sound=not args.no_sound and not args.headless, left_handed=args.left_handed,
+                               sound=wants_sound(args), left_handed=args.left_handed,
                                recognizer=settings)
         return TwoPlayerSession(sources, config, clock=clock, surface_provider=surface_provider, templates=templates)
 

@@ -10,7 +10,9 @@ always exists (when the action was never sampled at all, the other counts as REA
 
 Fast path: the build stores the answer for cells near sampled cells, the "fill" (sorted keys
 + state ids; see `neighbour_fill`), exact by construction. Cells outside the fill fall back
-to a numpy scan of the bucket.
+to a numpy scan of the bucket. A sampled cell is in the fill too (at distance 0, its own
+state), so no separate dict of the 60,000 state keys is kept (it held 6 MB for ~0.7 us on
+the lookups that land on a sampled cell, ~15 % of a match's).
 """
 
 from __future__ import annotations
@@ -63,7 +65,6 @@ class StateIndex:
         # int32 as stored (a state id fits): the fill has ~900,000 cells, 3.5 MB less than int64
         self.fill_state = np.asarray(fill[1], dtype=np.int32)
         self._nfill = len(self.fill_keys)
-        self._by_key = dict(zip(self.keys.tolist(), range(self.n), strict=True))
         bucket, _, _, _ = grid.split_key(self.keys)
         self._bucket = bucket
         self._action = bucket // grid.n_phase
@@ -103,8 +104,8 @@ class StateIndex:
 
     def nearest(self, distance: float, bearing_self: float, bearing_other: float,
                 other_action: int, other_frame: float) -> int:
-        """State id of one situation (the 60 Hz path: Python arithmetic, a dict probe, at
-        most one binary search; a numpy scan only outside the fill)."""
+        """State id of one situation (the 60 Hz path: Python arithmetic, at most one binary
+        search; a numpy scan only outside the fill)."""
         pi = math.pi
         two_pi = 2.0 * pi
         nd, na, npb = self._nd, self._na, self._np
@@ -125,9 +126,6 @@ class StateIndex:
             other_action, snap = self._no_action(other_action)
         bucket = other_action * npb + snap[pb]
         key = ((bucket * nd + db) * na + sb) * na + ob
-        sid = self._by_key.get(key)
-        if sid is not None:
-            return sid
         i = int(self._search(key))
         if i < self._nfill and self.fill_keys[i] == key:
             return int(self.fill_state[i])

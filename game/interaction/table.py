@@ -183,6 +183,11 @@ def _no_edges(a: dict) -> dict:
     return out
 
 
+def fill_keys_of(a: dict) -> np.ndarray:
+    """The look-up fill's keys (int64, ascending) from a file's delta-coded fill_key_steps."""
+    return np.cumsum(a["fill_key_steps"], dtype=np.int64)  # = cumsum of .astype(int64), no copy
+
+
 class GraphFileError(InputError):
     """An Interaction Graph file that cannot be read; the message names the file."""
 
@@ -292,11 +297,13 @@ class GraphTable:
         edge_ptr = np.concatenate([[0], np.cumsum(a["edge_count"].astype(np.int64))])
         edge_dst = np.empty(E, dtype=np.int64)
         edge_dst[action_major(a["edge_action"])] = np.cumsum(dst_steps)
-        fill_keys = np.cumsum(a["fill_key_steps"].astype(np.int64))
-        fill_state = fill_offset + np.searchsorted(keys, fill_keys)
+        # the fill's ~900,000 cells: each int64 temporary is 7 MB of a start-up's peak memory,
+        # so the keys are summed in int64 directly and the offsets become the states in place
+        fill_keys = fill_keys_of(a)
+        fill_offset += np.searchsorted(keys, fill_keys)
         out = dict(a, keys=keys, features=decode_features(grid, keys, a["feature_pos"]),
                    edge_ptr=edge_ptr, edge_dst=edge_dst.astype(np.int32),
-                   fill_state=fill_state.astype(np.int32))
+                   fill_keys=fill_keys, fill_state=fill_offset.astype(np.int32))
         return out
 
     @classmethod
@@ -310,6 +317,8 @@ class GraphTable:
             raise bad(why)
         if meta["version"] == 3:
             a = cls._decode_v3(a, grid, bad)
+        else:
+            a = dict(a, fill_keys=fill_keys_of(a))
         why = _bad_shapes(a) or _bad_contents(a, meta)
         if why:
             raise bad(why)
@@ -321,7 +330,7 @@ class GraphTable:
             best_action=a["best_action"].astype(np.int64), value=a["value"],
             edge_ptr=a["edge_ptr"].astype(np.int64), edge_dst=a["edge_dst"],
             edge_action=a["edge_action"], edge_steps=a["edge_steps"], edge_flip=a["edge_flip"],
-            edge_reward=a["edge_reward"], fill_keys=np.cumsum(a["fill_key_steps"].astype(np.int64)),
+            edge_reward=a["edge_reward"], fill_keys=a["fill_keys"],
             fill_state=a["fill_state"], grid=grid, rules=rules, rewards=rewards,
             build=meta.get("build", {}))
 
@@ -397,7 +406,9 @@ def _bad_contents(a: dict, meta: dict) -> str | None:
     if a["best_action"].min() < 0 or a["best_action"].max() >= A or \
             (E and a["edge_action"].max() >= A):
         return "an action id outside action_names"
-    steps = a["fill_key_steps"].astype(np.int64)
+    steps = a["fill_key_steps"]  # compared in its own dtype (no 7 MB int64 copy), except
+    if steps.dtype == np.uint64:  # uint64: read as the decode reads it, past 2**63 negative
+        steps = steps.astype(np.int64)
     if (np.diff(a["keys"]) <= 0).any() or (steps[1:] <= 0).any() or (steps[:1] < 0).any():
         return "keys not strictly ascending"
     if len(a["fill_state"]) and (a["fill_state"].min() < 0 or a["fill_state"].max() >= S):

@@ -109,6 +109,36 @@ def test_train_demo_opens_the_virtual_player_without_looking_for_a_wiimote():
     assert not top_level(mods) & set(HEAVY)
 
 
+def test_devices_lists_wiimotes_without_numpy_or_the_driver():
+    # the transport (hidapi enumeration) and the protocol's ids only: the driver, which turns
+    # reports into samples with numpy, loads when a wiimote:// source is opened
+    mods = run_in_fresh(["devices", "--json"])
+    assert {"engine.sensors.wiimote.transport", "serial.tools.list_ports"} <= mods
+    assert "numpy" not in top_level(mods)
+    assert "engine.sensors.wiimote.driver" not in mods
+
+
+def test_the_game_opens_the_audio_device_only_for_sound_and_never_the_joystick():
+    # pygame.init() opened both for every match (an audio thread mixing silence with --no-sound)
+    loaded_after("""
+        import pygame
+        opened = []
+
+        def spy(module, name):
+            real = getattr(module, name)
+            setattr(module, name, lambda *a, **k: (opened.append(name if module is pygame else module.__name__), real(*a, **k))[1])
+
+        spy(pygame, "init"), spy(pygame.mixer, "init"), spy(pygame.joystick, "init")
+        from tools.cli import main
+        assert main(["play", "--demo", "--headless", "--frames", "2"]) == 0
+        assert main(["play", "--demo", "--virtual-clock", "--frames", "2", "--no-sound"]) == 0
+        assert main(["train", "--demo", "--headless", "--frames", "1", "--actions", "straight_r"]) == 0
+        assert opened == [], opened
+        assert main(["play", "--demo", "--virtual-clock", "--frames", "2"]) == 0  # with sound
+        assert opened == ["pygame.mixer"], opened
+    """)
+
+
 @pytest.fixture(scope="module")
 def recognition_files(tmp_path_factory) -> dict[str, Path]:
     """Two actions' trials, their templates and a labelled recording of both (1 sensor)."""

@@ -19,6 +19,8 @@ URLs:
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from engine.sensors.source import (
     Clock,
     SourceError,
@@ -27,7 +29,6 @@ from engine.sensors.source import (
     url_flag,
     url_number,
 )
-from engine.sensors.wiimote.driver import WiimoteSource
 from engine.sensors.wiimote.protocol import (
     Calibration,
     Nunchuk,
@@ -55,6 +56,21 @@ from engine.sensors.wiimote.transport import (
     list_wiimotes,
 )
 
+if TYPE_CHECKING:
+    from engine.sensors.wiimote.driver import WiimoteSource
+
+
+def __getattr__(name: str) -> object:
+    """WiimoteSource is imported with its driver (and numpy) when first asked for: `quickjab
+    devices` lists Wiimotes through the transport and needs neither."""
+    if name == "WiimoteSource":
+        from engine.sensors.wiimote.driver import WiimoteSource
+
+        globals()["WiimoteSource"] = WiimoteSource
+        return WiimoteSource
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
 PAIRING_HELP = (
     "pair one first: press the red SYNC button under the battery cover (or hold 1+2), then on "
     "Linux `bluetoothctl` -> scan on, pair/trust/connect <its address> (no PIN), and allow "
@@ -69,6 +85,8 @@ class WiimoteNotFound(SourceError):
 
 
 def open_wiimote(url: str, clock: Clock) -> WiimoteSource:
+    from engine.sensors.wiimote.driver import WiimoteSource
+
     _, path, params = parse_source_url(url)
     try:
         backend = hid_backend()

@@ -12,8 +12,10 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
-import numpy as np
+if TYPE_CHECKING:  # numpy loads in the two Calibration methods that use it: `quickjab devices`
+    import numpy as np  # reads VENDOR_ID and model names from here without it (~40 ms, ~15 MB)
 
 VENDOR_ID = 0x057E
 PRODUCT_IDS = {0x0306: "RVL-CNT-01", 0x0330: "RVL-CNT-01-TR"}
@@ -197,11 +199,15 @@ class Calibration:
     stick_center: tuple[int, int] | None = None
 
     def to_g(self, raw: Iterable[int]) -> np.ndarray:
+        import numpy as np
+
         zero = np.asarray(self.zero, dtype=np.float64)
         return (np.asarray(tuple(raw), dtype=np.float64) - zero) / (np.asarray(self.one_g, dtype=np.float64) - zero)
 
     def from_g(self, g: Iterable[float]) -> np.ndarray:
         """The raw counts (float, unrounded) a sensor with this calibration reads for `g`."""
+        import numpy as np
+
         zero = np.asarray(self.zero, dtype=np.float64)
         return zero + np.asarray(tuple(g), dtype=np.float64) * (np.asarray(self.one_g, dtype=np.float64) - zero)
 

@@ -258,6 +258,22 @@ def test_a_corrupt_file_is_a_clear_error(small_table, tmp_path):
         InteractionGraph.load(tmp_path / "absent.npz")
 
 
+def test_fill_keys_out_of_order_are_refused_in_any_dtype(small_table, tmp_path):
+    # the fill's steps are checked in their stored dtype (no int64 copy at start-up); a uint64
+    # step past 2**63 is negative as the decode reads it, and refused as before
+    small_table.save(tmp_path / "good.npz")
+    with np.load(tmp_path / "good.npz") as z:
+        arrays = {k: z[k] for k in z.files}
+    steps = arrays["fill_key_steps"].astype(np.uint64)
+    for name, bad in (("zero", np.where(np.arange(len(steps)) == 1, 0, steps).astype(steps.dtype)),
+                      ("wrapped", np.where(np.arange(len(steps)) == 1, np.uint64(2**63 + 1), steps))):
+        np.savez(tmp_path / f"{name}.npz", **dict(arrays, fill_key_steps=bad))
+        with pytest.raises(GraphFileError, match="keys not strictly ascending"):
+            GraphTable.load(tmp_path / f"{name}.npz")
+    np.savez(tmp_path / "u64.npz", **dict(arrays, fill_key_steps=steps))
+    np.testing.assert_array_equal(GraphTable.load(tmp_path / "u64.npz").fill_keys, small_table.fill_keys)
+
+
 def test_cli_reports_a_corrupt_file_in_one_line(tmp_path):
     path = tmp_path / "bad.npz"
     path.write_bytes(b"\x00" * 100)
@@ -305,6 +321,20 @@ def test_lookup_maps_a_live_situation_to_its_nearest_state(small_graph):
         if i % 2 == 0:
             assert got == sid          # a sampled state's own features map to it
         assert g.best_action(s) == g.names[t.best_action[got]]
+
+
+def test_every_sampled_cell_is_in_the_fill_as_its_own_state(small_graph):
+    # what lets `nearest` keep no dict of the state keys: the fill answers a sampled cell too
+    from game.interaction.lookup import neighbour_fill
+
+    idx = small_graph.index
+    for keys, state in ((idx.fill_keys, idx.fill_state), neighbour_fill(idx.grid, idx.keys, radius=0)):
+        pos = np.searchsorted(keys, idx.keys)
+        np.testing.assert_array_equal(keys[pos], idx.keys)
+        np.testing.assert_array_equal(state[pos], np.arange(idx.n))
+    t = small_graph.table
+    for i in range(0, idx.n, max(1, idx.n // 200)):  # a state's own situation finds it
+        assert idx.nearest(*t.features[i], int(t.other_action[i]), int(t.other_frame[i])) == i
 
 
 def test_scalar_and_vectorized_lookup_agree(small_graph):

@@ -71,6 +71,13 @@ def test_shipped_graph_matches_the_library(lib, shipped):
     assert DEFAULT_GRAPH.stat().st_size < 8_000_000
 
 
+def test_shipped_graph_fill_holds_every_state_cell(shipped):
+    idx = shipped.index
+    pos = np.searchsorted(idx.fill_keys, idx.keys)
+    np.testing.assert_array_equal(idx.fill_keys[pos], idx.keys)
+    np.testing.assert_array_equal(idx.fill_state[pos], np.arange(idx.n))
+
+
 def test_shipped_graph_answers_with_an_action(shipped):
     s = Situation(0.9, 0.0, 0.0, np.pi, "guard", 0.0, "straight_r", 3.0)
     assert shipped.best_action(s) in (*ACTION_NAMES, "guard")
