@@ -336,10 +336,11 @@ class Emulator:
         self._settle()
         return len(frame)
 
-    def _settle(self, closing: bool = False) -> None:
+    def _settle(self, closing: bool = False, pending: int | None = None) -> None:
         """Move frames the host has read (all their bytes left the port's queue) into the
-        stats; when closing, the rest are undelivered."""
-        pending = self.port.pending()
+        stats; when closing, the rest are undelivered. `pending`: the queue as measured just
+        before the port closed (default: now)."""
+        pending = self.port.pending() if pending is None else pending
         read_up_to = self._written - pending
         s = self.stats
         q = self._in_flight
@@ -362,12 +363,18 @@ class Emulator:
 
     def _close_port(self, drain_s: float) -> None:
         """Give the host up to `drain_s` to read what is queued (0: a real unplug loses it),
-        then count what it got and close."""
+        then close and count what it got."""
         time.sleep(0.02)  # let the kernel move the last write into the queue FIONREAD sees
         end = time.monotonic() + drain_s
         while self.port.pending() and time.monotonic() < end:
             time.sleep(0.005)
-        self._settle(closing=True)
+        # Closed right after the queue is measured: closing the master discards what the host has
+        # not read, so nothing it reads later is counted undelivered. Settling first left the
+        # host a window (the accounting, longer on a loaded machine) to read counted bytes:
+        # test_every_fault_option_counts_agree_exactly once saw 1649 bytes more than the count.
+        pending = self.port.pending()
+        self.port.unplug()
+        self._settle(closing=True, pending=pending)
 
     def _control(self, sampler: Sampler) -> bool:
         """Called by Sampler.run every loop: schedule faults; True ends this boot."""
