@@ -48,7 +48,8 @@ def link_counts(stats: dict[str, int]) -> str:
     return (f"received {stats.get('frames_ok', 0)} frames, lost {stats.get('lost', 0)}, "
             f"CRC-rejected {stats.get('crc_errors', 0)}, other rejects {rejected}, "
             f"replays dropped {stats.get('replays', 0)}, reboots {stats.get('reboots', 0) + stats.get('seq_jumps', 0)}, "
-            f"sensor changes {stats.get('sensor_changes', 0)}, sensor conflicts {stats.get('sensor_conflicts', 0)}")
+            f"sensor changes {stats.get('sensor_changes', 0)}, sensor conflicts {stats.get('sensor_conflicts', 0)}, "
+            f"implausible {stats.get('implausible', 0)}")
 
 
 def record(url: str, output: str, seconds: float | None, label: str = "", poll_s: float = 0.005,

@@ -1,13 +1,18 @@
 """SAMPLE payloads of protocol v1 to accelerations in g, one (sensors, 3) row per frame,
-holding each sensor's last value for a frame that lacks it."""
+holding each sensor's last value for a frame that lacks it, and the check that a frame's
+accelerations are ones a sensor can read at all."""
 
 from __future__ import annotations
 
+import struct
 from collections.abc import Callable
 
 import numpy as np
 
+from engine.recording import MAX_ACCEL_G
 from firmware_bridge import protocol
+
+INT16_MAX_ABS = 32768  # the largest |count| an int16 holds (-32768)
 
 
 class SampleAccel:
@@ -32,6 +37,19 @@ class SampleAccel:
             self.last_row = acc[-1]  # for a later SAMPLE that lacks a sensor
             return acc
         return [self._accel(f, hello, sensors) for f in frames]
+
+    @staticmethod
+    def plausible(f: protocol.Frame, hello: protocol.Hello) -> bool:
+        """False when an acceleration of the SAMPLE (any axis, any sensor; gyro aside) would be
+        over MAX_ACCEL_G once scaled. PROTOCOL.md allows any accel_lsb_per_g from 1, and at 1 an
+        int16 reads up to 32,767 g: no worn sensor does, and a recording reader refuses it.
+        Compared in counts, before any conversion, so a dropped frame sets no held value."""
+        limit = MAX_ACCEL_G * hello.accel_lsb_per_g
+        if limit >= INT16_MAX_ABS:  # 33 counts per g or more (4096 usually): every count is fine
+            return True
+        per = protocol.sample_values_per_sensor(f.flags)
+        counts = struct.unpack(f"<{len(f.payload) // 2}h", f.payload)
+        return all(abs(c) <= limit for i, c in enumerate(counts) if i % per < 3)
 
     def _last(self, sensors: int) -> np.ndarray:
         """Every sensor's last accel, (sensors, 3); zeros before any."""

@@ -19,7 +19,8 @@ seq). A board that reboots with another sensor count changes `sensors` (counted 
 (engine.frames.FrameResampler) and the recorder (tools/record.py) learn of it. Only a reboot
 does: a HELLO that announces other sensors than its boot's earlier HELLO is counted as
 `sensor_conflicts` and dropped (the boot's first sensors stay; a boot that announced none yet,
-before finding its IMUs, may announce them).
+before finding its IMUs, may announce them). A SAMPLE with an acceleration over MAX_ACCEL_G
+once scaled (possible with a tiny `accel_lsb_per_g`) is counted as `implausible` and dropped.
 """
 
 from __future__ import annotations
@@ -324,6 +325,11 @@ class SerialSource(Source):
                     continue
                 if f.flags & protocol.FLAG_OVERRUN:
                     self.count("device_overruns")
+                if not self._accel.plausible(f, self.hello):
+                    # a tiny accel_lsb_per_g (PROTOCOL.md allows 1) scales counts past what any
+                    # sensor reads: passed on, it would make `record` write a file nothing reads
+                    self.count("implausible")
+                    continue
                 times.append(dev)
                 sample_frames.append(f)
         return out + self._flush(times, sample_frames, latest, now)

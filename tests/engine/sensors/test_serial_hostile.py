@@ -16,8 +16,9 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from engine.frames import FrameResampler
-from engine.recording import read_recording
+from engine.recording import MAX_ACCEL_G, read_recording
 from engine.sensors import open_source
+from engine.sensors.serial_accel import SampleAccel
 from firmware_bridge import protocol
 from tools.record import record
 
@@ -213,7 +214,7 @@ def test_fuzzed_streams_give_valid_samples_or_nothing(plan, seed):
             a = np.asarray(s.accel)
             # (a poll may hold samples from before and after a HELLO that changed the sensor count)
             assert a.ndim == 2 and a.shape[1] == 3 and a.shape[0] in (1, 2)
-            assert np.all(np.isfinite(a)) and np.all(np.abs(a) <= 32768)
+            assert np.all(np.isfinite(a)) and np.all(np.abs(a) <= MAX_ACCEL_G)  # HELLOs may scale by 1
             assert s.t >= last_t and np.isfinite(s.t)
             last_t = s.t
             got += 1
@@ -399,3 +400,87 @@ def test_a_text_frame_with_flags_set_is_malformed():
         os.close(slave)
     assert list(src.messages) == ["flags 0"]
     assert src.stats["malformed"] == 2 and src.stats["frames_ok"] == 1 and src.stats["texts"] == 1
+
+
+# -- readings no sensor gives: a HELLO with a tiny accel scale ------------------------------
+
+def _tiny_scale_stream(seq0: int = 0, t0: int = 0) -> tuple[bytes, list]:
+    """A HELLO with accel_lsb_per_g 1 (valid: 1..65535) and gyro, then SAMPLEs whose counts are
+    g as they are: the in-range ones (and what each should read as, in g) and the out-of-range.
+    Gyro counts are at full scale in every frame: they are not accelerations."""
+    gyro = (32767, -32768, 1)
+    frames = [  # (accel A, accel B, plausible)
+        ((0, 0, 1), (1, 0, 0), True),
+        ((1000, -1000, 0), (0, 0, -1000), True),  # exactly the limit reads back
+        ((0, 0, 1001), (0, 0, 1), False),
+        ((0, 0, 1), (-32768, 0, 0), False),  # one axis of the second sensor is enough
+        ((32767, 32767, 32767), (32767, 32767, 32767), False),
+        ((2, 3, 4), None, True),  # B missing: holds its last *plausible* value, (0, 0, -1000)
+    ]
+    data = hello(seq=seq0, accel=1, flags=3 | protocol.FLAG_GYRO, t_us=t0)
+    want = []
+    for k, (a, b, ok) in enumerate(frames):
+        seq = seq0 + 1 + k
+        data += protocol.encode_sample(seq, t0 + 5000 * (k + 1), a, b, gyro, gyro if b else None)
+        if ok:
+            want.append([list(a), list(b or (0, 0, -1000))])
+    return data, want
+
+
+def test_samples_over_the_acceleration_limit_are_dropped_and_counted():
+    # PROTOCOL.md allows any accel_lsb_per_g from 1: at 1 count per g an int16 reads up to
+    # 32,767 g, which the recording reader (MAX_ACCEL_G) refuses and no worn sensor gives
+    master, slave, src = _pty_source()
+    data, want = _tiny_scale_stream()
+    got = []
+    try:
+        os.write(master, data)
+        for _ in range(100):
+            got += src.poll()
+            if src.stats["frames_ok"] == 7:
+                break
+            time.sleep(0.01)
+    finally:
+        src.close()
+        os.close(master)
+        os.close(slave)
+    assert src.hello is not None and src.hello.accel_lsb_per_g == 1
+    assert [s.accel.tolist() for s in got] == want
+    assert all(np.abs(s.accel).max() <= MAX_ACCEL_G for s in got)
+    assert src.stats["implausible"] == 3 and src.stats["malformed"] == 0 and src.stats["sensor_missing"] == 1
+
+
+def test_record_of_a_tiny_scale_stream_reads_back(tmp_path, capsys):
+    master, slave = os.openpty()
+    tty.setraw(slave)
+    out = tmp_path / "rec.csv"
+
+    def board():
+        time.sleep(0.2)
+        for k in range(5):  # five rounds of the stream, the HELLO repeated as a board does
+            data, _ = _tiny_scale_stream(seq0=7 * k, t0=35_000 * k)
+            os.write(master, data)
+            time.sleep(0.05)
+
+    rows = record_while(board, master, slave, out)
+    rec = read_recording(out)  # refused before: "an acceleration of 1001 g, over the 1000 g ..."
+    assert rows == len(rec) == 15 and np.abs(rec.accel).max() == MAX_ACCEL_G
+    np.testing.assert_allclose(rec.accel[:3], [[[0, 0, 1], [1, 0, 0]], [[1000, -1000, 0], [0, 0, -1000]],
+                                               [[2, 3, 4], [0, 0, -1000]]])
+    link = next(line for line in capsys.readouterr().err.splitlines() if line.startswith("link:"))
+    assert "implausible 15" in link
+
+
+def test_the_acceleration_limit_in_counts_at_the_scales_around_it():
+    # at 33 counts per g an int16 stays under 1000 g (32768 / 33 = 993 g); at 32 it can pass it
+    def frame(a):
+        return protocol.Frame(protocol.SAMPLE, 1, 0, protocol.FLAG_SENSOR_A,
+                              protocol.struct.pack("<3h", *a))
+
+    def scale(lsb):
+        return protocol.Hello(protocol.Frame(protocol.HELLO, 0, 0, protocol.FLAG_SENSOR_A,
+                                             protocol.struct.pack(protocol.HELLO_FMT, lsb, 65500, 200, 1, 30, 1)))
+
+    assert SampleAccel.plausible(frame((-32768, 32767, 0)), scale(33))
+    assert SampleAccel.plausible(frame((-32000, 32000, 0)), scale(32))
+    assert not SampleAccel.plausible(frame((0, 0, -32001)), scale(32))
