@@ -102,10 +102,12 @@ def test_a_reboot_with_one_sensor_fewer_keeps_the_frames_stage_running():
     assert res.resized == 40
 
 
-def record_while(board, master: int, slave: int, out) -> int:
-    """`quickjab record` for 1 s from the pty's slave end while `board()` writes its master end
-    in a thread; both ends closed after. The rows recorded."""
-    th = threading.Thread(target=board)
+def record_while(board, out) -> int:
+    """`quickjab record` for 1 s from a raw pty's slave end while `board(master)` writes its
+    master end in a thread; both ends closed after. The rows recorded."""
+    master, slave = os.openpty()
+    tty.setraw(slave)
+    th = threading.Thread(target=board, args=(master,))
     th.start()
     try:
         return record(f"serial://{os.ttyname(slave)}", str(out), 1.0)
@@ -116,11 +118,9 @@ def record_while(board, master: int, slave: int, out) -> int:
 
 
 def test_record_continues_in_a_new_file_when_the_sensor_count_changes(tmp_path, capsys):
-    master, slave = os.openpty()
-    tty.setraw(slave)
     out = tmp_path / "rec.csv"
 
-    def board():
+    def board(master: int) -> None:
         time.sleep(0.2)
         os.write(master, hello(boot=1) + samples(30))
         time.sleep(0.2)
@@ -128,7 +128,7 @@ def test_record_continues_in_a_new_file_when_the_sensor_count_changes(tmp_path, 
         time.sleep(0.2)
         os.write(master, hello(boot=2, flags=protocol.FLAG_SENSOR_A) + samples(20, sensors=1, t0=9_000_000))
 
-    rows = record_while(board, master, slave, out)
+    rows = record_while(board, out)
     assert rows == 53
     a, b = read_recording(out), read_recording(tmp_path / "rec.2.csv")  # both read back
     assert (a.sensors, len(a), b.sensors, len(b)) == (2, 33, 1, 20)
@@ -358,11 +358,9 @@ def test_a_hello_that_changes_sensors_within_one_boot_is_dropped_and_record_keep
     # a broken board whose HELLOs alternate sensor A and A|B under one boot_id: a boot's
     # sensors are fixed once announced, so each flipped HELLO is counted and dropped, its
     # one-sensor SAMPLEs hold B's last value, and the recording stays in one file
-    master, slave = os.openpty()
-    tty.setraw(slave)
     out = tmp_path / "rec.csv"
 
-    def board():
+    def board(master: int) -> None:
         time.sleep(0.2)
         seq = 0
         for k in range(10):
@@ -372,7 +370,7 @@ def test_a_hello_that_changes_sensors_within_one_boot_is_dropped_and_record_keep
             seq += 11
             time.sleep(0.05)
 
-    rows = record_while(board, master, slave, out)
+    rows = record_while(board, out)
     assert rows == 100
     rec = read_recording(out)
     assert rec.sensors == 2 and len(rec) == 100
@@ -451,18 +449,16 @@ def test_samples_over_the_acceleration_limit_are_dropped_and_counted():
 
 
 def test_record_of_a_tiny_scale_stream_reads_back(tmp_path, capsys):
-    master, slave = os.openpty()
-    tty.setraw(slave)
     out = tmp_path / "rec.csv"
 
-    def board():
+    def board(master: int) -> None:
         time.sleep(0.2)
         for k in range(5):  # five rounds of the stream, the HELLO repeated as a board does
             data, _ = _tiny_scale_stream(seq0=7 * k, t0=35_000 * k)
             os.write(master, data)
             time.sleep(0.05)
 
-    rows = record_while(board, master, slave, out)
+    rows = record_while(board, out)
     rec = read_recording(out)  # refused before: "an acceleration of 1001 g, over the 1000 g ..."
     assert rows == len(rec) == 15 and np.abs(rec.accel).max() == MAX_ACCEL_G
     np.testing.assert_allclose(rec.accel[:3], [[[0, 0, 1], [1, 0, 0]], [[1000, -1000, 0], [0, 0, -1000]],
