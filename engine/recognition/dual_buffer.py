@@ -65,6 +65,10 @@ Per 60 Hz frame (`push`):
   sensors, the other hand's punch is not that return: a sensor the discarded action barely
   moves that moves past the gate and OTHER_HAND_RATIO of the discarded motion's own peak ends
   the discard (OTHER_HAND_*), and that frame is the next motion's onset (a combo).
+- Beyond the paper: a decided motion that has lasted as long as its action's longest template, and
+  at least `supplementary` frames, ends there (`complete`) whether or not the hand has rested:
+  without a character calling `character_finished()` a hand that never rests held one motion open
+  for seconds, and every punch thrown in it was lost (`_outlasted`).
 - Beyond the paper: with two or more sensors, while one sensor has moved clearly the most since the
   onset (the others' peaks under MOVING_HAND_RATIO of its), no decision (first, switch or final)
   names an action that barely moves it (under OTHER_HAND_SHARE of its templates' activity): the
@@ -339,10 +343,10 @@ class DualBufferRecognizer(TemplateSet, DecisionRules, Adaptation):
                 self._extended = True
         if self.quiet >= self.null_frames and not complete and self._paused():
             return  # a wind-up's pause: the blow may follow
-        # A motion rejected at the end of its window (nothing fitted) ends there, at rest or not:
-        # a player who never stops moving (a boxer bouncing on the feet) would otherwise hold the
-        # one rejected motion open, and lose every punch thrown in it, until the hand rests.
+        # A motion rejected at the end of its window ends there, and a decided one that outlasted its
+        # action (`_outlasted`), at rest or not: a hand that never rests held it open for seconds.
         rejected = self.action is None and self.count > self.window
+        complete = complete or self._outlasted()
         if self.quiet >= self.null_frames or complete or rejected:
             if self.action is not None and self._called_off():
                 events.append(self._event("reject", self.action_names[self.action], None, called_off=True))

@@ -381,6 +381,16 @@ class DecisionRules:
         closed = self._usable(self.dtw.closed_scores())  # as the decisions weigh adopted templates
         return bool(closed[k] <= np.min(np.where(self._tmpl_action == self.action, np.inf, closed)))
 
+    def _outlasted(self) -> bool:
+        """A decided motion longer than the supplementary buffer and than every template of its
+        action: over, at rest or not (eighteenth round). The character's clip ends a motion in the
+        game; without one (`quickjab recognize`, a caller that only pushes frames) a hand that
+        never rests held one motion open for seconds and lost every punch thrown in it."""
+        if self.action is None or self.count <= self.window:
+            return False
+        lo, hi = self._action_starts[self.action], self._action_ends[self.action]
+        return self.count > int(self.template_lengths[lo:hi].max())
+
     def _current_best(self, scores: np.ndarray) -> int:
         """The current action's best-scoring template (templates are sorted by action)."""
         lo, hi = self._action_starts[self.action], self._action_ends[self.action]

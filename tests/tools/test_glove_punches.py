@@ -240,3 +240,19 @@ def test_real_gloves_first_decisions_name_the_moving_hand(punchbuddy, monkeypatc
     off = row(name)
     assert on["first_correct"] >= off["first_correct"] + 0.05
     assert on["final_correct"] >= off["final_correct"] - 0.01
+
+
+def test_real_gloves_without_a_character_start_as_many_punches(punchbuddy, monkeypatch):
+    """With no character calling character_finished() (--clip-frames 0, as `quickjab recognize`
+    replays), a bouncing boxer's decided motion never came to rest and held every punch after it:
+    egor's punches started 62.7 %. Ending a motion that has outlasted its action's templates
+    (`_outlasted`) starts 88.9 % of them."""
+    from engine.recognition import DualBufferRecognizer
+
+    def row() -> dict:
+        return evaluate_gloves(punchbuddy, [6], clip_frames=0)["punchbuddy egor across sessions"][0].row()
+
+    on = row()
+    monkeypatch.setattr(DualBufferRecognizer, "_outlasted", lambda self: False)
+    off = row()
+    assert on["started"] >= off["started"] + 0.15 and on["final_correct"] >= off["final_correct"] + 0.15

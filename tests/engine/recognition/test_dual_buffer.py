@@ -342,8 +342,30 @@ def test_the_extended_dtw_is_bounded_when_the_hand_never_rests(templates):
     for f in frames:
         rec.push(f)
         longest = max(longest, rec.dtw.n)
-    assert longest == rec._extend_to > rec.supplementary
+    # the decided motion ends once it outlasts its action (`_outlasted`: the buffer here, the
+    # templates being shorter), so its DTW stops at the buffer, inside the bound
+    assert rec.supplementary <= longest <= rec._extend_to
     assert len(rec.dtw._recip) <= rec._extend_to
+
+
+def test_a_decided_motion_ends_once_it_outlasts_its_action_while_the_hand_keeps_moving(templates, monkeypatch):
+    # No character calls character_finished() (`quickjab recognize`, a caller that only pushes
+    # frames), the complete rule is off, and the hand never rests after the jab: the jab's motion
+    # ends when it has lasted the buffer (longer than every jab template), and the motions after
+    # it are the hand's own; without the rule the jab's motion never ends.
+    rng = np.random.default_rng(6)
+    frames = np.vstack([rest(10), bump(0, 3.0), rest(600) + rng.normal(0, 2.0, (600, 3))])
+
+    def first_motion() -> list[dict]:
+        events = run(DualBufferRecognizer(templates, complete_fraction=0), frames)
+        start = next(i for i, e in enumerate(events) if e["event"] == "start")
+        return events[start : start + 2]
+
+    start, end = first_motion()
+    assert start["action"] == end["action"] == "jab" and end["event"] == "end" and end["reason"] == "complete"
+    assert end["frame"] - start["onset_frame"] + 1 == DualBufferRecognizer(templates).supplementary + 1
+    monkeypatch.setattr(DualBufferRecognizer, "_outlasted", lambda self: False)
+    assert [e["event"] for e in first_motion()] == ["start"]  # nothing after it, ever
 
 
 def tilted_bump(deg: float, amp: float = 3.0, n: int = 24) -> np.ndarray:
