@@ -289,6 +289,25 @@ def _pty_source():
     return master, slave, open_source(f"serial://{os.ttyname(slave)}")
 
 
+def _write_and_poll(data: bytes, done) -> tuple[object, list]:
+    """A pty serial source fed `data` in one write, polled until `done(src)` (at most 1 s); the
+    source (closed) and the samples it gave."""
+    master, slave, src = _pty_source()
+    got: list = []
+    try:
+        os.write(master, data)
+        for _ in range(100):
+            got += src.poll()
+            if done(src):
+                break
+            time.sleep(0.01)
+    finally:
+        src.close()
+        os.close(master)
+        os.close(slave)
+    return src, got
+
+
 def _poll_all(src, want: int) -> list[tuple[float, float]]:
     """(sample t, host time right after the poll that returned it) until `want` samples came."""
     got: list[tuple[float, float]] = []
@@ -383,19 +402,9 @@ def test_a_hello_that_changes_sensors_within_one_boot_is_dropped_and_record_keep
 
 def test_a_text_frame_with_flags_set_is_malformed():
     # PROTOCOL.md: "TEXT frames carry flags 0"; the firmware's encode_text sends 0
-    master, slave, src = _pty_source()
-    try:
-        for seq, flags in ((1, 0x0F), (2, protocol.FLAG_SENSOR_A), (3, 0)):
-            os.write(master, protocol.encode_frame(protocol.TEXT, seq, 5000 * seq, flags, b"flags %d" % flags))
-        for _ in range(50):
-            src.poll()
-            if src.stats["frames_ok"] + src.stats["malformed"] == 3:
-                break
-            time.sleep(0.01)
-    finally:
-        src.close()
-        os.close(master)
-        os.close(slave)
+    data = b"".join(protocol.encode_frame(protocol.TEXT, seq, 5000 * seq, flags, b"flags %d" % flags)
+                    for seq, flags in ((1, 0x0F), (2, protocol.FLAG_SENSOR_A), (3, 0)))
+    src, _ = _write_and_poll(data, lambda src: src.stats["frames_ok"] + src.stats["malformed"] == 3)
     assert list(src.messages) == ["flags 0"]
     assert src.stats["malformed"] == 2 and src.stats["frames_ok"] == 1 and src.stats["texts"] == 1
 
@@ -428,20 +437,8 @@ def _tiny_scale_stream(seq0: int = 0, t0: int = 0) -> tuple[bytes, list]:
 def test_samples_over_the_acceleration_limit_are_dropped_and_counted():
     # PROTOCOL.md allows any accel_lsb_per_g from 1: at 1 count per g an int16 reads up to
     # 32,767 g, which the recording reader (MAX_ACCEL_G) refuses and no worn sensor gives
-    master, slave, src = _pty_source()
     data, want = _tiny_scale_stream()
-    got = []
-    try:
-        os.write(master, data)
-        for _ in range(100):
-            got += src.poll()
-            if src.stats["frames_ok"] == 7:
-                break
-            time.sleep(0.01)
-    finally:
-        src.close()
-        os.close(master)
-        os.close(slave)
+    src, got = _write_and_poll(data, lambda src: src.stats["frames_ok"] == 7)
     assert src.hello is not None and src.hello.accel_lsb_per_g == 1
     assert [s.accel.tolist() for s in got] == want
     assert all(np.abs(s.accel).max() <= MAX_ACCEL_G for s in got)
