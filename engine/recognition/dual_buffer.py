@@ -64,7 +64,10 @@ Per 60 Hz frame (`push`):
   motion's peak activity (at most DISCARD_HOLD x `discard_frames` frames). With two or more
   sensors, the other hand's punch is not that return: a sensor the discarded action barely
   moves that moves past the gate and OTHER_HAND_RATIO of the discarded motion's own peak ends
-  the discard (OTHER_HAND_*), and that frame is the next motion's onset (a combo).
+  the discard (OTHER_HAND_*), and that frame is the next motion's onset (a combo). Beyond the
+  paper, the same launch ends a decided motion (`complete`) that has run, since its start, the
+  rest of its best template past the main buffer (`_ran_course`): without a character nothing
+  else ended a motion the boxer never rested from, and the other hand's punch was lost.
 - Beyond the paper: a decided motion that has lasted as long as its action's longest template, and
   at least `supplementary` frames, ends there (`complete`) whether or not the hand has rested:
   without a character calling `character_finished()` a hand that never rests held one motion open

@@ -71,7 +71,9 @@ DISCARD_HOLD = 1.5
 # apart on the two-glove recordings, was lost in the clip and the discard). A sensor carrying less
 # than OTHER_HAND_SHARE of the discarded action's templates' activity, whose own activity (against
 # the motion's onset gravity) passes the gate and OTHER_HAND_RATIO of the discarded motion's peak
-# on the action's sensors, ends the discard; that frame is the next motion's onset.
+# on the action's sensors, ends the discard; that frame is the next motion's onset. It also ends a
+# decided motion that has run its course (`_ran_course`, nineteenth round), for a caller with no
+# character to end the motion first.
 OTHER_HAND_SHARE = 0.35
 OTHER_HAND_RATIO = 0.5
 # The moving hand (two or more sensors, eighteenth round): while one sensor has moved clearly the
@@ -193,7 +195,7 @@ class DecisionRules:
         (`_other_hand`) ends the previous motion: this frame is the next motion's onset."""
         self._double(valid, events)
         if self._hands > 1:
-            self._other_hand()
+            self._other_hand(events)
 
     def _double(self, valid: bool, events: list[dict]) -> None:
         """A double (see RELAUNCH_RATIO): just after the punch's stop, the hand launches along the
@@ -217,23 +219,21 @@ class DecisionRules:
         ):
             return
         if self.state == ACTIVE:
-            if self.adapt and self.count <= max(self.window, self._extend_to):
-                self._adapt()  # as at any end
-            events.append(self._event("end", self.action_names[self.action], None, reason="complete"))
-            self._after_peak = self._peak_act_seen
+            self._end_complete(events)
         self._begin_motion_state()
         self.state = IDLE
         self._n_recent = 0  # no back-dating into the previous motion
         self._launch = LaunchTracker()
         self._launch.step(self._gravity_removed(self._g0_list) if valid else None, valid)
 
-    def _other_hand(self) -> None:
+    def _other_hand(self, events: list) -> None:
         """Each sensor's peak activity over the decided motion (from the frame after its start,
-        against its onset gravity) and, in the discard that follows it, the other hand's launch
-        (OTHER_HAND_*): the discard ends and the state goes back to idle, so that this frame is the
-        next onset. (A clip that ends on the start frame itself leaves nothing tracked: the rule
-        is off for that motion.) Plain floats: two or three sensors a frame, where numpy's
-        per-call cost is most of the work."""
+        against its onset gravity) and, in the discard that follows it or once the motion has run
+        its course (`_ran_course`), the other hand's launch (OTHER_HAND_*): the discard or the
+        motion (`complete`) ends and the state goes back to idle, so that this frame is the next
+        onset. (A clip that ends on the start frame itself leaves nothing tracked: the rule is off
+        for that motion.) Plain floats: two or three sensors a frame, where numpy's per-call cost
+        is most of the work."""
         if self.state == ACTIVE and self.action is not None:
             if self._hand_g0 is None:
                 self._hand_g0 = list(self._g0_list)
@@ -247,13 +247,31 @@ class DecisionRules:
         other = self._other_hands[self._hand_action]
         own_peak = max((p for p, o in zip(self._hand_peak, other, strict=True) if not o), default=0.0)  # before this frame
         self._hand_peak = [max(p, d) for p, d in zip(self._hand_peak, dev, strict=True)]
-        if self.state != DISCARD or own_peak <= 0.0:
+        if own_peak <= 0.0 or not (self.state == DISCARD or self._ran_course()):
             return
         launch = max((d for d, o in zip(dev, other, strict=True) if o), default=0.0)
         if launch >= OTHER_HAND_RATIO * own_peak and launch >= self.gate.noise_g:
+            if self.state == ACTIVE:
+                self._end_complete(events)
             self._begin_motion_state()
             self.state = IDLE  # (nothing to back-date: no idle frame since the discarded motion)
             self._hand_g0 = None
+
+    def _ran_course(self) -> bool:
+        """A decided motion that has run, since its start, the rest of its best template past the
+        main buffer: where a character's clip would be ending. Without a character (a caller that
+        only pushes frames) the other hand's punch then ends the motion as it ends the discard."""
+        if self.state != ACTIVE or self.action is None:
+            return False
+        main = AUTO_MIN_MAIN if self.main == "auto" else self.main
+        return self.frame - self.start_frame >= int(self.template_lengths[self._current_best(self.dtw.scores)]) - main
+
+    def _end_complete(self, events: list) -> None:
+        """The decided motion ends here (`complete`), as at any end: adapted to, then its end."""
+        if self.adapt and self.count <= max(self.window, self._extend_to):
+            self._adapt()
+        events.append(self._event("end", self.action_names[self.action], None, reason="complete"))
+        self._after_peak = self._peak_act_seen
 
     def _gravity_removed(self, g: list[float]) -> list[float]:
         """This frame's acceleration less gravity `g`, all sensors' axes together (plain floats)."""

@@ -131,3 +131,49 @@ def test_the_punching_hands_own_return_is_still_discarded(templates, monkeypatch
 @pytest.fixture(scope="module")
 def templates() -> Templates:
     return make_templates()
+
+
+def right_never_resting(left_at: int) -> np.ndarray:
+    """A right punch whose hand then sways at 1.2-1.8 g (no null signal ends the right motion) until
+    6 frames after the left punch launches at frame `left_at`, and that left punch."""
+    right = np.vstack([rest(40), bump(0, 3.0), rest(96)])
+    right[64 : left_at + 6, 1] += 1.5 + 0.3 * np.cos(np.arange(left_at + 6 - 64) * 0.7)
+    left = rest(len(right))
+    left[left_at : left_at + 24] = bump(0, 3.0)
+    return hands(right, left)
+
+
+NO_CHARACTER = 1 << 30  # a caller that only pushes frames: character_finished() is never called
+
+
+def starts_and_ends(events: list[dict]) -> list[tuple]:
+    return [(e["event"], e["action"], e["frame"]) for e in events if e["event"] in ("start", "end")]
+
+
+@pytest.mark.parametrize("left_at", [70, 90])
+def test_without_a_character_the_other_hands_punch_ends_a_motion_that_ran_its_course(templates, monkeypatch, left_at):
+    # The right motion never rests, and it has run its course (its ~25-frame template) when the left
+    # hand launches: the launch ends it (`complete`) and the left punch starts in its main buffer.
+    frames = right_never_resting(left_at)
+    events, _ = play(DualBufferRecognizer(templates, noise_g=0.5), frames, NO_CHARACTER)
+    (_, first, _), (_, ended, end_at), (_, second, start_at) = starts_and_ends(events)[:3]
+    assert (first, ended, second) == ("hook_r", "hook_r", "hook_l")
+    assert end_at - left_at <= 3 and start_at - left_at <= 10
+    assert next(e for e in events if e["event"] == "end")["reason"] == "complete"
+    # without the rule the right motion holds on past the launch and the left punch is lost
+    monkeypatch.setattr(DualBufferRecognizer, "_ran_course", lambda self: False)
+    events, _ = play(DualBufferRecognizer(templates, noise_g=0.5), frames, NO_CHARACTER)
+    assert [a for kind, a, _ in starts_and_ends(events) if kind == "start"] == ["hook_r"]
+
+
+def test_the_other_hand_does_not_end_a_motion_before_its_course_is_run(templates, monkeypatch):
+    # the left hand launches 4 frames after the right punch's start: the right motion goes on
+    # until it has run its best template past the main buffer
+    frames = right_never_resting(left_at=50)
+    rec = DualBufferRecognizer(templates, noise_g=0.5)
+    events, _ = play(rec, frames, NO_CHARACTER)
+    (_, first, start_at), (_, _, end_at) = starts_and_ends(events)[:2]
+    assert first == "hook_r" and end_at - start_at >= int(rec.template_lengths.min()) - rec.main
+    monkeypatch.setattr(DualBufferRecognizer, "_ran_course", lambda self: self.state == rules.ACTIVE and self.action is not None)
+    events, _ = play(DualBufferRecognizer(templates, noise_g=0.5), frames, NO_CHARACTER)
+    assert starts_and_ends(events)[1][2] - start_at < 8  # a rule without the course ends it at the launch
