@@ -363,6 +363,8 @@ class Templates:
         dims = {s.shape[1] for s in self.signals} | {self.gravity.shape[1]}
         if len(dims) != 1 or next(iter(dims)) % 3:
             raise ValueError(f"inconsistent template dimensions {sorted(dims)}")
+        if dims == {0}:  # 0 is a multiple of 3, but there is nothing to compare a sensor with
+            raise ValueError("templates of no values per frame (D = 0), not 3 per sensor")
 
     @property
     def dim(self) -> int:

@@ -205,3 +205,14 @@ def test_complex_signals_are_refused_not_cast(tmp_path, trials, recwarn):
     with pytest.raises(TemplateFileError, match="complex.npz: .*signals must hold real numbers, not complex128"):
         Templates.load(path)
     assert not [w for w in recwarn if issubclass(w.category, np.exceptions.ComplexWarning)]
+
+
+def test_signals_of_no_columns_are_refused_at_load(tmp_path, trials):
+    """Signals (frames, 0) and gravity (T, 0) loaded as templates of D = 0, refused only later
+    by the command that compared them with a sensor (play's message did not name the file)."""
+    path = tmp_path / "d0.npz"
+    t = Templates.from_trials(trials)
+    t.save(path)
+    _rewritten(path, signals=np.zeros((sum(len(s) for s in t.signals), 0)), gravity=np.zeros((len(t), 0)))
+    with pytest.raises(TemplateFileError, match=r"d0.npz: .*no values per frame \(D = 0\)"):
+        Templates.load(path)
