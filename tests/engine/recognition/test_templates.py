@@ -216,3 +216,19 @@ def test_signals_of_no_columns_are_refused_at_load(tmp_path, trials):
     _rewritten(path, signals=np.zeros((sum(len(s) for s in t.signals), 0)), gravity=np.zeros((len(t), 0)))
     with pytest.raises(TemplateFileError, match=r"d0.npz: .*no values per frame \(D = 0\)"):
         Templates.load(path)
+
+
+def test_fractional_onsets_are_refused_not_truncated(tmp_path, trials):
+    """An onset of 2.7 was read as frame 2. A whole number stored as a float (2.0) is the same
+    onset and still loads: the format gives no type for onsets."""
+    path = tmp_path / "onsets.npz"
+    t = Templates.from_trials(trials)
+    t.save(path)
+    _rewritten(path, onsets=t.onsets.astype(np.float64))
+    np.testing.assert_array_equal(Templates.load(path).onsets, t.onsets)
+    _rewritten(path, onsets=t.onsets + 0.7)
+    with pytest.raises(TemplateFileError, match=r"onsets.npz: .*onset \d+\.7 is not a whole frame"):
+        Templates.load(path)
+    _rewritten(path, onsets=t.onsets.astype(str))  # read as numbers by the int64 cast
+    with pytest.raises(TemplateFileError, match=r"onsets.npz: .*onsets must hold numbers"):
+        Templates.load(path)
