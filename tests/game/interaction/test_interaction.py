@@ -274,6 +274,24 @@ def test_fill_keys_out_of_order_are_refused_in_any_dtype(small_table, tmp_path):
     np.testing.assert_array_equal(GraphTable.load(tmp_path / "u64.npz").fill_keys, small_table.fill_keys)
 
 
+def _saved_arrays(table, path) -> dict[str, np.ndarray]:
+    table.save(path)
+    with np.load(path) as z:
+        return {k: z[k] for k in z.files}
+
+
+@pytest.mark.parametrize("pos", [-5, 65536])
+def test_a_feature_position_outside_its_cell_is_refused(small_table, tmp_path, pos):
+    """feature_pos counts 1/65536 of its own cell: a negative or a whole cell's worth placed the
+    state's features in another cell, and loaded."""
+    arrays = _saved_arrays(small_table, tmp_path / "good.npz")
+    feature_pos = arrays["feature_pos"].astype(np.int32)
+    feature_pos[0, 0] = pos
+    np.savez(tmp_path / "pos.npz", **dict(arrays, feature_pos=feature_pos))
+    with pytest.raises(GraphFileError, match=r"pos.npz: .*feature_pos .* 0 to 65535"):
+        GraphTable.load(tmp_path / "pos.npz")
+
+
 def test_cli_reports_a_corrupt_file_in_one_line(tmp_path):
     path = tmp_path / "bad.npz"
     path.write_bytes(b"\x00" * 100)
