@@ -321,6 +321,23 @@ def test_cli_reports_a_corrupt_file_in_one_line(tmp_path):
     assert str(path) in r.stderr and len(r.stderr.strip().splitlines()) == 1
 
 
+@pytest.mark.parametrize("name", ["feature_pos", "fill_state_offset", "edge_dst_steps"])
+def test_cli_names_a_graph_whose_values_are_out_of_range(small_table, tmp_path, name):
+    """`graph info` on a feature position outside its cell or a state index 2**32 past a state
+    printed the graph and exited 0: now one line naming the file, exit 2, no traceback."""
+    arrays = _saved_arrays(small_table, tmp_path / "good.npz")
+    if name == "feature_pos":
+        arrays[name] = -1 - arrays[name].astype(np.int32)
+    else:
+        arrays[name], arrays[f"{name}_big"] = _escaped_first(arrays[name], arrays[f"{name}_big"], 2**32)
+    path = tmp_path / "bad.npz"
+    np.savez(path, **arrays)
+    r = subprocess.run([sys.executable, "-m", "tools.cli", "graph", "info", str(path)],
+                       cwd=REPO, capture_output=True, text=True)
+    assert r.returncode == 2 and "Traceback" not in r.stderr, r.stderr
+    assert str(path) in r.stderr and len(r.stderr.strip().splitlines()) == 1, r.stderr
+
+
 def test_cli_info_json(small_table, tmp_path):
     path = tmp_path / "g.npz"
     small_table.save(path)
