@@ -171,6 +171,15 @@ def join_small(small: np.ndarray, big: np.ndarray) -> np.ndarray | None:
     return out
 
 
+def _as_int32(x: np.ndarray) -> np.ndarray:
+    """State indices as int32 (a start-up's memory), or left as they are when one does not fit:
+    the cast would wrap it (2**32 past a state onto that state) and the range check after
+    decoding would pass it."""
+    if len(x) and (x.min() < np.iinfo(np.int32).min or x.max() > np.iinfo(np.int32).max):
+        return x
+    return x.astype(np.int32)
+
+
 def _no_edges(a: dict) -> dict:
     """Empty edge arrays (every state with no edge) standing in for a file's edges."""
     n = len(a["keys"] if "keys" in a else a.get("key_steps", ()))
@@ -282,8 +291,7 @@ class GraphTable:
     @staticmethod
     def _decode_v3(a: dict, grid: StateGrid, bad) -> dict:
         """The version-2 arrays (plain keys, features, edge_ptr, edge_dst, fill_state) from
-        the version-3 ones; shapes checked here where decoding needs them, the state indices
-        before they are narrowed to int32, other ranges later."""
+        the version-3 ones; shapes checked here where decoding needs them, ranges later."""
         keys = np.cumsum(a["key_steps"].astype(np.int64))
         S = len(keys)
         E = len(a["edge_action"])
@@ -302,14 +310,9 @@ class GraphTable:
         # so the keys are summed in int64 directly and the offsets become the states in place
         fill_keys = fill_keys_of(a)
         fill_offset += np.searchsorted(keys, fill_keys)
-        # ranges checked here, before the int32 below: 2**32 past a state would wrap onto it
-        if E and (edge_dst.min() < 0 or edge_dst.max() >= S):
-            raise bad("an edge points outside the states")
-        if len(fill_offset) and (fill_offset.min() < 0 or fill_offset.max() >= S):
-            raise bad("the look-up fill points outside the states")
         out = dict(a, keys=keys, features=decode_features(grid, keys, a["feature_pos"]),
-                   edge_ptr=edge_ptr, edge_dst=edge_dst.astype(np.int32),
-                   fill_keys=fill_keys, fill_state=fill_offset.astype(np.int32))
+                   edge_ptr=edge_ptr, edge_dst=_as_int32(edge_dst),
+                   fill_keys=fill_keys, fill_state=_as_int32(fill_offset))
         return out
 
     @classmethod
