@@ -178,6 +178,8 @@ def bad_templates(d: Path, bomb_gb: float = 1.5) -> dict[str, str]:
     variant("version-text", version=np.array("x"))
     variant("method-bad", method=np.array("nope"))
     variant("float-lengths", lengths=good["lengths"].astype(float) + 0.5)
+    variant("signals-no-columns", signals=good["signals"][:, :0], gravity=g[:, :0])  # D = 0
+    variant("onsets-fraction", onsets=good["onsets"] + 0.5)  # was cut to a whole frame
     variant("recognizer-unknown", recognizer=np.array('{"gate": 0.5}'))
     variant("recognizer-type", recognizer=np.array('{"supplementary": 1e12}'))
     variant("recognizer-not-json", recognizer=np.array("{noise_g: 0.5"))
@@ -234,6 +236,14 @@ def _bad_meta_numbers(meta: dict, variant) -> None:
             variant(f"rewards-{k}-nan", {f"rewards.{k}": float("nan")})
 
 
+def _first_moved(small: np.ndarray, big: np.ndarray, add: int) -> tuple[np.ndarray, np.ndarray]:
+    """An escaped pair of a graph file (table.split_small) whose first value is `add` more."""
+    small, wide = small.copy(), [int(x) for x in big]
+    first = wide.pop(0) if small[0] == -128 else int(small[0])  # -128: table.ESCAPE
+    small[0] = -128
+    return small, np.array([first + add, *wide], dtype=np.int64)
+
+
 def bad_graphs(d: Path, bomb_gb: float = 1.5) -> dict[str, str]:
     with np.load(ASSETS / "graph.npz", allow_pickle=False) as z:
         good = {k: z[k] for k in z.files}
@@ -266,6 +276,10 @@ def bad_graphs(d: Path, bomb_gb: float = 1.5) -> dict[str, str]:
     variant("key-steps-neg", key_steps=-good["key_steps"].astype(np.int64))
     variant("feature-pos-float", feature_pos=np.full((S, 3), np.nan))
     variant("edge-count-neg", edge_count=-good["edge_count"].astype(np.int64))
+    variant("feature-pos-neg", feature_pos=-1 - good["feature_pos"].astype(np.int32))
+    for name, key in (("fill-offset-wrap", "fill_state_offset"), ("edge-dst-wrap", "edge_dst_steps")):
+        small, big = _first_moved(good[key], good[f"{key}_big"], 2**32)  # int32 wrapped it back
+        variant(name, **{key: small, f"{key}_big": big})
     out["npy"] = str(d / "graph" / "arr.npy")
     np.save(out["npy"], good["visits"])
     out["truncated"] = _write(d, "graph/trunc.npz", (ASSETS / "graph.npz").read_bytes()[:5000])

@@ -363,6 +363,8 @@ class Templates:
         dims = {s.shape[1] for s in self.signals} | {self.gravity.shape[1]}
         if len(dims) != 1 or next(iter(dims)) % 3:
             raise ValueError(f"inconsistent template dimensions {sorted(dims)}")
+        if dims == {0}:  # 0 is a multiple of 3, but there is nothing to compare a sensor with
+            raise ValueError("templates of no values per frame (D = 0), not 3 per sensor")
 
     @property
     def dim(self) -> int:
@@ -515,7 +517,7 @@ class Templates:
                 [str(a) for a in data["actions"].tolist()],
                 np.split(signals, cuts),
                 data["gravity"],
-                data["onsets"],
+                _checked_onsets(data["onsets"], lengths),
                 data["thresholds"],
                 str(data["method"]),
                 str(data["feature"]),
@@ -527,8 +529,6 @@ class Templates:
                 raise ValueError(f"rest_noise {t.rest_noise} g out of range")
             if t.feature not in FEATURES:
                 raise ValueError(f"unknown feature {t.feature!r}")
-            if np.any(t.onsets < 0) or np.any(t.onsets >= lengths):
-                raise ValueError("onset outside its template")
         except TemplateFileError:
             raise
         except (KeyError, ValueError, TypeError, IndexError) as exc:
@@ -561,6 +561,23 @@ def _checked_signals(data: Mapping[str, np.ndarray]) -> tuple[np.ndarray, np.nda
     if peak > MAX_ACCEL_G:
         raise ValueError(f"an acceleration of {peak:.6g} g in the signals or gravity, over the {MAX_ACCEL_G:g} g a sensor can read")
     return lengths, signals
+
+
+def _checked_onsets(onsets: np.ndarray, lengths: np.ndarray) -> np.ndarray:
+    """A template file's onsets (T,) as int64, checked: whole frame numbers inside their
+    templates. The format gives onsets no type, so 3.0 is frame 3; the int64 cast read 3.7 as 3
+    and the text "3" as 3, so fractions and non-numbers are refused before it."""
+    if onsets.dtype.kind not in "iuf":
+        raise ValueError(f"onsets must hold numbers, not {onsets.dtype}")
+    onsets = onsets.reshape(-1)
+    if len(onsets) != len(lengths):
+        raise ValueError(f"{len(onsets)} onsets for {len(lengths)} templates")
+    if not np.all((onsets >= 0) & (onsets < lengths)):  # nan too
+        raise ValueError("onset outside its template")
+    fractions = onsets[onsets % 1 != 0]
+    if len(fractions):
+        raise ValueError(f"onset {fractions[0]:g} is not a whole frame number")
+    return onsets.astype(np.int64)
 
 
 def _saved_settings(data: Mapping[str, np.ndarray], path: Path) -> dict[str, object]:

@@ -171,6 +171,15 @@ def join_small(small: np.ndarray, big: np.ndarray) -> np.ndarray | None:
     return out
 
 
+def _as_int32(x: np.ndarray) -> np.ndarray:
+    """State indices as int32 (a start-up's memory), or left as they are when one does not fit:
+    the cast would wrap it (2**32 past a state onto that state) and the range check after
+    decoding would pass it."""
+    if len(x) and (x.min() < np.iinfo(np.int32).min or x.max() > np.iinfo(np.int32).max):
+        return x
+    return x.astype(np.int32)
+
+
 def _no_edges(a: dict) -> dict:
     """Empty edge arrays (every state with no edge) standing in for a file's edges."""
     n = len(a["keys"] if "keys" in a else a.get("key_steps", ()))
@@ -302,8 +311,8 @@ class GraphTable:
         fill_keys = fill_keys_of(a)
         fill_offset += np.searchsorted(keys, fill_keys)
         out = dict(a, keys=keys, features=decode_features(grid, keys, a["feature_pos"]),
-                   edge_ptr=edge_ptr, edge_dst=edge_dst.astype(np.int32),
-                   fill_keys=fill_keys, fill_state=fill_offset.astype(np.int32))
+                   edge_ptr=edge_ptr, edge_dst=_as_int32(edge_dst),
+                   fill_keys=fill_keys, fill_state=_as_int32(fill_offset))
         return out
 
     @classmethod
@@ -413,6 +422,9 @@ def _bad_contents(a: dict, meta: dict) -> str | None:
         return "keys not strictly ascending"
     if len(a["fill_state"]) and (a["fill_state"].min() < 0 or a["fill_state"].max() >= S):
         return "the look-up fill points outside the states"
+    pos = a.get("feature_pos")  # version 3: inside its own cell, or the state's features are not
+    if pos is not None and (pos.min() < 0 or pos.max() >= FEATURE_SCALE):
+        return f"feature_pos must count 0 to {FEATURE_SCALE - 1} (1/{FEATURE_SCALE} of a cell)"
     if not (np.isfinite(a["value"]).all() and np.isfinite(a["features"]).all()
             and np.isfinite(a["edge_reward"]).all()):
         return "non-finite numbers"

@@ -3,6 +3,10 @@
 from __future__ import annotations
 
 import json
+import os
+import subprocess
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -11,6 +15,7 @@ from engine.recording import Recording, write_recording
 from tools.cli import main
 
 G = np.array([0.0, 0.0, 1.0])
+REPO = Path(__file__).resolve().parents[2]
 
 
 def bump(axis: int, amp: float = 3.0, n: int = 24) -> np.ndarray:
@@ -74,6 +79,29 @@ def test_bad_files_exit_2_with_one_line(tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "bad.npz" in err[0]
     assert main(["templates", "build", str(tmp_path / "nowhere"), "-o", str(tmp_path / "x.npz")]) == 2
+
+
+@pytest.mark.parametrize("change", ["no-columns", "fractional-onsets"])
+def test_a_malformed_template_file_names_itself_and_exits_2(tmp_path, change):
+    """`recognize` with the shipped templates made bad: one line that starts with the template
+    file, exit 2, no traceback. Fractional onsets ran (exit 0); signals of no columns were
+    blamed on the recording ("rec.csv: 6 values per frame, templates ... have D = 0")."""
+    with np.load(REPO / "game" / "assets" / "templates.npz") as z:
+        arrays = {k: z[k] for k in z.files}
+    if change == "no-columns":
+        arrays.update(signals=np.zeros((len(arrays["signals"]), 0)), gravity=np.zeros((len(arrays["gravity"]), 0)))
+    else:
+        arrays["onsets"] = arrays["onsets"] + 0.5
+    bad = tmp_path / f"{change}.npz"
+    with open(bad, "wb") as f:
+        np.savez(f, **arrays)
+    rec = tmp_path / "rec.csv"  # two sensors, as the shipped templates need
+    write_recording(rec, Recording(np.arange(30) / 60.0, np.tile(G, (30, 2, 1)), [""] * 30))
+    r = subprocess.run([sys.executable, "-m", "tools.cli", "recognize", str(rec), "--templates", str(bad)],
+                       cwd=REPO, env={**os.environ, "PYTHONPATH": str(REPO)}, capture_output=True, text=True, timeout=120)
+    err = r.stderr.strip().splitlines()
+    assert r.returncode == 2 and "Traceback" not in r.stderr, r.stderr
+    assert len(err) == 1 and err[0].startswith(f"quickjab recognize: {bad}: "), r.stderr
 
 
 def test_a_plot_matplotlib_cannot_write_is_refused_before_the_evaluation(tmp_path, trials_dir, capsys):

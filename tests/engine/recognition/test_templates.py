@@ -205,3 +205,30 @@ def test_complex_signals_are_refused_not_cast(tmp_path, trials, recwarn):
     with pytest.raises(TemplateFileError, match="complex.npz: .*signals must hold real numbers, not complex128"):
         Templates.load(path)
     assert not [w for w in recwarn if issubclass(w.category, np.exceptions.ComplexWarning)]
+
+
+def test_signals_of_no_columns_are_refused_at_load(tmp_path, trials):
+    """Signals (frames, 0) and gravity (T, 0) loaded as templates of D = 0, refused only later
+    by the command that compared them with a sensor (play's message did not name the file)."""
+    path = tmp_path / "d0.npz"
+    t = Templates.from_trials(trials)
+    t.save(path)
+    _rewritten(path, signals=np.zeros((sum(len(s) for s in t.signals), 0)), gravity=np.zeros((len(t), 0)))
+    with pytest.raises(TemplateFileError, match=r"d0.npz: .*no values per frame \(D = 0\)"):
+        Templates.load(path)
+
+
+def test_fractional_onsets_are_refused_not_truncated(tmp_path, trials):
+    """An onset of 2.7 was read as frame 2. A whole number stored as a float (2.0) is the same
+    onset and still loads: the format gives no type for onsets."""
+    path = tmp_path / "onsets.npz"
+    t = Templates.from_trials(trials)
+    t.save(path)
+    _rewritten(path, onsets=t.onsets.astype(np.float64))
+    np.testing.assert_array_equal(Templates.load(path).onsets, t.onsets)
+    _rewritten(path, onsets=t.onsets + 0.7)
+    with pytest.raises(TemplateFileError, match=r"onsets.npz: .*onset \d+\.7 is not a whole frame"):
+        Templates.load(path)
+    _rewritten(path, onsets=t.onsets.astype(str))  # read as numbers by the int64 cast
+    with pytest.raises(TemplateFileError, match=r"onsets.npz: .*onsets must hold numbers"):
+        Templates.load(path)

@@ -274,6 +274,44 @@ def test_fill_keys_out_of_order_are_refused_in_any_dtype(small_table, tmp_path):
     np.testing.assert_array_equal(GraphTable.load(tmp_path / "u64.npz").fill_keys, small_table.fill_keys)
 
 
+def _saved_arrays(table, path) -> dict[str, np.ndarray]:
+    table.save(path)
+    with np.load(path) as z:
+        return {k: z[k] for k in z.files}
+
+
+def _escaped_first(small: np.ndarray, big: np.ndarray, add: int) -> tuple[np.ndarray, np.ndarray]:
+    """An escaped pair (split_small) whose first value is `add` more than it was."""
+    small, big = small.copy(), [int(x) for x in big]
+    first = big.pop(0) if small[0] == ESCAPE else int(small[0])
+    small[0] = ESCAPE
+    return small, np.array([first + add] + big, dtype=np.int64)
+
+
+@pytest.mark.parametrize("pos", [-5, 65536])
+def test_a_feature_position_outside_its_cell_is_refused(small_table, tmp_path, pos):
+    """feature_pos counts 1/65536 of its own cell: a negative or a whole cell's worth placed the
+    state's features in another cell, and loaded."""
+    arrays = _saved_arrays(small_table, tmp_path / "good.npz")
+    feature_pos = arrays["feature_pos"].astype(np.int32)
+    feature_pos[0, 0] = pos
+    np.savez(tmp_path / "pos.npz", **dict(arrays, feature_pos=feature_pos))
+    with pytest.raises(GraphFileError, match=r"pos.npz: .*feature_pos .* 0 to 65535"):
+        GraphTable.load(tmp_path / "pos.npz")
+
+
+@pytest.mark.parametrize("name, says", [("fill_state_offset", "the look-up fill points outside the states"),
+                                        ("edge_dst_steps", "an edge points outside the states")])
+def test_a_state_index_past_int32_is_refused_not_wrapped(small_table, tmp_path, name, says):
+    """The decoded state indices are kept as int32: a wide value 2**32 past a state wrapped
+    back onto that state, and the file loaded as if it were the good one."""
+    arrays = _saved_arrays(small_table, tmp_path / "good.npz")
+    small, big = _escaped_first(arrays[name], arrays[f"{name}_big"], 2**32)
+    np.savez(tmp_path / "wide.npz", **dict(arrays, **{name: small, f"{name}_big": big}))
+    with pytest.raises(GraphFileError, match=f"wide.npz: .*{says}"):
+        GraphTable.load(tmp_path / "wide.npz")
+
+
 def test_cli_reports_a_corrupt_file_in_one_line(tmp_path):
     path = tmp_path / "bad.npz"
     path.write_bytes(b"\x00" * 100)
@@ -281,6 +319,23 @@ def test_cli_reports_a_corrupt_file_in_one_line(tmp_path):
                        cwd=REPO, capture_output=True, text=True)
     assert r.returncode == 2
     assert str(path) in r.stderr and len(r.stderr.strip().splitlines()) == 1
+
+
+@pytest.mark.parametrize("name", ["feature_pos", "fill_state_offset", "edge_dst_steps"])
+def test_cli_names_a_graph_whose_values_are_out_of_range(small_table, tmp_path, name):
+    """`graph info` on a feature position outside its cell or a state index 2**32 past a state
+    printed the graph and exited 0: now one line naming the file, exit 2, no traceback."""
+    arrays = _saved_arrays(small_table, tmp_path / "good.npz")
+    if name == "feature_pos":
+        arrays[name] = -1 - arrays[name].astype(np.int32)
+    else:
+        arrays[name], arrays[f"{name}_big"] = _escaped_first(arrays[name], arrays[f"{name}_big"], 2**32)
+    path = tmp_path / "bad.npz"
+    np.savez(path, **arrays)
+    r = subprocess.run([sys.executable, "-m", "tools.cli", "graph", "info", str(path)],
+                       cwd=REPO, capture_output=True, text=True)
+    assert r.returncode == 2 and "Traceback" not in r.stderr, r.stderr
+    assert str(path) in r.stderr and len(r.stderr.strip().splitlines()) == 1, r.stderr
 
 
 def test_cli_info_json(small_table, tmp_path):
