@@ -423,7 +423,7 @@ def _bad_contents(a: dict, meta: dict) -> str | None:
     if len(a["fill_state"]) and (a["fill_state"].min() < 0 or a["fill_state"].max() >= S):
         return "the look-up fill points outside the states"
     pos = a.get("feature_pos")  # version 3: inside its own cell, or the state's features are not
-    if pos is not None and (pos.min() < 0 or pos.max() >= FEATURE_SCALE):
+    if pos is not None and len(pos) and (pos.min() < 0 or pos.max() >= FEATURE_SCALE):
         return f"feature_pos must count 0 to {FEATURE_SCALE - 1} (1/{FEATURE_SCALE} of a cell)"
     if not (np.isfinite(a["value"]).all() and np.isfinite(a["features"]).all()
             and np.isfinite(a["edge_reward"]).all()):
