@@ -25,6 +25,7 @@ once scaled (possible with a tiny `accel_lsb_per_g`) is counted as `implausible`
 
 from __future__ import annotations
 
+import os
 import termios
 from collections import deque
 from urllib.parse import parse_qsl
@@ -105,6 +106,18 @@ class DeviceClock:
     @property
     def offset(self) -> float:
         return self._mins[0][1]
+
+
+def write_now(port: serial.SerialBase, data: bytes) -> None:
+    """Write without waiting, or raise OSError (BlockingIOError when there is no room). A port
+    with a file descriptor (a tty, a socket://; pyserial keeps both non-blocking) is written
+    directly: pyserial's own write with write_timeout=0 retries EAGAIN without end, so a device
+    that never reads its input (its buffer full) would hang the caller. Others (loop://) as usual."""
+    fileno = getattr(port, "fileno", None)
+    if fileno is None:
+        port.write(data)
+    else:
+        os.write(fileno(), data)
 
 
 def find_board(vid: int | None = None, pid: int | None = None) -> str | None:
@@ -194,7 +207,7 @@ class SerialSource(Source):
             return
         self._next_hello_request = now + 0.25
         try:
-            self.port.write(protocol.HELLO_REQUEST)
+            write_now(self.port, protocol.HELLO_REQUEST)
         except (*LOST, serial.SerialTimeoutException):
             pass  # a read will notice a lost port; a full output buffer just means no request
 

@@ -4,6 +4,7 @@ device emulator (unplug and replug)."""
 from __future__ import annotations
 
 import os
+import threading
 import time
 import tty
 
@@ -248,3 +249,79 @@ def test_times_never_go_back_across_a_reboot():
     second = src.poll()
     assert len(first) == 20 and len(second) == 5 and src.stats["reboots"] == 1
     assert second[0].t >= first[-1].t
+
+
+def _fill_output(fd: int) -> None:
+    """Write to a pty's slave end until the tty's output buffer is full (nobody reads the master)."""
+    os.set_blocking(fd, False)
+    for _ in range(3):  # the kernel may move some on to the master meanwhile: fill again
+        for size in (4096, 256, 1):
+            try:
+                while True:
+                    os.write(fd, b"x" * size)
+            except BlockingIOError:
+                pass
+        time.sleep(0.02)
+
+
+def _drain(fd: int) -> None:
+    os.set_blocking(fd, False)
+    try:
+        while os.read(fd, 65536):
+            pass
+    except BlockingIOError:
+        pass
+
+
+def test_a_device_that_never_reads_cannot_hang_the_host():
+    # A board (the user's own, say) that never reads its input: the tty's output buffer fills with
+    # what the host sends, and asking for a HELLO then found no room. pyserial's write with
+    # write_timeout=0 retries EAGAIN forever: the constructor (the '?' on open) and every poll
+    # asking while SAMPLEs came without a HELLO spun at 100 % CPU and never returned.
+    master, slave = os.openpty()
+    tty.setraw(slave)
+    now = [0.0]
+    made: list = []
+    try:
+        _fill_output(slave)
+        th = threading.Thread(target=lambda: made.append(open_source(f"serial://{os.ttyname(slave)}",
+                                                                     clock=lambda: now[0])), daemon=True)
+        th.start()
+        th.join(2.0)
+        hung_on_open = th.is_alive()
+        while th.is_alive():  # make room, so that a hung write ends and the thread with it
+            _drain(master)
+            th.join(0.01)
+        assert not hung_on_open
+        src = made[0]
+        assert src.state is SourceState.CONNECTED
+        _drain(master)
+        _fill_output(slave)
+        polls: list = []
+
+        def poll_without_hello() -> None:
+            for k in range(5):  # SAMPLEs, no HELLO: the source asks again every 0.25 s
+                now[0] += 0.3
+                os.write(master, protocol.encode_sample(k, 5000 * k, (0, 0, 4096), None))
+                time.sleep(0.01)
+                polls.append(src.poll())
+
+        th = threading.Thread(target=poll_without_hello, daemon=True)
+        th.start()
+        th.join(2.0)
+        hung_on_poll = th.is_alive()
+        while th.is_alive():
+            _drain(master)
+            th.join(0.01)
+        assert not hung_on_poll and polls == [[]] * 5
+        assert src.stats["samples_before_hello"] == 5
+        _drain(master)  # the board reads at last: a request gets through, the HELLO comes
+        now[0] += 0.3
+        os.write(master, protocol.encode_hello(5, 25000, 77, 200, 4096, 65500, 30, protocol.IMU_MPU6050, 3)
+                 + samples(3, start_seq=6, t0=30000))
+        time.sleep(0.02)
+        assert len(src.poll()) == 3
+        src.close()
+    finally:
+        os.close(master)
+        os.close(slave)
