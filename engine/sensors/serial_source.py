@@ -10,7 +10,9 @@ URLs:
 Polling never waits: each poll drains `in_waiting` (the Linux tty buffer holds only 4095 bytes,
 so a slow reader loses data), decodes frames, and maps device time to host time. A lost port
 (OSError, SerialException, termios.error) becomes SourceState.RECONNECTING, and the port is
-reopened every `retry` seconds until it comes back.
+reopened every `retry` seconds until it comes back. After every open, SAMPLEs wait for a HELLO
+on that port (counted as `samples_before_hello`): a board back on the port may have rebooted or be
+another one, and the previous HELLO's scales would misread it.
 
 Hostile or broken input is counted and dropped, never raised: the decoder rejects HELLOs whose
 fields make no sense (protocol.hello_problem) and frames replayed from earlier (same boot and
@@ -151,6 +153,7 @@ class SerialSource(Source):
         self._last_byte = clock()
         self._stalled = False
         self._next_hello_request = 0.0
+        self._hello_on_port = False  # a HELLO came since the port was (re)opened
         self._polled = False
         self._open()
 
@@ -197,6 +200,9 @@ class SerialSource(Source):
         self._last_byte = self.clock()
         self._stalled = False
         self._next_hello_request = 0.0
+        # what is on the port now may have rebooted, or be another board: its SAMPLEs wait for
+        # its HELLO, as at the first open (self.hello stays, for the sensor-conflict check)
+        self._hello_on_port = False
         self._ask_hello()
 
     def _ask_hello(self) -> None:
@@ -291,6 +297,7 @@ class SerialSource(Source):
         if hello.sensors and hello.sensors != self.sensors and self.hello is not None:
             self.count("sensor_changes")
         self.hello = hello
+        self._hello_on_port = True
         if hello.sensors:
             self.sensors = hello.sensors
         self.rate_hz = float(hello.rate_hz)
@@ -332,7 +339,7 @@ class SerialSource(Source):
                 self.messages.append(f.payload.decode("utf-8", "replace"))
                 self.count("texts")
             elif f.msg_type == protocol.SAMPLE:
-                if self.hello is None:  # scales unknown until the first HELLO: ask for one
+                if not self._hello_on_port:  # scales unknown until a HELLO on this port: ask for one
                     self.count("samples_before_hello")
                     self._ask_hello()
                     continue

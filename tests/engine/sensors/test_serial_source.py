@@ -325,3 +325,53 @@ def test_a_device_that_never_reads_cannot_hang_the_host():
     finally:
         os.close(master)
         os.close(slave)
+
+
+def test_after_a_reconnect_no_sample_is_read_with_the_last_devices_scales(tmp_path):
+    # Unplugged, and what comes back on the same path may be another board (or the same one,
+    # rebooted with one IMU fewer): its SAMPLEs before its HELLO were converted with the old
+    # board's scales and sensors (a 1 g reading came out as 4 g, beside an invented sensor B).
+    link = str(tmp_path / "board")
+
+    def plug() -> tuple[int, int]:
+        master, slave = os.openpty()
+        tty.setraw(slave)
+        if os.path.lexists(link):
+            os.unlink(link)
+        os.symlink(os.ttyname(slave), link)
+        return master, slave
+
+    def poll_until(src, done) -> list:
+        got: list = []
+        for _ in range(100):
+            got += src.poll()
+            if done():
+                break
+            time.sleep(0.01)
+        return got
+
+    master, slave = plug()
+    src = open_source(f"serial://{link}?retry=0.01")
+    try:
+        os.write(master, HELLO2 + samples(10))
+        assert len(poll_until(src, lambda: src.stats["frames_ok"] == 11)) == 10
+        os.close(master)
+        os.close(slave)
+        poll_until(src, lambda: src.state is SourceState.RECONNECTING)
+        master, slave = plug()
+        poll_until(src, lambda: src.state is SourceState.CONNECTED)
+        assert os.read(master, 16) == protocol.HELLO_REQUEST
+        # another board: 16384 counts per g (an LSM6DS3 at +-2 g), sensor A only; two SAMPLEs
+        # made before the request arrived, then the HELLO that answers it
+        other = (b"".join(protocol.encode_sample(s, 5000 * s, (0, 0, 16384), None) for s in (3, 4))
+                 + protocol.encode_hello(5, 25000, 99, 200, 16384, 65500, 30, protocol.IMU_LSM6DS3, 1)
+                 + b"".join(protocol.encode_sample(s, 5000 * s, (0, 0, 16384), None) for s in (6, 7)))
+        os.write(master, other)
+        got = poll_until(src, lambda: src.stats["frames_ok"] == 16)
+        assert [s.accel.tolist() for s in got] == [[[0.0, 0.0, 1.0]]] * 2
+        assert src.sensors == 1 and src.stats["samples_before_hello"] == 2 and src.stats["reboots"] == 1
+        assert src.stats.get("sensor_missing", 0) == 0
+    finally:
+        src.close()
+        os.close(master)
+        os.close(slave)
