@@ -154,6 +154,7 @@ class SerialSource(Source):
         self._stalled = False
         self._next_hello_request = 0.0
         self._hello_on_port = False  # a HELLO came since the port was (re)opened
+        self._sensors_announced = False  # a HELLO named sensors: `sensors` is no longer a guess
         self._polled = False
         self._open()
 
@@ -294,12 +295,15 @@ class SerialSource(Source):
             self.count("sensor_conflicts")
             return False
         changed = not same_boot or hello.ts_bits != self.hello.ts_bits
-        if hello.sensors and hello.sensors != self.sensors and self.hello is not None:
-            self.count("sensor_changes")
+        if hello.sensors:
+            # a change from the sensors announced before; `sensors` is only a guess (2) until the
+            # first HELLO that names some (a boot's HELLOs before its IMUs are found name none)
+            if self._sensors_announced and hello.sensors != self.sensors:
+                self.count("sensor_changes")
+            self.sensors = hello.sensors
+            self._sensors_announced = True
         self.hello = hello
         self._hello_on_port = True
-        if hello.sensors:
-            self.sensors = hello.sensors
         self.rate_hz = float(hello.rate_hz)
         if changed:
             self.devclock.reset(hello.ts_bits)

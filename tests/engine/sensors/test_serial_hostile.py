@@ -477,3 +477,19 @@ def test_the_acceleration_limit_in_counts_at_the_scales_around_it():
     assert SampleAccel.plausible(frame((-32768, 32767, 0)), scale(33))
     assert SampleAccel.plausible(frame((-32000, 32000, 0)), scale(32))
     assert not SampleAccel.plausible(frame((0, 0, -32001)), scale(32))
+
+
+def test_a_boot_that_finds_its_imu_late_counts_no_sensor_change():
+    # the firmware's wait for IMUs (main.py): HELLOs with no sensor flags, and a TEXT, until
+    # detection finds them, then HELLOs with the sensors found. A boot's first sensors are no
+    # change (PROTOCOL.md, HELLO); a one-IMU board counted one, since the source starts at 2
+    data = (hello(seq=0, boot=5, flags=0) + protocol.encode_text(1, 10, "no IMU found; I2C scan: ")
+            + hello(seq=2, boot=5, flags=protocol.FLAG_SENSOR_A, t_us=1_000_000)
+            + samples(3, start_seq=3, t0=1_005_000, sensors=1)
+            # rebooted, and found both this time: that is a change, counted once
+            + hello(seq=0, boot=6, flags=0, t_us=100) + hello(seq=1, boot=6, flags=3, t_us=1_000_100)
+            + samples(3, start_seq=2, t0=1_005_100))
+    src, got = _write_and_poll(data, lambda src: src.stats["frames_ok"] == 11)
+    assert [s.accel.shape for s in got] == [(1, 3)] * 3 + [(2, 3)] * 3
+    assert src.sensors == 2 and src.stats["reboots"] == 1
+    assert src.stats.get("sensor_changes", 0) == 1 and src.stats.get("sensor_conflicts", 0) == 0
