@@ -40,6 +40,7 @@ out = []
 out.append(protocol.encode_hello(0, 123456, 0xDEADBEEF, 200, 4096, 65500, 30, 1, 3))
 out.append(protocol.encode_text(1, 0xFFFFFFFF, "h\u00e9llo \u2014 frames"))
 out.append(protocol.encode_text(2, 5, "x" * 300))
+out.append(protocol.encode_text(2, 5, "x" + "\u00e9" * 150))  # cut between characters, not inside one
 out.append(protocol.encode_sample(3, 0, (0, 0, 0), (0, 0, 0)))
 out.append(protocol.encode_sample(65535, 1 << 31, (-32768, 32767, 40000), None, (1, 2, 3), None, True))
 out.append(protocol.encode_sample(7, 9, None, (-1, -256, 256)))

@@ -493,3 +493,13 @@ def test_a_boot_that_finds_its_imu_late_counts_no_sensor_change():
     assert [s.accel.shape for s in got] == [(1, 3)] * 3 + [(2, 3)] * 3
     assert src.sensors == 2 and src.stats["reboots"] == 1
     assert src.stats.get("sensor_changes", 0) == 1 and src.stats.get("sensor_conflicts", 0) == 0
+
+
+def test_a_long_text_is_cut_on_a_character_boundary():
+    # PROTOCOL.md: a TEXT payload is 0..200 bytes of UTF-8. encode_text cut a longer line at byte
+    # 200 even inside a character, so the host showed a replacement character for its last half
+    line = "capteurs " + "é" * 150  # 309 bytes of UTF-8; byte 200 is the first of an é
+    src, _ = _write_and_poll(protocol.encode_text(1, 5000, line), lambda src: src.stats["frames_ok"] == 1)
+    (got,) = src.messages
+    assert "\ufffd" not in got and line.startswith(got)
+    assert len(got.encode()) == protocol.MAX_TEXT - 1  # as much as fits: 9 + 95 * 2 bytes
