@@ -106,6 +106,10 @@ class Sampler:
         t = self.ticks
         if self._last_hello is None or t.ticks_diff(now, self._last_hello) >= HELLO_EVERY_US:
             self.send_hello(now)
+        if self._last_text is not None and t.ticks_diff(now, self._last_text) >= TEXT_EVERY_US:
+            # forgotten once a second has passed, while ticks_diff can still tell: with a time
+            # over half the counter's period ago (537 s at 30 bits) it wraps and says "just now"
+            self._last_text = None
         readings = [None, None]
         for i in (0, 1):
             imu = self.imus[i]

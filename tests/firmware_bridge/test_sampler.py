@@ -130,3 +130,18 @@ def test_host_ticks_wrap_like_micropython():
     a = t.ticks_us()
     b = t.ticks_add(a, 20_000_000)
     assert b < a and t.ticks_diff(b, a) == 20_000_000 and t.ticks_diff(a, b) == -20_000_000
+
+
+def test_a_read_error_long_after_the_last_one_is_still_reported():
+    # At most one TEXT a second, timed by ticks_diff against the last TEXT: ticks_us wraps at
+    # 2**30 us, so a read error 600 s after the previous one looked 474 s *earlier* than it and
+    # went unreported, as did every other until 1074 s had passed
+    ticks = FakeTicks()
+    wire = Wire()
+    imu_b = FakeIMU((2, 2, 2), fail_at={1, 6001})  # reads every 0.1 s: 600 s apart
+    s = Sampler([FakeIMU((1, 1, 1)), imu_b], wire.write, ticks)
+    for k in range(6002):
+        s.step(ticks.ticks_add(0, 100_000 * k))
+    texts = [f for f in protocol.Decoder().feed(bytes(wire.data)) if f.msg_type == protocol.TEXT]
+    assert [f.payload for f in texts] == [b"read error on sensor B"] * 2
+    assert s.read_errors == 2
