@@ -156,7 +156,7 @@ class Sampler:
                 # stop() hung (a stall): stamp the reading when it is really made, and read the
                 # host again, so no request that came before the stamp waits behind this SAMPLE
                 now = later
-                if stop(self):
+                if stop is not None and stop(self):
                     break
             self.step(now)
             deadline = t.ticks_add(deadline, self.period_us)

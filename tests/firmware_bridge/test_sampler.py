@@ -145,3 +145,30 @@ def test_a_read_error_long_after_the_last_one_is_still_reported():
     texts = [f for f in protocol.Decoder().feed(bytes(wire.data)) if f.msg_type == protocol.TEXT]
     assert [f.payload for f in texts] == [b"read error on sensor B"] * 2
     assert s.read_errors == 2
+
+
+def test_run_without_a_stop_function_survives_a_slow_tick():
+    # run() (stop=None: sample for ever) read the host again after a tick that took over a period
+    # (a long GC pause) by calling stop, None: TypeError, and the board stopped streaming
+    class SlowTicks(FakeTicks):
+        def ticks_us(self):
+            self.now += 6000  # every look at the clock costs more than the 5 ms period
+            return super().ticks_us()
+
+    class Enough(Exception):
+        pass
+
+    class LastReads(FakeIMU):
+        def read(self):
+            if self.calls == 5:
+                raise Enough  # ends the test's run (an OSError would be a read error)
+            return super().read()
+
+    wire = Wire()
+    s = Sampler([LastReads((1, 1, 1)), None], wire.write, SlowTicks())
+    try:
+        s.run()
+    except Enough:
+        pass
+    kinds = [f.msg_type for f in protocol.Decoder().feed(bytes(wire.data))]
+    assert kinds == [protocol.HELLO] + [protocol.SAMPLE] * 5
