@@ -227,7 +227,8 @@ class EmulatorDef:
     # Gaussian noise on each simulated axis (g): 0.002 g, a quiet MEMS accelerometer at rest.
     noise_g: float = 0.002
     # Width of the board's microsecond tick counter (bits): 30, as MicroPython's ticks_us on
-    # rp2 and esp32, so hosts meet the wrap they meet on a real board.
+    # rp2 and esp32, so hosts meet the wrap they meet on a real board. A counter wider than 32
+    # bits goes out as its low 32 (t_us is a u32), and the HELLO announces 32.
     ts_bits: int = TS_BITS
     # The first boot's tick counter (us), e.g. just before the wrap; None: the host's monotonic clock.
     ticks_start: int | None = None

@@ -38,8 +38,10 @@ class Sampler:
         self.rate_hz = rate_hz
         self.period_us = 1000000 // rate_hz
         self.boot_id = boot_id
-        self.ts_bits = ts_bits
-        self.ts_mask = (1 << ts_bits) - 1
+        # t_us is a u32 on the wire: a wider tick counter (the emulator allows 62 bits) goes out
+        # as its low 32 bits, and the HELLO says so (ts_bits 8..32, PROTOCOL.md)
+        self.ts_bits = ts_bits if ts_bits < 32 else 32
+        self.ts_mask = (1 << self.ts_bits) - 1
         self.gyro = gyro
         self.seq = 0
         self.overrun = False

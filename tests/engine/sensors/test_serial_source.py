@@ -14,7 +14,13 @@ import pytest
 from engine.sensors import SourceError, SourceState, open_source
 from engine.sensors.serial_source import DeviceClock, SerialSource, parse_serial_url
 from firmware_bridge import protocol
-from firmware_bridge.emulator import Emulator, Faults, start_in_thread, synthetic_motion
+from firmware_bridge.emulator import (
+    Emulator,
+    EmulatorDef,
+    Faults,
+    start_in_thread,
+    synthetic_motion,
+)
 
 HELLO2 = protocol.encode_hello(0, 0, 77, 200, 4096, 65500, 30, protocol.IMU_MPU6050, 3)
 
@@ -375,3 +381,29 @@ def test_after_a_reconnect_no_sample_is_read_with_the_last_devices_scales(tmp_pa
         src.close()
         os.close(master)
         os.close(slave)
+
+
+def test_an_emulated_board_with_a_counter_wider_than_32_bits_streams(tmp_path):
+    # EmulatorDef allows tick counters up to 62 bits (a 64-bit esp_timer, say), but t_us is a u32
+    # on the wire: the HELLO announced ts_bits 40, outside 8..32, so every HELLO was malformed
+    # and the host never got a sample. Such a board sends its counter's low 32 bits: ts_bits 32
+    link = str(tmp_path / "bridge")
+    emu = Emulator.from_def(synthetic_motion(), EmulatorDef(ts_bits=40, ticks_start=(1 << 32) - 300_000), link=link)
+    th = start_in_thread(emu, 1.2)
+    for _ in range(100):
+        if os.path.exists(link):
+            break
+        time.sleep(0.01)
+    src = open_source(f"serial://{link}")
+    got = []
+    try:
+        while th.is_alive():
+            got += src.poll()
+            time.sleep(0.02)
+    finally:
+        src.close()
+        th.join(2)
+    assert src.stats["malformed"] == 0 and src.hello is not None and src.hello.ts_bits == 32
+    assert len(got) > 100 and src.stats.get("time_jumps", 0) == 0  # across the 32-bit wrap, 0.3 s in
+    t = np.array([s.t for s in got])
+    np.testing.assert_allclose(np.median(np.diff(t)), 0.005, atol=0.001)
