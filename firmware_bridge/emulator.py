@@ -238,8 +238,9 @@ class EmulatorDef:
     def __post_init__(self) -> None:
         if self.sensors not in (1, 2):
             raise ValueError(f"sensors must be 1 or 2, not {self.sensors}")
-        if self.rate_hz < 1 or self.noise_g < 0 or not 8 <= self.ts_bits <= 62:
-            raise ValueError("rate_hz must be >= 1, noise_g >= 0 and ts_bits from 8 to 62")
+        if not 1 <= self.rate_hz <= 65535 or self.noise_g < 0 or not 8 <= self.ts_bits <= 62:
+            # rate_hz: a u16 in the HELLO (PROTOCOL.md)
+            raise ValueError("rate_hz must be 1..65535, noise_g >= 0 and ts_bits from 8 to 62")
 
 
 class Emulator:
