@@ -521,3 +521,14 @@ def test_a_hello_whose_clock_wraps_within_a_sample_period_is_malformed():
     src, got = _write_and_poll(stream(14), lambda src: src.stats["frames_ok"] == 21)  # wraps every 16.4 ms
     assert len(got) == 20 and src.stats["malformed"] == 0
     np.testing.assert_allclose(np.diff([s.t for s in got]), 0.005, atol=1e-9)
+
+
+def test_a_sample_with_a_sensor_its_hello_did_not_announce_is_counted_as_such():
+    # HELLO: sensor A only. A SAMPLE that also carries B has nothing missing, yet was counted
+    # as `sensor_missing`; B's values are dropped (the samples keep the HELLO's one row)
+    a_only = hello(flags=protocol.FLAG_SENSOR_A)
+    data = (a_only + samples(2, sensors=2) + samples(1, start_seq=3, t0=15000, sensors=1)
+            + protocol.encode_sample(4, 20000, None, (0, 4096, 0)))  # B alone: A missing, B extra
+    src, got = _write_and_poll(data, lambda src: src.stats["frames_ok"] == 5)
+    assert [s.accel.tolist() for s in got] == [[[0, 0, 1]]] * 4  # A as read, then held
+    assert src.stats["sensor_unannounced"] == 3 and src.stats["sensor_missing"] == 1
