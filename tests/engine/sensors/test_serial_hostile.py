@@ -532,3 +532,10 @@ def test_a_sample_with_a_sensor_its_hello_did_not_announce_is_counted_as_such():
     src, got = _write_and_poll(data, lambda src: src.stats["frames_ok"] == 5)
     assert [s.accel.tolist() for s in got] == [[[0, 0, 1]]] * 4  # A as read, then held
     assert src.stats["sensor_unannounced"] == 3 and src.stats["sensor_missing"] == 1
+
+
+def test_a_text_that_is_not_utf8_is_kept_with_replacement_characters():
+    # PROTOCOL.md: a TEXT is a log line; bytes that are not UTF-8 show as U+FFFD, the line is kept
+    data = protocol.encode_frame(protocol.TEXT, 1, 5000, 0, b"sensor \xff\xfe B")
+    src, _ = _write_and_poll(data, lambda src: src.stats["frames_ok"] == 1)
+    assert list(src.messages) == ["sensor \ufffd\ufffd B"] and src.stats["malformed"] == 0
