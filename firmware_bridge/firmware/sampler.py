@@ -19,6 +19,17 @@ DEFAULT_ACCEL_LSB_PER_G = 4096
 DEFAULT_GYRO_MLSB_PER_DPS = 65500
 
 
+def _rescale(values, scale):
+    """(ax, ay, az, gx, gy, gz) counts times num / den, rounded half away from zero in integers
+    (no floating point on the board's hot path); encode_sample clamps them to int16."""
+    out = []
+    for i in range(len(values)):
+        num, den = (scale[0], scale[1]) if i < 3 else (scale[2], scale[3])
+        v = values[i] * num
+        out.append((v + den // 2) // den if v >= 0 else -((den // 2 - v) // den))
+    return tuple(out)
+
+
 class Sampler:
     """Reads one IMU per hand at `rate_hz` and writes one SAMPLE frame per reading, a HELLO at
     start and every second, and TEXT lines for read errors. Every frame of a boot, whatever its
@@ -61,6 +72,13 @@ class Sampler:
         self.accel_lsb_per_g = ref.accel_lsb_per_g if ref is not None else DEFAULT_ACCEL_LSB_PER_G
         self.gyro_mlsb_per_dps = ref.gyro_mlsb_per_dps if ref is not None else DEFAULT_GYRO_MLSB_PER_DPS
         self.imu_kind = ref.kind if ref is not None else protocol.IMU_UNKNOWN
+        # a HELLO carries one set of scales, A's: B of another kind (an MPU-6050 beside an
+        # LSM6DS3) has its counts converted to them, (accel num, den, gyro num, den)
+        b = imus[1]
+        self._b_scale = None
+        if ref is not None and b is not None and (b.accel_lsb_per_g != self.accel_lsb_per_g
+                                                  or b.gyro_mlsb_per_dps != self.gyro_mlsb_per_dps):
+            self._b_scale = (self.accel_lsb_per_g, b.accel_lsb_per_g, self.gyro_mlsb_per_dps, b.gyro_mlsb_per_dps)
         self._last_hello = None
 
     def _send(self, frame):
@@ -125,6 +143,8 @@ class Sampler:
         a, b = readings
         if a is None and b is None:
             return False
+        if b is not None and self._b_scale is not None:
+            b = _rescale(b, self._b_scale)
         g = self.gyro
         frame = protocol.encode_sample(
             self.seq, now & self.ts_mask,

@@ -67,6 +67,20 @@ def write(b):
 s = Sampler([IMU(1), IMU(2)], write, Ticks(0x3FFFFFFF - 400000), rate_hz=200, boot_id=42, ts_bits=30)
 s.run(stop)
 out.append(b"".join(wire))
+
+
+class OtherIMU(IMU):
+    kind = 2
+    accel_lsb_per_g = 4098
+    gyro_mlsb_per_dps = 57143
+
+
+# B of another kind: its counts converted to A's scales, in integers (negative ones too)
+del wire[:]
+n[0] = 290
+s = Sampler([IMU(3), OtherIMU(4)], write, Ticks(5), rate_hz=200, boot_id=43, ts_bits=30, gyro=True)
+s.run(stop)
+out.append(b"".join(wire))
 for o in out:
     print(protocol.binascii.hexlify(o).decode())
 
