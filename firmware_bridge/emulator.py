@@ -241,8 +241,6 @@ class EmulatorDef:
         if not 1 <= self.rate_hz <= 65535 or self.noise_g < 0 or not 8 <= self.ts_bits <= 62:
             # rate_hz: a u16 in the HELLO (PROTOCOL.md)
             raise ValueError("rate_hz must be 1..65535, noise_g >= 0 and ts_bits from 8 to 62")
-        if (1 << (min(self.ts_bits, 32) - 1)) * self.rate_hz <= 1_000_000:  # a malformed HELLO (PROTOCOL.md)
-            raise ValueError(f"ts_bits {self.ts_bits} wraps the clock within two samples at {self.rate_hz} Hz")
 
 
 class Emulator:

@@ -250,9 +250,6 @@ def hello_problem(payload, flags):
         return "gyro_mlsb_per_dps is 0 with GYRO set"
     if rate == 0:
         return "rate_hz is 0"
-    if (1 << (ts_bits - 1)) * rate <= 1000000:
-        # t_us is unwrapped from one frame to the next: half its period must outlast a sample's
-        return "ts_bits %d wraps t_us within two sample periods at %d Hz" % (ts_bits, rate)
     if flags & FLAG_OVERRUN:
         return "OVERRUN set on a HELLO"
     return None

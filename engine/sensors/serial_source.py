@@ -27,6 +27,7 @@ once scaled (possible with a tiny `accel_lsb_per_g`) is counted as `implausible`
 
 from __future__ import annotations
 
+import io
 import os
 import termios
 from collections import deque
@@ -115,11 +116,12 @@ def write_now(port: serial.SerialBase, data: bytes) -> None:
     with a file descriptor (a tty, a socket://; pyserial keeps both non-blocking) is written
     directly: pyserial's own write with write_timeout=0 retries EAGAIN without end, so a device
     that never reads its input (its buffer full) would hang the caller. Others (loop://) as usual."""
-    fileno = getattr(port, "fileno", None)
-    if fileno is None:
+    try:
+        fd = port.fileno()
+    except (AttributeError, io.UnsupportedOperation):  # loop:// and other ports with no descriptor
         port.write(data)
     else:
-        os.write(fileno(), data)
+        os.write(fd, data)
 
 
 def find_board(vid: int | None = None, pid: int | None = None) -> str | None:
@@ -307,6 +309,10 @@ class SerialSource(Source):
         self.rate_hz = float(hello.rate_hz)
         if changed:
             self.devclock.reset(hello.ts_bits)
+            if (1 << (hello.ts_bits - 1)) * hello.rate_hz <= 1_000_000:
+                # t_us wraps within two sample periods: its wraps cannot be told apart, so the
+                # sample times are wrong (PROTOCOL.md, HELLO); the HELLO is valid and taken
+                self.count("narrow_clock")
             kind = {1: "MPU-6050", 2: "LSM6DS3", 3: "simulated"}.get(hello.imu_kind, "IMU")
             self.description = f"serial bridge {self.port_name} ({kind} x{hello.sensors}, {hello.rate_hz} Hz)"
         return True

@@ -505,21 +505,20 @@ def test_a_long_text_is_cut_on_a_character_boundary():
     assert len(got.encode()) == protocol.MAX_TEXT - 1  # as much as fits: 9 + 95 * 2 bytes
 
 
-def test_a_hello_whose_clock_wraps_within_a_sample_period_is_malformed():
-    # ts_bits 12 at 200 Hz: t_us wraps every 4.1 ms, each frame 5 ms after the last. The host
-    # unwraps t_us from frame to frame, so every step read as 0.9 ms and the samples came out
-    # squeezed into a fifth of their time, silently. A field that makes no sense (PROTOCOL.md):
-    # malformed, like ts_bits outside 8..32
+def test_a_hello_whose_clock_wraps_within_a_sample_period_is_taken_and_counted():
+    # ts_bits 12 at 200 Hz: t_us wraps every 4.1 ms, each frame 5 ms after the last, so the host
+    # cannot unwrap it (each step reads 0.9 ms). PROTOCOL.md allows ts_bits 8..32: the HELLO is
+    # taken and its samples delivered, and the host counts `narrow_clock` once for it
     def stream(ts_bits: int) -> bytes:
         mask = (1 << ts_bits) - 1
         return hello(ts_bits=ts_bits) + b"".join(
             protocol.encode_sample(k, (5000 * k) & mask, (0, 0, 4096), (2048, -4096, 0)) for k in range(1, 21))
 
-    src, got = _write_and_poll(stream(12), lambda src: src.stats["frames_ok"] + src.stats["malformed"] == 21)
-    assert got == [] and src.hello is None
-    assert src.stats["malformed"] == 1 and src.stats["samples_before_hello"] == 20
+    src, got = _write_and_poll(stream(12), lambda src: src.stats["frames_ok"] == 21)
+    assert len(got) == 20 and src.hello is not None and src.hello.ts_bits == 12
+    assert src.stats["narrow_clock"] == 1 and src.stats.get("malformed", 0) == 0
     src, got = _write_and_poll(stream(14), lambda src: src.stats["frames_ok"] == 21)  # wraps every 16.4 ms
-    assert len(got) == 20 and src.stats["malformed"] == 0
+    assert len(got) == 20 and src.stats.get("narrow_clock", 0) == 0 and src.stats.get("malformed", 0) == 0
     np.testing.assert_allclose(np.diff([s.t for s in got]), 0.005, atol=1e-9)
 
 

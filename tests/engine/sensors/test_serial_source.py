@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from engine.sensors import SourceError, SourceState, open_source
-from engine.sensors.serial_source import DeviceClock, SerialSource, parse_serial_url
+from engine.sensors.serial_source import DeviceClock, SerialSource, parse_serial_url, write_now
 from firmware_bridge import protocol
 from firmware_bridge.emulator import (
     Emulator,
@@ -412,3 +412,16 @@ def test_an_emulated_board_with_a_counter_wider_than_32_bits_streams(tmp_path):
     assert len(got) > 100 and src.stats.get("time_jumps", 0) == 0  # across the 32-bit wrap, 0.3 s in
     t = np.array([s.t for s in got])
     np.testing.assert_allclose(np.median(np.diff(t)), 0.005, atol=0.001)
+
+
+def test_a_hello_request_reaches_a_port_with_no_file_descriptor():
+    # loop:// (and other URL ports) have fileno() raising io.UnsupportedOperation, an OSError:
+    # the direct write must fall back to the port's own, not drop every request as a lost port
+    import serial
+
+    port = serial.serial_for_url("loop://", timeout=0.5)
+    try:
+        write_now(port, protocol.HELLO_REQUEST)
+        assert port.read(1) == protocol.HELLO_REQUEST
+    finally:
+        port.close()
