@@ -227,7 +227,8 @@ class EmulatorDef:
     # Gaussian noise on each simulated axis (g): 0.002 g, a quiet MEMS accelerometer at rest.
     noise_g: float = 0.002
     # Width of the board's microsecond tick counter (bits): 30, as MicroPython's ticks_us on
-    # rp2 and esp32, so hosts meet the wrap they meet on a real board.
+    # rp2 and esp32, so hosts meet the wrap they meet on a real board. A counter wider than 32
+    # bits goes out as its low 32 (t_us is a u32), and the HELLO announces 32.
     ts_bits: int = TS_BITS
     # The first boot's tick counter (us), e.g. just before the wrap; None: the host's monotonic clock.
     ticks_start: int | None = None
@@ -237,8 +238,9 @@ class EmulatorDef:
     def __post_init__(self) -> None:
         if self.sensors not in (1, 2):
             raise ValueError(f"sensors must be 1 or 2, not {self.sensors}")
-        if self.rate_hz < 1 or self.noise_g < 0 or not 8 <= self.ts_bits <= 62:
-            raise ValueError("rate_hz must be >= 1, noise_g >= 0 and ts_bits from 8 to 62")
+        if not 1 <= self.rate_hz <= 65535 or self.noise_g < 0 or not 8 <= self.ts_bits <= 62:
+            # rate_hz: a u16 in the HELLO (PROTOCOL.md)
+            raise ValueError("rate_hz must be 1..65535, noise_g >= 0 and ts_bits from 8 to 62")
 
 
 class Emulator:

@@ -168,10 +168,17 @@ def encode_hello(seq, t_us, boot_id, rate_hz, accel_lsb_per_g, gyro_mlsb_per_dps
 
 def encode_text(seq, t_us, text):
     # type: (int, int, str | bytes) -> bytes
-    """TEXT: a UTF-8 log line from the device (at most MAX_TEXT bytes; longer is cut)."""
+    """TEXT: a UTF-8 log line from the device (at most MAX_TEXT bytes; longer is cut, between
+    two characters: never inside one, which would leave the payload no longer UTF-8)."""
     if isinstance(text, str):
         text = text.encode()
-    return encode_frame(TEXT, seq, t_us, 0, bytes(text[:MAX_TEXT]))
+    text = bytes(text)
+    n = len(text)
+    if n > MAX_TEXT:
+        n = MAX_TEXT
+        while n > 0 and text[n] & 0xC0 == 0x80:  # text[n] continues a character: cut before it
+            n -= 1
+    return encode_frame(TEXT, seq, t_us, 0, text[:n])
 
 
 def sample_values_per_sensor(flags):

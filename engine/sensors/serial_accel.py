@@ -17,7 +17,8 @@ INT16_MAX_ABS = 32768  # the largest |count| an int16 holds (-32768)
 
 class SampleAccel:
     """Converts SAMPLE frames with the scales and layout of the device's HELLO; counts each
-    frame missing an announced sensor through `count("sensor_missing")`."""
+    frame missing an announced sensor through `count("sensor_missing")`, and each carrying one
+    the HELLO did not announce (its values dropped) through `count("sensor_unannounced")`."""
 
     def __init__(self, count: Callable[[str], None]) -> None:
         self.count = count
@@ -67,7 +68,10 @@ class SampleAccel:
         if have == want or not want:
             out = raw
         else:
-            self.count("sensor_missing")
+            if want & ~have:
+                self.count("sensor_missing")
+            if have & ~want:  # not on the board, says its HELLO: nowhere to put it
+                self.count("sensor_unannounced")
             out = self._last(sensors).copy()
             slots = [s for s in (protocol.FLAG_SENSOR_A, protocol.FLAG_SENSOR_B) if want & s]
             k = 0

@@ -10,7 +10,9 @@ URLs:
 Polling never waits: each poll drains `in_waiting` (the Linux tty buffer holds only 4095 bytes,
 so a slow reader loses data), decodes frames, and maps device time to host time. A lost port
 (OSError, SerialException, termios.error) becomes SourceState.RECONNECTING, and the port is
-reopened every `retry` seconds until it comes back.
+reopened every `retry` seconds until it comes back. After every open, SAMPLEs wait for a HELLO
+on that port (counted as `samples_before_hello`): a board back on the port may have rebooted or be
+another one, and the previous HELLO's scales would misread it.
 
 Hostile or broken input is counted and dropped, never raised: the decoder rejects HELLOs whose
 fields make no sense (protocol.hello_problem) and frames replayed from earlier (same boot and
@@ -25,6 +27,8 @@ once scaled (possible with a tiny `accel_lsb_per_g`) is counted as `implausible`
 
 from __future__ import annotations
 
+import io
+import os
 import termios
 from collections import deque
 from urllib.parse import parse_qsl
@@ -107,6 +111,19 @@ class DeviceClock:
         return self._mins[0][1]
 
 
+def write_now(port: serial.SerialBase, data: bytes) -> None:
+    """Write without waiting, or raise OSError (BlockingIOError when there is no room). A port
+    with a file descriptor (a tty, a socket://; pyserial keeps both non-blocking) is written
+    directly: pyserial's own write with write_timeout=0 retries EAGAIN without end, so a device
+    that never reads its input (its buffer full) would hang the caller. Others (loop://) as usual."""
+    try:
+        fd = port.fileno()
+    except (AttributeError, io.UnsupportedOperation):  # loop:// and other ports with no descriptor
+        port.write(data)
+    else:
+        os.write(fd, data)
+
+
 def find_board(vid: int | None = None, pid: int | None = None) -> str | None:
     """The device path of the first known board (or the given VID/PID), or None."""
     wanted = ((vid, pid),) if vid is not None else KNOWN_BOARDS
@@ -138,6 +155,8 @@ class SerialSource(Source):
         self._last_byte = clock()
         self._stalled = False
         self._next_hello_request = 0.0
+        self._hello_on_port = False  # a HELLO came since the port was (re)opened
+        self._sensors_announced = False  # a HELLO named sensors: `sensors` is no longer a guess
         self._polled = False
         self._open()
 
@@ -184,6 +203,9 @@ class SerialSource(Source):
         self._last_byte = self.clock()
         self._stalled = False
         self._next_hello_request = 0.0
+        # what is on the port now may have rebooted, or be another board: its SAMPLEs wait for
+        # its HELLO, as at the first open (self.hello stays, for the sensor-conflict check)
+        self._hello_on_port = False
         self._ask_hello()
 
     def _ask_hello(self) -> None:
@@ -194,7 +216,7 @@ class SerialSource(Source):
             return
         self._next_hello_request = now + 0.25
         try:
-            self.port.write(protocol.HELLO_REQUEST)
+            write_now(self.port, protocol.HELLO_REQUEST)
         except (*LOST, serial.SerialTimeoutException):
             pass  # a read will notice a lost port; a full output buffer just means no request
 
@@ -275,14 +297,22 @@ class SerialSource(Source):
             self.count("sensor_conflicts")
             return False
         changed = not same_boot or hello.ts_bits != self.hello.ts_bits
-        if hello.sensors and hello.sensors != self.sensors and self.hello is not None:
-            self.count("sensor_changes")
-        self.hello = hello
         if hello.sensors:
+            # a change from the sensors announced before; `sensors` is only a guess (2) until the
+            # first HELLO that names some (a boot's HELLOs before its IMUs are found name none)
+            if self._sensors_announced and hello.sensors != self.sensors:
+                self.count("sensor_changes")
             self.sensors = hello.sensors
+            self._sensors_announced = True
+        self.hello = hello
+        self._hello_on_port = True
         self.rate_hz = float(hello.rate_hz)
         if changed:
             self.devclock.reset(hello.ts_bits)
+            if (1 << (hello.ts_bits - 1)) * hello.rate_hz <= 1_000_000:
+                # t_us wraps within two sample periods: its wraps cannot be told apart, so the
+                # sample times are wrong (PROTOCOL.md, HELLO); the HELLO is valid and taken
+                self.count("narrow_clock")
             kind = {1: "MPU-6050", 2: "LSM6DS3", 3: "simulated"}.get(hello.imu_kind, "IMU")
             self.description = f"serial bridge {self.port_name} ({kind} x{hello.sensors}, {hello.rate_hz} Hz)"
         return True
@@ -319,7 +349,7 @@ class SerialSource(Source):
                 self.messages.append(f.payload.decode("utf-8", "replace"))
                 self.count("texts")
             elif f.msg_type == protocol.SAMPLE:
-                if self.hello is None:  # scales unknown until the first HELLO: ask for one
+                if not self._hello_on_port:  # scales unknown until a HELLO on this port: ask for one
                     self.count("samples_before_hello")
                     self._ask_hello()
                     continue

@@ -129,7 +129,7 @@ class Watch:
         self.tail = b""
         self.next_led = time.ticks_us()
         self.dropped_seen = 0
-        self.overrun_until = 0
+        self.overrun_until = None  # ticks_us until which the LED says "overrun"; None: it does not
 
     def __call__(self, sampler):
         now = time.ticks_us()
@@ -142,7 +142,11 @@ class Watch:
         if sampler.dropped != self.dropped_seen:
             self.dropped_seen = sampler.dropped
             self.overrun_until = time.ticks_add(now, 1000000)
-        if time.ticks_diff(self.overrun_until, now) > 0:
+        # forgotten once past: ticks_diff with a time over half the counter's period ago (537 s on
+        # rp2 and esp32) wraps and would say it is still ahead
+        if self.overrun_until is not None and time.ticks_diff(self.overrun_until, now) <= 0:
+            self.overrun_until = None
+        if self.overrun_until is not None:
             code = "overrun"
         elif sampler.imus[0] is None or sampler.imus[1] is None:
             code = "one"

@@ -19,6 +19,17 @@ DEFAULT_ACCEL_LSB_PER_G = 4096
 DEFAULT_GYRO_MLSB_PER_DPS = 65500
 
 
+def _rescale(values, scale):
+    """(ax, ay, az, gx, gy, gz) counts times num / den, rounded half away from zero in integers
+    (no floating point on the board's hot path); encode_sample clamps them to int16."""
+    out = []
+    for i in range(len(values)):
+        num, den = (scale[0], scale[1]) if i < 3 else (scale[2], scale[3])
+        v = values[i] * num
+        out.append((v + den // 2) // den if v >= 0 else -((den // 2 - v) // den))
+    return tuple(out)
+
+
 class Sampler:
     """Reads one IMU per hand at `rate_hz` and writes one SAMPLE frame per reading, a HELLO at
     start and every second, and TEXT lines for read errors. Every frame of a boot, whatever its
@@ -38,8 +49,10 @@ class Sampler:
         self.rate_hz = rate_hz
         self.period_us = 1000000 // rate_hz
         self.boot_id = boot_id
-        self.ts_bits = ts_bits
-        self.ts_mask = (1 << ts_bits) - 1
+        # t_us is a u32 on the wire: a wider tick counter (the emulator allows 62 bits) goes out
+        # as its low 32 bits, and the HELLO says so (ts_bits 8..32, PROTOCOL.md)
+        self.ts_bits = ts_bits if ts_bits < 32 else 32
+        self.ts_mask = (1 << self.ts_bits) - 1
         self.gyro = gyro
         self.seq = 0
         self.overrun = False
@@ -59,6 +72,13 @@ class Sampler:
         self.accel_lsb_per_g = ref.accel_lsb_per_g if ref is not None else DEFAULT_ACCEL_LSB_PER_G
         self.gyro_mlsb_per_dps = ref.gyro_mlsb_per_dps if ref is not None else DEFAULT_GYRO_MLSB_PER_DPS
         self.imu_kind = ref.kind if ref is not None else protocol.IMU_UNKNOWN
+        # a HELLO carries one set of scales, A's: B of another kind (an MPU-6050 beside an
+        # LSM6DS3) has its counts converted to them, (accel num, den, gyro num, den)
+        b = imus[1]
+        self._b_scale = None
+        if ref is not None and b is not None and (b.accel_lsb_per_g != self.accel_lsb_per_g
+                                                  or b.gyro_mlsb_per_dps != self.gyro_mlsb_per_dps):
+            self._b_scale = (self.accel_lsb_per_g, b.accel_lsb_per_g, self.gyro_mlsb_per_dps, b.gyro_mlsb_per_dps)
         self._last_hello = None
 
     def _send(self, frame):
@@ -106,6 +126,10 @@ class Sampler:
         t = self.ticks
         if self._last_hello is None or t.ticks_diff(now, self._last_hello) >= HELLO_EVERY_US:
             self.send_hello(now)
+        if self._last_text is not None and t.ticks_diff(now, self._last_text) >= TEXT_EVERY_US:
+            # forgotten once a second has passed, while ticks_diff can still tell: with a time
+            # over half the counter's period ago (537 s at 30 bits) it wraps and says "just now"
+            self._last_text = None
         readings = [None, None]
         for i in (0, 1):
             imu = self.imus[i]
@@ -119,6 +143,8 @@ class Sampler:
         a, b = readings
         if a is None and b is None:
             return False
+        if b is not None and self._b_scale is not None:
+            b = _rescale(b, self._b_scale)
         g = self.gyro
         frame = protocol.encode_sample(
             self.seq, now & self.ts_mask,
@@ -152,7 +178,7 @@ class Sampler:
                 # stop() hung (a stall): stamp the reading when it is really made, and read the
                 # host again, so no request that came before the stamp waits behind this SAMPLE
                 now = later
-                if stop(self):
+                if stop is not None and stop(self):
                     break
             self.step(now)
             deadline = t.ticks_add(deadline, self.period_us)

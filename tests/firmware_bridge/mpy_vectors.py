@@ -40,6 +40,7 @@ out = []
 out.append(protocol.encode_hello(0, 123456, 0xDEADBEEF, 200, 4096, 65500, 30, 1, 3))
 out.append(protocol.encode_text(1, 0xFFFFFFFF, "h\u00e9llo \u2014 frames"))
 out.append(protocol.encode_text(2, 5, "x" * 300))
+out.append(protocol.encode_text(2, 5, "x" + "\u00e9" * 150))  # cut between characters, not inside one
 out.append(protocol.encode_sample(3, 0, (0, 0, 0), (0, 0, 0)))
 out.append(protocol.encode_sample(65535, 1 << 31, (-32768, 32767, 40000), None, (1, 2, 3), None, True))
 out.append(protocol.encode_sample(7, 9, None, (-1, -256, 256)))
@@ -64,6 +65,20 @@ def write(b):
 
 
 s = Sampler([IMU(1), IMU(2)], write, Ticks(0x3FFFFFFF - 400000), rate_hz=200, boot_id=42, ts_bits=30)
+s.run(stop)
+out.append(b"".join(wire))
+
+
+class OtherIMU(IMU):
+    kind = 2
+    accel_lsb_per_g = 4098
+    gyro_mlsb_per_dps = 57143
+
+
+# B of another kind: its counts converted to A's scales, in integers (negative ones too)
+del wire[:]
+n[0] = 290
+s = Sampler([IMU(3), OtherIMU(4)], write, Ticks(5), rate_hz=200, boot_id=43, ts_bits=30, gyro=True)
 s.run(stop)
 out.append(b"".join(wire))
 for o in out:

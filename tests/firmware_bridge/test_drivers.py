@@ -101,3 +101,48 @@ def test_board_finds_two_mpus_a_is_the_lower_address(firmware_path):
     assert a.addr == 0x69 and b is None
     (a, b), _ = board.find_imus(FakeBus({}))
     assert a is None and b is None
+
+
+class RpTime:
+    """MicroPython's time on rp2 for board.py: ticks_us wraps at 2**30 us (17.9 minutes)."""
+
+    MASK = (1 << 30) - 1
+    HALF = 1 << 29
+
+    def __init__(self) -> None:
+        self.us = 0
+
+    def ticks_us(self) -> int:
+        return self.us & self.MASK
+
+    def ticks_add(self, t: int, d: int) -> int:
+        return (t + d) & self.MASK
+
+    def ticks_diff(self, a: int, b: int) -> int:
+        return ((a - b + self.HALF) & self.MASK) - self.HALF
+
+
+def test_led_shows_overrun_only_for_a_second_after_a_drop(firmware_path, monkeypatch):
+    # "steady on: output dropped in the last second" (firmware/README.md). Compared by ticks_diff
+    # with a time long past (0 at boot, or the last drop's second), the LED showed "host not
+    # reading" from 537 s to 1074 s after it, the half of the counter's period where
+    # ticks_diff wraps: on every healthy board from minute 9 to minute 18 after boot
+    import board
+
+    clock = RpTime()
+    monkeypatch.setattr(board, "time", clock)
+    poller = types.SimpleNamespace(register=lambda obj, mask: None, poll=lambda timeout: [])
+    led = types.SimpleNamespace(code=None)
+    led.show = lambda now, code: setattr(led, "code", code)
+    watch = board.Watch(led, stdin=types.SimpleNamespace(), poller=poller)
+    sampler = types.SimpleNamespace(dropped=0, imus=[object(), object()])
+    shown = []
+    for step in range(25 * 60 * 20):  # 25 minutes, the LED every 50 ms
+        clock.us = step * 50_000
+        if step == 20 * 60 * 20:  # a frame dropped at minute 20
+            sampler.dropped = 1
+        watch(sampler)
+        shown.append(led.code)
+    overrun = [i for i, code in enumerate(shown) if code == "overrun"]
+    assert overrun == list(range(20 * 60 * 20, 20 * 60 * 20 + 20))  # that second, and only then
+    assert set(shown) == {"both", "overrun"}

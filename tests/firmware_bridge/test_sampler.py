@@ -130,3 +130,90 @@ def test_host_ticks_wrap_like_micropython():
     a = t.ticks_us()
     b = t.ticks_add(a, 20_000_000)
     assert b < a and t.ticks_diff(b, a) == 20_000_000 and t.ticks_diff(a, b) == -20_000_000
+
+
+def test_a_read_error_long_after_the_last_one_is_still_reported():
+    # At most one TEXT a second, timed by ticks_diff against the last TEXT: ticks_us wraps at
+    # 2**30 us, so a read error 600 s after the previous one looked 474 s *earlier* than it and
+    # went unreported, as did every other until 1074 s had passed
+    ticks = FakeTicks()
+    wire = Wire()
+    imu_b = FakeIMU((2, 2, 2), fail_at={1, 6001})  # reads every 0.1 s: 600 s apart
+    s = Sampler([FakeIMU((1, 1, 1)), imu_b], wire.write, ticks)
+    for k in range(6002):
+        s.step(ticks.ticks_add(0, 100_000 * k))
+    texts = [f for f in protocol.Decoder().feed(bytes(wire.data)) if f.msg_type == protocol.TEXT]
+    assert [f.payload for f in texts] == [b"read error on sensor B"] * 2
+    assert s.read_errors == 2
+
+
+def test_run_without_a_stop_function_survives_a_slow_tick():
+    # run() (stop=None: sample for ever) read the host again after a tick that took over a period
+    # (a long GC pause) by calling stop, None: TypeError, and the board stopped streaming
+    class SlowTicks(FakeTicks):
+        def ticks_us(self):
+            self.now += 6000  # every look at the clock costs more than the 5 ms period
+            return super().ticks_us()
+
+    class Enough(Exception):
+        pass
+
+    class LastReads(FakeIMU):
+        def read(self):
+            if self.calls == 5:
+                raise Enough  # ends the test's run (an OSError would be a read error)
+            return super().read()
+
+    wire = Wire()
+    s = Sampler([LastReads((1, 1, 1)), None], wire.write, SlowTicks())
+    try:
+        s.run()
+    except Enough:
+        pass
+    kinds = [f.msg_type for f in protocol.Decoder().feed(bytes(wire.data))]
+    assert kinds == [protocol.HELLO] + [protocol.SAMPLE] * 5
+
+
+def test_two_kinds_of_imu_go_out_in_the_hellos_scales():
+    # board.find_imus takes the first two of 0x68, 0x69, 0x6A, 0x6B: an MPU-6050 (4096 counts
+    # per g, 65.5 per dps) as A and an LSM6DS3 (4098, 57.143) as B. A HELLO has one set of
+    # scales, A's, and B's counts went out unconverted: its accel read 0.05 % high and its gyro
+    # (with gyro on) 13 % low
+    import os
+    import time
+    import tty
+
+    from engine.sensors import open_source
+
+    class LSM(FakeIMU):
+        kind = protocol.IMU_LSM6DS3
+        accel_lsb_per_g = 4098
+        gyro_mlsb_per_dps = 57143
+
+        def read(self):
+            return (4098, -2049, 0, 5714, -28571, 0)  # 1 g, -0.5 g, 0; 100 dps, -500 dps, 0
+
+    master, slave = os.openpty()
+    tty.setraw(slave)
+    src = open_source(f"serial://{os.ttyname(slave)}")
+    wire = Wire()
+    try:
+        s = Sampler([FakeIMU((0, 0, 4096)), LSM(())], wire.write, FakeTicks(), rate_hz=200, gyro=True)
+        run(s, 5)
+        os.write(master, bytes(wire.data))
+        got = []
+        for _ in range(100):
+            got += src.poll()
+            if len(got) == 5:
+                break
+            time.sleep(0.01)
+    finally:
+        src.close()
+        os.close(master)
+        os.close(slave)
+    assert len(got) == 5 and src.hello.accel_lsb_per_g == 4096
+    for sample in got:
+        assert abs(sample.accel[1] - [1, -0.5, 0]).max() < 2e-4  # B in g with the HELLO's scale
+    frames = protocol.Decoder().feed(bytes(wire.data))
+    b_gyro = [f.values()[9:12] for f in frames if f.msg_type == protocol.SAMPLE]
+    assert b_gyro == [(6550, -32749, 0)] * 5  # x 65500 / 57143: 100 and -499.99 dps at 65.5 per dps

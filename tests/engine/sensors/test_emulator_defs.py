@@ -82,3 +82,11 @@ def test_serial_board_from_def_samples_the_same_as_the_keywords():
             emu.port.close()
     with pytest.raises(ValueError):
         EmulatorDef(sensors=3)
+
+
+def test_serial_board_def_refuses_a_rate_the_hello_cannot_carry():
+    # rate_hz is a u16 in the HELLO (PROTOCOL.md): 70000 was accepted, and the board's first
+    # HELLO raised struct.error in the emulator's thread
+    assert EmulatorDef(rate_hz=65535).rate_hz == 65535
+    with pytest.raises(ValueError, match="rate_hz"):
+        EmulatorDef(rate_hz=65536)

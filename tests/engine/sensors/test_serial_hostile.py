@@ -477,3 +477,64 @@ def test_the_acceleration_limit_in_counts_at_the_scales_around_it():
     assert SampleAccel.plausible(frame((-32768, 32767, 0)), scale(33))
     assert SampleAccel.plausible(frame((-32000, 32000, 0)), scale(32))
     assert not SampleAccel.plausible(frame((0, 0, -32001)), scale(32))
+
+
+def test_a_boot_that_finds_its_imu_late_counts_no_sensor_change():
+    # the firmware's wait for IMUs (main.py): HELLOs with no sensor flags, and a TEXT, until
+    # detection finds them, then HELLOs with the sensors found. A boot's first sensors are no
+    # change (PROTOCOL.md, HELLO); a one-IMU board counted one, since the source starts at 2
+    data = (hello(seq=0, boot=5, flags=0) + protocol.encode_text(1, 10, "no IMU found; I2C scan: ")
+            + hello(seq=2, boot=5, flags=protocol.FLAG_SENSOR_A, t_us=1_000_000)
+            + samples(3, start_seq=3, t0=1_005_000, sensors=1)
+            # rebooted, and found both this time: that is a change, counted once
+            + hello(seq=0, boot=6, flags=0, t_us=100) + hello(seq=1, boot=6, flags=3, t_us=1_000_100)
+            + samples(3, start_seq=2, t0=1_005_100))
+    src, got = _write_and_poll(data, lambda src: src.stats["frames_ok"] == 11)
+    assert [s.accel.shape for s in got] == [(1, 3)] * 3 + [(2, 3)] * 3
+    assert src.sensors == 2 and src.stats["reboots"] == 1
+    assert src.stats.get("sensor_changes", 0) == 1 and src.stats.get("sensor_conflicts", 0) == 0
+
+
+def test_a_long_text_is_cut_on_a_character_boundary():
+    # PROTOCOL.md: a TEXT payload is 0..200 bytes of UTF-8. encode_text cut a longer line at byte
+    # 200 even inside a character, so the host showed a replacement character for its last half
+    line = "capteurs " + "é" * 150  # 309 bytes of UTF-8; byte 200 is the first of an é
+    src, _ = _write_and_poll(protocol.encode_text(1, 5000, line), lambda src: src.stats["frames_ok"] == 1)
+    (got,) = src.messages
+    assert "\ufffd" not in got and line.startswith(got)
+    assert len(got.encode()) == protocol.MAX_TEXT - 1  # as much as fits: 9 + 95 * 2 bytes
+
+
+def test_a_hello_whose_clock_wraps_within_a_sample_period_is_taken_and_counted():
+    # ts_bits 12 at 200 Hz: t_us wraps every 4.1 ms, each frame 5 ms after the last, so the host
+    # cannot unwrap it (each step reads 0.9 ms). PROTOCOL.md allows ts_bits 8..32: the HELLO is
+    # taken and its samples delivered, and the host counts `narrow_clock` once for it
+    def stream(ts_bits: int) -> bytes:
+        mask = (1 << ts_bits) - 1
+        return hello(ts_bits=ts_bits) + b"".join(
+            protocol.encode_sample(k, (5000 * k) & mask, (0, 0, 4096), (2048, -4096, 0)) for k in range(1, 21))
+
+    src, got = _write_and_poll(stream(12), lambda src: src.stats["frames_ok"] == 21)
+    assert len(got) == 20 and src.hello is not None and src.hello.ts_bits == 12
+    assert src.stats["narrow_clock"] == 1 and src.stats.get("malformed", 0) == 0
+    src, got = _write_and_poll(stream(14), lambda src: src.stats["frames_ok"] == 21)  # wraps every 16.4 ms
+    assert len(got) == 20 and src.stats.get("narrow_clock", 0) == 0 and src.stats.get("malformed", 0) == 0
+    np.testing.assert_allclose(np.diff([s.t for s in got]), 0.005, atol=1e-9)
+
+
+def test_a_sample_with_a_sensor_its_hello_did_not_announce_is_counted_as_such():
+    # HELLO: sensor A only. A SAMPLE that also carries B has nothing missing, yet was counted
+    # as `sensor_missing`; B's values are dropped (the samples keep the HELLO's one row)
+    a_only = hello(flags=protocol.FLAG_SENSOR_A)
+    data = (a_only + samples(2, sensors=2) + samples(1, start_seq=3, t0=15000, sensors=1)
+            + protocol.encode_sample(4, 20000, None, (0, 4096, 0)))  # B alone: A missing, B extra
+    src, got = _write_and_poll(data, lambda src: src.stats["frames_ok"] == 5)
+    assert [s.accel.tolist() for s in got] == [[[0, 0, 1]]] * 4  # A as read, then held
+    assert src.stats["sensor_unannounced"] == 3 and src.stats["sensor_missing"] == 1
+
+
+def test_a_text_that_is_not_utf8_is_kept_with_replacement_characters():
+    # PROTOCOL.md: a TEXT is a log line; bytes that are not UTF-8 show as U+FFFD, the line is kept
+    data = protocol.encode_frame(protocol.TEXT, 1, 5000, 0, b"sensor \xff\xfe B")
+    src, _ = _write_and_poll(data, lambda src: src.stats["frames_ok"] == 1)
+    assert list(src.messages) == ["sensor \ufffd\ufffd B"] and src.stats["malformed"] == 0

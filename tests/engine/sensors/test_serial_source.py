@@ -4,6 +4,7 @@ device emulator (unplug and replug)."""
 from __future__ import annotations
 
 import os
+import threading
 import time
 import tty
 
@@ -11,9 +12,15 @@ import numpy as np
 import pytest
 
 from engine.sensors import SourceError, SourceState, open_source
-from engine.sensors.serial_source import DeviceClock, SerialSource, parse_serial_url
+from engine.sensors.serial_source import DeviceClock, SerialSource, parse_serial_url, write_now
 from firmware_bridge import protocol
-from firmware_bridge.emulator import Emulator, Faults, start_in_thread, synthetic_motion
+from firmware_bridge.emulator import (
+    Emulator,
+    EmulatorDef,
+    Faults,
+    start_in_thread,
+    synthetic_motion,
+)
 
 HELLO2 = protocol.encode_hello(0, 0, 77, 200, 4096, 65500, 30, protocol.IMU_MPU6050, 3)
 
@@ -248,3 +255,173 @@ def test_times_never_go_back_across_a_reboot():
     second = src.poll()
     assert len(first) == 20 and len(second) == 5 and src.stats["reboots"] == 1
     assert second[0].t >= first[-1].t
+
+
+def _fill_output(fd: int) -> None:
+    """Write to a pty's slave end until the tty's output buffer is full (nobody reads the master)."""
+    os.set_blocking(fd, False)
+    for _ in range(3):  # the kernel may move some on to the master meanwhile: fill again
+        for size in (4096, 256, 1):
+            try:
+                while True:
+                    os.write(fd, b"x" * size)
+            except BlockingIOError:
+                pass
+        time.sleep(0.02)
+
+
+def _drain(fd: int) -> None:
+    os.set_blocking(fd, False)
+    try:
+        while os.read(fd, 65536):
+            pass
+    except BlockingIOError:
+        pass
+
+
+def test_a_device_that_never_reads_cannot_hang_the_host():
+    # A board (the user's own, say) that never reads its input: the tty's output buffer fills with
+    # what the host sends, and asking for a HELLO then found no room. pyserial's write with
+    # write_timeout=0 retries EAGAIN forever: the constructor (the '?' on open) and every poll
+    # asking while SAMPLEs came without a HELLO spun at 100 % CPU and never returned.
+    master, slave = os.openpty()
+    tty.setraw(slave)
+    now = [0.0]
+    made: list = []
+    try:
+        _fill_output(slave)
+        th = threading.Thread(target=lambda: made.append(open_source(f"serial://{os.ttyname(slave)}",
+                                                                     clock=lambda: now[0])), daemon=True)
+        th.start()
+        th.join(2.0)
+        hung_on_open = th.is_alive()
+        while th.is_alive():  # make room, so that a hung write ends and the thread with it
+            _drain(master)
+            th.join(0.01)
+        assert not hung_on_open
+        src = made[0]
+        assert src.state is SourceState.CONNECTED
+        _drain(master)
+        _fill_output(slave)
+        polls: list = []
+
+        def poll_without_hello() -> None:
+            for k in range(5):  # SAMPLEs, no HELLO: the source asks again every 0.25 s
+                now[0] += 0.3
+                os.write(master, protocol.encode_sample(k, 5000 * k, (0, 0, 4096), None))
+                time.sleep(0.01)
+                polls.append(src.poll())
+
+        th = threading.Thread(target=poll_without_hello, daemon=True)
+        th.start()
+        th.join(2.0)
+        hung_on_poll = th.is_alive()
+        while th.is_alive():
+            _drain(master)
+            th.join(0.01)
+        assert not hung_on_poll and polls == [[]] * 5
+        for _ in range(100):  # a loaded machine may pass the last SAMPLE on late
+            if src.stats.get("samples_before_hello") == 5:
+                break
+            assert src.poll() == []
+            time.sleep(0.01)
+        assert src.stats["samples_before_hello"] == 5
+        _drain(master)  # the board reads at last: a request gets through, the HELLO comes
+        now[0] += 0.3
+        os.write(master, protocol.encode_hello(5, 25000, 77, 200, 4096, 65500, 30, protocol.IMU_MPU6050, 3)
+                 + samples(3, start_seq=6, t0=30000))
+        time.sleep(0.02)
+        assert len(src.poll()) == 3
+        src.close()
+    finally:
+        os.close(master)
+        os.close(slave)
+
+
+def test_after_a_reconnect_no_sample_is_read_with_the_last_devices_scales(tmp_path):
+    # Unplugged, and what comes back on the same path may be another board (or the same one,
+    # rebooted with one IMU fewer): its SAMPLEs before its HELLO were converted with the old
+    # board's scales and sensors (a 1 g reading came out as 4 g, beside an invented sensor B).
+    link = str(tmp_path / "board")
+
+    def plug() -> tuple[int, int]:
+        master, slave = os.openpty()
+        tty.setraw(slave)
+        if os.path.lexists(link):
+            os.unlink(link)
+        os.symlink(os.ttyname(slave), link)
+        return master, slave
+
+    def poll_until(src, done) -> list:
+        got: list = []
+        for _ in range(100):
+            got += src.poll()
+            if done():
+                break
+            time.sleep(0.01)
+        return got
+
+    master, slave = plug()
+    src = open_source(f"serial://{link}?retry=0.01")
+    try:
+        os.write(master, HELLO2 + samples(10))
+        assert len(poll_until(src, lambda: src.stats["frames_ok"] == 11)) == 10
+        os.close(master)
+        os.close(slave)
+        poll_until(src, lambda: src.state is SourceState.RECONNECTING)
+        master, slave = plug()
+        poll_until(src, lambda: src.state is SourceState.CONNECTED)
+        assert os.read(master, 16) == protocol.HELLO_REQUEST
+        # another board: 16384 counts per g (an LSM6DS3 at +-2 g), sensor A only; two SAMPLEs
+        # made before the request arrived, then the HELLO that answers it
+        other = (b"".join(protocol.encode_sample(s, 5000 * s, (0, 0, 16384), None) for s in (3, 4))
+                 + protocol.encode_hello(5, 25000, 99, 200, 16384, 65500, 30, protocol.IMU_LSM6DS3, 1)
+                 + b"".join(protocol.encode_sample(s, 5000 * s, (0, 0, 16384), None) for s in (6, 7)))
+        os.write(master, other)
+        got = poll_until(src, lambda: src.stats["frames_ok"] == 16)
+        assert [s.accel.tolist() for s in got] == [[[0.0, 0.0, 1.0]]] * 2
+        assert src.sensors == 1 and src.stats["samples_before_hello"] == 2 and src.stats["reboots"] == 1
+        assert src.stats.get("sensor_missing", 0) == 0
+    finally:
+        src.close()
+        os.close(master)
+        os.close(slave)
+
+
+def test_an_emulated_board_with_a_counter_wider_than_32_bits_streams(tmp_path):
+    # EmulatorDef allows tick counters up to 62 bits (a 64-bit esp_timer, say), but t_us is a u32
+    # on the wire: the HELLO announced ts_bits 40, outside 8..32, so every HELLO was malformed
+    # and the host never got a sample. Such a board sends its counter's low 32 bits: ts_bits 32
+    link = str(tmp_path / "bridge")
+    emu = Emulator.from_def(synthetic_motion(), EmulatorDef(ts_bits=40, ticks_start=(1 << 32) - 300_000), link=link)
+    th = start_in_thread(emu, 1.2)
+    for _ in range(100):
+        if os.path.exists(link):
+            break
+        time.sleep(0.01)
+    src = open_source(f"serial://{link}")
+    got = []
+    try:
+        while th.is_alive():
+            got += src.poll()
+            time.sleep(0.02)
+    finally:
+        src.close()
+        th.join(2)
+    assert src.stats["malformed"] == 0 and src.hello is not None and src.hello.ts_bits == 32
+    assert len(got) > 100 and src.stats.get("time_jumps", 0) == 0  # across the 32-bit wrap, 0.3 s in
+    t = np.array([s.t for s in got])
+    np.testing.assert_allclose(np.median(np.diff(t)), 0.005, atol=0.001)
+
+
+def test_a_hello_request_reaches_a_port_with_no_file_descriptor():
+    # loop:// (and other URL ports) have fileno() raising io.UnsupportedOperation, an OSError:
+    # the direct write must fall back to the port's own, not drop every request as a lost port
+    import serial
+
+    port = serial.serial_for_url("loop://", timeout=0.5)
+    try:
+        write_now(port, protocol.HELLO_REQUEST)
+        assert port.read(1) == protocol.HELLO_REQUEST
+    finally:
+        port.close()
