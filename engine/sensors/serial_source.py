@@ -278,7 +278,12 @@ class SerialSource(Source):
                 self.count("stalls")
             return []
         self._last_byte, self._stalled = now, False
+        replays = self.decoder.replays
         frames = self.decoder.feed(data)
+        if self.decoder.replays > replays or any(f.jump for f in frames):
+            # a reboot whose HELLO was lost: its frames are replays or a jump until its next HELLO,
+            # which the board sends within a second anyway; asked for, it comes on its next tick
+            self._ask_hello()
         return self._samples(frames, now)
 
     def _apply_hello(self, f: protocol.Frame) -> bool:

@@ -538,3 +538,42 @@ def test_a_text_that_is_not_utf8_is_kept_with_replacement_characters():
     data = protocol.encode_frame(protocol.TEXT, 1, 5000, 0, b"sensor \xff\xfe B")
     src, _ = _write_and_poll(data, lambda src: src.stats["frames_ok"] == 1)
     assert list(src.messages) == ["sensor \ufffd\ufffd B"] and src.stats["malformed"] == 0
+
+
+def _requests_after(data: bytes) -> bytes:
+    """What the host writes to a pty board once it has taken a boot's HELLO and 100 samples and
+    0.3 s have passed (the request at open drained), then read `data` and polled."""
+    master, slave, src = _pty_source()
+    try:
+        os.write(master, hello(boot=1) + samples(100))
+        for _ in range(100):
+            if len(src.poll()) or src.stats.get("frames_ok", 0) >= 101:
+                break
+            time.sleep(0.01)
+        time.sleep(0.3)  # past the 0.25 s between two requests
+        os.set_blocking(master, False)
+        try:
+            os.read(master, 100)  # the request sent at open
+        except BlockingIOError:
+            pass
+        os.write(master, data)
+        for _ in range(50):
+            src.poll()
+            time.sleep(0.01)
+        try:
+            return os.read(master, 100)
+        except BlockingIOError:
+            return b""
+    finally:
+        src.close()
+        os.close(master)
+        os.close(slave)
+
+
+def test_a_reboot_whose_hello_was_lost_asks_for_the_new_boots_hello():
+    # The board rebooted and its boot HELLO was lost: the new boot's seqs 1.. were all delivered by
+    # the old boot, so its frames are dropped as replays until its next HELLO, up to a second.
+    # The host asks for that HELLO at once (`?`), as it does while SAMPLEs come before any HELLO
+    assert _requests_after(samples(20, t0=50)) == protocol.HELLO_REQUEST
+    # a board streaming on, no replay and no jump: nothing asked
+    assert _requests_after(samples(20, start_seq=101, t0=5000 * 101)) == b""
