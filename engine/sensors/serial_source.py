@@ -124,6 +124,24 @@ def write_now(port: serial.SerialBase, data: bytes) -> None:
         os.write(fd, data)
 
 
+def read_waiting(port: serial.SerialBase) -> bytes:
+    """Everything waiting on `port`, without waiting. A zero-timeout read(1) when nothing is waiting
+    makes a hung-up pty or unplugged port raise here instead of looking merely quiet."""
+    n = port.in_waiting
+    if not n:
+        return port.read(1)
+    data = port.read(n)
+    if n < BACKLOG:  # the usual case: one ioctl, one read
+        return data
+    chunks = [data]  # a backlog: keep draining while the device refills the buffer
+    for _ in range(MAX_READS_PER_POLL):
+        n = port.in_waiting
+        if not n:
+            break
+        chunks.append(port.read(n))
+    return b"".join(chunks)
+
+
 def find_board(vid: int | None = None, pid: int | None = None) -> str | None:
     """The device path of the first known board (or the given VID/PID), or None."""
     wanted = ((vid, pid),) if vid is not None else KNOWN_BOARDS
@@ -239,24 +257,6 @@ class SerialSource(Source):
         self.state = SourceState.DISCONNECTED
 
     # -- reading ----------------------------------------------------------------------------
-    def _read(self) -> bytes:
-        """Everything waiting, without waiting. A zero-timeout read(1) when nothing is waiting
-        makes a hung-up pty or unplugged port raise here instead of looking merely quiet."""
-        port = self.port
-        n = port.in_waiting
-        if not n:
-            return port.read(1)
-        data = port.read(n)
-        if n < BACKLOG:  # the usual case: one ioctl, one read
-            return data
-        chunks = [data]  # a backlog: keep draining while the device refills the buffer
-        for _ in range(MAX_READS_PER_POLL):
-            n = port.in_waiting
-            if not n:
-                break
-            chunks.append(port.read(n))
-        return b"".join(chunks)
-
     def poll(self) -> list[Sample]:
         if self.state is SourceState.DISCONNECTED:
             return []
@@ -267,7 +267,7 @@ class SerialSource(Source):
             if self.port is None:
                 return []
         try:
-            data = self._read()
+            data = read_waiting(self.port)
         except LOST:
             self._lost()
             return []
