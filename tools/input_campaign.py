@@ -44,6 +44,7 @@ class Case:
     expect: str = "error"  # "error": exit 2, one line; "ok": exit 0
     stdin_none: bool = True
     env: dict[str, str] | None = None  # set over the campaign's environment (e.g. XDG_CONFIG_HOME)
+    cwd: str | None = None  # where it runs (default: the repository), for relative paths in URLs
 
 
 @dataclass
@@ -663,6 +664,14 @@ def _url_cases(q: list[str], good_rec: str, out: Path) -> list[Case]:
         cases.append(Case(f"url/{name}/record", q + ["record", "--source", url, "--seconds", "0.3", "-o", str(out / "u.csv")]))
     for name in ("demo-rate-1e9", "emu-drop-2", "keyboard-seed-neg"):
         cases.append(Case(f"url/{name}/scope", q + ["scope", "--headless", "--frames", "3", "--source", urls[name]]))
+    # a relative path is urlsplit's host part: '[' (IPv6) or a character NFKC turns into '/' raised ValueError
+    rec_dir = str(Path(good_rec).parent)
+    for name, file in (("bracket", "[x.csv"), ("nfkc-slash", "a\uff0fb.csv")):
+        cases.append(Case(f"url/{name}-missing/record", q + ["record", "--source", f"replay://{file}", "--seconds", "0.3",
+                                                              "-o", str(out / "u.csv")], cwd=rec_dir))
+        _write(Path(rec_dir), f"named/{file}", GOOD_REC)
+        cases.append(Case(f"ok/url-{name}-name/record", q + ["record", "--source", f"replay://{file}", "--seconds", "0.3",
+                                                             "-o", str(out / "u.csv")], expect="ok", cwd=str(Path(rec_dir) / "named")))
     return cases
 
 
@@ -789,7 +798,7 @@ def run_case(case: Case, timeout: float, limit_mb: int, env: dict) -> Outcome:
     with tempfile.TemporaryFile() as err, tempfile.TemporaryFile() as so:
         start = time.monotonic()
         p = subprocess.Popen([sys.executable, *case.argv], stdin=subprocess.DEVNULL, stdout=so, stderr=err,
-                             cwd=ROOT, env={**env, **(case.env or {})}, preexec_fn=_limit(limit_mb))
+                             cwd=case.cwd or ROOT, env={**env, **(case.env or {})}, preexec_fn=_limit(limit_mb))
         rc = None
         rss = 0.0
         marker = case.argv[1] if len(case.argv) > 1 else sys.executable
