@@ -460,6 +460,7 @@ def bad_config_files(d: Path) -> dict[str, str]:
         "huge-buffer": "[recognizer]\nsupplementary = 100000000000\n",
         "nan": "[recognizer]\nnoise_g = nan\n",
         "deep": "[recognizer]\nnoise_g = " + "[" * 100_000 + "]" * 100_000 + "\n",  # tomllib: RecursionError
+        "bigint": "[recognizer]\nmain = " + "1" * 5000 + "\n",  # tomllib's int(): a plain ValueError
         "binary": b"\xff\xfe\x00[recognizer]",
         "big": "# " + "x" * (2 << 20) + "\n",
         "directory": None,
