@@ -409,7 +409,10 @@ def bad_action_dirs(d: Path) -> dict[str, str]:
     good = json.loads((ASSETS / "actions" / "hook_r.json").read_text())
     for name, change in (("nan-root", {"root": [[0, float("nan"), 0, 0]]}), ("frames-huge", {"frames": 10**9}),
                          ("damage-inf", {"attacks": [{**good["attacks"][0], "damage": float("inf")}]}),
-                         ("deep", None), ("fifo", None)):
+                         ("deep", None), ("fifo", None),
+                         ("frames-inf", {"frames": float("inf")}),  # int(Infinity): OverflowError
+                         ("name-list", {"name": ["hook_r"]}),  # unhashable in the library: TypeError
+                         ("not-object", None)):  # a JSON list: AttributeError
         folder = d / "actions" / name
         if folder.exists():
             shutil.rmtree(folder)
@@ -420,6 +423,8 @@ def bad_action_dirs(d: Path) -> dict[str, str]:
         elif name == "fifo":
             target.unlink()
             os.mkfifo(target)
+        elif name == "not-object":
+            target.write_text(json.dumps([good]))
         else:
             target.write_text(json.dumps({**good, **change}))
         out[name] = str(folder)
