@@ -13,6 +13,7 @@ the process and thread. Times are microseconds from the first recorded frame.
 from __future__ import annotations
 
 import json
+import math
 import os
 import stat
 from pathlib import Path
@@ -133,8 +134,14 @@ _FRAME_ARGS_COUNTS = ("steps", "dropped")
 
 
 def _number(x: object) -> bool:
-    """A finite JSON number (bools are not numbers here)."""
-    return isinstance(x, (int, float)) and not isinstance(x, bool) and bool(np.isfinite(x))
+    """A finite JSON number a float holds (bools are not numbers here; an integer of 400 digits
+    is not one either: np.isfinite raised TypeError on it, float() OverflowError)."""
+    if not isinstance(x, (int, float)) or isinstance(x, bool):
+        return False
+    try:
+        return math.isfinite(x)
+    except OverflowError:
+        return False
 
 
 def _bad_event(ev: object) -> str | None:

@@ -329,6 +329,9 @@ def bad_traces(d: Path) -> dict[str, str]:
         tr("number", "5"),
         tr("no-frame", {"traceEvents": [stage]}),
         tr("bad-utf8", b"\xff\xfe{}".decode("latin-1")),
+        # integers no float holds: np.isfinite raised TypeError
+        tr("dropped-400-digits", '{"traceEvents": [{"ph": "X", "name": "frame", "ts": 0, "dur": 1, "args": {"dropped": 1' + "0" * 400 + '}}]}'),
+        tr("budget-400-digits", '{"traceEvents": [{"ph": "X", "name": "frame", "ts": 0, "dur": 1}], "otherData": {"frame_budget_ms": 1' + "0" * 400 + '}}'),
     ]
     out = dict(cases)
     out["bad-bytes"] = _write(d, "trace/bytes.json", b"\xff\xfe\x00{")
