@@ -34,6 +34,9 @@ MAX_GAP_S = 600.0  # no sample for 10 minutes: not one recording any more
 MAX_ACCEL_G = 1000.0
 MAX_LINE_CHARS = 1 << 20  # metadata and header lines
 CHUNK_ROWS = 8192  # rows converted to numbers at once
+# Labels and metadata may come from bytes that are not UTF-8 (a file name, an argument), which
+# Python holds as lone surrogates that UTF-8 cannot encode: written as \udcff, they stay readable
+UNENCODABLE = "backslashreplace"
 
 
 class RecordingError(InputError):
@@ -280,7 +283,7 @@ def write_recording(path: str | os.PathLike, rec: Recording) -> None:
     buf.write(_file_head(rec.sensors, rec.meta))
     for t, a, lab in zip(rec.t, rec.accel, rec.labels, strict=True):
         buf.write(_format_row(float(t), a, lab))
-    Path(path).write_text(buf.getvalue(), encoding="utf-8")
+    Path(path).write_text(buf.getvalue(), encoding="utf-8", errors=UNENCODABLE)
 
 
 class RecordingWriter:
@@ -303,7 +306,7 @@ class RecordingWriter:
         self.sensors = sensors
         self.t0 = t0  # recording time = host time - t0; the first sample sets it when None
         try:
-            self._file = open(self.path, "w", encoding="utf-8", newline="", buffering=1)
+            self._file = open(self.path, "w", encoding="utf-8", errors=UNENCODABLE, newline="", buffering=1)
         except OSError as exc:
             raise RecordingError(self.path, None, f"cannot write: {exc.strerror}") from None
         self._file.write(_file_head(sensors, meta or {}))

@@ -768,6 +768,12 @@ def _valid_cases(q: list[str], d: Path, good_rec: str, tpl: str, out: Path) -> l
     cases.append(Case("ok/bvh-export-guard", q + ["bvh", "export", "--play", "guard", "-o", str(out / "g.bvh")], expect="ok"))
     cases.append(Case("ok/record-demo", q + ["record", "--source", "demo://?rate=100", "--seconds", "0.3", "-o", str(out / "d.csv")], expect="ok"))
     cases.append(Case("ok/record-emu", q + ["record", "--source", emu, "--seconds", "0.5", "-o", str(out / "e.csv")], expect="ok"))
+    # bytes that are not UTF-8 in an argument or a file name (lone surrogates): UnicodeEncodeError
+    odd = _write(d, "rec/\udcff.csv", GOOD_REC)
+    cases.append(Case("ok/record-label-not-utf8", q + ["record", "--source", "demo://?rate=100", "--seconds", "0.3",
+                                                       "--label", "\udcff", "-o", str(out / "d.csv")], expect="ok"))
+    cases.append(Case("ok/record-name-not-utf8", q + ["record", "--source", f"replay://{odd}", "--seconds", "0.3",
+                                                      "-o", str(out / "d.csv")], expect="ok"))
     long_rec = d / "rec" / "long400k.csv"
     if not long_rec.exists():  # 400k rows at 100 Hz: wiimote-emu's poll must not depend on the length
         long_rec.write_text("t,rx,ry,rz,lx,ly,lz\n" + "".join(f"{i / 100:.2f},0.1,0,1,0,0.1,1\n" for i in range(400_000)))
