@@ -12,7 +12,7 @@ import sys
 from collections.abc import Callable
 
 from engine import arguments
-from engine.errors import InputError
+from engine.errors import InputError, refuse_overwriting
 
 DEFAULT_SOURCE = "wiimote://"
 KEYBOARD_SOURCE = "keyboard://"
@@ -101,6 +101,14 @@ def open_player_source(url: str | None, demo: bool, seed: int, clock) -> tuple[o
     return open_source(f"{KEYBOARD_SOURCE}?seed={seed}", clock=clock), True
 
 
+def played_files(args: argparse.Namespace) -> list[str | None]:
+    """The files a match reads: the templates, the graph, and what its source URLs replay."""
+    from engine.sensors.source import url_file
+
+    urls = [getattr(args, key, None) for key in ("source", "source2")]
+    return [getattr(args, "templates", None), getattr(args, "graph", None), *(url_file(u) for u in urls if u)]
+
+
 def run_session(args: argparse.Namespace, caption: str, open_sources: Callable[[object], list],
                 make_session: Callable[..., object]) -> int:
     """What one- and two-player play share: the window (or none: --headless, which stops after
@@ -112,6 +120,7 @@ def run_session(args: argparse.Namespace, caption: str, open_sources: Callable[[
     size = parse_size(args.size)
     if args.frames is not None and args.frames < 1:
         raise InputError("--frames must be at least 1")
+    refuse_overwriting({"--screenshot": args.screenshot, "--trace": args.trace}, played_files(args))
     frames = headless_frames(args.frames, args.headless, "play")
     if args.headless:
         headless_env()

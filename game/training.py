@@ -27,7 +27,7 @@ import numpy as np
 
 from engine import arguments
 from engine.clock import STEP_HZ
-from engine.errors import InputError
+from engine.errors import InputError, refuse_overwriting
 from engine.sensors.source import PLAYABLE
 from game.launch import (
     KEYBOARD_SOURCE,
@@ -385,6 +385,16 @@ def _open_source(args: argparse.Namespace, clock):
     return source, playable, auto
 
 
+def _check_files(args: argparse.Namespace, output: Path) -> None:
+    """Before the session: no output over an input (the templates file is read too, as the set
+    the new moves join) or over another output."""
+    from engine.sensors.source import url_file
+
+    replayed = url_file(args.source) if args.source else None
+    refuse_overwriting({"--screenshot": args.screenshot}, [output, replayed])
+    refuse_overwriting({"-o": output, "--screenshot": args.screenshot}, [replayed])
+
+
 def _open_window(args: argparse.Namespace, size: tuple[int, int], source) -> None:
     import pygame
 
@@ -461,6 +471,11 @@ def run(args: argparse.Namespace) -> int:
         # --profile NAME resets NAME's set (profile_templates_path(None) is the default player's)
         return reset_templates(Path(args.output) if args.output else profile_templates_path(args.profile))
     actions = _chosen_actions(args)
+    from game.userdata import profile_templates_path, user_templates_path
+
+    output = Path(args.output) if args.output else (
+        profile_templates_path(args.profile) if getattr(args, "profile", None) else user_templates_path())
+    _check_files(args, output)
     if args.headless:
         headless_env()
     import pygame
@@ -468,7 +483,6 @@ def run(args: argparse.Namespace) -> int:
     from engine.clock import RealClock, VirtualClock
     from engine.frames import FrameResampler
     from engine.loop import FixedStepLoop
-    from game.userdata import profile_templates_path, user_templates_path
 
     clock = VirtualClock() if args.headless else RealClock()
     source, playable, auto = _open_source(args, clock)
@@ -478,8 +492,6 @@ def run(args: argparse.Namespace) -> int:
     screen_view = TrainingScreen(lib, trainer, source.url, args.left_handed)
     resampler = FrameResampler(sensors=2)
     t0 = clock.seconds()
-    output = Path(args.output) if args.output else (
-        profile_templates_path(args.profile) if getattr(args, "profile", None) else user_templates_path())
     loop = FixedStepLoop(clock)
     stages = _TrainingStages(loop, source, playable, auto, trainer, screen_view, resampler, t0, output,
                              args.left_handed, settings)

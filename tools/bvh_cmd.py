@@ -17,7 +17,7 @@ import json
 from pathlib import Path
 
 from engine import arguments
-from engine.errors import InputError
+from engine.errors import InputError, refuse_overwriting
 from game.actions import KINDS, load_library
 from game.bvh import (
     cut_action,
@@ -67,6 +67,7 @@ def run_info(args: argparse.Namespace) -> int:
 
 
 def run_cut(args: argparse.Namespace) -> int:
+    refuse_overwriting({"-o": args.output}, [args.file])
     bvh = read_bvh(args.file, mappable=True)
     motion = retarget(bvh)
     guard = None if args.no_guard_blend else load_library()["guard"].posture(0)

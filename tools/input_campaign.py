@@ -513,6 +513,7 @@ def build_cases(d: Path, big_mb: int, bomb_gb: float = 1.5) -> list[Case]:
     args = {**_bad_game_args(q, d, good_rec, tpl, out), **_bad_tool_args(q, d, out)}
     for name, argv in args.items():
         cases.append(Case(f"arg/{name}", argv))
+    cases += _same_file_cases(q, d)
     cases += _valid_cases(q, d, good_rec, tpl, out)
     return cases
 
@@ -756,6 +757,28 @@ def _bad_tool_args(q: list[str], d: Path, out: Path) -> dict[str, list[str]]:
         "bvh-export-gap-nan": q + ["bvh", "export", "--play", "guard", "--gap", "nan", "-o", str(out / "x.bvh")],
         "bvh-cut-start-neg": q + ["bvh", "cut", _write(d, "bvh/ok.bvh", BVH_HEAD + "Frames: 3\nFrame Time: 0.0166667\n" + "0 90 0 0 0 0 0 0 0\n" * 3), "--start", "-5", "--end", "1", "--name", "x", "-o", str(out / "a.json")],
     }
+
+
+def _same_file_cases(q: list[str], d: Path) -> list[Case]:
+    """An output that is one of the command's inputs: each destroyed its input and exited 0
+    (recognize emptied the recording, bvh cut wrote JSON over the capture). Own copies each."""
+    s = d / "same"
+    rec = lambda name: _write(s, name, GOOD_REC)  # noqa: E731
+    trial = _write(s, "trials/jab/1.csv", GOOD_REC.replace(",\n", ",jab\n"))
+    tpl = str(s / "t.npz")
+    Path(tpl).write_bytes((ASSETS / "templates.npz").read_bytes())
+    mocap = ROOT.parent / "shared" / "data" / "mocap" / "cmu_02_05_punch_strike.bvh"  # mappable: cut writes
+    bvh = _write(s, "m.bvh", mocap.read_bytes() if mocap.exists() else BVH_HEAD)
+    r1, r2, r3 = rec("r1.csv"), rec("r2.csv"), rec("r3.csv")
+    argvs = {
+        "recognize-o-recording": ["recognize", r1, "--templates", str(ASSETS / "templates.npz"), "-o", r1],
+        "build-o-trial": ["templates", "build", str(s / "trials"), "-o", trial],
+        "bvh-cut-o-file": ["bvh", "cut", bvh, "--start", "0", "--end", "20", "--name", "x", "-o", bvh],
+        "record-o-replayed": ["record", "--source", f"replay://{r2}", "--seconds", "0.3", "-o", r2],
+        "play-screenshot-templates": ["play", "--headless", "--frames", "2", "--templates", tpl, "--screenshot", tpl],
+        "scope-trace-replayed": ["scope", "--headless", "--frames", "2", "--source", f"replay://{r3}", "--trace", r3],
+    }
+    return [Case(f"same/{name}", q + argv) for name, argv in argvs.items()]
 
 
 def _valid_cases(q: list[str], d: Path, good_rec: str, tpl: str, out: Path) -> list[Case]:

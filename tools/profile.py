@@ -16,7 +16,7 @@ import numpy as np
 from engine import arguments
 from engine.budget import UNACCOUNTED, WAIT, percentiles_ms
 from engine.clock import STEP_MS
-from engine.errors import InputError
+from engine.errors import InputError, refuse_overwriting
 from engine.trace import read_chrome_trace
 
 DEFAULT_BUDGET_MS = STEP_MS
@@ -181,6 +181,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    refuse_overwriting({"--plot": args.plot}, [args.trace])
     trace = read_chrome_trace(args.trace)
     summary = profile_summary(trace)
     if args.plot:

@@ -9,7 +9,7 @@ import sys
 from pathlib import Path
 
 from engine import arguments
-from engine.errors import InputError
+from engine.errors import InputError, refuse_overwriting
 from engine.frames import recording_frames
 from engine.recognition import DualBufferRecognizer, Templates
 from engine.recognition.config import layered, parse_assignments
@@ -201,8 +201,9 @@ def _register_evaluate(sub: argparse._SubParsersAction) -> None:
 
 
 def cmd_build(args: argparse.Namespace) -> int:
-    from tools.trial_files import load_trials_dir, templates_from_trials
+    from tools.trial_files import load_trials_dir, templates_from_trials, trial_paths
 
+    refuse_overwriting({"-o": args.output}, [f for fs in trial_paths(args.trials_dir, args.glob).values() for f in fs])
     settings = parse_assignments(args.recognizer)
     trials = load_trials_dir(args.trials_dir, args.glob)
     kwargs = {k: v for k, v in (("method", args.method), ("feature", args.feature)) if v}
@@ -218,6 +219,7 @@ def cmd_build(args: argparse.Namespace) -> int:
 
 
 def cmd_recognize(args: argparse.Namespace) -> int:
+    refuse_overwriting({"-o": args.output}, [args.recording, args.templates])
     templates = Templates.load(args.templates)
     rec_file = read_recording(args.recording)
     times, frames, _ = recording_frames(rec_file)
@@ -245,6 +247,7 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     from tools.trial_files import load_trials_dir, templates_from_trials
 
     if args.plot:  # said before minutes of evaluation, not after
+        refuse_overwriting({"--plot": args.plot}, [*args.inputs, args.templates])
         try:
             import matplotlib  # noqa: F401
         except ImportError:

@@ -21,7 +21,7 @@ import numpy as np
 
 from engine import arguments
 from engine.clock import RealClock, VirtualClock
-from engine.errors import InputError
+from engine.errors import InputError, refuse_overwriting
 from engine.loop import FixedStepLoop
 from engine.sensors import Sample, Source, SourceError, SourceState, open_source
 from engine.sensors.rate import RateMeter
@@ -361,6 +361,9 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from engine.sensors.source import url_file
+
+    refuse_overwriting({"--screenshot": args.screenshot, "--trace": args.trace}, [url_file(args.source)])
     view = view_from_args(args)
     if args.headless:
         headless_env()

@@ -168,6 +168,16 @@ def parse_source_url(url: str) -> tuple[str, str, dict[str, str]]:
     return parts.scheme.lower(), path, dict(parse_qsl(parts.query))
 
 
+def url_file(url: str) -> str | None:
+    """The file a source URL reads (replay://rec.csv: rec.csv), None when it names none or is no
+    URL: what a command writing files must not write over."""
+    try:
+        _, path, _ = parse_source_url(url)
+    except SourceError:
+        return None
+    return path or None
+
+
 def url_flag(params: dict[str, str], key: str, default: str = "0") -> bool:
     """A yes/no URL parameter: 1, true, yes or on (any case) is yes."""
     return params.get(key, default).lower() in ("1", "true", "yes", "on")
