@@ -386,13 +386,27 @@ def _open_source(args: argparse.Namespace, clock):
 
 
 def _check_files(args: argparse.Namespace, output: Path) -> None:
-    """Before the session: no output over an input (the templates file is read too, as the set
-    the new moves join) or over another output."""
+    """Before the session, not when its trials are done (minutes of a player's moves lost): the
+    templates file can be written, and read if it is there (the set the new moves join); no
+    output over an input or over another output."""
+    import os
+
+    from engine.recognition import Templates
     from engine.sensors.source import url_file
 
     replayed = url_file(args.source) if args.source else None
     refuse_overwriting({"--screenshot": args.screenshot}, [output, replayed])
     refuse_overwriting({"-o": output, "--screenshot": args.screenshot}, [replayed])
+    if output.is_dir():
+        raise InputError(f"{output}: a directory; the templates are saved to a file (-o FILE.npz)")
+    if output.exists():
+        Templates.load(output)  # not a template file: said now
+        return
+    folder = next(p for p in output.absolute().parents if p.exists())  # the rest is created on saving
+    if not folder.is_dir():
+        raise InputError(f"{output}: cannot save the templates there: {folder} is not a directory")
+    if not os.access(folder, os.W_OK | os.X_OK):
+        raise InputError(f"{output}: cannot save the templates there: cannot write in {folder}")
 
 
 def _open_window(args: argparse.Namespace, size: tuple[int, int], source) -> None:
