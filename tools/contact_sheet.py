@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
+from engine.errors import InputError
 from game.actions import ACTION_NAMES, Action
 from game.skeleton import BONES, JOINTS, compose_root, local_to_world
 
@@ -168,6 +169,11 @@ def write_sheet(lib: dict[str, Action], path: str | os.PathLike) -> Path:
 
     os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
     path = Path(path)
+    if path.is_dir():  # said before the drawing
+        raise InputError(f"{path}: a directory, not a file name for the sheet")
     path.parent.mkdir(parents=True, exist_ok=True)
-    pygame.image.save(render_sheet(lib), str(path))
+    try:
+        pygame.image.save(render_sheet(lib), str(path))
+    except pygame.error as exc:  # cannot write there: was a traceback
+        raise InputError(f"{path}: cannot save the sheet ({exc})") from None
     return path

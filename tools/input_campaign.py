@@ -757,6 +757,7 @@ def _bad_tool_args(q: list[str], d: Path, out: Path) -> dict[str, list[str]]:
         "graph-duel-seed-neg": q + ["graph", "duel", "--bouts", "1", "--seconds", "2", "--seed", "-1"],
         "record-seconds-nan": q + ["record", "--source", "demo://", "--seconds", "nan", "-o", str(out / "x.csv")],
         "record-seconds-neg": q + ["record", "--source", "demo://", "--seconds", "-1", "-o", str(out / "x.csv")],
+        "actions-sheet-o-dir": q + ["actions", "sheet", "-o", str(out)],  # pygame.error: a traceback
         "bvh-export-gap-nan": q + ["bvh", "export", "--play", "guard", "--gap", "nan", "-o", str(out / "x.bvh")],
         "bvh-cut-start-neg": q + ["bvh", "cut", _write(d, "bvh/ok.bvh", BVH_HEAD + "Frames: 3\nFrame Time: 0.0166667\n" + "0 90 0 0 0 0 0 0 0\n" * 3), "--start", "-5", "--end", "1", "--name", "x", "-o", str(out / "a.json")],
     }

@@ -187,6 +187,18 @@ def test_an_action_file_of_the_wrong_shape_or_types_names_itself(tmp_path, chang
     assert str(err.value).startswith(f"{path}: ") and "\n" not in str(err.value)
 
 
+def test_a_contact_sheet_over_a_folder_is_one_line(tmp_path, capsys):
+    """pygame.image.save raised pygame.error (a traceback) for a folder or a file it cannot write."""
+    from tools.cli import main
+
+    for target in (tmp_path, tmp_path / "sheet.png"):
+        if target != tmp_path:
+            target.mkdir()
+        assert main(["actions", "sheet", "-o", str(target)]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and err[0].startswith(f"quickjab actions: {target}"), err
+
+
 def test_contact_sheet_command_draws_every_action(tmp_path):
     import pygame
 
