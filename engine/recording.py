@@ -33,6 +33,7 @@ MAX_GAP_S = 600.0  # no sample for 10 minutes: not one recording any more
 # overflow in the recognizer (thresholds of inf, NaN activity)
 MAX_ACCEL_G = 1000.0
 MAX_LINE_CHARS = 1 << 20  # metadata and header lines
+MAX_META_KEYS = 1000  # distinct metadata keys: each is Python objects ~10x its text (a recording has a few)
 CHUNK_ROWS = 8192  # rows converted to numbers at once
 # Labels and metadata may come from bytes that are not UTF-8 (a file name, an argument), which
 # Python holds as lone surrogates that UTF-8 cannot encode: written as \udcff, they stay readable
@@ -129,7 +130,8 @@ def _row_bound(f: io.TextIOBase, lines: int, numbers: int) -> int:
     return min(lines, os.fstat(f.fileno()).st_size // (2 * numbers) + 1)
 
 
-def _read_rows(path: Path, f: io.TextIOBase, max_rows: int) -> Recording:
+def _read_metadata(path: Path, f: io.TextIOBase) -> tuple[dict[str, str], str, int]:
+    """The `# key: value` lines before the header, the header line and its number."""
     meta: dict[str, str] = {}
     lineno = 0
     while True:
@@ -144,10 +146,15 @@ def _read_rows(path: Path, f: io.TextIOBase, max_rows: int) -> Recording:
             if ":" in body:
                 key, value = body.split(":", 1)
                 meta[key.strip()] = value.strip()
+                if len(meta) > MAX_META_KEYS:  # 33 MB of keys took 400 MB
+                    raise RecordingError(path, lineno, f"over {MAX_META_KEYS} metadata keys before the header (a recording has a few)")
             continue
-        break
+        return meta, line, lineno
+
+
+def _read_rows(path: Path, f: io.TextIOBase, max_rows: int) -> Recording:
+    meta, line, header_line = _read_metadata(path, f)
     header = [h.strip() for h in next(csv.reader([line]))]
-    header_line = lineno
     missing = [c for c in ("t", "rx", "ry", "rz") if c not in header]
     if missing:
         raise RecordingError(path, header_line, f"missing column(s) {', '.join(missing)}")

@@ -115,6 +115,13 @@ def bad_recordings(d: Path, big_mb: int) -> dict[str, str]:
         if not p.exists():
             p.write_bytes(b"t,rx,ry,rz\n0,0,0,1\n" + b"\r" * (big_mb * 2**20) + b"1,0,0,1\n")
         out[f"big-cr-{big_mb}mb"] = str(p)
+        p = d / "rec" / f"meta{big_mb}.csv"  # distinct `# key: value` lines: each kept, 11x the file
+        if not p.exists():
+            with open(p, "w") as f:
+                for start in range(0, big_mb * 2**20 // 12, 100_000):
+                    f.write("".join(f"#{i:x}: v\n" for i in range(start, start + 100_000)))
+                f.write("t,rx,ry,rz\n0,0,0,1\n0.1,0,0,1\n")
+        out[f"meta-flood-{big_mb}mb"] = str(p)
     return out
 
 
