@@ -93,6 +93,7 @@ def bad_recordings(d: Path, big_mb: int) -> dict[str, str]:
         "no-columns": _write(d, "rec/nocol.csv", _rec(["0,1"], header="t,a")),
         "binary": _write(d, "rec/binary.csv", bytes(range(256)) * 64),
         "nul": _write(d, "rec/nul.csv", "t,rx,ry,rz\n0,1,\0,1\n"),
+        "newline-name": _write(d, "rec/new\nline.csv", "x"),  # the message naming it was two lines
         "dir": str(d),
         "dev-zero": "/dev/zero",
         "missing": str(d / "rec" / "nope.csv"),
