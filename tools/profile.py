@@ -20,6 +20,7 @@ from engine.errors import InputError, refuse_overwriting
 from engine.trace import read_chrome_trace
 
 DEFAULT_BUDGET_MS = STEP_MS
+MAX_PLOT_STAGES = 16  # bands in the stacked plot: each is a fill and a legend entry (2000 took 10 s)
 
 
 def profile_summary(trace: dict) -> dict:
@@ -112,6 +113,18 @@ def _below_outliers(values: np.ndarray) -> float:
     return float(np.sort(values)[-k - 1])
 
 
+def _largest_stages(per_frame: dict[str, np.ndarray], most: int) -> tuple[list[str], dict[str, np.ndarray]]:
+    """At most `most` bands: the stages of the largest total time, then the rest summed as one
+    ("N other stages"); all of them, in their order, when there are no more."""
+    names = list(per_frame)
+    if len(names) <= most:
+        return names, per_frame
+    order = sorted(names, key=lambda n: -float(per_frame[n].sum()))
+    kept, rest = order[: most - 1], order[most - 1 :]
+    other = f"{len(rest)} other stages"
+    return [*kept, other], {**{n: per_frame[n] for n in kept}, other: np.sum([per_frame[n] for n in rest], axis=0)}
+
+
 def plot_profile(trace: dict, summary: dict, out: str, max_bars: int = 600) -> dict:
     """Frame-time histogram and stacked per-stage bars (the last `max_bars` frames). A frame's
     work is drawn against the frame period (16.7 ms, 33.3 ms in low power). Both axes end a
@@ -137,6 +150,7 @@ def plot_profile(trace: dict, summary: dict, out: str, max_bars: int = 600) -> d
             per_frame[e["name"]][i] += e["dur"] / 1000
     if UNACCOUNTED in per_frame:
         per_frame[UNACCOUNTED] = np.array([(e.get("args") or {}).get("unaccounted_us", 0.0) / 1000 for e in frames])
+    names, per_frame = _largest_stages(per_frame, MAX_PLOT_STAGES)
 
     period = float(summary.get("frame_period_ms") or budget)
     top = max(1.25 * period, 1.15 * _below_outliers(work))
@@ -168,7 +182,7 @@ def plot_profile(trace: dict, summary: dict, out: str, max_bars: int = 600) -> d
     fig.tight_layout()
     fig.savefig(out, dpi=100)
     plt.close(fig)
-    return {"hist_xmax": top, "bars_ymax": stacked_top, "period_ms": period}
+    return {"hist_xmax": top, "bars_ymax": stacked_top, "period_ms": period, "stages": names}
 
 
 def register(sub: argparse._SubParsersAction) -> None:
