@@ -155,6 +155,16 @@ def _zip_bomb(path: Path, member: str, declared_gb: float) -> str:
     return str(path)
 
 
+def _many_members(path: Path, n: int) -> str:
+    """A zip of `n` empty members (about 86 bytes each)."""
+    if not path.exists():
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with zipfile.ZipFile(path, "w", zipfile.ZIP_STORED) as z:
+            for i in range(n):
+                z.writestr(f"{i:x}", b"")
+    return str(path)
+
+
 def bad_templates(d: Path, bomb_gb: float = 1.5) -> dict[str, str]:
     with np.load(ASSETS / "templates.npz", allow_pickle=False) as z:
         good = {k: z[k] for k in z.files}
@@ -522,6 +532,10 @@ def build_cases(d: Path, big_mb: int, bomb_gb: float = 1.5) -> list[Case]:
     for name, argv in args.items():
         cases.append(Case(f"arg/{name}", argv))
     cases += _same_file_cases(q, d)
+    if big_mb:  # ~12,000 empty members a MB: zipfile read them all (6.7x the file) before the count was checked
+        many = _many_members(d / "tpl" / f"members{big_mb}.npz", big_mb * 12_000)
+        cases += [Case("tpl/many-members/recognize", q + ["recognize", good_rec, "--templates", many]),
+                  Case("graph/many-members/info", q + ["graph", "info", many])]
     cases += _valid_cases(q, d, good_rec, tpl, out)
     return cases
 
