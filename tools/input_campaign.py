@@ -41,10 +41,11 @@ GOOD_REC = "# rate_hz: 60\nt,rx,ry,rz,lx,ly,lz,label\n" + "".join(
 class Case:
     name: str
     argv: list[str]
-    expect: str = "error"  # "error": exit 2, one line; "ok": exit 0
+    expect: str = "error"  # "error": exit 2, one line; "ok": exit 0; "term": ended by the SIGTERM of term_after
     stdin_none: bool = True
     env: dict[str, str] | None = None  # set over the campaign's environment (e.g. XDG_CONFIG_HOME)
     cwd: str | None = None  # where it runs (default: the repository), for relative paths in URLs
+    term_after: float | None = None  # send SIGTERM this many seconds in (expect="term": it must end the run)
 
 
 @dataclass
@@ -532,6 +533,8 @@ def build_cases(d: Path, big_mb: int, bomb_gb: float = 1.5) -> list[Case]:
     for name, argv in args.items():
         cases.append(Case(f"arg/{name}", argv))
     cases += _same_file_cases(q, d)
+    # SDL turned SIGTERM into a quit event nothing in a soak reads: only SIGKILL ended it
+    cases.append(Case("signal/soak-sigterm", q + ["soak", "--minutes", "10", "--quiet"], expect="term", term_after=8.0))
     if big_mb:  # ~12,000 empty members a MB: zipfile read them all (6.7x the file) before the count was checked
         many = _many_members(d / "tpl" / f"members{big_mb}.npz", big_mb * 12_000)
         cases += [Case("tpl/many-members/recognize", q + ["recognize", good_rec, "--templates", many]),
@@ -870,6 +873,7 @@ def run_case(case: Case, timeout: float, limit_mb: int, env: dict) -> Outcome:
                              cwd=case.cwd or ROOT, env={**env, **(case.env or {})}, preexec_fn=_limit(limit_mb))
         rc = None
         rss = 0.0
+        term_at = case.term_after
         marker = case.argv[1] if len(case.argv) > 1 else sys.executable
         while True:
             rss = max(rss, _peak_rss_mb(p.pid, marker) or 0.0)
@@ -877,6 +881,9 @@ def run_case(case: Case, timeout: float, limit_mb: int, env: dict) -> Outcome:
             if pid:
                 rc = os.waitstatus_to_exitcode(status)
                 break
+            if term_at is not None and time.monotonic() - start > term_at:
+                os.kill(p.pid, signal.SIGTERM)
+                term_at = None  # once
             if time.monotonic() - start > timeout:
                 os.killpg(p.pid, signal.SIGKILL)
                 os.wait4(p.pid, 0)
@@ -896,6 +903,8 @@ def judge(o: Outcome, max_rss_mb: float) -> str:
         return "memory" if "MemoryError" in o.stderr else "traceback"
     if o.rss_mb > max_rss_mb:
         return "memory"
+    if o.case.expect == "term":
+        return "ok" if o.rc == -signal.SIGTERM else f"exit-{o.rc}"
     if o.case.expect == "ok":
         return "ok" if o.rc == 0 else "refused-valid"
     if o.rc == 0:
