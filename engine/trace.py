@@ -124,7 +124,10 @@ def _span_event(budget: FrameBudget, r: int, name: str, limit_ns: float, origin:
 
 
 def write_chrome_trace(budget: FrameBudget, path: str | os.PathLike) -> None:
-    Path(path).write_text(json.dumps(chrome_trace(budget)), encoding="utf-8")
+    try:
+        Path(path).write_text(json.dumps(chrome_trace(budget)), encoding="utf-8")
+    except OSError as exc:  # a full disk's ENOSPC names no file
+        raise TraceError(f"{path}: cannot write the trace ({exc.strerror or exc})") from None
 
 
 MAX_TRACE_BYTES = 256 * 2**20  # over an hour of play; parsed JSON takes ~10x its text

@@ -101,6 +101,17 @@ def open_player_source(url: str | None, demo: bool, seed: int, clock) -> tuple[o
     return open_source(f"{KEYBOARD_SOURCE}?seed={seed}", clock=clock), True
 
 
+def save_screenshot(path: str) -> None:
+    """The window's last frame to `path`; a file pygame cannot write (a device, a full disk) is
+    an InputError naming it, not a pygame.error traceback."""
+    import pygame
+
+    try:
+        pygame.image.save(pygame.display.get_surface(), path)
+    except (OSError, pygame.error) as exc:
+        raise InputError(f"{path}: cannot save the screenshot ({exc})") from None
+
+
 def played_files(args: argparse.Namespace) -> list[str | None]:
     """The files a match reads: the templates, the graph, and what its source URLs replay."""
     from engine.sensors.source import url_file
@@ -148,7 +159,7 @@ def run_session(args: argparse.Namespace, caption: str, open_sources: Callable[[
             session.loop.run(frames=frames)
         finally:
             if args.screenshot:
-                pygame.image.save(pygame.display.get_surface(), args.screenshot)
+                save_screenshot(args.screenshot)
                 print(f"quickjab play: wrote {args.screenshot}", file=sys.stderr)
             if args.trace:
                 write_chrome_trace(session.loop.budget, args.trace)

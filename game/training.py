@@ -36,6 +36,7 @@ from game.launch import (
     init_pygame,
     open_player_source,
     parse_size,
+    save_screenshot,
 )
 
 if TYPE_CHECKING:  # pygame loads only when the screen opens (the CLI imports this module)
@@ -515,11 +516,13 @@ def run(args: argparse.Namespace) -> int:
     try:
         loop.run(frames=args.frames, until=lambda: trainer.done and args.frames is None and args.headless)
     finally:
-        if args.screenshot:
-            pygame.image.save(pygame.display.get_surface(), args.screenshot)
-            print(f"quickjab train: wrote {args.screenshot}", file=sys.stderr)
-        source.close()
-        pygame.quit()
+        try:
+            if args.screenshot:
+                save_screenshot(args.screenshot)
+                print(f"quickjab train: wrote {args.screenshot}", file=sys.stderr)
+        finally:
+            source.close()
+            pygame.quit()
     if not trainer.done:
         print(f"quickjab train: stopped after {sum(len(v) for v in trainer.recorded.values())} trials; nothing saved", file=sys.stderr)
     return 0

@@ -751,6 +751,9 @@ def _bad_game_args(q: list[str], d: Path, good_rec: str, tpl: str, out: Path) ->
         "play-screenshot-no-dir": q + ["play", "--headless", "--frames", "2", "--screenshot", str(out / "no" / "s.png")],
         "play-trace-a-dir": q + ["play", "--headless", "--frames", "2", "--trace", str(out)],
         "scope-screenshot-no-dir": q + ["scope", "--headless", "--frames", "2", "--screenshot", str(out / "no" / "s.png")],
+        # /dev/full passes the folder check and takes nothing: pygame.error, or ENOSPC naming no file
+        "play-screenshot-dev-full": q + ["play", "--headless", "--frames", "2", "--screenshot", "/dev/full"],
+        "play-trace-dev-full": q + ["play", "--headless", "--frames", "2", "--trace", "/dev/full"],
         # found only once the trials were done, the session lost: refused before it
         "train-o-dir": q + ["train", "--headless", "--demo", "--frames", "2", "-o", str(out)],
         "train-o-corrupt": q + ["train", "--headless", "--demo", "--frames", "2", "-o", _write(d, "tpl/corrupt.npz", "x")],
