@@ -316,7 +316,10 @@ class RecordingWriter:
             self._file = open(self.path, "w", encoding="utf-8", errors=UNENCODABLE, newline="", buffering=1)
         except OSError as exc:
             raise RecordingError(self.path, None, f"cannot write: {exc.strerror}") from None
-        self._file.write(_file_head(sensors, meta or {}))
+        try:
+            self._file.write(_file_head(sensors, meta or {}))
+        except OSError as exc:
+            raise self._cannot_write(exc) from None
         self._last_flush = time.monotonic()
         self.rows = 0
         self._dirty = False
@@ -329,7 +332,10 @@ class RecordingWriter:
         if len(accel) < self.sensors:  # a short row would make the file unreadable: the caller
             # starts a new file for a new sensor count (tools/record.py)
             raise ValueError(f"{self.path}: a sample with {len(accel)} sensor(s) in a file of {self.sensors}")
-        self._file.write(_format_row(sample.t - self.t0, accel, label))
+        try:
+            self._file.write(_format_row(sample.t - self.t0, accel, label))
+        except OSError as exc:
+            raise self._cannot_write(exc) from None
         self.rows += 1
         self._dirty = True
         self.flush_if_due()
@@ -340,10 +346,17 @@ class RecordingWriter:
             self._flush()
 
     def _flush(self) -> None:
-        self._file.flush()
-        os.fsync(self._file.fileno())
+        try:
+            self._file.flush()
+            os.fsync(self._file.fileno())
+        except OSError as exc:
+            raise self._cannot_write(exc) from None
         self._last_flush = time.monotonic()
         self._dirty = False
+
+    def _cannot_write(self, exc: OSError) -> RecordingError:
+        """A write that failed (a full disk: ENOSPC names no file), as an error naming the file."""
+        return RecordingError(self.path, None, f"cannot write: {exc.strerror or exc}")
 
     def close(self) -> None:
         if not self._file.closed:

@@ -551,7 +551,10 @@ def write_bvh(path: str | os.PathLike, positions: np.ndarray, fps: float = FPS, 
     lines += ["MOTION", f"Frames: {n}", f"Frame Time: {1.0 / fps:.6f}"]
     lines += [" ".join(f"{v:.6f}" for v in row) for row in data]
     path = Path(path)
-    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    try:
+        path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    except OSError as exc:  # a full disk: ENOSPC names no file
+        raise BVHError(f"{path}: cannot write ({exc.strerror or exc})") from None
     return path
 
 

@@ -46,6 +46,7 @@ class Case:
     env: dict[str, str] | None = None  # set over the campaign's environment (e.g. XDG_CONFIG_HOME)
     cwd: str | None = None  # where it runs (default: the repository), for relative paths in URLs
     term_after: float | None = None  # send SIGTERM this many seconds in (expect="term": it must end the run)
+    names: str | None = None  # the refusal's line must name this (a file whose error named none)
 
 
 @dataclass
@@ -531,7 +532,7 @@ def build_cases(d: Path, big_mb: int, bomb_gb: float = 1.5) -> list[Case]:
     cases += [Case(f"eval/{name}", q + argv) for name, argv in bad_evaluate_inputs(d, tpl, out).items()]
     args = {**_bad_game_args(q, d, good_rec, tpl, out), **_bad_tool_args(q, d, out)}
     for name, argv in args.items():
-        cases.append(Case(f"arg/{name}", argv))
+        cases.append(Case(f"arg/{name}", argv, names="/dev/full" if "dev-full" in name else None))
     cases += _same_file_cases(q, d)
     # SDL turned SIGTERM into a quit event nothing in a soak reads: only SIGKILL ended it
     cases.append(Case("signal/soak-sigterm", q + ["soak", "--minutes", "10", "--quiet"], expect="term", term_after=8.0))
@@ -751,9 +752,12 @@ def _bad_game_args(q: list[str], d: Path, good_rec: str, tpl: str, out: Path) ->
         "play-screenshot-no-dir": q + ["play", "--headless", "--frames", "2", "--screenshot", str(out / "no" / "s.png")],
         "play-trace-a-dir": q + ["play", "--headless", "--frames", "2", "--trace", str(out)],
         "scope-screenshot-no-dir": q + ["scope", "--headless", "--frames", "2", "--screenshot", str(out / "no" / "s.png")],
-        # /dev/full passes the folder check and takes nothing: pygame.error, or ENOSPC naming no file
+        # /dev/full passes the folder check and takes nothing (a full disk): pygame.error, or ENOSPC naming no file
         "play-screenshot-dev-full": q + ["play", "--headless", "--frames", "2", "--screenshot", "/dev/full"],
         "play-trace-dev-full": q + ["play", "--headless", "--frames", "2", "--trace", "/dev/full"],
+        "record-o-dev-full": q + ["record", "--source", "demo://", "--seconds", "0.8", "-o", "/dev/full"],
+        "templates-build-o-dev-full": q + ["templates", "build", str(d / "eval" / "trials-ok"), "-o", "/dev/full"],
+        "bvh-export-o-dev-full": q + ["bvh", "export", "--play", "straight_l", "-o", "/dev/full"],
         # found only once the trials were done, the session lost: refused before it
         "train-o-dir": q + ["train", "--headless", "--demo", "--frames", "2", "-o", str(out)],
         "train-o-corrupt": q + ["train", "--headless", "--demo", "--frames", "2", "-o", _write(d, "tpl/corrupt.npz", "x")],
@@ -917,7 +921,9 @@ def judge(o: Outcome, max_rss_mb: float) -> str:
         return f"exit-{o.rc}"
     # the refusal is the last line: "quickjab CMD: ..." or argparse's "quickjab CMD: error: ..."
     # (status lines such as "no Wiimote found: playing from the keyboard" may come before it)
-    return "ok" if lines and lines[-1].startswith("quickjab") else "no-message"
+    if not (lines and lines[-1].startswith("quickjab")):
+        return "no-message"
+    return "unnamed" if o.case.names and o.case.names not in lines[-1] else "ok"
 
 
 def main(argv: list[str] | None = None) -> int:

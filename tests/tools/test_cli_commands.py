@@ -169,3 +169,19 @@ def test_an_output_that_is_an_input_is_refused_before_it_is_written(tmp_path, ca
     err = capsys.readouterr().err.strip().splitlines()
     assert err[-1].startswith("quickjab") and "is the input" in err[-1] and str(victim) in err[-1], err
     assert victim.read_bytes() == before
+
+
+@pytest.mark.parametrize("argv", [
+    ["record", "--source", "demo://?rate=100", "--seconds", "0.8", "-o", "/dev/full"],
+    ["templates", "build", "{trials}", "-o", "/dev/full"],
+    ["bvh", "export", "--play", "straight_l", "-o", "/dev/full"],
+])
+def test_a_full_disk_names_the_file_it_could_not_write(tmp_path, capsys, argv):
+    """/dev/full is a disk with no room: ENOSPC names no file, and the line was only
+    "[Errno 28] No space left on device"."""
+    trial = tmp_path / "trials" / "jab" / "1.csv"
+    trial.parent.mkdir(parents=True)
+    trial.write_text(GOOD_REC.replace(",\n", ",jab\n"))
+    assert main([a.format(trials=tmp_path / "trials") for a in argv]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err[-1].startswith(f"quickjab {argv[0]}: /dev/full") and "No space left" in err[-1], err
