@@ -101,15 +101,29 @@ def open_player_source(url: str | None, demo: bool, seed: int, clock) -> tuple[o
     return open_source(f"{KEYBOARD_SOURCE}?seed={seed}", clock=clock), True
 
 
-def save_screenshot(path: str) -> None:
-    """The window's last frame to `path`; a file pygame cannot write (a device, a full disk) is
-    an InputError naming it, not a pygame.error traceback."""
+def save_image(surface, path: str | os.PathLike, what: str = "the screenshot") -> None:
+    """`surface` as an image file, its format from the suffix as pygame.image.save picks it.
+    Encoded in memory and written by Python: pygame's own writing ignores a failed write (a full
+    disk left a truncated PNG, and "wrote"). A file that cannot be written is an InputError
+    naming it, not a pygame.error traceback."""
+    import io
+
     import pygame
 
+    buf = io.BytesIO()
     try:
-        pygame.image.save(pygame.display.get_surface(), path)
+        pygame.image.save(surface, buf, os.path.basename(path))
+        with open(path, "wb") as f:
+            f.write(buf.getvalue())
     except (OSError, pygame.error) as exc:
-        raise InputError(f"{path}: cannot save the screenshot ({exc})") from None
+        raise InputError(f"{path}: cannot save {what} ({getattr(exc, 'strerror', None) or exc})") from None
+
+
+def save_screenshot(path: str) -> None:
+    """The window's last frame to `path` (save_image)."""
+    import pygame
+
+    save_image(pygame.display.get_surface(), path)
 
 
 def played_files(args: argparse.Namespace) -> list[str | None]:

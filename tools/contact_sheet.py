@@ -165,15 +165,13 @@ def draw_legend(sheet, font) -> None:
 
 
 def write_sheet(lib: dict[str, Action], path: str | os.PathLike) -> Path:
-    import pygame
 
     os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
     path = Path(path)
     if path.is_dir():  # said before the drawing
         raise InputError(f"{path}: a directory, not a file name for the sheet")
     path.parent.mkdir(parents=True, exist_ok=True)
-    try:
-        pygame.image.save(render_sheet(lib), str(path))
-    except pygame.error as exc:  # cannot write there: was a traceback
-        raise InputError(f"{path}: cannot save the sheet ({exc})") from None
+    from game.launch import save_image
+
+    save_image(render_sheet(lib), path, "the sheet")  # a file it cannot write whole: an InputError naming it
     return path

@@ -47,6 +47,7 @@ class Case:
     cwd: str | None = None  # where it runs (default: the repository), for relative paths in URLs
     term_after: float | None = None  # send SIGTERM this many seconds in (expect="term": it must end the run)
     names: str | None = None  # the refusal's line must name this (a file whose error named none)
+    fsize_kb: int | None = None  # no file over this size can be written (a full disk), SIGXFSZ ignored
 
 
 @dataclass
@@ -534,6 +535,12 @@ def build_cases(d: Path, big_mb: int, bomb_gb: float = 1.5) -> list[Case]:
     for name, argv in args.items():
         cases.append(Case(f"arg/{name}", argv, names="/dev/full" if "dev-full" in name else None))
     cases += _same_file_cases(q, d)
+    # a full disk (files stop at 8 KB): pygame.image.save ignored the failed write and said "wrote"
+    for name, argv, path in (("play-screenshot", ["play", "--headless", "--frames", "2", "--screenshot"], out / "full.png"),
+                             ("actions-sheet", ["actions", "sheet", "-o"], out / "sheet.png"),
+                             ("profile-plot", ["profile", _write(d, "trace/ok.json", '{"traceEvents": [{"ph": "X", "name": "frame", "ts": 0, "dur": 9}]}'),
+                                               "--plot"], out / "plot.png")):
+        cases.append(Case(f"full/{name}", q + argv + [str(path)], names=str(path), fsize_kb=8))
     # SDL turned SIGTERM into a quit event nothing in a soak reads: only SIGKILL ended it
     cases.append(Case("signal/soak-sigterm", q + ["soak", "--minutes", "10", "--quiet"], expect="term", term_after=8.0))
     if big_mb:  # ~12,000 empty members a MB: zipfile read them all (6.7x the file) before the count was checked
@@ -849,9 +856,12 @@ def _valid_cases(q: list[str], d: Path, good_rec: str, tpl: str, out: Path) -> l
     return cases
 
 
-def _limit(limit_mb: int):
+def _limit(limit_mb: int, fsize_kb: int | None = None):
     def apply() -> None:
         os.setpgrp()
+        if fsize_kb:  # a write past it fails with EFBIG, as one on a full disk with ENOSPC
+            signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+            resource.setrlimit(resource.RLIMIT_FSIZE, (fsize_kb * 1024, fsize_kb * 1024))
         if limit_mb:
             resource.setrlimit(resource.RLIMIT_AS, (limit_mb * 2**20, limit_mb * 2**20))
         os.nice(10)
@@ -877,7 +887,7 @@ def run_case(case: Case, timeout: float, limit_mb: int, env: dict) -> Outcome:
     with tempfile.TemporaryFile() as err, tempfile.TemporaryFile() as so:
         start = time.monotonic()
         p = subprocess.Popen([sys.executable, *case.argv], stdin=subprocess.DEVNULL, stdout=so, stderr=err,
-                             cwd=case.cwd or ROOT, env={**env, **(case.env or {})}, preexec_fn=_limit(limit_mb))
+                             cwd=case.cwd or ROOT, env={**env, **(case.env or {})}, preexec_fn=_limit(limit_mb, case.fsize_kb))
         rc = None
         rss = 0.0
         term_at = case.term_after

@@ -113,6 +113,19 @@ def _below_outliers(values: np.ndarray) -> float:
     return float(np.sort(values)[-k - 1])
 
 
+def save_figure(fig, path: str, dpi: float) -> None:
+    """fig.savefig, then closed; a file it cannot write (a full disk: ENOSPC names no file) is
+    an InputError naming it."""
+    import matplotlib.pyplot as plt
+
+    try:
+        fig.savefig(path, dpi=dpi)
+    except OSError as exc:
+        raise InputError(f"{path}: cannot write the plot ({exc.strerror or exc})") from None
+    finally:
+        plt.close(fig)
+
+
 def _largest_stages(per_frame: dict[str, np.ndarray], most: int) -> tuple[list[str], dict[str, np.ndarray]]:
     """At most `most` bands: the stages of the largest total time, then the rest summed as one
     ("N other stages"); all of them, in their order, when there are no more."""
@@ -180,8 +193,7 @@ def plot_profile(trace: dict, summary: dict, out: str, max_bars: int = 600) -> d
     ax2.set_title("per-stage time per frame (stacked)" + (f"; {over} frames above the axis" if over else ""), fontsize=10)
     ax2.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8)  # beside the bars, not over them
     fig.tight_layout()
-    fig.savefig(out, dpi=100)
-    plt.close(fig)
+    save_figure(fig, out, 100)
     return {"hist_xmax": top, "bars_ymax": stacked_top, "period_ms": period, "stages": names}
 
 

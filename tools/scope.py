@@ -287,10 +287,9 @@ def run_scope(
     try:
         loop.run(frames=frames, until=lambda: scope.quit)
         if screenshot:
-            try:
-                scope.pygame.image.save(scope.screen, screenshot)
-            except (OSError, scope.pygame.error) as exc:
-                raise InputError(f"{screenshot}: cannot save screenshot: {exc}") from None
+            from game.launch import save_image
+
+            save_image(scope.screen, screenshot)  # a file it cannot write whole: an InputError naming it
         if trace:
             write_chrome_trace(loop.budget, trace)
     finally:

@@ -185,3 +185,31 @@ def test_a_full_disk_names_the_file_it_could_not_write(tmp_path, capsys, argv):
     assert main([a.format(trials=tmp_path / "trials") for a in argv]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert err[-1].startswith(f"quickjab {argv[0]}: /dev/full") and "No space left" in err[-1], err
+
+
+def _file_size_limit() -> None:  # the child: files over 8 KB cannot be written, as on a full disk
+    import resource
+    import signal
+
+    signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # a write past the limit fails with EFBIG instead
+    resource.setrlimit(resource.RLIMIT_FSIZE, (8192, 8192))
+
+
+@pytest.mark.parametrize("argv", [
+    ["play", "--headless", "--frames", "2", "--source", "keyboard://", "--screenshot", "{out}.png"],
+    ["scope", "--headless", "--frames", "2", "--screenshot", "{out}.png"],
+    ["actions", "sheet", "-o", "{out}.png"],
+    ["profile", "{trace}", "--plot", "{out}.png"],
+])
+def test_an_image_that_cannot_be_written_whole_is_an_error_naming_it(tmp_path, argv):
+    """pygame.image.save ignores a failed write: on a full disk play, scope and the contact
+    sheet said "wrote" and left a truncated PNG (exit 0); matplotlib's error named no file."""
+    trace = tmp_path / "t.json"
+    trace.write_text('{"traceEvents": [{"ph": "X", "name": "frame", "ts": 0, "dur": 9}]}')
+    out = tmp_path / "out"
+    env = {**os.environ, "PYTHONPATH": str(REPO), "SDL_VIDEODRIVER": "dummy", "SDL_AUDIODRIVER": "dummy",
+           "XDG_DATA_HOME": str(tmp_path / "xdg")}
+    r = subprocess.run([sys.executable, "-m", "tools.cli", *(a.format(out=out, trace=trace) for a in argv)], cwd=REPO,
+                       env=env, capture_output=True, text=True, timeout=120, preexec_fn=_file_size_limit)
+    last = r.stderr.strip().splitlines()[-1]
+    assert r.returncode == 2 and "Traceback" not in r.stderr and last.startswith(f"quickjab {argv[0]}: {out}.png"), r.stderr
