@@ -765,6 +765,7 @@ def _bad_game_args(q: list[str], d: Path, good_rec: str, tpl: str, out: Path) ->
         "record-o-dev-full": q + ["record", "--source", "demo://", "--seconds", "0.8", "-o", "/dev/full"],
         "templates-build-o-dev-full": q + ["templates", "build", str(d / "eval" / "trials-ok"), "-o", "/dev/full"],
         "bvh-export-o-dev-full": q + ["bvh", "export", "--play", "straight_l", "-o", "/dev/full"],
+        "recognize-o-dev-full": q + ["recognize", _write(d, "rec/punch.csv", _rec(_bump_rows())), "--templates", tpl, "-o", "/dev/full"],
         # found only once the trials were done, the session lost: refused before it
         "train-o-dir": q + ["train", "--headless", "--demo", "--frames", "2", "-o", str(out)],
         "train-o-corrupt": q + ["train", "--headless", "--demo", "--frames", "2", "-o", _write(d, "tpl/corrupt.npz", "x")],

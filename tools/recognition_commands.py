@@ -231,14 +231,19 @@ def cmd_recognize(args: argparse.Namespace) -> int:
     config = layered(templates.recognizer, recognizer_settings(), _cli_settings(args),
                      where=["templates", "config file", "command line"])
     rec = DualBufferRecognizer.from_config(templates, config)
-    out = open(args.output, "w", encoding="utf-8") if args.output else sys.stdout
     try:
-        for t, f in zip(times, frames, strict=True):
-            for e in rec.push(f, t=float(t)):
-                out.write(json.dumps(e.to_dict()) + "\n")
-    finally:
-        if args.output:
-            out.close()
+        out = open(args.output, "w", encoding="utf-8") if args.output else sys.stdout
+        try:
+            for t, f in zip(times, frames, strict=True):
+                for e in rec.push(f, t=float(t)):
+                    out.write(json.dumps(e.to_dict()) + "\n")
+        finally:
+            if args.output:
+                out.close()
+    except OSError as exc:  # a full disk: ENOSPC names no file
+        if not args.output:
+            raise
+        raise InputError(f"{args.output}: cannot write ({exc.strerror or exc})") from None
     return 0
 
 

@@ -9,6 +9,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from engine import __version__
@@ -175,6 +176,7 @@ def test_an_output_that_is_an_input_is_refused_before_it_is_written(tmp_path, ca
     ["record", "--source", "demo://?rate=100", "--seconds", "0.8", "-o", "/dev/full"],
     ["templates", "build", "{trials}", "-o", "/dev/full"],
     ["bvh", "export", "--play", "straight_l", "-o", "/dev/full"],
+    ["recognize", "{punch}", "--templates", str(REPO / "game" / "assets" / "templates.npz"), "-o", "/dev/full"],
 ])
 def test_a_full_disk_names_the_file_it_could_not_write(tmp_path, capsys, argv):
     """/dev/full is a disk with no room: ENOSPC names no file, and the line was only
@@ -182,7 +184,9 @@ def test_a_full_disk_names_the_file_it_could_not_write(tmp_path, capsys, argv):
     trial = tmp_path / "trials" / "jab" / "1.csv"
     trial.parent.mkdir(parents=True)
     trial.write_text(GOOD_REC.replace(",\n", ",jab\n"))
-    assert main([a.format(trials=tmp_path / "trials") for a in argv]) == 2
+    punch = tmp_path / "punch.csv"  # a punch: the recognizer has events to write
+    punch.write_text("t,rx,ry,rz,lx,ly,lz\n" + "".join(f"{i / 60:.5f},{3 * np.sin(i / 5):.3f},0,1,0,0,1\n" for i in range(60)))
+    assert main([a.format(trials=tmp_path / "trials", punch=punch) for a in argv]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert err[-1].startswith(f"quickjab {argv[0]}: /dev/full") and "No space left" in err[-1], err
 
