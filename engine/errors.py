@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import os
 import stat
+from collections.abc import Iterable
 
 
 class InputError(Exception):
@@ -18,3 +19,27 @@ def not_a_regular_file(st: os.stat_result) -> str | None:
     if stat.S_ISREG(st.st_mode):
         return None
     return "a directory" if stat.S_ISDIR(st.st_mode) else "not a regular file (a pipe or a device?)"
+
+
+def same_file(a: str | os.PathLike, b: str | os.PathLike) -> bool:
+    """Whether `a` and `b` name one file: the same file through links and other spellings when
+    both exist, else the same resolved path."""
+    try:
+        return os.path.samefile(a, b)
+    except (OSError, ValueError):  # one of them is not there (yet)
+        return os.path.realpath(a) == os.path.realpath(b)
+
+
+def refuse_overwriting(outputs: dict[str, str | os.PathLike | None], inputs: Iterable[str | os.PathLike | None]) -> None:
+    """InputError when a file a command is to write ({option: path}, None: not given) is one of
+    the files it reads, or another of its outputs: `recognize rec.csv -o rec.csv` emptied the
+    recording, `bvh cut a.bvh -o a.bvh` replaced the capture with JSON. Said before any work."""
+    given = [(flag, out) for flag, out in outputs.items() if out is not None]
+    inputs = [inp for inp in inputs if inp is not None and os.path.exists(inp)]  # what is not there is not lost
+    for k, (flag, out) in enumerate(given):
+        for inp in inputs:
+            if same_file(out, inp):
+                raise InputError(f"{flag} {out}: is the input {inp}; writing it would destroy it (give another file)")
+        for other, out2 in given[k + 1:]:
+            if same_file(out, out2):
+                raise InputError(f"{flag} {out} and {other} {out2} are one file: give each its own")

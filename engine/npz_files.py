@@ -41,6 +41,18 @@ def _npy_bytes(zf: zipfile.ZipFile, info: zipfile.ZipInfo) -> int:
     return int(np.prod(shape, dtype=object)) * dtype.itemsize
 
 
+def _declared_members(fh) -> int:
+    """The member count an archive's end record declares, found as zipfile finds it, but before
+    zipfile reads the whole central directory into some 400 bytes of objects a member (24 MB of
+    empty members took 115 MB before their count could be refused). 0 when there is no end record."""
+    try:
+        end = zipfile._EndRecData(fh)  # the record zipfile itself reads the count from
+    except AttributeError:  # a zipfile without it: the count is checked once the directory is read
+        end = None
+    fh.seek(0)
+    return 0 if end is None else int(end[zipfile._ECD_ENTRIES_TOTAL])
+
+
 def read_npz(path: str | os.PathLike, max_bytes: int, keep: Callable[[str], bool] | None = None) -> dict[str, np.ndarray]:
     """Every array of an .npz (those whose name `keep` accepts, when given), after checking the
     whole file fits in `max_bytes` uncompressed. Raises FileNotFoundError for a missing file,
@@ -55,6 +67,8 @@ def read_npz(path: str | os.PathLike, max_bytes: int, keep: Callable[[str], bool
             if head == b"\x93NUMPY":
                 raise NpzFileError("a single .npy array, not an .npz archive")
             fh.seek(0)
+            if (n := _declared_members(fh)) > MAX_MEMBERS:
+                raise NpzFileError(f"{n} members, at most {MAX_MEMBERS}")
             with zipfile.ZipFile(fh) as zf:
                 infos = zf.infolist()
                 if len(infos) > MAX_MEMBERS:

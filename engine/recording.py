@@ -33,7 +33,11 @@ MAX_GAP_S = 600.0  # no sample for 10 minutes: not one recording any more
 # overflow in the recognizer (thresholds of inf, NaN activity)
 MAX_ACCEL_G = 1000.0
 MAX_LINE_CHARS = 1 << 20  # metadata and header lines
+MAX_META_KEYS = 1000  # distinct metadata keys: each is Python objects ~10x its text (a recording has a few)
 CHUNK_ROWS = 8192  # rows converted to numbers at once
+# Labels and metadata may come from bytes that are not UTF-8 (a file name, an argument), which
+# Python holds as lone surrogates that UTF-8 cannot encode: written as \udcff, they stay readable
+UNENCODABLE = "backslashreplace"
 
 
 class RecordingError(InputError):
@@ -126,7 +130,8 @@ def _row_bound(f: io.TextIOBase, lines: int, numbers: int) -> int:
     return min(lines, os.fstat(f.fileno()).st_size // (2 * numbers) + 1)
 
 
-def _read_rows(path: Path, f: io.TextIOBase, max_rows: int) -> Recording:
+def _read_metadata(path: Path, f: io.TextIOBase) -> tuple[dict[str, str], str, int]:
+    """The `# key: value` lines before the header, the header line and its number."""
     meta: dict[str, str] = {}
     lineno = 0
     while True:
@@ -141,10 +146,15 @@ def _read_rows(path: Path, f: io.TextIOBase, max_rows: int) -> Recording:
             if ":" in body:
                 key, value = body.split(":", 1)
                 meta[key.strip()] = value.strip()
+                if len(meta) > MAX_META_KEYS:  # 33 MB of keys took 400 MB
+                    raise RecordingError(path, lineno, f"over {MAX_META_KEYS} metadata keys before the header (a recording has a few)")
             continue
-        break
+        return meta, line, lineno
+
+
+def _read_rows(path: Path, f: io.TextIOBase, max_rows: int) -> Recording:
+    meta, line, header_line = _read_metadata(path, f)
     header = [h.strip() for h in next(csv.reader([line]))]
-    header_line = lineno
     missing = [c for c in ("t", "rx", "ry", "rz") if c not in header]
     if missing:
         raise RecordingError(path, header_line, f"missing column(s) {', '.join(missing)}")
@@ -280,7 +290,7 @@ def write_recording(path: str | os.PathLike, rec: Recording) -> None:
     buf.write(_file_head(rec.sensors, rec.meta))
     for t, a, lab in zip(rec.t, rec.accel, rec.labels, strict=True):
         buf.write(_format_row(float(t), a, lab))
-    Path(path).write_text(buf.getvalue(), encoding="utf-8")
+    Path(path).write_text(buf.getvalue(), encoding="utf-8", errors=UNENCODABLE)
 
 
 class RecordingWriter:
@@ -303,10 +313,13 @@ class RecordingWriter:
         self.sensors = sensors
         self.t0 = t0  # recording time = host time - t0; the first sample sets it when None
         try:
-            self._file = open(self.path, "w", encoding="utf-8", newline="", buffering=1)
+            self._file = open(self.path, "w", encoding="utf-8", errors=UNENCODABLE, newline="", buffering=1)
         except OSError as exc:
             raise RecordingError(self.path, None, f"cannot write: {exc.strerror}") from None
-        self._file.write(_file_head(sensors, meta or {}))
+        try:
+            self._file.write(_file_head(sensors, meta or {}))
+        except OSError as exc:
+            raise self._cannot_write(exc) from None
         self._last_flush = time.monotonic()
         self.rows = 0
         self._dirty = False
@@ -319,7 +332,10 @@ class RecordingWriter:
         if len(accel) < self.sensors:  # a short row would make the file unreadable: the caller
             # starts a new file for a new sensor count (tools/record.py)
             raise ValueError(f"{self.path}: a sample with {len(accel)} sensor(s) in a file of {self.sensors}")
-        self._file.write(_format_row(sample.t - self.t0, accel, label))
+        try:
+            self._file.write(_format_row(sample.t - self.t0, accel, label))
+        except OSError as exc:
+            raise self._cannot_write(exc) from None
         self.rows += 1
         self._dirty = True
         self.flush_if_due()
@@ -330,10 +346,17 @@ class RecordingWriter:
             self._flush()
 
     def _flush(self) -> None:
-        self._file.flush()
-        os.fsync(self._file.fileno())
+        try:
+            self._file.flush()
+            os.fsync(self._file.fileno())
+        except OSError as exc:
+            raise self._cannot_write(exc) from None
         self._last_flush = time.monotonic()
         self._dirty = False
+
+    def _cannot_write(self, exc: OSError) -> RecordingError:
+        """A write that failed (a full disk: ENOSPC names no file), as an error naming the file."""
+        return RecordingError(self.path, None, f"cannot write: {exc.strerror or exc}")
 
     def close(self) -> None:
         if not self._file.closed:

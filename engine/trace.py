@@ -13,6 +13,7 @@ the process and thread. Times are microseconds from the first recorded frame.
 from __future__ import annotations
 
 import json
+import math
 import os
 import stat
 from pathlib import Path
@@ -123,7 +124,10 @@ def _span_event(budget: FrameBudget, r: int, name: str, limit_ns: float, origin:
 
 
 def write_chrome_trace(budget: FrameBudget, path: str | os.PathLike) -> None:
-    Path(path).write_text(json.dumps(chrome_trace(budget)), encoding="utf-8")
+    try:
+        Path(path).write_text(json.dumps(chrome_trace(budget)), encoding="utf-8")
+    except OSError as exc:  # a full disk's ENOSPC names no file
+        raise TraceError(f"{path}: cannot write the trace ({exc.strerror or exc})") from None
 
 
 MAX_TRACE_BYTES = 256 * 2**20  # over an hour of play; parsed JSON takes ~10x its text
@@ -133,8 +137,14 @@ _FRAME_ARGS_COUNTS = ("steps", "dropped")
 
 
 def _number(x: object) -> bool:
-    """A finite JSON number (bools are not numbers here)."""
-    return isinstance(x, (int, float)) and not isinstance(x, bool) and bool(np.isfinite(x))
+    """A finite JSON number a float holds (bools are not numbers here; an integer of 400 digits
+    is not one either: np.isfinite raised TypeError on it, float() OverflowError)."""
+    if not isinstance(x, (int, float)) or isinstance(x, bool):
+        return False
+    try:
+        return math.isfinite(x)
+    except OverflowError:
+        return False
 
 
 def _bad_event(ev: object) -> str | None:

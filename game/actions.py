@@ -197,8 +197,12 @@ def _hermite(keys: np.ndarray, values: np.ndarray, at: np.ndarray) -> np.ndarray
 
 def action_from_json(data: dict, source: str = "") -> Action:
     """Build an Action from its JSON object; raises ActionError naming `source` when malformed."""
+    if not isinstance(data, dict):
+        raise ActionError(f"{source or '?'}: not an action (expected a JSON object, not {type(data).__name__})")
     where = source or data.get("name", "?")
     try:
+        if not isinstance(data["name"], str) or not data["name"]:
+            raise ActionError(f"{where}: name must be a non-empty string, not {data['name']!r}")
         joints = data.get("joints", list(JOINTS))
         if list(joints) != list(JOINTS):
             raise ActionError(f"{where}: joints must be {', '.join(JOINTS)}")
@@ -238,7 +242,7 @@ def action_from_json(data: dict, source: str = "") -> Action:
         )  # fmt: skip
     except ActionError:
         raise
-    except (KeyError, TypeError, ValueError, IndexError) as exc:
+    except (KeyError, TypeError, ValueError, IndexError, OverflowError) as exc:  # OverflowError: int(Infinity)
         raise ActionError(f"{where}: malformed action ({type(exc).__name__}: {exc})") from None
 
 

@@ -551,7 +551,10 @@ def write_bvh(path: str | os.PathLike, positions: np.ndarray, fps: float = FPS, 
     lines += ["MOTION", f"Frames: {n}", f"Frame Time: {1.0 / fps:.6f}"]
     lines += [" ".join(f"{v:.6f}" for v in row) for row in data]
     path = Path(path)
-    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    try:
+        path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    except OSError as exc:  # a full disk: ENOSPC names no file
+        raise BVHError(f"{path}: cannot write ({exc.strerror or exc})") from None
     return path
 
 
@@ -634,7 +637,8 @@ def _emit_joint(lines: list[str], hier: list, children: dict[int, list[int]], i:
 def played_positions(lib: dict[str, Action], names: list[str], root=(0.0, 0.0, 0.0),
                      rest_frames: int = 20) -> np.ndarray:
     """WORLD joint positions (n, 17, 3) of a PlayerController playing `names` one after another
-    (each from the guard), root motion applied: what `quickjab bvh export` writes."""  # fmt: skip
+    (each from the guard), root motion applied: what `quickjab bvh export` writes. Each action
+    plays its frames; a looping one (the guard), which never returns to the guard, once round."""  # fmt: skip
     from game.motion import PlayerController
     from game.skeleton import compose_root
 
@@ -645,11 +649,13 @@ def played_positions(lib: dict[str, Action], names: list[str], root=(0.0, 0.0, 0
         out.append(local_to_world(pc.step(), root))
     for name in names:
         pc.play(name)
+        clip, steps = lib[name], 0
         while True:
             posture = pc.step()
             root = compose_root(root, pc.root_delta)
             out.append(local_to_world(posture, root))
-            if pc.finished_action():
+            steps += 1
+            if pc.finished_action() or (clip.loop and steps >= clip.frames):
                 break
     for _ in range(rest_frames):
         out.append(local_to_world(pc.step(), root))

@@ -12,6 +12,12 @@ import sys
 from engine.errors import InputError
 
 
+def one_line(text: str) -> str:
+    """`text` with each character that is not printable (a line break in a file name: the
+    message would be two lines) written as its escape, as repr() writes it."""
+    return "".join(c if c.isprintable() else repr(c)[1:-1] for c in text)
+
+
 def run_command(parser: argparse.ArgumentParser, args: argparse.Namespace) -> int:
     """Run the command `parser` parsed into `args` (its `func`); the exit code."""
     if not getattr(args, "func", None):
@@ -20,7 +26,7 @@ def run_command(parser: argparse.ArgumentParser, args: argparse.Namespace) -> in
     try:
         return int(args.func(args) or 0)
     except (InputError, OSError) as exc:  # OSError: str names the file
-        print(f"quickjab {args.command}: {exc}", file=sys.stderr)
+        print(f"quickjab {args.command}: {one_line(str(exc))}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         return 130

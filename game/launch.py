@@ -12,7 +12,7 @@ import sys
 from collections.abc import Callable
 
 from engine import arguments
-from engine.errors import InputError
+from engine.errors import InputError, refuse_overwriting
 
 DEFAULT_SOURCE = "wiimote://"
 KEYBOARD_SOURCE = "keyboard://"
@@ -101,6 +101,39 @@ def open_player_source(url: str | None, demo: bool, seed: int, clock) -> tuple[o
     return open_source(f"{KEYBOARD_SOURCE}?seed={seed}", clock=clock), True
 
 
+def save_image(surface, path: str | os.PathLike, what: str = "the screenshot") -> None:
+    """`surface` as an image file, its format from the suffix as pygame.image.save picks it.
+    Encoded in memory and written by Python: pygame's own writing ignores a failed write (a full
+    disk left a truncated PNG, and "wrote"). A file that cannot be written is an InputError
+    naming it, not a pygame.error traceback."""
+    import io
+
+    import pygame
+
+    buf = io.BytesIO()
+    try:
+        pygame.image.save(surface, buf, os.path.basename(path))
+        with open(path, "wb") as f:
+            f.write(buf.getvalue())
+    except (OSError, pygame.error) as exc:
+        raise InputError(f"{path}: cannot save {what} ({getattr(exc, 'strerror', None) or exc})") from None
+
+
+def save_screenshot(path: str) -> None:
+    """The window's last frame to `path` (save_image)."""
+    import pygame
+
+    save_image(pygame.display.get_surface(), path)
+
+
+def played_files(args: argparse.Namespace) -> list[str | None]:
+    """The files a match reads: the templates, the graph, and what its source URLs replay."""
+    from engine.sensors.source import url_file
+
+    urls = [getattr(args, key, None) for key in ("source", "source2")]
+    return [getattr(args, "templates", None), getattr(args, "graph", None), *(url_file(u) for u in urls if u)]
+
+
 def run_session(args: argparse.Namespace, caption: str, open_sources: Callable[[object], list],
                 make_session: Callable[..., object]) -> int:
     """What one- and two-player play share: the window (or none: --headless, which stops after
@@ -112,6 +145,7 @@ def run_session(args: argparse.Namespace, caption: str, open_sources: Callable[[
     size = parse_size(args.size)
     if args.frames is not None and args.frames < 1:
         raise InputError("--frames must be at least 1")
+    refuse_overwriting({"--screenshot": args.screenshot, "--trace": args.trace}, played_files(args))
     frames = headless_frames(args.frames, args.headless, "play")
     if args.headless:
         headless_env()
@@ -139,7 +173,7 @@ def run_session(args: argparse.Namespace, caption: str, open_sources: Callable[[
             session.loop.run(frames=frames)
         finally:
             if args.screenshot:
-                pygame.image.save(pygame.display.get_surface(), args.screenshot)
+                save_screenshot(args.screenshot)
                 print(f"quickjab play: wrote {args.screenshot}", file=sys.stderr)
             if args.trace:
                 write_chrome_trace(session.loop.budget, args.trace)

@@ -27,7 +27,7 @@ import numpy as np
 
 from engine import arguments
 from engine.clock import STEP_HZ
-from engine.errors import InputError
+from engine.errors import InputError, refuse_overwriting
 from engine.sensors.source import PLAYABLE
 from game.launch import (
     KEYBOARD_SOURCE,
@@ -36,6 +36,7 @@ from game.launch import (
     init_pygame,
     open_player_source,
     parse_size,
+    save_screenshot,
 )
 
 if TYPE_CHECKING:  # pygame loads only when the screen opens (the CLI imports this module)
@@ -385,6 +386,30 @@ def _open_source(args: argparse.Namespace, clock):
     return source, playable, auto
 
 
+def _check_files(args: argparse.Namespace, output: Path) -> None:
+    """Before the session, not when its trials are done (minutes of a player's moves lost): the
+    templates file can be written, and read if it is there (the set the new moves join); no
+    output over an input or over another output."""
+    import os
+
+    from engine.recognition import Templates
+    from engine.sensors.source import url_file
+
+    replayed = url_file(args.source) if args.source else None
+    refuse_overwriting({"--screenshot": args.screenshot}, [output, replayed])
+    refuse_overwriting({"-o": output, "--screenshot": args.screenshot}, [replayed])
+    if output.is_dir():
+        raise InputError(f"{output}: a directory; the templates are saved to a file (-o FILE.npz)")
+    if output.exists():
+        Templates.load(output)  # not a template file: said now
+        return
+    folder = next(p for p in output.absolute().parents if p.exists())  # the rest is created on saving
+    if not folder.is_dir():
+        raise InputError(f"{output}: cannot save the templates there: {folder} is not a directory")
+    if not os.access(folder, os.W_OK | os.X_OK):
+        raise InputError(f"{output}: cannot save the templates there: cannot write in {folder}")
+
+
 def _open_window(args: argparse.Namespace, size: tuple[int, int], source) -> None:
     import pygame
 
@@ -461,6 +486,11 @@ def run(args: argparse.Namespace) -> int:
         # --profile NAME resets NAME's set (profile_templates_path(None) is the default player's)
         return reset_templates(Path(args.output) if args.output else profile_templates_path(args.profile))
     actions = _chosen_actions(args)
+    from game.userdata import profile_templates_path, user_templates_path
+
+    output = Path(args.output) if args.output else (
+        profile_templates_path(args.profile) if getattr(args, "profile", None) else user_templates_path())
+    _check_files(args, output)
     if args.headless:
         headless_env()
     import pygame
@@ -468,7 +498,6 @@ def run(args: argparse.Namespace) -> int:
     from engine.clock import RealClock, VirtualClock
     from engine.frames import FrameResampler
     from engine.loop import FixedStepLoop
-    from game.userdata import profile_templates_path, user_templates_path
 
     clock = VirtualClock() if args.headless else RealClock()
     source, playable, auto = _open_source(args, clock)
@@ -478,8 +507,6 @@ def run(args: argparse.Namespace) -> int:
     screen_view = TrainingScreen(lib, trainer, source.url, args.left_handed)
     resampler = FrameResampler(sensors=2)
     t0 = clock.seconds()
-    output = Path(args.output) if args.output else (
-        profile_templates_path(args.profile) if getattr(args, "profile", None) else user_templates_path())
     loop = FixedStepLoop(clock)
     stages = _TrainingStages(loop, source, playable, auto, trainer, screen_view, resampler, t0, output,
                              args.left_handed, settings)
@@ -489,11 +516,13 @@ def run(args: argparse.Namespace) -> int:
     try:
         loop.run(frames=args.frames, until=lambda: trainer.done and args.frames is None and args.headless)
     finally:
-        if args.screenshot:
-            pygame.image.save(pygame.display.get_surface(), args.screenshot)
-            print(f"quickjab train: wrote {args.screenshot}", file=sys.stderr)
-        source.close()
-        pygame.quit()
+        try:
+            if args.screenshot:
+                save_screenshot(args.screenshot)
+                print(f"quickjab train: wrote {args.screenshot}", file=sys.stderr)
+        finally:
+            source.close()
+            pygame.quit()
     if not trainer.done:
         print(f"quickjab train: stopped after {sum(len(v) for v in trainer.recorded.values())} trials; nothing saved", file=sys.stderr)
     return 0

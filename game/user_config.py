@@ -52,6 +52,8 @@ def read_config(path: str | os.PathLike | None = None) -> dict[str, dict[str, ob
         raise InputError(f"{path}: not a valid TOML file (not UTF-8 text)") from None
     except RecursionError:  # tomllib recurses per nesting level: `[` x 100,000 is within the size limit
         raise InputError(f"{path}: not a valid TOML file (nested too deeply)") from None
+    except ValueError:  # tomllib's int() of an integer over Python's 4300-digit limit (not a TOMLDecodeError)
+        raise InputError(f"{path}: not a valid TOML file (an integer of over 4300 digits)") from None
     except OSError as exc:
         raise InputError(f"{path}: cannot read the config file ({exc.strerror or exc})") from None
     unknown = [k for k in data if k not in TABLES]

@@ -17,7 +17,7 @@ import json
 from pathlib import Path
 
 from engine import arguments
-from engine.errors import InputError
+from engine.errors import InputError, refuse_overwriting
 from game.actions import KINDS, load_library
 from game.bvh import (
     cut_action,
@@ -67,12 +67,16 @@ def run_info(args: argparse.Namespace) -> int:
 
 
 def run_cut(args: argparse.Namespace) -> int:
+    refuse_overwriting({"-o": args.output}, [args.file])
     bvh = read_bvh(args.file, mappable=True)
     motion = retarget(bvh)
     guard = None if args.no_guard_blend else load_library()["guard"].posture(0)
     action = cut_action(motion, args.start, args.end, args.name, args.kind, guard)
     Path(args.output).parent.mkdir(parents=True, exist_ok=True)
-    Path(args.output).write_text(json.dumps(action.to_json(), indent=1) + "\n", encoding="utf-8")
+    try:
+        Path(args.output).write_text(json.dumps(action.to_json(), indent=1) + "\n", encoding="utf-8")
+    except OSError as exc:  # a full disk: ENOSPC names no file
+        raise InputError(f"{args.output}: cannot write ({exc.strerror or exc})") from None
     print(f"wrote {args.name} ({action.frames} frames) to {args.output}; "
           f"preview: quickjab actions sheet --add {args.output} -o sheet.png")
     return 0

@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
+from engine.errors import InputError
 from game.actions import ACTION_NAMES, Action
 from game.skeleton import BONES, JOINTS, compose_root, local_to_world
 
@@ -164,10 +165,13 @@ def draw_legend(sheet, font) -> None:
 
 
 def write_sheet(lib: dict[str, Action], path: str | os.PathLike) -> Path:
-    import pygame
 
     os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
     path = Path(path)
+    if path.is_dir():  # said before the drawing
+        raise InputError(f"{path}: a directory, not a file name for the sheet")
     path.parent.mkdir(parents=True, exist_ok=True)
-    pygame.image.save(render_sheet(lib), str(path))
+    from game.launch import save_image
+
+    save_image(render_sheet(lib), path, "the sheet")  # a file it cannot write whole: an InputError naming it
     return path

@@ -421,8 +421,9 @@ def plot(rows_by_title: Mapping[str, Sequence[dict]], path: str) -> dict:
     layout = {"size": (int(round(fig.bbox.width)), int(round(height))),
               "axes": [box(ax.get_window_extent()) for ax in axes[0]],
               "legend": box(legend.get_window_extent())}
-    fig.savefig(path, dpi=dpi)
-    plt.close(fig)
+    from tools.profile import save_figure
+
+    save_figure(fig, path, dpi)
     return layout
 
 

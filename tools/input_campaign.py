@@ -41,9 +41,13 @@ GOOD_REC = "# rate_hz: 60\nt,rx,ry,rz,lx,ly,lz,label\n" + "".join(
 class Case:
     name: str
     argv: list[str]
-    expect: str = "error"  # "error": exit 2, one line; "ok": exit 0
+    expect: str = "error"  # "error": exit 2, one line; "ok": exit 0; "term": ended by the SIGTERM of term_after
     stdin_none: bool = True
     env: dict[str, str] | None = None  # set over the campaign's environment (e.g. XDG_CONFIG_HOME)
+    cwd: str | None = None  # where it runs (default: the repository), for relative paths in URLs
+    term_after: float | None = None  # send SIGTERM this many seconds in (expect="term": it must end the run)
+    names: str | None = None  # the refusal's line must name this (a file whose error named none)
+    fsize_kb: int | None = None  # no file over this size can be written (a full disk), SIGXFSZ ignored
 
 
 @dataclass
@@ -92,6 +96,7 @@ def bad_recordings(d: Path, big_mb: int) -> dict[str, str]:
         "no-columns": _write(d, "rec/nocol.csv", _rec(["0,1"], header="t,a")),
         "binary": _write(d, "rec/binary.csv", bytes(range(256)) * 64),
         "nul": _write(d, "rec/nul.csv", "t,rx,ry,rz\n0,1,\0,1\n"),
+        "newline-name": _write(d, "rec/new\nline.csv", "x"),  # the message naming it was two lines
         "dir": str(d),
         "dev-zero": "/dev/zero",
         "missing": str(d / "rec" / "nope.csv"),
@@ -114,6 +119,13 @@ def bad_recordings(d: Path, big_mb: int) -> dict[str, str]:
         if not p.exists():
             p.write_bytes(b"t,rx,ry,rz\n0,0,0,1\n" + b"\r" * (big_mb * 2**20) + b"1,0,0,1\n")
         out[f"big-cr-{big_mb}mb"] = str(p)
+        p = d / "rec" / f"meta{big_mb}.csv"  # distinct `# key: value` lines: each kept, 11x the file
+        if not p.exists():
+            with open(p, "w") as f:
+                for start in range(0, big_mb * 2**20 // 12, 100_000):
+                    f.write("".join(f"#{i:x}: v\n" for i in range(start, start + 100_000)))
+                f.write("t,rx,ry,rz\n0,0,0,1\n0.1,0,0,1\n")
+        out[f"meta-flood-{big_mb}mb"] = str(p)
     return out
 
 
@@ -143,6 +155,16 @@ def _zip_bomb(path: Path, member: str, declared_gb: float) -> str:
         while left > 0:
             f.write(chunk[: min(left, len(chunk))])
             left -= len(chunk)
+    return str(path)
+
+
+def _many_members(path: Path, n: int) -> str:
+    """A zip of `n` empty members (about 86 bytes each)."""
+    if not path.exists():
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with zipfile.ZipFile(path, "w", zipfile.ZIP_STORED) as z:
+            for i in range(n):
+                z.writestr(f"{i:x}", b"")
     return str(path)
 
 
@@ -328,6 +350,9 @@ def bad_traces(d: Path) -> dict[str, str]:
         tr("number", "5"),
         tr("no-frame", {"traceEvents": [stage]}),
         tr("bad-utf8", b"\xff\xfe{}".decode("latin-1")),
+        # integers no float holds: np.isfinite raised TypeError
+        tr("dropped-400-digits", '{"traceEvents": [{"ph": "X", "name": "frame", "ts": 0, "dur": 1, "args": {"dropped": 1' + "0" * 400 + '}}]}'),
+        tr("budget-400-digits", '{"traceEvents": [{"ph": "X", "name": "frame", "ts": 0, "dur": 1}], "otherData": {"frame_budget_ms": 1' + "0" * 400 + '}}'),
     ]
     out = dict(cases)
     out["bad-bytes"] = _write(d, "trace/bytes.json", b"\xff\xfe\x00{")
@@ -408,7 +433,10 @@ def bad_action_dirs(d: Path) -> dict[str, str]:
     good = json.loads((ASSETS / "actions" / "hook_r.json").read_text())
     for name, change in (("nan-root", {"root": [[0, float("nan"), 0, 0]]}), ("frames-huge", {"frames": 10**9}),
                          ("damage-inf", {"attacks": [{**good["attacks"][0], "damage": float("inf")}]}),
-                         ("deep", None), ("fifo", None)):
+                         ("deep", None), ("fifo", None),
+                         ("frames-inf", {"frames": float("inf")}),  # int(Infinity): OverflowError
+                         ("name-list", {"name": ["hook_r"]}),  # unhashable in the library: TypeError
+                         ("not-object", None)):  # a JSON list: AttributeError
         folder = d / "actions" / name
         if folder.exists():
             shutil.rmtree(folder)
@@ -419,6 +447,8 @@ def bad_action_dirs(d: Path) -> dict[str, str]:
         elif name == "fifo":
             target.unlink()
             os.mkfifo(target)
+        elif name == "not-object":
+            target.write_text(json.dumps([good]))
         else:
             target.write_text(json.dumps({**good, **change}))
         out[name] = str(folder)
@@ -459,6 +489,7 @@ def bad_config_files(d: Path) -> dict[str, str]:
         "huge-buffer": "[recognizer]\nsupplementary = 100000000000\n",
         "nan": "[recognizer]\nnoise_g = nan\n",
         "deep": "[recognizer]\nnoise_g = " + "[" * 100_000 + "]" * 100_000 + "\n",  # tomllib: RecursionError
+        "bigint": "[recognizer]\nmain = " + "1" * 5000 + "\n",  # tomllib's int(): a plain ValueError
         "binary": b"\xff\xfe\x00[recognizer]",
         "big": "# " + "x" * (2 << 20) + "\n",
         "directory": None,
@@ -502,7 +533,20 @@ def build_cases(d: Path, big_mb: int, bomb_gb: float = 1.5) -> list[Case]:
     cases += [Case(f"eval/{name}", q + argv) for name, argv in bad_evaluate_inputs(d, tpl, out).items()]
     args = {**_bad_game_args(q, d, good_rec, tpl, out), **_bad_tool_args(q, d, out)}
     for name, argv in args.items():
-        cases.append(Case(f"arg/{name}", argv))
+        cases.append(Case(f"arg/{name}", argv, names="/dev/full" if "dev-full" in name else None))
+    cases += _same_file_cases(q, d)
+    # a full disk (files stop at 8 KB): pygame.image.save ignored the failed write and said "wrote"
+    for name, argv, path in (("play-screenshot", ["play", "--headless", "--frames", "2", "--screenshot"], out / "full.png"),
+                             ("actions-sheet", ["actions", "sheet", "-o"], out / "sheet.png"),
+                             ("profile-plot", ["profile", _write(d, "trace/ok.json", '{"traceEvents": [{"ph": "X", "name": "frame", "ts": 0, "dur": 9}]}'),
+                                               "--plot"], out / "plot.png")):
+        cases.append(Case(f"full/{name}", q + argv + [str(path)], names=str(path), fsize_kb=8))
+    # SDL turned SIGTERM into a quit event nothing in a soak reads: only SIGKILL ended it
+    cases.append(Case("signal/soak-sigterm", q + ["soak", "--minutes", "10", "--quiet"], expect="term", term_after=8.0))
+    if big_mb:  # ~12,000 empty members a MB: zipfile read them all (6.7x the file) before the count was checked
+        many = _many_members(d / "tpl" / f"members{big_mb}.npz", big_mb * 12_000)
+        cases += [Case("tpl/many-members/recognize", q + ["recognize", good_rec, "--templates", many]),
+                  Case("graph/many-members/info", q + ["graph", "info", many])]
     cases += _valid_cases(q, d, good_rec, tpl, out)
     return cases
 
@@ -663,6 +707,14 @@ def _url_cases(q: list[str], good_rec: str, out: Path) -> list[Case]:
         cases.append(Case(f"url/{name}/record", q + ["record", "--source", url, "--seconds", "0.3", "-o", str(out / "u.csv")]))
     for name in ("demo-rate-1e9", "emu-drop-2", "keyboard-seed-neg"):
         cases.append(Case(f"url/{name}/scope", q + ["scope", "--headless", "--frames", "3", "--source", urls[name]]))
+    # a relative path is urlsplit's host part: '[' (IPv6) or a character NFKC turns into '/' raised ValueError
+    rec_dir = str(Path(good_rec).parent)
+    for name, file in (("bracket", "[x.csv"), ("nfkc-slash", "a\uff0fb.csv")):
+        cases.append(Case(f"url/{name}-missing/record", q + ["record", "--source", f"replay://{file}", "--seconds", "0.3",
+                                                              "-o", str(out / "u.csv")], cwd=rec_dir))
+        _write(Path(rec_dir), f"named/{file}", GOOD_REC)
+        cases.append(Case(f"ok/url-{name}-name/record", q + ["record", "--source", f"replay://{file}", "--seconds", "0.3",
+                                                             "-o", str(out / "u.csv")], expect="ok", cwd=str(Path(rec_dir) / "named")))
     return cases
 
 
@@ -707,6 +759,16 @@ def _bad_game_args(q: list[str], d: Path, good_rec: str, tpl: str, out: Path) ->
         "play-screenshot-no-dir": q + ["play", "--headless", "--frames", "2", "--screenshot", str(out / "no" / "s.png")],
         "play-trace-a-dir": q + ["play", "--headless", "--frames", "2", "--trace", str(out)],
         "scope-screenshot-no-dir": q + ["scope", "--headless", "--frames", "2", "--screenshot", str(out / "no" / "s.png")],
+        # /dev/full passes the folder check and takes nothing (a full disk): pygame.error, or ENOSPC naming no file
+        "play-screenshot-dev-full": q + ["play", "--headless", "--frames", "2", "--screenshot", "/dev/full"],
+        "play-trace-dev-full": q + ["play", "--headless", "--frames", "2", "--trace", "/dev/full"],
+        "record-o-dev-full": q + ["record", "--source", "demo://", "--seconds", "0.8", "-o", "/dev/full"],
+        "templates-build-o-dev-full": q + ["templates", "build", str(d / "eval" / "trials-ok"), "-o", "/dev/full"],
+        "bvh-export-o-dev-full": q + ["bvh", "export", "--play", "straight_l", "-o", "/dev/full"],
+        "recognize-o-dev-full": q + ["recognize", _write(d, "rec/punch.csv", _rec(_bump_rows())), "--templates", tpl, "-o", "/dev/full"],
+        # found only once the trials were done, the session lost: refused before it
+        "train-o-dir": q + ["train", "--headless", "--demo", "--frames", "2", "-o", str(out)],
+        "train-o-corrupt": q + ["train", "--headless", "--demo", "--frames", "2", "-o", _write(d, "tpl/corrupt.npz", "x")],
     }
 
 
@@ -735,9 +797,32 @@ def _bad_tool_args(q: list[str], d: Path, out: Path) -> dict[str, list[str]]:
         "graph-duel-seed-neg": q + ["graph", "duel", "--bouts", "1", "--seconds", "2", "--seed", "-1"],
         "record-seconds-nan": q + ["record", "--source", "demo://", "--seconds", "nan", "-o", str(out / "x.csv")],
         "record-seconds-neg": q + ["record", "--source", "demo://", "--seconds", "-1", "-o", str(out / "x.csv")],
+        "actions-sheet-o-dir": q + ["actions", "sheet", "-o", str(out)],  # pygame.error: a traceback
         "bvh-export-gap-nan": q + ["bvh", "export", "--play", "guard", "--gap", "nan", "-o", str(out / "x.bvh")],
         "bvh-cut-start-neg": q + ["bvh", "cut", _write(d, "bvh/ok.bvh", BVH_HEAD + "Frames: 3\nFrame Time: 0.0166667\n" + "0 90 0 0 0 0 0 0 0\n" * 3), "--start", "-5", "--end", "1", "--name", "x", "-o", str(out / "a.json")],
     }
+
+
+def _same_file_cases(q: list[str], d: Path) -> list[Case]:
+    """An output that is one of the command's inputs: each destroyed its input and exited 0
+    (recognize emptied the recording, bvh cut wrote JSON over the capture). Own copies each."""
+    s = d / "same"
+    rec = lambda name: _write(s, name, GOOD_REC)  # noqa: E731
+    trial = _write(s, "trials/jab/1.csv", GOOD_REC.replace(",\n", ",jab\n"))
+    tpl = str(s / "t.npz")
+    Path(tpl).write_bytes((ASSETS / "templates.npz").read_bytes())
+    mocap = ROOT.parent / "shared" / "data" / "mocap" / "cmu_02_05_punch_strike.bvh"  # mappable: cut writes
+    bvh = _write(s, "m.bvh", mocap.read_bytes() if mocap.exists() else BVH_HEAD)
+    r1, r2, r3 = rec("r1.csv"), rec("r2.csv"), rec("r3.csv")
+    argvs = {
+        "recognize-o-recording": ["recognize", r1, "--templates", str(ASSETS / "templates.npz"), "-o", r1],
+        "build-o-trial": ["templates", "build", str(s / "trials"), "-o", trial],
+        "bvh-cut-o-file": ["bvh", "cut", bvh, "--start", "0", "--end", "20", "--name", "x", "-o", bvh],
+        "record-o-replayed": ["record", "--source", f"replay://{r2}", "--seconds", "0.3", "-o", r2],
+        "play-screenshot-templates": ["play", "--headless", "--frames", "2", "--templates", tpl, "--screenshot", tpl],
+        "scope-trace-replayed": ["scope", "--headless", "--frames", "2", "--source", f"replay://{r3}", "--trace", r3],
+    }
+    return [Case(f"same/{name}", q + argv) for name, argv in argvs.items()]
 
 
 def _valid_cases(q: list[str], d: Path, good_rec: str, tpl: str, out: Path) -> list[Case]:
@@ -746,8 +831,19 @@ def _valid_cases(q: list[str], d: Path, good_rec: str, tpl: str, out: Path) -> l
     emu = f"wiimote-emu://{good_rec}"
     cases.append(Case("ok/recognize-good", q + ["recognize", good_rec, "--templates", tpl], expect="ok"))
     cases.append(Case("ok/graph-info-shipped", q + ["graph", "info"], expect="ok"))
+    stages = [{"ph": "X", "name": f"s{i}", "ts": 1, "dur": 1} for i in range(50_000)]  # a band each: minutes to draw
+    many = _write(d, "trace/stages50000.json", json.dumps({"traceEvents": [{"ph": "X", "name": "frame", "ts": 0, "dur": 9}, *stages]}))
+    cases.append(Case("ok/profile-plot-50000-stages", q + ["profile", many, "--plot", str(out / "p.png")], expect="ok"))
+    # the guard loops and never returns to the guard: export stepped it for ever, memory growing
+    cases.append(Case("ok/bvh-export-guard", q + ["bvh", "export", "--play", "guard", "-o", str(out / "g.bvh")], expect="ok"))
     cases.append(Case("ok/record-demo", q + ["record", "--source", "demo://?rate=100", "--seconds", "0.3", "-o", str(out / "d.csv")], expect="ok"))
     cases.append(Case("ok/record-emu", q + ["record", "--source", emu, "--seconds", "0.5", "-o", str(out / "e.csv")], expect="ok"))
+    # bytes that are not UTF-8 in an argument or a file name (lone surrogates): UnicodeEncodeError
+    odd = _write(d, "rec/\udcff.csv", GOOD_REC)
+    cases.append(Case("ok/record-label-not-utf8", q + ["record", "--source", "demo://?rate=100", "--seconds", "0.3",
+                                                       "--label", "\udcff", "-o", str(out / "d.csv")], expect="ok"))
+    cases.append(Case("ok/record-name-not-utf8", q + ["record", "--source", f"replay://{odd}", "--seconds", "0.3",
+                                                      "-o", str(out / "d.csv")], expect="ok"))
     long_rec = d / "rec" / "long400k.csv"
     if not long_rec.exists():  # 400k rows at 100 Hz: wiimote-emu's poll must not depend on the length
         long_rec.write_text("t,rx,ry,rz,lx,ly,lz\n" + "".join(f"{i / 100:.2f},0.1,0,1,0,0.1,1\n" for i in range(400_000)))
@@ -761,9 +857,12 @@ def _valid_cases(q: list[str], d: Path, good_rec: str, tpl: str, out: Path) -> l
     return cases
 
 
-def _limit(limit_mb: int):
+def _limit(limit_mb: int, fsize_kb: int | None = None):
     def apply() -> None:
         os.setpgrp()
+        if fsize_kb:  # a write past it fails with EFBIG, as one on a full disk with ENOSPC
+            signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+            resource.setrlimit(resource.RLIMIT_FSIZE, (fsize_kb * 1024, fsize_kb * 1024))
         if limit_mb:
             resource.setrlimit(resource.RLIMIT_AS, (limit_mb * 2**20, limit_mb * 2**20))
         os.nice(10)
@@ -789,9 +888,10 @@ def run_case(case: Case, timeout: float, limit_mb: int, env: dict) -> Outcome:
     with tempfile.TemporaryFile() as err, tempfile.TemporaryFile() as so:
         start = time.monotonic()
         p = subprocess.Popen([sys.executable, *case.argv], stdin=subprocess.DEVNULL, stdout=so, stderr=err,
-                             cwd=ROOT, env={**env, **(case.env or {})}, preexec_fn=_limit(limit_mb))
+                             cwd=case.cwd or ROOT, env={**env, **(case.env or {})}, preexec_fn=_limit(limit_mb, case.fsize_kb))
         rc = None
         rss = 0.0
+        term_at = case.term_after
         marker = case.argv[1] if len(case.argv) > 1 else sys.executable
         while True:
             rss = max(rss, _peak_rss_mb(p.pid, marker) or 0.0)
@@ -799,6 +899,9 @@ def run_case(case: Case, timeout: float, limit_mb: int, env: dict) -> Outcome:
             if pid:
                 rc = os.waitstatus_to_exitcode(status)
                 break
+            if term_at is not None and time.monotonic() - start > term_at:
+                os.kill(p.pid, signal.SIGTERM)
+                term_at = None  # once
             if time.monotonic() - start > timeout:
                 os.killpg(p.pid, signal.SIGKILL)
                 os.wait4(p.pid, 0)
@@ -818,6 +921,8 @@ def judge(o: Outcome, max_rss_mb: float) -> str:
         return "memory" if "MemoryError" in o.stderr else "traceback"
     if o.rss_mb > max_rss_mb:
         return "memory"
+    if o.case.expect == "term":
+        return "ok" if o.rc == -signal.SIGTERM else f"exit-{o.rc}"
     if o.case.expect == "ok":
         return "ok" if o.rc == 0 else "refused-valid"
     if o.rc == 0:
@@ -827,7 +932,9 @@ def judge(o: Outcome, max_rss_mb: float) -> str:
         return f"exit-{o.rc}"
     # the refusal is the last line: "quickjab CMD: ..." or argparse's "quickjab CMD: error: ..."
     # (status lines such as "no Wiimote found: playing from the keyboard" may come before it)
-    return "ok" if lines and lines[-1].startswith("quickjab") else "no-message"
+    if not (lines and lines[-1].startswith("quickjab")):
+        return "no-message"
+    return "unnamed" if o.case.names and o.case.names not in lines[-1] else "ok"
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -16,10 +16,11 @@ import numpy as np
 from engine import arguments
 from engine.budget import UNACCOUNTED, WAIT, percentiles_ms
 from engine.clock import STEP_MS
-from engine.errors import InputError
+from engine.errors import InputError, refuse_overwriting
 from engine.trace import read_chrome_trace
 
 DEFAULT_BUDGET_MS = STEP_MS
+MAX_PLOT_STAGES = 16  # bands in the stacked plot: each is a fill and a legend entry (2000 took 10 s)
 
 
 def profile_summary(trace: dict) -> dict:
@@ -112,6 +113,31 @@ def _below_outliers(values: np.ndarray) -> float:
     return float(np.sort(values)[-k - 1])
 
 
+def save_figure(fig, path: str, dpi: float) -> None:
+    """fig.savefig, then closed; a file it cannot write (a full disk: ENOSPC names no file) is
+    an InputError naming it."""
+    import matplotlib.pyplot as plt
+
+    try:
+        fig.savefig(path, dpi=dpi)
+    except OSError as exc:
+        raise InputError(f"{path}: cannot write the plot ({exc.strerror or exc})") from None
+    finally:
+        plt.close(fig)
+
+
+def _largest_stages(per_frame: dict[str, np.ndarray], most: int) -> tuple[list[str], dict[str, np.ndarray]]:
+    """At most `most` bands: the stages of the largest total time, then the rest summed as one
+    ("N other stages"); all of them, in their order, when there are no more."""
+    names = list(per_frame)
+    if len(names) <= most:
+        return names, per_frame
+    order = sorted(names, key=lambda n: -float(per_frame[n].sum()))
+    kept, rest = order[: most - 1], order[most - 1 :]
+    other = f"{len(rest)} other stages"
+    return [*kept, other], {**{n: per_frame[n] for n in kept}, other: np.sum([per_frame[n] for n in rest], axis=0)}
+
+
 def plot_profile(trace: dict, summary: dict, out: str, max_bars: int = 600) -> dict:
     """Frame-time histogram and stacked per-stage bars (the last `max_bars` frames). A frame's
     work is drawn against the frame period (16.7 ms, 33.3 ms in low power). Both axes end a
@@ -137,6 +163,7 @@ def plot_profile(trace: dict, summary: dict, out: str, max_bars: int = 600) -> d
             per_frame[e["name"]][i] += e["dur"] / 1000
     if UNACCOUNTED in per_frame:
         per_frame[UNACCOUNTED] = np.array([(e.get("args") or {}).get("unaccounted_us", 0.0) / 1000 for e in frames])
+    names, per_frame = _largest_stages(per_frame, MAX_PLOT_STAGES)
 
     period = float(summary.get("frame_period_ms") or budget)
     top = max(1.25 * period, 1.15 * _below_outliers(work))
@@ -166,9 +193,8 @@ def plot_profile(trace: dict, summary: dict, out: str, max_bars: int = 600) -> d
     ax2.set_title("per-stage time per frame (stacked)" + (f"; {over} frames above the axis" if over else ""), fontsize=10)
     ax2.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8)  # beside the bars, not over them
     fig.tight_layout()
-    fig.savefig(out, dpi=100)
-    plt.close(fig)
-    return {"hist_xmax": top, "bars_ymax": stacked_top, "period_ms": period}
+    save_figure(fig, out, 100)
+    return {"hist_xmax": top, "bars_ymax": stacked_top, "period_ms": period, "stages": names}
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -181,6 +207,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    refuse_overwriting({"--plot": args.plot}, [args.trace])
     trace = read_chrome_trace(args.trace)
     summary = profile_summary(trace)
     if args.plot:

@@ -9,7 +9,7 @@ import sys
 from pathlib import Path
 
 from engine import arguments
-from engine.errors import InputError
+from engine.errors import InputError, refuse_overwriting
 from engine.frames import recording_frames
 from engine.recognition import DualBufferRecognizer, Templates
 from engine.recognition.config import layered, parse_assignments
@@ -201,8 +201,9 @@ def _register_evaluate(sub: argparse._SubParsersAction) -> None:
 
 
 def cmd_build(args: argparse.Namespace) -> int:
-    from tools.trial_files import load_trials_dir, templates_from_trials
+    from tools.trial_files import load_trials_dir, templates_from_trials, trial_paths
 
+    refuse_overwriting({"-o": args.output}, [f for fs in trial_paths(args.trials_dir, args.glob).values() for f in fs])
     settings = parse_assignments(args.recognizer)
     trials = load_trials_dir(args.trials_dir, args.glob)
     kwargs = {k: v for k, v in (("method", args.method), ("feature", args.feature)) if v}
@@ -218,6 +219,7 @@ def cmd_build(args: argparse.Namespace) -> int:
 
 
 def cmd_recognize(args: argparse.Namespace) -> int:
+    refuse_overwriting({"-o": args.output}, [args.recording, args.templates])
     templates = Templates.load(args.templates)
     rec_file = read_recording(args.recording)
     times, frames, _ = recording_frames(rec_file)
@@ -229,14 +231,19 @@ def cmd_recognize(args: argparse.Namespace) -> int:
     config = layered(templates.recognizer, recognizer_settings(), _cli_settings(args),
                      where=["templates", "config file", "command line"])
     rec = DualBufferRecognizer.from_config(templates, config)
-    out = open(args.output, "w", encoding="utf-8") if args.output else sys.stdout
     try:
-        for t, f in zip(times, frames, strict=True):
-            for e in rec.push(f, t=float(t)):
-                out.write(json.dumps(e.to_dict()) + "\n")
-    finally:
-        if args.output:
-            out.close()
+        out = open(args.output, "w", encoding="utf-8") if args.output else sys.stdout
+        try:
+            for t, f in zip(times, frames, strict=True):
+                for e in rec.push(f, t=float(t)):
+                    out.write(json.dumps(e.to_dict()) + "\n")
+        finally:
+            if args.output:
+                out.close()
+    except OSError as exc:  # a full disk: ENOSPC names no file
+        if not args.output:
+            raise
+        raise InputError(f"{args.output}: cannot write ({exc.strerror or exc})") from None
     return 0
 
 
@@ -245,6 +252,7 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     from tools.trial_files import load_trials_dir, templates_from_trials
 
     if args.plot:  # said before minutes of evaluation, not after
+        refuse_overwriting({"--plot": args.plot}, [*args.inputs, args.templates])
         try:
             import matplotlib  # noqa: F401
         except ImportError:

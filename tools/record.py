@@ -9,9 +9,10 @@ import time
 from pathlib import Path
 
 from engine import arguments
-from engine.errors import InputError
+from engine.errors import InputError, refuse_overwriting
 from engine.recording import RecordingWriter
 from engine.sensors import SourceState, open_source
+from engine.sensors.source import url_file
 
 CONNECT_TIMEOUT_S = 3.0  # a source that never connects (no port, no board) is an error by then
 RATE_PROBE_S = 0.5  # without an announced rate, the rate is measured over the first samples
@@ -177,5 +178,6 @@ class _RecordingParts:
 def run(args: argparse.Namespace) -> int:
     if not args.connect_timeout > 0:
         raise InputError(f"--connect-timeout {args.connect_timeout}: must be positive")
+    refuse_overwriting({"-o": args.output}, [url_file(args.source)])
     record(args.source, args.output, args.seconds, args.label, connect_timeout=args.connect_timeout)
     return 0

@@ -21,7 +21,7 @@ import numpy as np
 
 from engine import arguments
 from engine.clock import RealClock, VirtualClock
-from engine.errors import InputError
+from engine.errors import InputError, refuse_overwriting
 from engine.loop import FixedStepLoop
 from engine.sensors import Sample, Source, SourceError, SourceState, open_source
 from engine.sensors.rate import RateMeter
@@ -287,10 +287,9 @@ def run_scope(
     try:
         loop.run(frames=frames, until=lambda: scope.quit)
         if screenshot:
-            try:
-                scope.pygame.image.save(scope.screen, screenshot)
-            except (OSError, scope.pygame.error) as exc:
-                raise InputError(f"{screenshot}: cannot save screenshot: {exc}") from None
+            from game.launch import save_image
+
+            save_image(scope.screen, screenshot)  # a file it cannot write whole: an InputError naming it
         if trace:
             write_chrome_trace(loop.budget, trace)
     finally:
@@ -361,6 +360,9 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from engine.sensors.source import url_file
+
+    refuse_overwriting({"--screenshot": args.screenshot, "--trace": args.trace}, [url_file(args.source)])
     view = view_from_args(args)
     if args.headless:
         headless_env()

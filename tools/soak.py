@@ -241,6 +241,9 @@ def run(args: argparse.Namespace) -> int:
         raise InputError(f"--steps/--minutes must give at least one step, got {steps}")
     if args.render_every < 0 or args.sample_seconds <= 0 or args.warmup_seconds < 0:
         raise InputError("--render-every >= 0, --sample-seconds > 0 and --warmup-seconds >= 0")
+    # SDL turns SIGTERM into a quit event, which nothing in a soak reads (`kill` and `timeout` could
+    # not stop it): leave SIGTERM to end the process (Ctrl-C is Python's own KeyboardInterrupt)
+    os.environ.setdefault("SDL_NO_SIGNAL_HANDLERS", "1")
 
     def progress(step: int, total: int, rss: int) -> None:
         if not args.quiet:

@@ -21,17 +21,26 @@ def read_frames(path: str | Path) -> np.ndarray:
     return frames
 
 
-def load_trials_dir(root: str | Path, pattern: str = "*.csv") -> dict[str, list[np.ndarray]]:
-    """{action: [frames, ...]} for the files matching `pattern` (a glob on the file name) in
-    each action folder, sorted by name. Raises InputError when nothing is there."""
+def trial_paths(root: str | Path, pattern: str = "*.csv") -> dict[str, list[Path]]:
+    """{action: [file, ...]}: the files matching `pattern` (a glob on the file name) in each
+    action folder, sorted by name; {} when `root` is not a directory."""
     root = Path(root)
     if not root.is_dir():
-        raise InputError(f"{root}: not a directory of trials (<root>/<action>/*.csv)")
-    out: dict[str, list[np.ndarray]] = {}
+        return {}
+    out: dict[str, list[Path]] = {}
     for folder in sorted(p for p in root.iterdir() if p.is_dir()):
         files = sorted(f for f in folder.iterdir() if f.suffix == ".csv" and fnmatch.fnmatch(f.name, pattern))
         if files:
-            out[folder.name] = [read_frames(f) for f in files]
+            out[folder.name] = files
+    return out
+
+
+def load_trials_dir(root: str | Path, pattern: str = "*.csv") -> dict[str, list[np.ndarray]]:
+    """{action: [frames, ...]} for the files of `trial_paths`. Raises InputError when nothing is there."""
+    root = Path(root)
+    if not root.is_dir():
+        raise InputError(f"{root}: not a directory of trials (<root>/<action>/*.csv)")
+    out = {action: [read_frames(f) for f in files] for action, files in trial_paths(root, pattern).items()}
     if not out:
         raise InputError(f"{root}: no trials matching {pattern!r} under <root>/<action>/")
     dims = {t.shape[1] for ts in out.values() for t in ts}

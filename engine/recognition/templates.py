@@ -472,24 +472,27 @@ class Templates:
         vals = np.array(list(self.meta.values()), dtype=str)
         # only when set: a file without settings has the keys it always had
         settings = {"recognizer": np.array(json.dumps(self.recognizer, sort_keys=True))} if self.recognizer else {}
-        with open(path, "wb") as f:  # np.savez would append .npz to a name without it
-            np.savez_compressed(
-                f,
-                format=np.array("quickjab-templates"),
-                version=np.array(FORMAT_VERSION),
-                actions=np.array(self.actions, dtype=str),
-                lengths=lengths,
-                signals=np.concatenate(self.signals, axis=0),
-                gravity=self.gravity,
-                onsets=self.onsets,
-                thresholds=self.thresholds,
-                method=np.array(self.method),
-                feature=np.array(self.feature),
-                meta_keys=keys,
-                meta_values=vals,
-                rest_noise=np.array(self.rest_noise),
-                **settings,
-            )
+        try:
+            with open(path, "wb") as f:  # np.savez would append .npz to a name without it
+                np.savez_compressed(
+                    f,
+                    format=np.array("quickjab-templates"),
+                    version=np.array(FORMAT_VERSION),
+                    actions=np.array(self.actions, dtype=str),
+                    lengths=lengths,
+                    signals=np.concatenate(self.signals, axis=0),
+                    gravity=self.gravity,
+                    onsets=self.onsets,
+                    thresholds=self.thresholds,
+                    method=np.array(self.method),
+                    feature=np.array(self.feature),
+                    meta_keys=keys,
+                    meta_values=vals,
+                    rest_noise=np.array(self.rest_noise),
+                    **settings,
+                )
+        except OSError as exc:  # a full disk: ENOSPC names no file
+            raise TemplateFileError(path, f"cannot write ({exc.strerror or exc})") from None
 
     @classmethod
     def load(cls, path: str | os.PathLike) -> Templates:

@@ -155,9 +155,27 @@ def parse_source_url(url: str) -> tuple[str, str, dict[str, str]]:
     """Split `scheme://path?k=v` into (scheme, path, params). `serial:///dev/x` gives '/dev/x'."""
     if "://" not in url:
         raise SourceError(f"{url!r} is not a source URL (expected scheme://..., e.g. replay://rec.csv)")
-    parts = urlsplit(url)
+    try:
+        parts = urlsplit(url)
+    except ValueError:
+        # a relative path is the URL's host part to urlsplit, which refuses a host with '[' or
+        # ']' (IPv6) or characters NFKC turns into '/', '?', '#', '@' or ':': split it the same
+        # way without those checks, so `replay://take[1].csv` names its file like any other
+        scheme, rest = url.split("://", 1)
+        rest, _, query = rest.partition("#")[0].partition("?")
+        return scheme.lower(), rest, dict(parse_qsl(query))
     path = parts.netloc + parts.path
     return parts.scheme.lower(), path, dict(parse_qsl(parts.query))
+
+
+def url_file(url: str) -> str | None:
+    """The file a source URL reads (replay://rec.csv: rec.csv), None when it names none or is no
+    URL: what a command writing files must not write over."""
+    try:
+        _, path, _ = parse_source_url(url)
+    except SourceError:
+        return None
+    return path or None
 
 
 def url_flag(params: dict[str, str], key: str, default: str = "0") -> bool:

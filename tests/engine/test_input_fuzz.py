@@ -25,7 +25,13 @@ from engine.errors import InputError
 from engine.frames import recording_frames
 from engine.npz_files import NpzFileError, read_npz
 from engine.recognition.templates import TemplateFileError, Templates
-from engine.recording import MAX_ACCEL_G, MAX_DURATION_S, RecordingError, read_recording
+from engine.recording import (
+    MAX_ACCEL_G,
+    MAX_DURATION_S,
+    MAX_META_KEYS,
+    RecordingError,
+    read_recording,
+)
 from engine.sensors.source import SourceError, SourceState, open_source
 from engine.trace import TraceError, read_chrome_trace
 from tools.profile import profile_summary
@@ -129,6 +135,19 @@ def test_a_row_of_millions_of_fields_is_refused_before_it_is_split(tmp_path, pea
     assert peak < 3 * path.stat().st_size, (peak, path.stat().st_size)  # split, the row took 4x
 
 
+def test_a_flood_of_metadata_keys_is_refused_without_holding_them(tmp_path, peak_memory):
+    """Every distinct `# key: value` line was kept in the metadata dict: some 100 bytes of
+    Python objects per line, 11 times the file (33 MB of keys took 400 MB)."""
+    path = tmp_path / "meta.csv"
+    path.write_text("".join(f"#k{i:x}: v\n" for i in range(300_000)) + "t,rx,ry,rz\n0,0,0,1\n0.1,0,0,1\n")
+    err, peak = peak_memory(lambda: pytest.raises(RecordingError, read_recording, path))
+    assert "metadata" in str(err.value) and err.value.line == MAX_META_KEYS + 1
+    assert peak < path.stat().st_size, (peak, path.stat().st_size)
+    ok = tmp_path / "ok.csv"  # as many keys as allowed, and any number of comments or repeats
+    ok.write_text("".join(f"# k{i}: v\n# a comment\n# k0: again\n" for i in range(MAX_META_KEYS)) + "t,rx,ry,rz\n0,0,0,1\n")
+    assert len(read_recording(ok).meta) == MAX_META_KEYS
+
+
 @pytest.mark.parametrize("kind", ["fifo", "dir"])
 def test_non_regular_files_are_refused_at_once(tmp_path, kind):
     path = tmp_path / "x.csv"
@@ -181,6 +200,18 @@ def test_template_zip_bomb_is_refused_before_it_is_inflated(tmp_path):
     finally:
         tracemalloc.stop()
     assert peak < 20 * 2**20
+
+
+def test_an_archive_of_a_great_many_members_is_refused_before_its_directory_is_read(tmp_path, peak_memory):
+    """zipfile reads the whole central directory, some 400 bytes of Python objects per entry,
+    before the member count could be checked: 24 MB of empty entries took 115 MB."""
+    path = tmp_path / "many.npz"
+    with zipfile.ZipFile(path, "w", zipfile.ZIP_STORED) as z:
+        for i in range(100_000):
+            z.writestr(f"{i:x}", b"")
+    err, peak = peak_memory(lambda: pytest.raises(NpzFileError, read_npz, path, 2**30))
+    assert "members" in str(err.value)
+    assert peak < path.stat().st_size / 4, (peak, path.stat().st_size)
 
 
 def test_npz_member_claiming_more_than_it_holds_is_refused(tmp_path):

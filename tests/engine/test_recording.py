@@ -213,3 +213,18 @@ def test_awkward_labels_metadata_and_a_bom_round_trip(tmp_path):
     bom = tmp_path / "bom.csv"
     bom.write_bytes(b"\xef\xbb\xbft,rx,ry,rz\r\n0,1,2,3\r\n")
     assert read_recording(bom).accel.tolist() == [[[1.0, 2.0, 3.0]]]
+
+
+def test_text_from_a_non_utf8_file_name_or_argument_is_written_escaped(tmp_path):
+    """Python hands bytes that are not UTF-8 in argv or a file name over as lone surrogates:
+    `record --label $'\\xff'` or `--source replay://$'\\xff'.csv` (its URL is the metadata's
+    recorded_from) raised UnicodeEncodeError on the first row or the header."""
+    odd = "\udcff"  # what b"\xff" decodes to with the file system's surrogateescape
+    path = tmp_path / "odd.csv"
+    with RecordingWriter(path, 1, {"recorded_from": f"replay://{odd}.csv"}) as w:
+        w.write(Sample(0.0, np.array([0.0, 0.0, 1.0])), odd)
+        w.write(Sample(0.1, np.array([0.0, 0.0, 1.0])), odd)
+    back = read_recording(path)
+    assert back.labels == ["\\udcff"] * 2 and back.meta["recorded_from"] == "replay://\\udcff.csv"
+    write_recording(tmp_path / "whole.csv", Recording(back.t, back.accel, [odd] * 2, {"source": odd}))
+    assert read_recording(tmp_path / "whole.csv").labels == ["\\udcff"] * 2

@@ -28,6 +28,22 @@ def test_parse_source_url():
     assert parse_source_url("REPLAY://a/b.csv")[0] == "replay"
 
 
+@pytest.mark.parametrize("name", ["take[1].csv", "x]y.csv", "a\uff0fb.csv", "\u2100x.csv"])
+def test_a_file_name_urllib_takes_for_a_host_is_still_a_path(tmp_path, monkeypatch, name):
+    """A relative path is the URL's host part to urlsplit: brackets read as an IPv6 address and
+    characters NFKC turns into '/' or ':' made it raise ValueError (a traceback). Such a name is
+    a file name like any other."""
+    path, _ = write_rec(tmp_path)
+    (tmp_path / name).write_bytes(path.read_bytes())
+    monkeypatch.chdir(tmp_path)
+    assert parse_source_url(f"replay://{name}?speed=2") == ("replay", name, {"speed": "2"})
+    src = open_source(f"replay://{name}")
+    assert src.sensors == 2
+    src.close()
+    with pytest.raises(RecordingError, match="cannot read"):
+        open_source(f"replay://missing{name}")
+
+
 @pytest.mark.parametrize("url", ["nosuch://x", "rec.csv", "", "replay:/x.csv"])
 def test_open_source_rejects_unknown_schemes_and_non_urls(url):
     with pytest.raises(SourceError) as err:

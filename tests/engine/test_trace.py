@@ -150,6 +150,23 @@ def test_reading_a_bad_trace_names_the_file(tmp_path, content):
         read_chrome_trace(tmp_path / "missing.json")
 
 
+_FRAME = '{"ph": "X", "name": "frame", "ts": 0, "dur": 100'
+
+
+@pytest.mark.parametrize("content", [  # integers no float holds: np.isfinite raised TypeError
+    '{"traceEvents": [' + _FRAME + ', "args": {"steps": 1, "dropped": 1' + "0" * 300 + '}}]}',
+    '{"traceEvents": [' + _FRAME.replace('"ts": 0', '"ts": 1' + "0" * 400) + '}]}',
+    '{"traceEvents": [' + _FRAME + '}, {"ph": "X", "name": "sense", "ts": 1, "dur": 1, "args": {"depth": 1' + "0" * 400 + '}}]}',
+    '{"traceEvents": [' + _FRAME + '}], "otherData": {"frame_budget_ms": 1' + "0" * 400 + '}}',
+    '{"traceEvents": [' + _FRAME + '}], "otherData": {"stages": {"sense": {"budget_ms": 1' + "0" * 400 + '}}}}',
+])
+def test_an_integer_no_float_holds_is_refused_naming_the_file(tmp_path, content):
+    path = tmp_path / "huge.json"
+    path.write_text(content)
+    with pytest.raises(InputError, match="huge.json: "):
+        read_chrome_trace(path)
+
+
 def test_read_back_what_was_written(tmp_path):
     loop = traced_loop(frames=10)
     write_chrome_trace(loop.budget, tmp_path / "t.json")

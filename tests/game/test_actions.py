@@ -162,6 +162,43 @@ def test_bad_action_file_names_itself(tmp_path):
         load_action(path)
 
 
+def _with_first(good: dict, key: str, **change) -> dict:
+    """`good` with the first item of its list `key` changed."""
+    return dict(good, **{key: [dict(good[key][0], **change), *good[key][1:]]})
+
+
+@pytest.mark.parametrize("change", [
+    lambda g: [g], lambda g: 5, lambda g: None,  # the root is not an object: AttributeError
+    lambda g: dict(g, frames=float("inf")),  # int(inf): OverflowError
+    lambda g: _with_first(g, "keyframes", frame=float("inf")),
+    lambda g: _with_first(g, "attacks", start=float("-inf")),
+    lambda g: dict(g, guards=[{"start": float("inf"), "end": 1, "covers": ["head"], "kind": "block"}]),
+    lambda g: dict(g, name=["hook_r"]), lambda g: dict(g, name={"a": 1}),  # unhashable in the library: TypeError
+    lambda g: dict(g, name=5), lambda g: dict(g, name=""),
+])
+def test_an_action_file_of_the_wrong_shape_or_types_names_itself(tmp_path, change):
+    """JSON's Infinity, a root that is not an object and a name that is not a string ended in a
+    traceback (OverflowError, AttributeError, TypeError) instead of the file's one line."""
+    good = json.loads(open(LIB["hook_r"].source).read())
+    path = tmp_path / "odd.json"
+    path.write_text(json.dumps(change(good)))  # Infinity as JSON's Python dialect writes it
+    with pytest.raises(ActionError) as err:
+        load_action(path)
+    assert str(err.value).startswith(f"{path}: ") and "\n" not in str(err.value)
+
+
+def test_a_contact_sheet_over_a_folder_is_one_line(tmp_path, capsys):
+    """pygame.image.save raised pygame.error (a traceback) for a folder or a file it cannot write."""
+    from tools.cli import main
+
+    for target in (tmp_path, tmp_path / "sheet.png"):
+        if target != tmp_path:
+            target.mkdir()
+        assert main(["actions", "sheet", "-o", str(target)]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and err[0].startswith(f"quickjab actions: {target}"), err
+
+
 def test_contact_sheet_command_draws_every_action(tmp_path):
     import pygame
 

@@ -90,6 +90,27 @@ def test_export_import_round_trip(tmp_path):
     assert np.all(back.joints[0].offset == 0.0)
 
 
+def test_a_looping_action_is_exported_once_round(tmp_path):
+    """The guard loops: it never returns to the guard, so `bvh export --play guard` stepped it
+    for ever, its frame list growing by some 30 MB a second."""
+    import signal
+
+    def hung(*_):
+        raise TimeoutError("played_positions never finished a looping action")
+
+    old = signal.signal(signal.SIGALRM, hung)
+    signal.alarm(30)
+    try:
+        positions = played_positions(LIB, ["guard"], rest_frames=20)
+        assert main(["bvh", "export", "--play", "straight_l,guard,hook_r", "-o", str(tmp_path / "g.bvh")]) == 0
+    finally:
+        signal.alarm(0)
+        signal.signal(signal.SIGALRM, old)
+    assert len(positions) == 20 + LIB["guard"].frames + 20  # each action its own frames, a loop once round
+    expected = sum(LIB[n].frames for n in ("straight_l", "guard", "hook_r")) + 40
+    assert read_bvh(tmp_path / "g.bvh").frames == expected
+
+
 def test_any_channel_order_is_honoured():
     # one bone along +y under a root rotated 90 degrees about z then x: order matters
     text = """HIERARCHY

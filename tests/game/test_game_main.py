@@ -66,3 +66,17 @@ def test_one_owner_runs_a_command_for_both_command_lines(capsys, monkeypatch):
     ]
     with pytest.raises(ValueError):  # a bug is not input: its traceback shows
         run_command(parser, raising(ValueError("bug")))
+
+
+def test_a_file_name_with_a_line_break_still_gives_one_line(capsys, tmp_path):
+    """The message names the file as it is: a name holding a newline (legal on Linux) split the
+    error into two lines, the second without `quickjab`; other breaks str.splitlines() counts
+    (\\r, \\x0b, \\x1c, \\u2028...) likewise."""
+    from tools.cli import main
+
+    for name in ("new\nline.csv", "cr\rx.csv", "vt\x0bx.csv", "ls\u2028x.csv"):
+        path = tmp_path / name
+        path.write_text("x")
+        assert main(["recognize", str(path), "--templates", str(REPO / "game" / "assets" / "templates.npz")]) == 2
+        err = capsys.readouterr().err
+        assert len(err.splitlines()) == 1 and err.startswith("quickjab recognize: ") and repr(name)[1:-1] in err, err

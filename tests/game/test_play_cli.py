@@ -58,6 +58,38 @@ def test_a_screenshot_or_trace_in_a_missing_folder_is_refused_before_the_match(t
         assert exit_.value.code == 2 and len(err) == 1 and "no directory" in err[0], err
 
 
+@pytest.mark.parametrize("where, says", [
+    ("folder", "a directory"), ("corrupt.npz", "not a template file"), ("file.txt/t.npz", "not a directory"),
+])
+def test_a_templates_file_train_cannot_write_is_refused_before_the_session(tmp_path, monkeypatch, capsys, where, says) -> None:
+    """A bad -o (or a bad own templates file) was found only when the trials were done, after
+    minutes of a player's moves: all lost. --frames 2 ends the session long before that: the
+    run used to exit 0 with "nothing saved"."""
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "xdg"))
+    (tmp_path / "folder").mkdir()
+    (tmp_path / "corrupt.npz").write_bytes(b"not a zip")
+    (tmp_path / "file.txt").write_text("x")
+    target = tmp_path / where
+    assert main(["train", "--headless", "--demo", "--actions", "straight_r", "--frames", "2", "-o", str(target)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err[-1].startswith(f"quickjab train: {target}") and says in err[-1], err
+
+
+@pytest.mark.parametrize("argv", [
+    ["play", "--headless", "--frames", "2", "--source", "keyboard://", "--screenshot", "/dev/full"],
+    ["play", "--headless", "--frames", "2", "--source", "keyboard://", "--trace", "/dev/full"],
+    ["train", "--headless", "--demo", "--frames", "2", "--screenshot", "/dev/full"],
+])
+def test_a_screenshot_or_trace_that_cannot_be_written_names_its_file(tmp_path, monkeypatch, capsys, argv) -> None:
+    """/dev/full passes the folder check but takes nothing: pygame.error (a traceback) for the
+    screenshot, "[Errno 28] No space left on device" naming no file for the trace, as a full
+    disk would give."""
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "xdg"))
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err[-1].startswith(f"quickjab {argv[0]}: /dev/full: cannot"), err
+
+
 def test_training_saves_templates_that_play_then_uses(tmp_path, monkeypatch) -> None:
     monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "xdg"))
     assert main(["train", "--headless", "--demo", "--source", "keyboard://?seed=3",

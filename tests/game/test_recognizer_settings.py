@@ -61,6 +61,9 @@ def test_config_file_then_command_line():
     # nested past the parser's recursion limit (tomllib recurses per level): RecursionError
     ("[recognizer]\nnoise_g = " + "[" * 100_000 + "]" * 100_000 + "\n", "not a valid TOML file"),
     ("[recognizer]\nnoise_g = " + "{a = " * 50_000 + "1" + "}" * 50_000 + "\n", "not a valid TOML file"),
+    # an integer of over 4300 digits: tomllib's int() raised a plain ValueError (a traceback)
+    ("[recognizer]\nmain = " + "1" * 5000 + "\n", "not a valid TOML file (an integer of over 4300 digits"),
+    ("\ufeff[recognizer]\nnoise_g = 0.5\n", "not a valid TOML file"),  # a byte-order mark: TOML has none
 ])
 def test_a_bad_config_file_names_itself_in_one_line(text, says):
     path = write_config(text)

@@ -9,6 +9,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from engine import __version__
@@ -123,3 +124,96 @@ def test_unwritable_output_is_one_line(tmp_path, shared_data):
     src = shared_data / "punchbuddy" / "right-hook-50-matt-combo-lh-4.csv"
     r = quickjab("record", "--source", f"replay://{src}?speed=100", "-o", str(tmp_path / "no" / "dir" / "x.csv"))
     assert r.returncode == 2 and "Traceback" not in r.stderr and "x.csv" in r.stderr
+
+
+GOOD_REC = "t,rx,ry,rz,lx,ly,lz,label\n" + "".join(f"{i / 60:.6f},0.01,0.02,1.0,0.0,0.01,0.99,\n" for i in range(60))
+
+
+def _same_file_cases(d: Path) -> dict[str, tuple[list[str], Path]]:
+    """name -> (argv whose output is one of its inputs, that input)."""
+    rec, trial = d / "rec.csv", d / "trials" / "jab" / "1.csv"
+    rec.write_text(GOOD_REC)
+    trial.parent.mkdir(parents=True)
+    trial.write_text(GOOD_REC.replace(",\n", ",jab\n"))
+    tpl = d / "t.npz"
+    tpl.write_bytes((REPO / "game" / "assets" / "templates.npz").read_bytes())
+    bvh = d / "m.bvh"
+    bvh.write_text("HIERARCHY\n")  # never read: refused before
+    trace = d / "trace"
+    trace.write_text('{"traceEvents": []}')
+    return {
+        "recognize-recording": (["recognize", str(rec), "--templates", str(tpl), "-o", str(rec)], rec),
+        "recognize-templates": (["recognize", str(rec), "--templates", str(tpl), "-o", str(tpl)], tpl),
+        "build-trial": (["templates", "build", str(d / "trials"), "-o", str(trial)], trial),
+        "bvh-cut": (["bvh", "cut", str(bvh), "--start", "0", "--end", "1", "--name", "x", "-o", str(bvh)], bvh),
+        "record-replay": (["record", "--source", f"replay://{rec}", "--seconds", "0.2", "-o", str(rec)], rec),
+        "record-replay-link": (["record", "--source", f"replay://{d / 'link.csv'}", "--seconds", "0.2", "-o", str(rec)], rec),
+        "profile-plot": (["profile", str(trace), "--plot", str(trace)], trace),
+        "play-screenshot": (["play", "--headless", "--frames", "2", "--templates", str(tpl), "--screenshot", str(tpl)], tpl),
+        "scope-trace": (["scope", "--headless", "--frames", "2", "--source", f"replay://{rec}", "--trace", str(rec)], rec),
+        "train-screenshot": (["train", "--headless", "--demo", "--frames", "2", "-o", str(tpl), "--screenshot", str(tpl)], tpl),
+    }
+
+
+@pytest.mark.parametrize("name", ["recognize-recording", "recognize-templates", "build-trial", "bvh-cut", "record-replay",
+                                  "record-replay-link", "profile-plot", "play-screenshot", "scope-trace", "train-screenshot"])
+def test_an_output_that_is_an_input_is_refused_before_it_is_written(tmp_path, capsys, monkeypatch, name):
+    """`recognize rec.csv -o rec.csv` emptied the recording, `templates build trials -o
+    trials/jab/1.csv` wrote the templates over a trial, `bvh cut a.bvh -o a.bvh` replaced the
+    capture with JSON, `record --source replay://a.csv -o a.csv` cut it to its first seconds:
+    each exited 0. Now: one line naming both, exit 2, the input as it was."""
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "xdg"))
+    argv, victim = _same_file_cases(tmp_path)[name]
+    (tmp_path / "link.csv").symlink_to(tmp_path / "rec.csv")
+    before = victim.read_bytes()
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err[-1].startswith("quickjab") and "is the input" in err[-1] and str(victim) in err[-1], err
+    assert victim.read_bytes() == before
+
+
+@pytest.mark.parametrize("argv", [
+    ["record", "--source", "demo://?rate=100", "--seconds", "0.8", "-o", "/dev/full"],
+    ["templates", "build", "{trials}", "-o", "/dev/full"],
+    ["bvh", "export", "--play", "straight_l", "-o", "/dev/full"],
+    ["recognize", "{punch}", "--templates", str(REPO / "game" / "assets" / "templates.npz"), "-o", "/dev/full"],
+])
+def test_a_full_disk_names_the_file_it_could_not_write(tmp_path, capsys, argv):
+    """/dev/full is a disk with no room: ENOSPC names no file, and the line was only
+    "[Errno 28] No space left on device"."""
+    trial = tmp_path / "trials" / "jab" / "1.csv"
+    trial.parent.mkdir(parents=True)
+    trial.write_text(GOOD_REC.replace(",\n", ",jab\n"))
+    punch = tmp_path / "punch.csv"  # a punch: the recognizer has events to write
+    punch.write_text("t,rx,ry,rz,lx,ly,lz\n" + "".join(f"{i / 60:.5f},{3 * np.sin(i / 5):.3f},0,1,0,0,1\n" for i in range(60)))
+    assert main([a.format(trials=tmp_path / "trials", punch=punch) for a in argv]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err[-1].startswith(f"quickjab {argv[0]}: /dev/full") and "No space left" in err[-1], err
+
+
+def _file_size_limit() -> None:  # the child: files over 8 KB cannot be written, as on a full disk
+    import resource
+    import signal
+
+    signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # a write past the limit fails with EFBIG instead
+    resource.setrlimit(resource.RLIMIT_FSIZE, (8192, 8192))
+
+
+@pytest.mark.parametrize("argv", [
+    ["play", "--headless", "--frames", "2", "--source", "keyboard://", "--screenshot", "{out}.png"],
+    ["scope", "--headless", "--frames", "2", "--screenshot", "{out}.png"],
+    ["actions", "sheet", "-o", "{out}.png"],
+    ["profile", "{trace}", "--plot", "{out}.png"],
+])
+def test_an_image_that_cannot_be_written_whole_is_an_error_naming_it(tmp_path, argv):
+    """pygame.image.save ignores a failed write: on a full disk play, scope and the contact
+    sheet said "wrote" and left a truncated PNG (exit 0); matplotlib's error named no file."""
+    trace = tmp_path / "t.json"
+    trace.write_text('{"traceEvents": [{"ph": "X", "name": "frame", "ts": 0, "dur": 9}]}')
+    out = tmp_path / "out"
+    env = {**os.environ, "PYTHONPATH": str(REPO), "SDL_VIDEODRIVER": "dummy", "SDL_AUDIODRIVER": "dummy",
+           "XDG_DATA_HOME": str(tmp_path / "xdg")}
+    r = subprocess.run([sys.executable, "-m", "tools.cli", *(a.format(out=out, trace=trace) for a in argv)], cwd=REPO,
+                       env=env, capture_output=True, text=True, timeout=120, preexec_fn=_file_size_limit)
+    last = r.stderr.strip().splitlines()[-1]
+    assert r.returncode == 2 and "Traceback" not in r.stderr and last.startswith(f"quickjab {argv[0]}: {out}.png"), r.stderr
