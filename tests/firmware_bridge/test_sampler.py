@@ -179,11 +179,7 @@ def test_two_kinds_of_imu_go_out_in_the_hellos_scales():
     # per g, 65.5 per dps) as A and an LSM6DS3 (4098, 57.143) as B. A HELLO has one set of
     # scales, A's, and B's counts went out unconverted: its accel read 0.05 % high and its gyro
     # (with gyro on) 13 % low
-    import os
-    import time
-    import tty
-
-    from engine.sensors import open_source
+    from tests.engine.sensors.test_serial_hostile import _write_and_poll
 
     class LSM(FakeIMU):
         kind = protocol.IMU_LSM6DS3
@@ -193,24 +189,10 @@ def test_two_kinds_of_imu_go_out_in_the_hellos_scales():
         def read(self):
             return (4098, -2049, 0, 5714, -28571, 0)  # 1 g, -0.5 g, 0; 100 dps, -500 dps, 0
 
-    master, slave = os.openpty()
-    tty.setraw(slave)
-    src = open_source(f"serial://{os.ttyname(slave)}")
     wire = Wire()
-    try:
-        s = Sampler([FakeIMU((0, 0, 4096)), LSM(())], wire.write, FakeTicks(), rate_hz=200, gyro=True)
-        run(s, 5)
-        os.write(master, bytes(wire.data))
-        got = []
-        for _ in range(100):
-            got += src.poll()
-            if len(got) == 5:
-                break
-            time.sleep(0.01)
-    finally:
-        src.close()
-        os.close(master)
-        os.close(slave)
+    s = Sampler([FakeIMU((0, 0, 4096)), LSM(())], wire.write, FakeTicks(), rate_hz=200, gyro=True)
+    run(s, 5)
+    src, got = _write_and_poll(bytes(wire.data), lambda src: src.stats.get("frames_ok", 0) == 6)  # HELLO, 5 SAMPLEs
     assert len(got) == 5 and src.hello.accel_lsb_per_g == 4096
     for sample in got:
         assert abs(sample.accel[1] - [1, -0.5, 0]).max() < 2e-4  # B in g with the HELLO's scale

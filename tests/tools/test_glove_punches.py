@@ -242,19 +242,25 @@ def test_real_gloves_first_decisions_name_the_moving_hand(punchbuddy, monkeypatc
     assert on["final_correct"] >= off["final_correct"] - 0.01
 
 
+def _without_a_character_rule_on_and_off(punchbuddy, monkeypatch, person: str, rule: str) -> tuple[dict, dict]:
+    """`person`'s across-sessions row with no character (--clip-frames 0), with the recognizer's
+    `rule` (a method saying whether it applies) as it is, then turned off."""
+    from engine.recognition import DualBufferRecognizer
+
+    def row() -> dict:
+        return evaluate_gloves(punchbuddy, [6], clip_frames=0)[f"punchbuddy {person} across sessions"][0].row()
+
+    on = row()
+    monkeypatch.setattr(DualBufferRecognizer, rule, lambda self: False)
+    return on, row()
+
+
 def test_real_gloves_without_a_character_start_as_many_punches(punchbuddy, monkeypatch):
     """With no character calling character_finished() (--clip-frames 0, as `quickjab recognize`
     replays), a bouncing boxer's decided motion never came to rest and held every punch after it:
     egor's punches started 62.7 %. Ending a motion that has outlasted its action's templates
     (`_outlasted`) starts 88.9 % of them."""
-    from engine.recognition import DualBufferRecognizer
-
-    def row() -> dict:
-        return evaluate_gloves(punchbuddy, [6], clip_frames=0)["punchbuddy egor across sessions"][0].row()
-
-    on = row()
-    monkeypatch.setattr(DualBufferRecognizer, "_outlasted", lambda self: False)
-    off = row()
+    on, off = _without_a_character_rule_on_and_off(punchbuddy, monkeypatch, "egor", "_outlasted")
     assert on["started"] >= off["started"] + 0.15 and on["final_correct"] >= off["final_correct"] + 0.15
 
 
@@ -263,12 +269,5 @@ def test_real_gloves_without_a_character_keep_the_other_hands_punch(punchbuddy, 
     hand's next punch, which started mid-way or not at all: final 57.4 %. Once the motion has run
     its best template's course, the other hand's launch ends it as it ends the discard
     (`_ran_course`): final 88.9 %."""
-    from engine.recognition import DualBufferRecognizer
-
-    def row() -> dict:
-        return evaluate_gloves(punchbuddy, [6], clip_frames=0)["punchbuddy matt across sessions"][0].row()
-
-    on = row()
-    monkeypatch.setattr(DualBufferRecognizer, "_ran_course", lambda self: False)
-    off = row()
+    on, off = _without_a_character_rule_on_and_off(punchbuddy, monkeypatch, "matt", "_ran_course")
     assert on["first_correct"] >= off["first_correct"] + 0.15 and on["final_correct"] >= off["final_correct"] + 0.2

@@ -139,16 +139,22 @@ def test_big_burst_is_drained_in_one_poll():
         os.close(slave)
 
 
+def start_linked(emu: Emulator, seconds: float, link: str) -> threading.Thread:
+    """The emulator running in a thread, once its port's link exists (waited for up to 1 s)."""
+    th = start_in_thread(emu, seconds)
+    for _ in range(100):
+        if os.path.exists(link):
+            break
+        time.sleep(0.01)
+    return th
+
+
 def test_emulator_unplug_replug_and_wrap_are_survived(tmp_path):
     link = str(tmp_path / "bridge")
     emu = Emulator(synthetic_motion(), rate_hz=200, link=link, ticks_start=(1 << 30) - 700_000,
                    faults=Faults(unplug_at=[0.8], unplug_s=0.4, garbage_every=0.1, stall_at=[2.6], stall_s=0.3,
                                  reboot_at=[3.2]))
-    th = start_in_thread(emu, 4.6)
-    for _ in range(100):
-        if os.path.exists(link):
-            break
-        time.sleep(0.01)
+    th = start_linked(emu, 4.6, link)
     src = open_source(f"serial://{link}?retry=0.1")
     states, got = [src.state], []
     try:
@@ -394,11 +400,7 @@ def test_an_emulated_board_with_a_counter_wider_than_32_bits_streams(tmp_path):
     # and the host never got a sample. Such a board sends its counter's low 32 bits: ts_bits 32
     link = str(tmp_path / "bridge")
     emu = Emulator.from_def(synthetic_motion(), EmulatorDef(ts_bits=40, ticks_start=(1 << 32) - 300_000), link=link)
-    th = start_in_thread(emu, 1.2)
-    for _ in range(100):
-        if os.path.exists(link):
-            break
-        time.sleep(0.01)
+    th = start_linked(emu, 1.2, link)
     src = open_source(f"serial://{link}")
     got = []
     try:
