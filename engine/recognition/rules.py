@@ -247,10 +247,11 @@ class DecisionRules:
         other = self._other_hands[self._hand_action]
         own_peak = max((p for p, o in zip(self._hand_peak, other, strict=True) if not o), default=0.0)  # before this frame
         self._hand_peak = [max(p, d) for p, d in zip(self._hand_peak, dev, strict=True)]
-        if own_peak <= 0.0 or not (self.state == DISCARD or self._ran_course()):
+        if own_peak <= 0.0:
             return
         launch = max((d for d, o in zip(dev, other, strict=True) if o), default=0.0)
-        if launch >= OTHER_HAND_RATIO * own_peak and launch >= self.gate.noise_g:
+        strong = launch >= OTHER_HAND_RATIO * own_peak and launch >= self.gate.noise_g
+        if strong and (self.state == DISCARD or self._ran_course()):  # (the DTW's scores read only then)
             if self.state == ACTIVE:
                 self._end_complete(events)
             self._begin_motion_state()
