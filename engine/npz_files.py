@@ -47,10 +47,11 @@ def _declared_members(fh) -> int:
     empty members took 115 MB before their count could be refused). 0 when there is no end record."""
     try:
         end = zipfile._EndRecData(fh)  # the record zipfile itself reads the count from
-    except AttributeError:  # a zipfile without it: the count is checked once the directory is read
-        end = None
+        count = 0 if end is None else int(end[zipfile._ECD_ENTRIES_TOTAL])
+    except AttributeError:  # a zipfile without them: the count is checked once the directory is read
+        count = 0
     fh.seek(0)
-    return 0 if end is None else int(end[zipfile._ECD_ENTRIES_TOTAL])
+    return count
 
 
 def read_npz(path: str | os.PathLike, max_bytes: int, keep: Callable[[str], bool] | None = None) -> dict[str, np.ndarray]:
