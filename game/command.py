@@ -7,6 +7,7 @@ through it; it lives in game because game never imports tools."""
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 
 from engine.errors import InputError
@@ -25,6 +26,11 @@ def run_command(parser: argparse.ArgumentParser, args: argparse.Namespace) -> in
         return 0
     try:
         return int(args.func(args) or 0)
+    except BrokenPipeError:
+        # the reader of our output went away (`quickjab recognize ... | head`): quiet, as a command
+        # ended by SIGPIPE is; stdout to /dev/null, or the interpreter's last flush fails again
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 141  # 128 + SIGPIPE, what a shell reports for it
     except (InputError, OSError) as exc:  # OSError: str names the file
         print(f"quickjab {args.command}: {one_line(str(exc))}", file=sys.stderr)
         return 2

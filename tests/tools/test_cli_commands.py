@@ -217,3 +217,26 @@ def test_an_image_that_cannot_be_written_whole_is_an_error_naming_it(tmp_path, a
                        env=env, capture_output=True, text=True, timeout=120, preexec_fn=_file_size_limit)
     last = r.stderr.strip().splitlines()[-1]
     assert r.returncode == 2 and "Traceback" not in r.stderr and last.startswith(f"quickjab {argv[0]}: {out}.png"), r.stderr
+
+
+def test_a_reader_that_goes_away_ends_the_command_quietly(tmp_path):
+    # `quickjab recognize ... | head -1`: the pipe closes after the first event, and the command
+    # printed "[Errno 32] Broken pipe" and exited 2, as for a bad file. Now it ends quietly, with
+    # the status a shell gives a command that SIGPIPE ended
+    from engine.recognition import Templates
+    from tests.engine.recognition.test_dual_buffer import bump, rest
+
+    rng = np.random.default_rng(0)
+    trials = {a: [np.vstack([rest(10), bump(k, 3.0), rest(10)]) + rng.normal(0, 0.02, (44, 3)) for _ in range(3)]
+              for k, a in enumerate(("jab", "hook"))}
+    Templates.from_trials(trials).save(tmp_path / "t.npz")
+    frames = np.vstack([np.vstack([rest(30), bump(k % 2, 3.0)]) for k in range(800)])  # ~200 KB of events: past a pipe's 64 KiB
+    rows = "\n".join(f"{i / 60:.4f},{x:.3f},{y:.3f},{z:.3f}" for i, (x, y, z) in enumerate(frames))
+    (tmp_path / "rec.csv").write_text("t,rx,ry,rz\n" + rows + "\n")
+    env = {**os.environ, "PYTHONPATH": str(REPO)}
+    cmd = [sys.executable, "-m", "tools.cli", "recognize", str(tmp_path / "rec.csv"), "--templates", str(tmp_path / "t.npz")]
+    proc = subprocess.Popen(cmd, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    assert proc.stdout.readline()  # one event, then the reader goes away
+    proc.stdout.close()
+    _, err = proc.communicate(timeout=120)
+    assert err.decode() == "" and proc.returncode == 141
