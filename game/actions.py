@@ -35,6 +35,11 @@ KINDS = ("attack", "defense", "step", "reaction", "idle")
 FPS = STEP_HZ  # clips hold one frame per step
 MAX_FRAMES = 3600  # one minute: the longest shipped action is under 2 s
 MAX_FILE_BYTES = 16 * 2**20  # an action file is ~10 KB
+# Joint positions and root motion in metres: the shipped poses stay within 1.7 m of the root, a
+# step moves it 0.3 m. Past these, a value is no pose but overflow waiting to happen (1e308 loaded,
+# and the contact sheet's projection overflowed).
+MAX_POSE_M = 10.0
+MAX_ROOT_M = 100.0
 
 # Hit reactions: hit_<where>_<side>_<strength>; side is where the blow comes FROM as seen by
 # the boxer who is hit (a right hook from the opponent lands on the left: "left").
@@ -231,6 +236,8 @@ def action_from_json(data: dict, source: str = "") -> Action:
         ]
         if not (np.isfinite(root).all() and all(np.isfinite([w.damage, w.reach]).all() for w in attacks)):
             raise ActionError(f"{where}: root keys, damage and reach must be finite numbers")
+        if np.abs(key_poses).max() > MAX_POSE_M or (len(root) and np.abs(root[:, 1:]).max() > MAX_ROOT_M):
+            raise ActionError(f"{where}: poses must lie within {MAX_POSE_M:g} m and root keys within {MAX_ROOT_M:g} m")
         for w in attacks:
             if w.hand not in ("l", "r") or not 0 <= w.start <= w.end < frames:
                 raise ActionError(f"{where}: bad attack window {w}")

@@ -436,6 +436,9 @@ def bad_action_dirs(d: Path) -> dict[str, str]:
                          ("deep", None), ("fifo", None),
                          ("frames-inf", {"frames": float("inf")}),  # int(Infinity): OverflowError
                          ("name-list", {"name": ["hook_r"]}),  # unhashable in the library: TypeError
+                         ("pose-1e307", {"keyframes": [{**good["keyframes"][0],
+                                                        "pose": [[1e307] * 3] * len(good["keyframes"][0]["pose"])},
+                                                       *good["keyframes"][1:]]}),  # loaded; the sheet overflowed
                          ("not-object", None)):  # a JSON list: AttributeError
         folder = d / "actions" / name
         if folder.exists():

@@ -187,6 +187,26 @@ def test_an_action_file_of_the_wrong_shape_or_types_names_itself(tmp_path, chang
     assert str(err.value).startswith(f"{path}: ") and "\n" not in str(err.value)
 
 
+def _pose_scaled(good: dict, k: float) -> dict:
+    return _with_first(good, "keyframes", pose=[[k * v for v in p] for p in good["keyframes"][0]["pose"]])
+
+
+@pytest.mark.parametrize("change", [
+    lambda g: _pose_scaled(g, 1e307),  # 1e308 coordinates loaded; the contact sheet overflowed
+    lambda g: _pose_scaled(g, 100.0),  # a joint 100 m from the root is no pose
+    lambda g: dict(g, root=[[0, 1e6, 0, 0], [5, 0, 0, 0]]),
+])
+def test_an_action_whose_poses_lie_metres_away_is_refused(tmp_path, change):
+    good = json.loads(open(LIB["hook_r"].source).read())
+    path = tmp_path / "far.json"
+    path.write_text(json.dumps(change(good)))
+    with pytest.raises(ActionError, match="within") as err:
+        load_action(path)
+    assert str(err.value).startswith(f"{path}: ")
+    path.write_text(json.dumps(_pose_scaled(good, 1.0)))  # the same file as shipped loads
+    assert load_action(path).name == "hook_r"
+
+
 def test_a_contact_sheet_over_a_folder_is_one_line(tmp_path, capsys):
     """pygame.image.save raised pygame.error (a traceback) for a folder or a file it cannot write."""
     from tools.cli import main
