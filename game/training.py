@@ -3,9 +3,10 @@
 Walks the player through the 13 actions. For each: the boxer shows the action (looping
 animation), then five trials: "get ready" (the hands still, so the trial starts at rest),
 "GO!" and a recording window of the active source's 60 Hz frames. Then the trials build the
-player's templates (engine.recognition.Templates.from_trials, paper section III) from the 3
-most representative trials of each action (a player's first trials are often warm-ups, and a
-trial can be cut off), saved in the user's data directory where `quickjab play` finds them from
+player's templates (engine.recognition.Templates.from_trials, paper section III) from every
+usable trial of each action (`keep="usable"`: a cut-off trial, a warm-up unlike the others and a
+trial that looks like another action are dropped; keeping all the good ones beats keeping the 3
+most representative, docs/recognition.md, twentieth round), saved in the user's data directory where `quickjab play` finds them from
 then on. The "get ready" rest before each trial also tells the recognizer the sensor's resting
 noise (its automatic gate, Templates.rest_noise).
 
@@ -44,7 +45,7 @@ if TYPE_CHECKING:  # pygame loads only when the screen opens (the CLI imports th
 
 HZ = STEP_HZ
 TRIALS = 5
-KEEP = 3  # the most representative trials of each action build its templates
+KEEP = "usable"  # every trial not cut off, odd or like another action's builds the templates
 SHOW_STEPS = 90  # the animation alone before the first trial of an action
 READY_STEPS = 60  # "get ready": the hands held still
 LEAD_IN = 30  # frames of the ready phase kept at the start of a trial (the rest before)
@@ -308,7 +309,7 @@ class TrainingScreen:
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("train", help="Train your moves: record 5 trials of each action, build your templates from the 3 most representative",
+    p = sub.add_parser("train", help="Train your moves: record 5 trials of each action, build your templates from the usable ones",
                        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--source", default=None, help="source URL (default: the first Wiimote, else the keyboard)")
     p.add_argument("--demo", action="store_true", help="the virtual player performs every move by itself")

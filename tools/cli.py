@@ -19,7 +19,7 @@ from engine import __version__
 # A module may add several commands (tools.recognition_commands: templates, recognize, evaluate).
 COMMANDS: dict[str, tuple[str, str]] = {
     "play": ("game.play", "box: a match against the CPU, or two players with --players 2 (Wiimote, serial IMUs or the keyboard)"),
-    "train": ("game.training", "Train your moves: record 5 trials of each action, build your templates from the 3 most representative"),
+    "train": ("game.training", "Train your moves: record 5 trials of each action, build your templates from the usable ones"),
     "record": ("tools.record", "record a source to a CSV file"),
     "devices": ("tools.devices", "list Wiimotes and serial ports"),
     "scope": ("tools.scope", "show a source's acceleration live (sensor oscilloscope)"),

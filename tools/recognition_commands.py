@@ -128,6 +128,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     b.add_argument("--feature", choices=FEATURES, default=None, help="what DTW compares (default log)")
     b.add_argument("--mirror", action="store_true", help="mirror for a left-handed player (swap hands, flip x, swap _l/_r)")
     b.add_argument("--glob", default="*.csv", help="which trial files to use in each action folder (default *.csv)")
+    b.add_argument("--keep", type=_keep, default=None,
+                   help="keep each action's KEEP most representative trials, or 'usable': every trial not cut off, "
+                        "odd or like another action's (as `train` does); default all")
     b.add_argument("--recognizer", action="append", default=[], metavar="NAME=VALUE",
                    help="a recognizer setting to save with the templates, e.g. noise_g=0.5 (repeatable)")
     b.set_defaults(func=cmd_build)
@@ -185,8 +188,9 @@ def _register_evaluate(sub: argparse._SubParsersAction) -> None:
                    help="--phone-punches: pool this many disjoint draws of --trials templates per kind "
                         "(punches 1-3, 4-6, ...; default 1)")
     e.add_argument("--seed", type=arguments.seed, default=0, help="--mixed: the shuffle's seed (default 0)")
-    e.add_argument("--keep", type=arguments.int_range(1, 1000), default=None,
-                   help="templates: keep each action's KEEP most representative trials (e.g. --trials 5 --keep 3)")
+    e.add_argument("--keep", type=_keep, default=None,
+                   help="templates: keep each action's KEEP most representative trials (e.g. --trials 5 --keep 3), "
+                        "or 'usable': every trial not cut off, odd or like another action's (as `train` does)")
     e.add_argument("--every", type=arguments.int_range(1, 1_000_000), default=1, help="use every k-th test trial (quicker sweeps)")
     e.add_argument("--folds", type=arguments.int_range(2, MAX_FOLDS), default=2, help="labelled CSV without templates: K contiguous folds (default 2)")
     e.add_argument("--mains", type=_mains, default=_mains("1-12"), help="main-buffer sizes (default 1-12; e.g. 6 or 1-12,auto)")
@@ -206,7 +210,7 @@ def cmd_build(args: argparse.Namespace) -> int:
     refuse_overwriting({"-o": args.output}, [f for fs in trial_paths(args.trials_dir, args.glob).values() for f in fs])
     settings = parse_assignments(args.recognizer)
     trials = load_trials_dir(args.trials_dir, args.glob)
-    kwargs = {k: v for k, v in (("method", args.method), ("feature", args.feature)) if v}
+    kwargs = {k: v for k, v in (("method", args.method), ("feature", args.feature), ("keep", args.keep)) if v}
     templates = templates_from_trials(trials, args.trials_dir, **kwargs)
     if args.mirror:
         templates = templates.mirrored()
@@ -289,6 +293,16 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         ev.plot(results, args.plot)
         print(f"wrote {args.plot}")
     return 0
+
+
+def _keep(text: str) -> int | str:
+    """--keep: a count of trials (1-1000) or `usable`."""
+    if text == "usable":
+        return text
+    try:
+        return arguments.int_range(1, 1000)(text)
+    except argparse.ArgumentTypeError as exc:
+        raise argparse.ArgumentTypeError(f"{exc} (or 'usable')") from None
 
 
 def _evaluate_uwave(args: argparse.Namespace, kw: dict, tk: dict) -> dict[str, list[dict]]:

@@ -49,6 +49,16 @@ REJECT_K = 2.0  # threshold = mean + REJECT_K * std of same-action training scor
 REJECT_RATIO = 2.0  # ... and at least REJECT_RATIO * their max (docs/recognition.md)
 REJECT_FLOOR_G = 0.05  # and never below this (g): identical trials must not reject all noise
 CUT_OFF_FRACTION = 0.5  # representative_trials(): shorter or fainter than this x the median: cut off
+# usable_trials() (`keep="usable"`, what `train` keeps of its 5 trials; docs/recognition.md,
+# twentieth round): a trial whose summed distance to its action's others is over ODD_RATIO x their
+# median is an odd one (a warm-up); one whose nearest trial of another action is closer than
+# CONFUSABLE_MARGIN x its mean distance to its own action's, and that ratio under CONFUSABLE_REL x
+# its action's median ratio, looks like another action and would draw that action's punches. At
+# least MIN_USABLE trials of an action stay.
+ODD_RATIO = 1.5
+CONFUSABLE_MARGIN = 1.1
+CONFUSABLE_REL = 0.9
+MIN_USABLE = 2
 REST_NOISE_QUANTILE = 90  # resting_noise(): this percentile of the resting activity ...
 REST_NOISE_MIN_FRAMES = 6  # ... over at least this many resting frames
 # Uncompressed; the shipped set is under 1 MB, and a template per trial of uWave's 4,480 (one
@@ -262,23 +272,81 @@ def representative_trials(trials: Sequence[np.ndarray], keep: int = 3, feature: 
     trials = [np.asarray(t, dtype=np.float64) for t in trials]
     if len(trials) <= keep:
         return trials
-    motions = []
+    motions = _motions(trials, feature)
+    cand = _whole(trials, motions, keep)
+    d = pairwise_distances([motions[i] for i in cand])
+    kept = list(range(len(cand)))
+    while len(kept) > keep:
+        kept.pop(int(np.argmax(d[np.ix_(kept, kept)].sum(axis=1))))
+    return [trials[cand[i]] for i in kept]
+
+
+def usable_trials(trials: Mapping[str, Sequence[np.ndarray]], feature: str = DEFAULT_FEATURE) -> dict[str, list[np.ndarray]]:
+    """Every trial that makes a good template, per action, in recorded order: not cut off or
+    faint (as `representative_trials`), not an odd one among its action's, not one that looks like
+    another action (see ODD_RATIO, CONFUSABLE_MARGIN). Keeping every good trial beats keeping the
+    3 most representative of 5 (docs/recognition.md, twentieth round)."""
+    trials = {a: [np.asarray(t, dtype=np.float64) for t in ts] for a, ts in trials.items()}
+    motions = {a: _motions(ts, feature) for a, ts in trials.items()}
+    cand = {a: _whole(ts, motions[a], MIN_USABLE) for a, ts in trials.items()}
+    index = [(a, i) for a in trials for i in cand[a]]
+    d = pairwise_distances([motions[a][i] for a, i in index])
+    owner = np.array([a for a, _ in index])
+    rows = {a: list(np.flatnonzero(owner == a)) for a in trials}
+    for a, own in [(a, list(own)) for a, own in rows.items()]:  # odd ones first, the farthest first
+        sums = d[np.ix_(own, own)].sum(axis=1)
+        for k in np.argsort(-sums, kind="stable"):
+            if len(rows[a]) > MIN_USABLE and sums[k] > ODD_RATIO * np.median(sums):
+                rows[a].remove(own[k])
+    alive = np.zeros(len(index), dtype=bool)
+    alive[[k for own in rows.values() for k in own]] = True
+    for a, own in [(a, list(own)) for a, own in rows.items()]:
+        others = np.flatnonzero(alive & (owner != a))
+        if len(own) <= MIN_USABLE or not len(others):
+            continue
+        near = d[np.ix_(own, others)].min(axis=1)
+        mine = d[np.ix_(own, own)].sum(axis=1) / (len(own) - 1)
+        ratio = near / np.maximum(mine, 1e-12)
+        bar = min(CONFUSABLE_MARGIN, CONFUSABLE_REL * float(np.median(ratio)))
+        for k in np.argsort(ratio, kind="stable"):
+            if len(rows[a]) > MIN_USABLE and ratio[k] < bar:
+                rows[a].remove(own[k])
+    return {a: [trials[a][index[k][1]] for k in sorted(rows[a])] for a in trials}
+
+
+def _motions(trials: Sequence[np.ndarray], feature: str) -> list[np.ndarray]:
+    """Each trial's trimmed motion in `feature`s, from its own rest."""
+    out = []
     for t in trials:
         sig, on = trim_rest(t)
-        motions.append(features(sig[on:], trial_rest(t)[0], feature))
+        out.append(features(sig[on:], trial_rest(t)[0], feature))
+    return out
+
+
+def _whole(trials: Sequence[np.ndarray], motions: Sequence[np.ndarray], least: int) -> list[int]:
+    """The trials neither cut off nor faint (under CUT_OFF_FRACTION of the median length or peak
+    activity), or all of them when fewer than `least` would be left."""
     lengths = np.array([len(m) for m in motions], dtype=float)
     peaks = np.array([motion_activity(t)[1].max() for t in trials])
     ok = (lengths >= CUT_OFF_FRACTION * np.median(lengths)) & (peaks >= CUT_OFF_FRACTION * np.median(peaks))
-    cand = list(np.flatnonzero(ok)) if ok.sum() >= keep else list(range(len(trials)))
-    d = np.zeros((len(trials), len(trials)))
-    for i in cand:
-        for j in cand:
-            if i < j:
-                d[i, j] = d[j, i] = dtw_distance(motions[i], motions[j])
-    while len(cand) > keep:
-        sub = d[np.ix_(cand, cand)].sum(axis=1)
-        cand.pop(int(np.argmax(sub)))
-    return [trials[i] for i in sorted(cand)]
+    return [int(i) for i in np.flatnonzero(ok)] if ok.sum() >= least else list(range(len(trials)))
+
+
+def pairwise_distances(motions: Sequence[np.ndarray]) -> np.ndarray:
+    """(n, n) closed-end normalized DTW distances (`dtw_distance`) between every two motions, one
+    DTW over all of them per motion."""
+    n = len(motions)
+    d = np.zeros((n, n))
+    if n < 2:
+        return d
+    dtw = IncrementalDTW([np.asarray(m, dtype=np.float64) for m in motions], method="scan")
+    for i, m in enumerate(motions):
+        dtw.reset()
+        for x in m:
+            dtw.push(x)
+        d[i] = dtw.closed_scores()
+    np.fill_diagonal(d, 0.0)
+    return (d + d.T) / 2  # the same up to the summation order; exactly symmetric
 
 
 def _medoid(seqs: list[np.ndarray]) -> int:
@@ -386,18 +454,21 @@ class Templates:
         method: str = DEFAULT_METHOD,
         reject_k: float = REJECT_K,
         feature: str = DEFAULT_FEATURE,
-        keep: int | None = None,
+        keep: int | str | None = None,
     ) -> Templates:
         """Templates from {action: [trial (n, D), ...]} at 60 Hz in g, gravity included. With
-        `keep`, each action keeps only its `keep` most representative trials
-        (`representative_trials`: e.g. 5 recorded, 3 kept)."""
+        `keep` k, each action keeps only its k most representative trials
+        (`representative_trials`: e.g. 5 recorded, 3 kept); with `keep="usable"`, every trial
+        that makes a good template (`usable_trials`, what `train` keeps)."""
         if method not in METHODS:
             raise ValueError(f"method must be one of {METHODS}, not {method!r}")
         features(np.zeros((1, 3)), np.zeros(3), feature)  # validates the name
         trials, _ = _check_trials(trials)
-        if keep is not None:
-            if keep < 1:
-                raise ValueError(f"keep must be >= 1, not {keep}")
+        if keep == "usable":
+            trials = usable_trials(trials, feature)
+        elif keep is not None:
+            if isinstance(keep, str) or keep < 1:
+                raise ValueError(f"keep must be >= 1 or 'usable', not {keep!r}")
             trials = {a: representative_trials(ts, keep, feature) for a, ts in trials.items()}
         actions, signals, gravity, onsets, thresholds = [], [], [], [], []
         for action, items in trials.items():

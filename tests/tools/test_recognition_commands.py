@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from engine.recognition import Templates
 from engine.recording import Recording, write_recording
 from tools.cli import main
 
@@ -479,3 +480,18 @@ def test_evaluate_phone_punches_pools_template_draws(tmp_path, capsys):
     assert main(["evaluate", "--phone-punches", str(tmp_path), "--mains", "6", "--draws", "3"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "right_*_fast.csv" in err[0] and "too few for template draw 3" in err[0]
+
+
+def test_templates_build_and_evaluate_keep_usable_trials(tmp_path, trials_dir, capsys):
+    """`--keep usable` (as `train`): a warm-up unlike the others is dropped, the good ones kept."""
+    warm_up = np.vstack([rest(8), bump(1, 2.0, 40), rest(8)])
+    write(trials_dir / "jab" / "3.csv", warm_up, "jab")
+    for keep, jabs in (("usable", 3), ("2", 2), (None, 4)):
+        out = tmp_path / f"t{keep}.npz"
+        assert main(["templates", "build", str(trials_dir), "-o", str(out), *(["--keep", keep] if keep else [])]) == 0
+        assert Templates.load(out).actions.count("jab") == jabs
+    assert main(["evaluate", "--train", str(trials_dir), str(trials_dir), "--keep", "usable"]) == 0
+    capsys.readouterr()
+    with pytest.raises(SystemExit) as exit_info:
+        main(["templates", "build", str(trials_dir), "--keep", "best"])
+    assert exit_info.value.code == 2 and "'usable'" in capsys.readouterr().err
