@@ -102,6 +102,17 @@ def test_play_loads_no_numba_or_matplotlib():
     assert not mods & (set(COMMAND_MODULES) - {"game.play"})
 
 
+def test_play_never_loads_numpy_ma():
+    """np.unique and np.percentile import numpy.ma (1.3 MB, 7 ms) on first use: at start-up (the
+    graph's phase bins), then inside a game frame (the auto gate's first learning, 30 frames in).
+    The game does without both."""
+    mods = loaded_after("""
+        from tools.cli import main
+        assert main(["play", "--demo", "--headless", "--frames", "240", "--no-sound"]) == 0
+    """)
+    assert "engine.recognition.gate" in mods and "numpy.ma" not in mods
+
+
 def test_train_demo_opens_the_virtual_player_without_looking_for_a_wiimote():
     mods = run_in_fresh(["train", "--demo", "--headless", "--frames", "1", "--actions", "straight_r"])
     assert {"game.training", "game.keyboard_source"} <= mods

@@ -11,6 +11,7 @@ import pytest
 
 from engine.recognition import DualBufferRecognizer, Templates, gate, rules
 from engine.recognition import dual_buffer as db
+from engine.recognition.gate import percentile
 from engine.recognition.templates import features, grip_features, representative_trials
 
 G = np.array([0.0, 0.0, 1.0])
@@ -360,3 +361,20 @@ def test_representative_trials_drop_the_cut_off_and_the_odd_one():
     assert representative_trials(good[:2], keep=3) == good[:2]  # fewer than keep: all of them
     tm = Templates.from_trials({"jab": [warm_up, *good, cut_off]}, keep=3)
     assert len(tm) == 3
+
+
+def test_the_gates_percentile_is_numpys_bit_for_bit():
+    """gate.percentile replaces np.percentile (which imports numpy.ma mid-game); the auto gate
+    must learn exactly what it learnt before."""
+    rng = np.random.default_rng(11)
+    for n in [*range(1, 40), 120, 600]:
+        for scale in (1e-3, 1.0, 40.0):
+            a = rng.random(n) * scale
+            if n % 3 == 0:
+                a = np.round(a, 1)  # ties
+            for q in (0, 10, 25, 50, 90, 99.9, 100, float(rng.random() * 100)):
+                assert percentile(a, q) == float(np.percentile(a, q)), (n, scale, q)
+    a = rng.random(50)
+    kept = a.copy()
+    percentile(a, 90)
+    assert np.array_equal(a, kept)  # the caller's buffer is left as it was
