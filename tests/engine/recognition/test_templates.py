@@ -72,6 +72,26 @@ def test_a_trial_cut_with_the_previous_motions_tail_keeps_its_rest():
     np.testing.assert_allclose(built.gravity, np.tile(G, (3, 1)), atol=0.02)
 
 
+def test_the_onset_is_the_motion_after_the_last_rest_not_a_fidget_before_it():
+    """A trial cut with a long lead holds a fidget that reaches a tenth of the punch's peak; a
+    rest (REST_WINDOW quiet frames) separates them: the template starts at the punch. A wind-up
+    whose pause is shorter than a rest stays part of the motion."""
+    rng = np.random.default_rng(5)
+    punch = trial(rng, lead=0)[:24]
+
+    def with_lead(gap: int) -> np.ndarray:
+        fidget = np.tile(G, (12, 1))
+        fidget[:, 1] += 0.8 * np.sin(np.linspace(0, np.pi, 12))  # over a tenth of the punch's 3 g
+        x = np.vstack([np.tile(G, (10, 1)), fidget, np.tile(G, (gap, 1)), punch, np.tile(G, (6, 1))])
+        return x + rng.normal(0, 0.005, x.shape)  # every frame its own: found again below
+
+    for gap, starts_at in ((12, 10 + 12 + 12), (4, 10)):  # a rest before the punch / a wind-up's pause
+        x = with_lead(gap)
+        trimmed, onset = trim_rest(x)
+        at = int(np.flatnonzero(np.all(x == trimmed[onset], axis=1))[0])
+        assert abs(at - starts_at) <= 2, (gap, at)
+
+
 def test_a_trial_that_starts_at_rest_keeps_its_first_frames_as_rest():
     x = trial(np.random.default_rng(4), lead=10)
     g, rest = trial_rest(x)
