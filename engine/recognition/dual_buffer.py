@@ -87,7 +87,12 @@ from __future__ import annotations
 import numpy as np
 
 from engine.recognition.adaptation import ADAPT_MARGIN, ADAPT_PER_ACTION, Adaptation
-from engine.recognition.config import RecognizerConfig
+from engine.recognition.config import (
+    SETTINGS,
+    RecognizerConfig,
+    RecognizerConfigError,
+    check_settings,
+)
 from engine.recognition.events import RecognizerEvent
 from engine.recognition.features import FrameFeatures
 from engine.recognition.gate import (
@@ -125,6 +130,16 @@ __all__ = [
 ]
 
 
+def _check_keywords(settings: dict[str, object]) -> None:
+    """The keywords checked as RecognizerConfig checks its fields (numpy scalars as the numbers
+    they hold), so `DualBufferRecognizer(t, **kw)` and `from_config` refuse the same values; a
+    ValueError naming the setting."""
+    try:
+        check_settings({k: v.item() if isinstance(v, np.generic) else v for k, v in settings.items()}, "DualBufferRecognizer")
+    except RecognizerConfigError as exc:
+        raise ValueError(str(exc)) from None
+
+
 class DualBufferRecognizer(TemplateSet, DecisionRules, Adaptation):
     """Frames in, action events out (the module docstring's rules). Owns a gate, features and a speed
     estimate; the rules, template set and adaptation are mixins over its one motion state."""
@@ -151,15 +166,11 @@ class DualBufferRecognizer(TemplateSet, DecisionRules, Adaptation):
     ):
         if not isinstance(templates, Templates):
             raise TypeError("templates must be a Templates")
-        if main != "auto" and (not isinstance(main, (int, np.integer)) or main < 1):
-            raise ValueError(f"main must be a positive int or 'auto', not {main!r}")
+        _check_keywords({k: v for k, v in locals().items() if k in SETTINGS})
         self.gate = NoiseGate(noise_g, templates)  # gravity and the gate (IV-A)
-        if supplementary < 1 or null_frames < 1 or discard_frames < 0 or self.gate.noise_g < 0:
-            raise ValueError("supplementary and null_frames must be >= 1, discard_frames and noise_g >= 0")
         self.templates = templates
         self.main = main
         self.supplementary = int(supplementary)
-        self.gate.noise_g = float(self.gate.noise_g)
         self.null_frames = int(null_frames)
         self.discard_frames = int(discard_frames)
         self.switch_margin = float(switch_margin)
@@ -172,12 +183,9 @@ class DualBufferRecognizer(TemplateSet, DecisionRules, Adaptation):
         self.feature = templates.feature
         self.frame_features = FrameFeatures(self.feature, self.dim)  # owns its buffer
         self.speed = SpeedEstimate(self.dim)  # the motion estimates on start and switch events
-        self._stop_scores = np.empty(len(templates.actions))
         self.min_progress = float(min_progress)
         self.window = max(self.supplementary, AUTO_MAX_MAIN if main == "auto" else int(main))
-        # Adaptation to the player (see `_adapt`): the trained templates stay; up to `adapt`
-        # recent, confidently recognized whole motions per action join them.
-        self.adapt = max(0, int(adapt))
+        self.adapt = max(0, int(adapt))  # recent whole motions per action that join the templates (`_adapt`)
         self._dtw_method = dtw_method
         self._build_templates(templates, reject, extend)
         self._motion = np.empty((max(self.window, self._extend_to), self.dim))  # features since the onset
@@ -287,29 +295,36 @@ class DualBufferRecognizer(TemplateSet, DecisionRules, Adaptation):
                 if self.gate.auto and not self._moved:
                     self.gate.learn(self._act)
                 return events
-            self.state = ACTIVE
-            self._idle_quiet = 0
-            if self.gate.noise_g != self._cut_gate:
-                self._recut()  # the gate learnt since the templates were cut
-            self.dtw.reset()
-            self._g0 = self.gate.gravity.copy()
-            self._g0_list = self._g0.tolist()
-            # The frames just before the gate opened that were already on their way (see
-            # ONSET_FRACTION) start the motion: replayed now, oldest first, against the current
-            # gravity (which follows a slow rise a little; the gravity from before them lost).
-            m = min(self._n_recent, BACKDATE_MAX)
-            recent = self._recent[(self._n_recent - m + np.arange(m)) % BACKDATE_MAX]
-            back = self.gate.backdate(activity(recent, self._g0)) if m else 0
-            self.onset_frame = self.frame - back
-            xs, act, lin = self._xs, self._act, self._lin
-            for r in recent[m - back :]:
-                self._xs = r.tolist()
-                self._act, self._lin = float(activity(r[None], self._g0)[0]), float(linear(r[None], self._g0)[0])
-                self._step_active(r, True, events, backdated=True)
-            self._xs, self._act, self._lin = xs, act, lin
-            self._n_recent = 0
+            if not self._open_motion(events):
+                return events
         self._step_active(x, valid, events)
         return events
+
+    def _open_motion(self, events: list[RecognizerEvent]) -> bool:
+        """A motion starts from the frames before this one already on their way (ONSET_FRACTION),
+        replayed oldest first against the current gravity (it follows a slow rise a little); False
+        when the motion ended in them (a window shorter than the back-dated frames)."""
+        self.state = ACTIVE
+        self._idle_quiet = 0
+        if self.gate.noise_g != self._cut_gate:
+            self._recut()  # the gate learnt since the templates were cut
+        self.dtw.reset()
+        self._g0 = self.gate.gravity.copy()
+        self._g0_list = self._g0.tolist()
+        m = min(self._n_recent, BACKDATE_MAX)
+        recent = self._recent[(self._n_recent - m + np.arange(m)) % BACKDATE_MAX]
+        back = self.gate.backdate(activity(recent, self._g0)) if m else 0
+        self.onset_frame = self.frame - back
+        xs, act, lin = self._xs, self._act, self._lin
+        for r in recent[m - back :]:
+            self._xs = r.tolist()
+            self._act, self._lin = float(activity(r[None], self._g0)[0]), float(linear(r[None], self._g0)[0])
+            self._step_active(r, True, events, backdated=True)
+            if self.state != ACTIVE:
+                break
+        self._xs, self._act, self._lin = xs, act, lin
+        self._n_recent = 0
+        return self.state == ACTIVE
 
     def _step_active(self, x: np.ndarray, valid: bool, events: list[RecognizerEvent], backdated: bool = False) -> None:
         self.count += 1

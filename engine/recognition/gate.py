@@ -83,7 +83,7 @@ class NoiseGate:
             noise_g = self.auto_gate(templates.rest_noise) if np.isfinite(templates.rest_noise) else AUTO_START_G
         elif not isinstance(noise_g, (int, float, np.integer, np.floating)):
             raise ValueError(f"noise_g must be a number of g or 'auto', not {noise_g!r}")
-        self.noise_g = noise_g
+        self.noise_g = float(noise_g)
         self._idle_acts = np.empty(AUTO_FRAMES)  # the activity on the last idle frames (ring), for "auto"
         self._n_idle = 0
         self._busy_acts = np.empty(BUSY_FRAMES)  # the activity on the last frames (ring), see BUSY_FRAMES

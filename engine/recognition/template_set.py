@@ -72,6 +72,7 @@ class TemplateSet:
         self.template_lengths = np.array([len(c) for c in cut])
         self._strokes = shaken_actions(templates, self.action_names, self.gate.noise_g)  # a relaunch ends none of these
         self.dtw = IncrementalDTW(cut, method=self._dtw_method, min_progress=self.min_progress)
+        self._stop_scores = np.empty(len(cut))  # the scores when the hand stopped (`_stopped`)
         # A decided motion that outlasts the supplementary buffer keeps its DTW growing (one
         # row a frame, as before) up to this many frames, for a final decision over the whole
         # motion at its end (`_late_switch`); bounded so a hand that never rests costs nothing.

@@ -68,6 +68,26 @@ def test_from_config_gives_exactly_the_keyword_recognizer(session, changes):
     assert any('"start"' in e for e in by_keywords)  # the stream does exercise the recognizer
 
 
+@pytest.mark.parametrize("bad", [{"noise_g": True}, {"main": 0}, {"supplementary": 0}, {"reject": 1},
+                                 {"dtw_method": "fast"}, {"null_frames": 2.5}])
+def test_the_keywords_refuse_what_the_config_refuses(session, bad):
+    templates, _ = session
+    with pytest.raises(RecognizerConfigError):
+        RecognizerConfig(**bad)
+    with pytest.raises(ValueError, match=f"recognizer setting {next(iter(bad))} must be"):
+        DualBufferRecognizer(templates, **bad)
+    DualBufferRecognizer(templates, main=np.int64(6), noise_g=np.float32(0.5))  # numpy numbers are numbers
+
+
+@pytest.mark.parametrize("supplementary", [1, 3, 7])
+def test_a_window_shorter_than_the_back_dated_frames_never_breaks_push(session, supplementary):
+    """The frames before the gate opened are replayed into the motion (up to BACKDATE_MAX); a
+    window shorter than them ended the motion among them, and push raised a TypeError."""
+    templates, frames = session
+    out = events(DualBufferRecognizer(templates, supplementary=supplementary, main=1), frames[:1800])
+    assert any('"start"' in e for e in out) and any('"reject"' in e or '"end"' in e for e in out)
+
+
 def test_from_config_none_is_the_defaults(session):
     templates, frames = session
     assert events(DualBufferRecognizer.from_config(templates), frames[:900]) == events(DualBufferRecognizer(templates), frames[:900])
