@@ -45,7 +45,6 @@ if TYPE_CHECKING:  # pygame loads only when the screen opens (the CLI imports th
 
 HZ = STEP_HZ
 TRIALS = 5
-KEEP = "usable"  # every trial not cut off, odd or like another action's builds the templates
 SHOW_STEPS = 90  # the animation alone before the first trial of an action
 READY_STEPS = 60  # "get ready": the hands held still
 LEAD_IN = 30  # frames of the ready phase kept at the start of a trial (the rest before)
@@ -87,6 +86,7 @@ class Trainer:
     _ring: list[np.ndarray] = field(default_factory=list)
     _buffer: list[np.ndarray] = field(default_factory=list)
     go: bool = False  # True on the step GO is given (the keyboard source performs then)
+    dropped: dict[str, tuple[int, int]] = field(default_factory=dict)  # action -> (trials dropped, recorded)
 
     @property
     def action(self) -> str:
@@ -140,8 +140,11 @@ class Trainer:
         others are kept, so training one move never loses the rest. The recognizer settings
         saved with `base` are kept too, `recognizer`'s (`train --recognizer`) set over them."""
         from engine.recognition import Templates
+        from engine.recognition.templates import usable_trials
 
-        templates = Templates.from_trials(self.recorded, keep=KEEP)
+        kept = usable_trials(self.recorded)  # keep="usable"; the player is told what was dropped
+        self.dropped = {a: (len(ts) - len(kept[a]), len(ts)) for a, ts in self.recorded.items() if len(kept[a]) < len(ts)}
+        templates = Templates.from_trials(kept)
         trained = set(self.recorded)
         if base is not None:
             if base.meta.get("source") == "quickjab train":
@@ -465,6 +468,9 @@ class _TrainingStages:
             output.parent.mkdir(parents=True, exist_ok=True)
             templates.save(output)
             self.screen_view.saved_to = str(output)
+            for action, (n, of) in trainer.dropped.items():
+                print(f"quickjab train: {action}: dropped {n} of {of} trials (cut off, unlike the others, or like another move)",
+                      file=sys.stderr)
             print(f"quickjab train: saved {len(templates)} templates to {output}", file=sys.stderr)
 
     def render(self, alpha: float) -> None:

@@ -168,3 +168,25 @@ def test_training_traces_are_one_colour_per_hand():
     greenish = (lit[:, 1] > lit[:, 0] + 30) & (lit[:, 1] > lit[:, 2] + 30)
     assert greenish.sum() == 0
     assert TRACE_COLOURS[0][0][0] > TRACE_COLOURS[0][0][2] and TRACE_COLOURS[1][0][2] > TRACE_COLOURS[1][0][0]
+
+
+def test_training_keeps_the_usable_trials_and_says_what_it_dropped():
+    """`train` builds the templates from every usable trial (keep="usable"), not 3 of 5, and
+    tells the player how many of a move's trials it dropped."""
+    from game.training import Trainer
+
+    rng = np.random.default_rng(0)
+    g = np.tile([0.0, 0.0, 1.0], (60, 1))
+
+    def punch(axis: int, n: int = 24) -> np.ndarray:
+        x = g.copy()
+        x[20 : 20 + n, axis] += 3.0 * np.sin(np.linspace(0, np.pi, n))
+        return x + rng.normal(0, 0.01, x.shape)
+
+    cut_off = g.copy()
+    cut_off[54:, 0] += 3.0 * np.sin(np.linspace(0, np.pi / 2, 6))  # the window closed on the way up
+    trainer = Trainer(["jab", "upper"], recorded={"jab": [punch(0) for _ in range(4)] + [cut_off],
+                                                  "upper": [punch(2) for _ in range(5)]})
+    templates = trainer.templates()
+    assert templates.actions.count("jab") == 4 and templates.actions.count("upper") == 5
+    assert trainer.dropped == {"jab": (1, 5)}
