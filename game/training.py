@@ -142,7 +142,9 @@ class Trainer:
         from engine.recognition import Templates
         from engine.recognition.templates import usable_trials
 
-        kept = usable_trials(self.recorded)  # keep="usable"; the player is told what was dropped
+        # keep="usable", looking for look-alikes among the moves kept from `base` too; the player
+        # is told what was dropped
+        kept = usable_trials(self.recorded, others=_moves(base, left_handed))
         self.dropped = {a: (len(ts) - len(kept[a]), len(ts)) for a, ts in self.recorded.items() if len(kept[a]) < len(ts)}
         templates = Templates.from_trials(kept)
         trained = set(self.recorded)
@@ -157,13 +159,28 @@ class Trainer:
         return templates
 
 
+def _oriented(base, left_handed: bool):
+    """`base` as the player holds the sensors: a set of the other handedness mirrored (the file
+    holds the player's own motions)."""
+    return base.mirrored() if (base.meta.get("left_handed") == "1") != left_handed else base
+
+
+def _moves(base, left_handed: bool) -> dict[str, list[np.ndarray]]:
+    """`base`'s templates by action (None: none), oriented for the player."""
+    out: dict[str, list[np.ndarray]] = {}
+    if base is not None:
+        base = _oriented(base, left_handed)
+        for action, signal in zip(base.actions, base.signals, strict=True):
+            out.setdefault(action, []).append(signal)
+    return out
+
+
 def merge_templates(base, new, left_handed: bool = False):
     """`base`'s templates for the actions `new` does not have, then all of `new`'s. A base of
-    the other handedness is mirrored first (the file holds the player's own motions)."""
+    the other handedness is mirrored first (`_oriented`)."""
     from engine.recognition import Templates
 
-    if (base.meta.get("left_handed") == "1") != left_handed:
-        base = base.mirrored()
+    base = _oriented(base, left_handed)
     if base.dim != new.dim:
         return new  # another sensor layout: nothing of the old set fits
     trained = set(new.action_names)

@@ -69,11 +69,12 @@ def _time_incremental(templates: list[np.ndarray], query: np.ndarray, method: st
 
 def _time_push(templates: list[np.ndarray], query: np.ndarray, repeat: int, per_action: int = 1) -> float:
     from engine.recognition import DualBufferRecognizer, Templates
+    from engine.recognition.config import MAX_FRAMES
 
     actions = [f"a{k // per_action}" for k in range(len(templates))]
     tm = Templates(actions, templates, np.zeros((len(templates), templates[0].shape[1])),
                    np.zeros(len(templates), dtype=int), np.full(len(templates), np.inf), feature="raw")
-    rec = DualBufferRecognizer(tm, noise_g=0.0, null_frames=10_000)
+    rec = DualBufferRecognizer(tm, noise_g=0.0, null_frames=MAX_FRAMES)  # never ends a motion
     return _time_frames(rec.reset, rec.push, query, repeat)
 
 

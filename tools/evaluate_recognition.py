@@ -454,15 +454,17 @@ def evaluate_cross_session(
     clip_frames: int = CLIP_FRAMES,
     where: str = "the training recordings",
     draw: int = 0,
+    template_lead: int = 10,
     **rec_kwargs,
 ) -> list[Summary]:
     """Templates from the first `trials` labelled intervals of each action's training recording
-    (`{action: (frames, labels)}`, each interval cut with its lead-in as `stream_trials` does),
+    (`{action: (frames, labels)}`, each interval cut with `template_lead` frames before it, as
+    `stream_trials` does),
     then every test recording replayed whole as a stream (a fresh recognizer per recording) and
     scored with `score_stream`; a spliced stream (`mixed_stream`) brings its punches' true onsets
     as a third item. Pooled over the test recordings. Training recordings that give no templates
     (no interval of their action, one too short) are an InputError naming `where`."""
-    templates = first_trials_templates(train, trials, template_kwargs, where, draw)
+    templates = first_trials_templates(train, trials, template_kwargs, where, draw, template_lead)
     pooled = [Summary(m) for m in mains]
     for frames, labels, *onsets in test:
         ivs = intervals(labels)
@@ -482,17 +484,18 @@ def first_trials_templates(
     template_kwargs: Mapping | None = None,
     where: str = "the training recordings",
     draw: int = 0,
+    lead: int = 10,
 ) -> Templates:
     """Templates from the first `trials` labelled intervals of each action's training recording
-    (`{action: (frames, labels)}`), each cut with its lead-in as `stream_trials` does; with
-    `draw` k, the k-th next `trials` of them instead (draw 1: intervals 4-6 of 3 per draw)."""
+    (`{action: (frames, labels)}`), each cut with `lead` frames before it as `stream_trials` does;
+    with `draw` k, the k-th next `trials` of them instead (draw 1: intervals 4-6 of 3 per draw)."""
     cut = {}
     for action, (frames, labels) in train.items():
         ivs = [iv for iv in intervals(labels) if iv[0] == action][draw * trials : (draw + 1) * trials]
         if not ivs:
             has = sum(iv[0] == action for iv in intervals(labels))
             raise InputError(f"{where}: {has} intervals labelled {action!r}, too few for template draw {draw + 1} ({trials} per draw)")
-        cut[action] = stream_trials(frames, ivs)[action]
+        cut[action] = stream_trials(frames, ivs, lead)[action]
     return templates_from_trials(cut, where, **(template_kwargs or {}))
 
 
@@ -506,6 +509,7 @@ def evaluate_isolated(
     fresh: bool = False,
     lead: int = 10,
     draw: int = 0,
+    template_lead: int = 10,
     **rec_kwargs,
 ) -> list[Summary]:
     """The templates of `evaluate_cross_session`, tested on every labelled punch of the test
@@ -513,7 +517,7 @@ def evaluate_isolated(
     punches are, and as many after; those frames may hold a neighbouring punch's tail), in session
     order through one recognizer (`evaluate_trials`; with `fresh`, a fresh one per trial): "the
     rest" of a person's punches, one at a time."""
-    templates = first_trials_templates(train, trials, template_kwargs, where, draw)
+    templates = first_trials_templates(train, trials, template_kwargs, where, draw, template_lead)
     tests: dict[str, list[np.ndarray]] = {}
     for frames, labels in test:
         for action, a, b in intervals(labels):

@@ -153,7 +153,7 @@ def _register_evaluate(sub: argparse._SubParsersAction) -> None:
             "Replay trials or labelled recordings and print, per main-buffer size, the four "
             "outcome groups, first-decision accuracy and lag from the true onset. Inputs: "
             "--templates T.npz with trial dirs or labelled CSVs; or --train TRIALS_DIR; or "
-            "--uwave DIR (per user: templates from day 1 reps 1-3, test days 2-7); or "
+            "--uwave DIR (per user: templates from the first --trials reps of day 1, default 3, test days 2-7); or "
             "--phone-punches DIR (cross-session, per hand fast -> slow and slow -> fast); or --punchbuddy DIR "
             "(two gloves, unlabelled: punches found in the signal; across sessions and across people); or a labelled "
             "CSV alone with --folds K (templates from the other folds' intervals). The lag is counted "
@@ -177,7 +177,9 @@ def _register_evaluate(sub: argparse._SubParsersAction) -> None:
                         "on the person's other sessions ('<person> across sessions') and from a person's sessions, "
                         "tested on another's ('<A> -> <B>')")
     e.add_argument("--trials", type=arguments.int_range(1, 1000), default=3,
-                   help="--phone-punches, --punchbuddy: training trials per punch (default 3)")
+                   help="--phone-punches, --punchbuddy: training trials per punch; --uwave: the first TRIALS "
+                        "reps of day 1 (default 3)")
+    e.add_argument("--lead", type=arguments.int_range(0, MAX_BUFFER), default=10, help="--phone-punches: frames kept before each labelled punch when templates are cut (default 10)")
     e.add_argument("--mixed", action="store_true",
                    help="--phone-punches: also the other set's punches of all kinds spliced into one shuffled stream "
                         "(as recorded; turned to one guard; and from one guard, the fist turned in as each punch starts)")
@@ -185,8 +187,8 @@ def _register_evaluate(sub: argparse._SubParsersAction) -> None:
                    help="--phone-punches: also every punch of the other set as an isolated trial (with the 10 frames "
                         "before and after it), in session order through one recognizer (--fresh: a fresh one per trial)")
     e.add_argument("--draws", type=arguments.int_range(1, 100), default=1,
-                   help="--phone-punches: pool this many disjoint draws of --trials templates per kind "
-                        "(punches 1-3, 4-6, ...; default 1)")
+                   help="--phone-punches, --uwave: pool this many disjoint draws of --trials templates per kind "
+                        "(punches or reps 1-3, 4-6, ...; default 1)")
     e.add_argument("--seed", type=arguments.seed, default=0, help="--mixed: the shuffle's seed (default 0)")
     e.add_argument("--keep", type=_keep, default=None,
                    help="templates: keep each action's KEEP most representative trials (e.g. --trials 5 --keep 3), "
@@ -270,7 +272,7 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         res = ev.evaluate_phone_punches(
             args.phone_punches, args.mains, mixed=args.mixed, seed=args.seed, isolated=args.isolated, fresh=args.fresh,
             draws=args.draws,
-            trials=args.trials, template_kwargs=tk,
+            trials=args.trials, template_kwargs=tk, template_lead=args.lead,
             clip_frames=args.clip_frames, **kw
         )
         if not res:
@@ -306,8 +308,8 @@ def _keep(text: str) -> int | str:
 
 
 def _evaluate_uwave(args: argparse.Namespace, kw: dict, tk: dict) -> dict[str, list[dict]]:
-    """The uWave users' rows pooled: each user's first three day-1 trials are the templates,
-    days 2-7 the tests."""
+    """The uWave users' rows pooled: each user's first --trials day-1 reps are the templates
+    (with --draws k, the next ones too, each draw on its own), days 2-7 the tests."""
     from tools import evaluate_recognition as ev
     from tools.trial_files import load_trials_dir, templates_from_trials, trials_dim
 
@@ -315,17 +317,23 @@ def _evaluate_uwave(args: argparse.Namespace, kw: dict, tk: dict) -> dict[str, l
     pooled = None
     for u in users:
         root = Path(args.uwave) / f"U{u}"
-        templates = templates_from_trials(load_trials_dir(root, "d1-r0[1-3].csv"), f"{root} (d1-r0[1-3].csv)", **tk)
+        day1 = load_trials_dir(root, "d1-*.csv")  # in rep order
         tests = {a: ts[:: args.every] for a, ts in load_trials_dir(root, "d[2-7]-*.csv").items()}
-        if trials_dim(tests) != templates.dim:
-            raise InputError(f"{root}: the test trials d[2-7]-*.csv have {trials_dim(tests)} values per frame, "
-                             f"the templates from d1-r0[1-3].csv have D = {templates.dim} (one- and two-hand recordings mixed)")
-        res = ev.evaluate_trials(templates, tests, args.mains, fresh=args.fresh, **kw)
-        if pooled is None:
-            pooled = res
-        else:
-            for p, r in zip(pooled, res, strict=True):
-                p.add(r)
+        for d in range(args.draws):
+            reps = f"d1 reps {d * args.trials + 1}-{(d + 1) * args.trials}"
+            cut = {a: ts[d * args.trials : (d + 1) * args.trials] for a, ts in day1.items()}
+            if any(not ts for ts in cut.values()):
+                raise InputError(f"{root}: no {reps} for every gesture (--trials {args.trials} x --draws {args.draws})")
+            templates = templates_from_trials(cut, f"{root} ({reps})", **tk)
+            if trials_dim(tests) != templates.dim:
+                raise InputError(f"{root}: the test trials d[2-7]-*.csv have {trials_dim(tests)} values per frame, "
+                                 f"the templates from {reps} have D = {templates.dim} (one- and two-hand recordings mixed)")
+            res = ev.evaluate_trials(templates, tests, args.mains, fresh=args.fresh, **kw)
+            if pooled is None:
+                pooled = res
+            else:
+                for p, r in zip(pooled, res, strict=True):
+                    p.add(r)
     order = "fresh recognizer per trial" if args.fresh else "session order"
     return {f"uWave users {args.users}, noise_g {kw['noise_g']}, {order}": [s.row() for s in pooled]}
 

@@ -295,37 +295,41 @@ def representative_trials(trials: Sequence[np.ndarray], keep: int = 3, feature: 
     return [trials[cand[i]] for i in kept]
 
 
-def usable_trials(trials: Mapping[str, Sequence[np.ndarray]], feature: str = DEFAULT_FEATURE) -> dict[str, list[np.ndarray]]:
+def usable_trials(
+    trials: Mapping[str, Sequence[np.ndarray]],
+    feature: str = DEFAULT_FEATURE,
+    others: Mapping[str, Sequence[np.ndarray]] | None = None,
+) -> dict[str, list[np.ndarray]]:
     """Every trial that makes a good template, per action, in recorded order: not cut off or
     faint (as `representative_trials`), not an odd one among its action's, not one that looks like
-    another action (see ODD_RATIO, CONFUSABLE_MARGIN). Keeping every good trial beats keeping the
-    3 most representative of 5 (docs/recognition.md, twentieth round)."""
-    trials = {a: [np.asarray(t, dtype=np.float64) for t in ts] for a, ts in trials.items()}
-    motions = {a: _motions(ts, feature) for a, ts in trials.items()}
-    cand = {a: _whole(ts, motions[a], MIN_USABLE) for a, ts in trials.items()}
-    index = [(a, i) for a in trials for i in cand[a]]
+    another action (see ODD_RATIO, CONFUSABLE_MARGIN). `others`: more actions' trials a trial may
+    look like (the moves a player keeps from an earlier session), never dropped themselves. Both
+    rules compare with the action's median, so at most half of its trials go and at least
+    MIN_USABLE stay (the look-alike rule needs 3: of 2 it would drop one). Keeping every good
+    trial beats keeping the 3 most representative of 5 (docs/recognition.md, twentieth round)."""
+    trials, dim = _check_trials(trials)
+    refs = {a: [np.asarray(t, dtype=np.float64) for t in ts] for a, ts in (others or {}).items() if a not in trials}
+    pool = {**{a: ts for a, ts in refs.items() if ts and all(t.ndim == 2 and t.shape[1] == dim for t in ts)}, **trials}
+    motions = {a: _motions(ts, feature) for a, ts in pool.items()}
+    cand = {a: _whole(ts, motions[a], MIN_USABLE) if a in trials else range(len(ts)) for a, ts in pool.items()}
+    index = [(a, i) for a in pool for i in cand[a]]
     d = pairwise_distances([motions[a][i] for a, i in index])
     owner = np.array([a for a, _ in index])
-    rows = {a: list(np.flatnonzero(owner == a)) for a in trials}
-    for a, own in [(a, list(own)) for a, own in rows.items()]:  # odd ones first, the farthest first
+    rows = {a: [int(k) for k in np.flatnonzero(owner == a)] for a in trials}
+    for a, own in rows.items():  # odd ones
         sums = d[np.ix_(own, own)].sum(axis=1)
-        for k in np.argsort(-sums, kind="stable"):
-            if len(rows[a]) > MIN_USABLE and sums[k] > ODD_RATIO * np.median(sums):
-                rows[a].remove(own[k])
-    alive = np.zeros(len(index), dtype=bool)
+        rows[a] = [k for k, v in zip(own, sums, strict=True) if not v > ODD_RATIO * np.median(sums)]
+    alive = ~np.isin(owner, list(trials))  # the references, and the trials still kept
     alive[[k for own in rows.values() for k in own]] = True
-    for a, own in [(a, list(own)) for a, own in rows.items()]:
-        others = np.flatnonzero(alive & (owner != a))
-        if len(own) <= MIN_USABLE or not len(others):
+    for a, own in rows.items():  # look-alikes
+        near = np.flatnonzero(alive & (owner != a))
+        if len(own) <= MIN_USABLE or not len(near):
             continue
-        near = d[np.ix_(own, others)].min(axis=1)
         mine = d[np.ix_(own, own)].sum(axis=1) / (len(own) - 1)
-        ratio = near / np.maximum(mine, 1e-12)
+        ratio = d[np.ix_(own, near)].min(axis=1) / np.maximum(mine, 1e-12)
         bar = min(CONFUSABLE_MARGIN, CONFUSABLE_REL * float(np.median(ratio)))
-        for k in np.argsort(ratio, kind="stable"):
-            if len(rows[a]) > MIN_USABLE and ratio[k] < bar:
-                rows[a].remove(own[k])
-    return {a: [trials[a][index[k][1]] for k in sorted(rows[a])] for a in trials}
+        rows[a] = [k for k, r in zip(own, ratio, strict=True) if not r < bar]
+    return {a: [trials[a][index[k][1]] for k in rows[a]] for a in trials}
 
 
 def _motions(trials: Sequence[np.ndarray], feature: str) -> list[np.ndarray]:

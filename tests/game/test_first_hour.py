@@ -190,3 +190,32 @@ def test_training_keeps_the_usable_trials_and_says_what_it_dropped():
     templates = trainer.templates()
     assert templates.actions.count("jab") == 4 and templates.actions.count("upper") == 5
     assert trainer.dropped == {"jab": (1, 5)}
+
+
+def test_retraining_one_move_compares_it_with_the_moves_kept(monkeypatch):
+    """`train --actions jab`: a jab trial moved as the kept uppercut is dropped (the look-alike
+    rule sees the base set's moves too; the odd-one rule, which would also drop it, is off)."""
+    import engine.recognition.templates as template_module
+    from engine.recognition import Templates
+    from game.training import Trainer
+
+    monkeypatch.setattr(template_module, "ODD_RATIO", np.inf)
+
+    rng = np.random.default_rng(1)
+    g = np.tile([0.0, 0.0, 1.0], (60, 1))
+
+    def punch(axis: int, amp: float = 3.0) -> np.ndarray:
+        x = g.copy()
+        x[20:44, axis] += amp * np.sin(np.linspace(0, np.pi, 24))
+        return x + rng.normal(0, 0.05, x.shape)
+
+    look_alike = punch(2, 2.1)
+    look_alike[20:44, 0] += 0.9 * np.sin(np.linspace(0, np.pi, 24))
+    base = Templates.from_trials({"upper": [punch(2) for _ in range(4)]})
+    recorded = {"jab": [punch(0), look_alike, punch(0), punch(0), punch(0)]}
+    alone = Trainer(["jab"], recorded=recorded)
+    assert alone.templates().actions.count("jab") == 5 and alone.dropped == {}  # nothing to look like
+    trainer = Trainer(["jab"], recorded=recorded)
+    templates = trainer.templates(base=base)
+    assert trainer.dropped == {"jab": (1, 5)}
+    assert templates.actions.count("jab") == 4 and templates.actions.count("upper") == 4

@@ -482,7 +482,7 @@ def test_evaluate_phone_punches_pools_template_draws(tmp_path, capsys):
     assert len(err) == 1 and "right_*_fast.csv" in err[0] and "too few for template draw 3" in err[0]
 
 
-def test_templates_build_and_evaluate_keep_usable_trials(tmp_path, trials_dir, capsys):
+def test_templates_build_and_evaluate_keep_usable_trials(tmp_path, trials_dir, capsys, monkeypatch):
     """`--keep usable` (as `train`): a warm-up unlike the others is dropped, the good ones kept."""
     warm_up = np.vstack([rest(8), bump(1, 2.0, 40), rest(8)])
     write(trials_dir / "jab" / "3.csv", warm_up, "jab")
@@ -490,7 +490,13 @@ def test_templates_build_and_evaluate_keep_usable_trials(tmp_path, trials_dir, c
         out = tmp_path / f"t{keep}.npz"
         assert main(["templates", "build", str(trials_dir), "-o", str(out), *(["--keep", keep] if keep else [])]) == 0
         assert Templates.load(out).actions.count("jab") == jabs
-    assert main(["evaluate", "--train", str(trials_dir), str(trials_dir), "--keep", "usable"]) == 0
+    import tools.trial_files
+
+    built = []
+    real = tools.trial_files.templates_from_trials
+    monkeypatch.setattr(tools.trial_files, "templates_from_trials", lambda *a, **k: built.append(real(*a, **k)) or built[-1])
+    assert main(["evaluate", "--train", str(trials_dir), str(trials_dir), "--keep", "usable", "--mains", "6"]) == 0
+    assert [t.actions.count("jab") for t in built] == [3]  # evaluate's templates kept the usable trials too
     capsys.readouterr()
     with pytest.raises(SystemExit) as exit_info:
         main(["templates", "build", str(trials_dir), "--keep", "best"])

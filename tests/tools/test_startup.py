@@ -113,6 +113,26 @@ def test_play_never_loads_numpy_ma():
     assert "engine.recognition.gate" in mods and "numpy.ma" not in mods
 
 
+def test_the_auto_gate_never_loads_numpy_ma():
+    """Both of the gate's percentiles, the resting noise's (`learn`) and a hand that never rests
+    (BUSY_FRAMES over the gate), run without numpy.ma."""
+    mods = loaded_after("""
+        import types
+        import numpy as np
+        from engine.recognition.gate import BUSY_FRAMES, NoiseGate
+        gate = NoiseGate("auto", types.SimpleNamespace(rest_noise=0.3))
+        for k in range(200):
+            gate.learn(0.1 + 0.01 * (k % 7))
+        learnt = gate.noise_g
+        for k in range(10):
+            gate.step(np.array([0.0, 0.0, 1.0]), False, False)  # at rest: the gravity
+        for k in range(2 * BUSY_FRAMES):  # then never under the gate
+            gate.step(np.array([0.8 + 0.4 * np.sin(k / 3), 0.5 * np.cos(k / 5), 1.0]), False, False)
+        assert gate.noise_g > learnt, (learnt, gate.noise_g)  # the busy rule raised it
+    """)
+    assert "numpy.ma" not in mods
+
+
 def test_train_demo_opens_the_virtual_player_without_looking_for_a_wiimote():
     mods = run_in_fresh(["train", "--demo", "--headless", "--frames", "1", "--actions", "straight_r"])
     assert {"game.training", "game.keyboard_source"} <= mods

@@ -78,13 +78,38 @@ def test_a_trial_that_looks_like_another_action_is_dropped(monkeypatch):
     assert len(usable_trials(recorded)["jab"]) == 5  # with neither rule the look-alike stays
 
 
-def test_usable_trials_leave_at_least_two_of_an_action():
+def test_usable_trials_leave_at_least_two_of_an_action(monkeypatch):
+    """Both rules compare with the action's median, so at most half of its trials go; the
+    look-alike rule skips an action of 2 trials (it would drop one of them)."""
+    import engine.recognition.templates as templates
+
     rng = np.random.default_rng(2)
     good = trial(0, 3.0, rng)
     warm_up = np.vstack([rest(10), bump(1, 2.0, 40), rest(10)])
     assert len(usable_trials({"jab": [good, trial(0, 3.0, rng), warm_up]})["jab"]) == 2
     assert len(usable_trials({"jab": [good, warm_up]})["jab"]) == MIN_USABLE  # both kept
     assert len(usable_trials({"jab": [good]})["jab"]) == 1
+    monkeypatch.setattr(templates, "ODD_RATIO", np.inf)
+    uppers = {"upper": [trial(2, 3.0, rng) for _ in range(4)]}
+    assert len(usable_trials({"jab": [good, look_alike(rng)], **uppers})["jab"]) == 2  # of 2, none goes
+    assert len(usable_trials({"jab": [good, trial(0, 3.0, rng), look_alike(rng)], **uppers})["jab"]) == 2
+
+
+def test_moves_kept_from_an_earlier_session_count_as_other_actions(monkeypatch):
+    """Retraining one move (`train --actions jab`): its trials are compared with the moves the
+    player keeps, given as `others` (never dropped themselves; another D is ignored)."""
+    import engine.recognition.templates as templates
+
+    monkeypatch.setattr(templates, "ODD_RATIO", np.inf)
+    rng = np.random.default_rng(1)
+    jabs = [trial(0, 3.0, rng) for _ in range(4)]
+    recorded = {"jab": [jabs[0], look_alike(rng), *jabs[1:]]}
+    uppers = [trial(2, 3.0, rng) for _ in range(4)]
+    assert len(usable_trials(recorded)["jab"]) == 5  # nothing to look like
+    kept = usable_trials(recorded, others={"upper": uppers, "jab": uppers, "two_hands": [np.zeros((30, 6))]})
+    assert list(kept) == ["jab"] and all(same(k, j) for k, j in zip(kept["jab"], jabs, strict=True))
+    with pytest.raises(ValueError, match="non-finite"):
+        usable_trials({"jab": [np.full((30, 3), np.nan)]})
 
 
 def test_keep_is_a_count_or_usable():
