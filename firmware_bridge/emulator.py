@@ -241,6 +241,11 @@ class EmulatorDef:
         if not 1 <= self.rate_hz <= 65535 or self.noise_g < 0 or not 8 <= self.ts_bits <= 62:
             # rate_hz: a u16 in the HELLO (PROTOCOL.md)
             raise ValueError("rate_hz must be 1..65535, noise_g >= 0 and ts_bits from 8 to 62")
+        if 1 << (self.ts_bits - 1) <= 2 * (1_000_000 // self.rate_hz):
+            # the sampler times its ticks by differences of tick counts, right only under half the
+            # counter's period: a period of two samples must fit (PROTOCOL.md's narrow_clock)
+            raise ValueError(f"ts_bits {self.ts_bits} is too narrow for {self.rate_hz} Hz: "
+                             f"2**(ts_bits - 1) must exceed two sample periods ({2 * (1_000_000 // self.rate_hz)} us)")
 
 
 class Emulator:

@@ -310,7 +310,8 @@ class Decoder:
         self.hello = None  # the last Hello seen
         self.old_boots = []  # boot ids before the current one, newest last
         self._headless_boot = False  # a seq_jump started a boot whose HELLO has not come yet
-        # seen[s] is 1 when this boot delivered seq s in the last SEQ_WINDOW frames
+        self._old_seen = None  # meanwhile, the seq values the boot before it delivered
+        # seen[s] is 1 once this boot delivered seq s (PROTOCOL.md: "this boot already delivered")
         self._seen = bytearray(SEQ_MASK + 1)
 
     def resync(self):
@@ -382,6 +383,12 @@ class Decoder:
                     self.reboots += 1
                     self._restart_seq()  # the new boot counts its sequence from its first HELLO
             self._headless_boot = False
+            self._old_seen = None
+        if hello is None and self._old_seen is not None and self._old_seen[frame.seq]:
+            # until the new boot's HELLO, a seq the boot before it delivered cannot be told from
+            # that boot's bytes played back (PROTOCOL.md, Receiver rules): dropped as a replay
+            self.replays += 1
+            return
         if self.last_seq is not None:
             gap = (frame.seq - self.last_seq - 1) & SEQ_MASK
             if gap >= SEQ_WINDOW:
@@ -390,11 +397,12 @@ class Decoder:
                     return
                 self.seq_jumps += 1  # never seen: a reboot whose HELLO was lost
                 frame.jump = True
+                if hello is None:  # (a HELLO says which boot it is: nothing to hold against it)
+                    self._old_seen = self._seen
                 self._restart_seq()
                 self._headless_boot = True  # its HELLO, when it comes, is no second reboot
             else:
                 self.lost += gap
-                self._forget(self.last_seq + 1, gap)
         if hello is not None:
             self.boot_id = hello.boot_id
             self.hello = hello
@@ -406,14 +414,3 @@ class Decoder:
     def _restart_seq(self):
         self.last_seq = None
         self._seen = bytearray(SEQ_MASK + 1)
-
-    def _forget(self, start, n):
-        """Clear `n` seen marks from seq `start` on (wrapping): the lost ones were never seen."""
-        start &= SEQ_MASK
-        end = start + n
-        seen = self._seen
-        if end <= SEQ_MASK + 1:
-            seen[start:end] = bytes(n)
-        else:
-            seen[start:] = bytes(SEQ_MASK + 1 - start)
-            seen[: end - SEQ_MASK - 1] = bytes(end - SEQ_MASK - 1)

@@ -65,7 +65,7 @@ class SampleAccel:
         raw = np.frombuffer(f.payload, dtype="<i2").reshape(-1, per)[:, :3] / hello.accel_lsb_per_g
         want = hello.flags & protocol.FLAGS_SENSORS
         have = f.flags & protocol.FLAGS_SENSORS
-        if have == want or not want:
+        if have == want:  # (a HELLO that announced no sensor: the source drops its SAMPLEs)
             out = raw
         else:
             if want & ~have:

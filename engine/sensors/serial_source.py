@@ -358,6 +358,12 @@ class SerialSource(Source):
                     self.count("samples_before_hello")
                     self._ask_hello()
                     continue
+                if not self.hello.flags & protocol.FLAGS_SENSORS:
+                    # its HELLO announced no sensor (sent before the board found one): the values
+                    # have no place (PROTOCOL.md); the board's next HELLO, asked for now, will say
+                    self.count("sensor_unannounced")
+                    self._ask_hello()
+                    continue
                 if f.flags & protocol.FLAG_OVERRUN:
                     self.count("device_overruns")
                 if not self._accel.plausible(f, self.hello):
@@ -375,15 +381,16 @@ class SerialSource(Source):
         `latest` had arrived by `now`, so none is mapped later than `now`."""
         if latest is not None:
             self.devclock.observe(now, latest)
-        return self._map(times, sample_frames) if times else []
+        return self._map(times, sample_frames, now) if times else []
 
-    def _map(self, times: list[float], sample_frames: list[protocol.Frame]) -> list[Sample]:
-        """Samples for SAMPLE frames of one layout and clock, at device times `times`."""
+    def _map(self, times: list[float], sample_frames: list[protocol.Frame], now: float) -> list[Sample]:
+        """Samples for SAMPLE frames of one layout and clock, at device times `times`, never
+        later than `now` (dev + offset, offset = now - dev, can round one step past it)."""
         # a few samples per poll: plain floats beat numpy calls here
         offset, last = self.devclock.offset, self.devclock.last_t
         out = []
         for dev, a in zip(times, self._accel.rows(sample_frames, self.hello, self.sensors), strict=True):
-            last = max(dev + offset, last)  # never backwards
+            last = min(max(dev + offset, last), now)  # never backwards
             out.append(Sample(last, a))
         self.devclock.last_t = last
         return out

@@ -60,8 +60,11 @@ class Sampler:
         self.dropped = 0  # frames cut short or not written at all
         self.read_errors = 0
         self.late = 0  # deadlines missed by more than one period
-        self._last_hello = None
-        self._last_text = None
+        # how long ago the last HELLO and TEXT went (us; None: a HELLO is due / no TEXT to space
+        # from), added up from tick to tick (`_age`)
+        self._hello_age = None
+        self._text_age = None
+        self._looked = None  # the ticks when the ages were last brought up to date
         self.set_imus(imus)
 
     def set_imus(self, imus):
@@ -79,7 +82,7 @@ class Sampler:
         if ref is not None and b is not None and (b.accel_lsb_per_g != self.accel_lsb_per_g
                                                   or b.gyro_mlsb_per_dps != self.gyro_mlsb_per_dps):
             self._b_scale = (self.accel_lsb_per_g, b.accel_lsb_per_g, self.gyro_mlsb_per_dps, b.gyro_mlsb_per_dps)
-        self._last_hello = None
+        self._hello_age = None
 
     def _send(self, frame):
         self.seq = (self.seq + 1) & protocol.SEQ_MASK
@@ -104,32 +107,44 @@ class Sampler:
             f |= protocol.FLAG_GYRO
         return f
 
+    def _age(self, now):
+        """Bring the HELLO's and the TEXT's ages up to `now`. The difference of two tick counts
+        is right only under half the counter's period (0.5 s at 20 bits, 537 s at 30), so the
+        ages add up the small steps between looks instead of comparing with a time long past."""
+        if self._looked is not None:
+            dt = self.ticks.ticks_diff(now, self._looked)
+            if dt > 0:
+                if self._hello_age is not None:
+                    self._hello_age += dt
+                if self._text_age is not None:
+                    self._text_age += dt
+                    if self._text_age >= TEXT_EVERY_US:
+                        self._text_age = None  # the next TEXT may go (and the age stays a small int)
+        self._looked = now
+
     def send_hello(self, now):
-        self._last_hello = now
+        self._age(now)
+        self._hello_age = 0
         return self._send(protocol.encode_hello(
             self.seq, now & self.ts_mask, self.boot_id, self.rate_hz, self.accel_lsb_per_g,
             self.gyro_mlsb_per_dps, self.ts_bits, self.imu_kind, self.present_flags()))
 
     def request_hello(self):
         """The host asked (protocol.HELLO_REQUEST): send a HELLO before the next SAMPLE."""
-        self._last_hello = None
+        self._hello_age = None
 
     def send_text(self, now, text):
-        t = self.ticks
-        if self._last_text is not None and t.ticks_diff(now, self._last_text) < TEXT_EVERY_US:
+        self._age(now)
+        if self._text_age is not None:  # at most one a second
             return False
-        self._last_text = now
+        self._text_age = 0
         return self._send(protocol.encode_text(self.seq, now & self.ts_mask, text))
 
     def step(self, now):
         """One reading of every IMU and its frame; a HELLO first when one is due."""
-        t = self.ticks
-        if self._last_hello is None or t.ticks_diff(now, self._last_hello) >= HELLO_EVERY_US:
+        self._age(now)
+        if self._hello_age is None or self._hello_age >= HELLO_EVERY_US:
             self.send_hello(now)
-        if self._last_text is not None and t.ticks_diff(now, self._last_text) >= TEXT_EVERY_US:
-            # forgotten once a second has passed, while ticks_diff can still tell: with a time
-            # over half the counter's period ago (537 s at 30 bits) it wraps and says "just now"
-            self._last_text = None
         readings = [None, None]
         for i in (0, 1):
             imu = self.imus[i]

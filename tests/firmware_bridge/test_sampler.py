@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import pytest
+
 from firmware_bridge import protocol
 from firmware_bridge.emulator import HostTicks
 from firmware_bridge.firmware.sampler import Sampler
@@ -199,3 +201,21 @@ def test_two_kinds_of_imu_go_out_in_the_hellos_scales():
     frames = protocol.Decoder().feed(bytes(wire.data))
     b_gyro = [f.values()[9:12] for f in frames if f.msg_type == protocol.SAMPLE]
     assert b_gyro == [(6550, -32749, 0)] * 5  # x 65500 / 57143: 100 and -499.99 dps at 65.5 per dps
+
+
+@pytest.mark.parametrize("bits", [16, 20, 30])
+def test_a_narrow_tick_counter_still_sends_a_hello_every_second_and_a_text_at_most_every_second(bits):
+    # The HELLO was due when ticks_diff(now, last HELLO) reached 1 s: with a counter of 20 bits
+    # or fewer half its period is under 1 s, ticks_diff never gets there, and after the first
+    # HELLO none came again (PROTOCOL.md: every second). The TEXT spacing had the same flaw.
+    ticks = FakeTicks(bits=bits)
+    wire = Wire()
+    s = Sampler([FakeIMU((1, 1, 1)), FakeIMU((2, 2, 2), fail_at=set(range(0, 640, 7)))], wire.write, ticks,
+                ts_bits=bits)
+    for k in range(640):  # 3.2 s at 200 Hz
+        s.step(ticks.ticks_add(0, 5000 * k))
+    frames = protocol.Decoder().feed(bytes(wire.data))
+    hellos = [f for f in frames if f.msg_type == protocol.HELLO]
+    texts = [f for f in frames if f.msg_type == protocol.TEXT]
+    assert len(hellos) == 4  # at 0, 1, 2 and 3 s
+    assert len(texts) == 4  # a read error every 35 ms, reported once a second

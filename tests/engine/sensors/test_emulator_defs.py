@@ -90,3 +90,13 @@ def test_serial_board_def_refuses_a_rate_the_hello_cannot_carry():
     assert EmulatorDef(rate_hz=65535).rate_hz == 65535
     with pytest.raises(ValueError, match="rate_hz"):
         EmulatorDef(rate_hz=65536)
+
+
+def test_serial_board_def_refuses_a_tick_counter_too_narrow_for_its_rate():
+    # the sampler times its ticks by tick differences, right only under half the counter's period:
+    # at ts_bits 8-13 and 200 Hz its loop ran ~30x too fast (10,422 frames in 1.5 s at 8 bits)
+    assert EmulatorDef(rate_hz=200, ts_bits=15).ts_bits == 15
+    for bits in (8, 13, 14):
+        with pytest.raises(ValueError, match="too narrow"):
+            EmulatorDef(rate_hz=200, ts_bits=bits)
+    assert EmulatorDef(rate_hz=10, ts_bits=19).ts_bits == 19  # 0.26 s half-period, 0.1 s samples

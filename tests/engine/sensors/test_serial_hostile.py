@@ -577,3 +577,57 @@ def test_a_reboot_whose_hello_was_lost_asks_for_the_new_boots_hello():
     assert _requests_after(samples(20, t0=50)) == protocol.HELLO_REQUEST
     # a board streaming on, no replay and no jump: nothing asked
     assert _requests_after(samples(20, start_seq=101, t0=5000 * 101)) == b""
+
+
+def test_after_a_headless_reboot_the_old_boots_bytes_are_replays_until_its_hello():
+    # PROTOCOL.md, Receiver rules: until the new boot's HELLO, its frames at seq values the old
+    # boot delivered are dropped as replays. The record of those values was wiped at the jump, so
+    # the old boot's seq-150 bytes played back came through as a sample (a stale 1 g reading)
+    # and counted 148 lost.
+    src = open_source("serial://loop://")
+    src.port.write(hello(seq=98) + samples(102, start_seq=99))  # the old boot delivers 98-200
+    assert len(src.poll()) == 102
+    src.port.write(samples(1, start_seq=1, t0=10_000))  # rebooted, its HELLO lost: seq 1
+    src.port.write(samples(1, start_seq=150, t0=5000 * 52))  # the old boot's bytes again
+    got = src.poll()
+    assert len(got) == 1 and src.stats["seq_jumps"] == 1 and src.stats["replays"] == 1 and src.stats["lost"] == 0
+    src.port.write(hello(seq=2, boot=78, t_us=15_000) + samples(3, start_seq=3, t0=20_000))  # its HELLO
+    assert len(src.poll()) == 3
+    assert src.stats["reboots"] == 0 and src.stats["lost"] == 0  # the jump counted that reboot
+
+
+def test_a_seq_delivered_on_an_earlier_pass_of_the_counter_is_a_replay():
+    # "whose seq this boot already delivered": a seq lost on this pass of the 16-bit counter was
+    # still delivered on the last one, so its bytes played back are a replay, not a reboot
+    dec = protocol.Decoder()
+    dec.feed(hello(seq=0) + b"".join(protocol.encode_sample(s & protocol.SEQ_MASK, 5000 * s, (0, 0, 4096), None)
+                                   for s in range(1, 65536 + 50)))
+    dec.feed(protocol.encode_sample(60, 5000 * (65536 + 60), (0, 0, 4096), None))  # 50-59 lost on pass 2
+    old = protocol.encode_sample(55, 5000 * 55, (0, 0, 4096), None)  # pass 1's seq 55, played back
+    assert dec.feed(old) == []
+    assert (dec.replays, dec.seq_jumps, dec.lost) == (1, 0, 10)
+
+
+def test_a_hello_that_announced_no_sensor_drops_the_samples_it_has_no_place_for():
+    # PROTOCOL.md: a sensor the HELLO did not announce is ignored (sensor_unannounced). After the
+    # HELLO a board sends before it has found an IMU (flags 0), the values were taken as they came,
+    # sensor B's reading landing in sensor A's place.
+    src = open_source("serial://loop://")
+    b_only = protocol.encode_sample(1, 5000, None, (0, 0, -4096))
+    src.port.write(hello(flags=0) + b_only)
+    assert src.poll() == [] and src.stats["sensor_unannounced"] == 1
+    src.port.write(hello(seq=2, flags=protocol.FLAG_SENSOR_B, t_us=10_000)
+                   + protocol.encode_sample(3, 15_000, None, (0, 0, -4096)))
+    got = src.poll()
+    assert len(got) == 1 and got[0].accel.tolist() == [[0.0, 0.0, -1.0]]
+
+
+def test_mapped_times_are_never_later_than_the_poll():
+    # dev + (now - dev) can round one step past `now` (here with t_us near the 2**32 wrap)
+    src = open_source("serial://loop://", clock=lambda: 1000.05)
+    base = (1 << 32) - 10_000
+    src.port.write(hello(ts_bits=32, flags=1, t_us=base - 5000)
+                   + b"".join(protocol.encode_sample(1 + i, (base + 5000 * i) & 0xFFFFFFFF, (0, 0, 4096), None)
+                              for i in range(5)))
+    got = src.poll()
+    assert len(got) == 5 and max(s.t for s in got) <= 1000.05
