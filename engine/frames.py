@@ -18,10 +18,15 @@ from engine.sample import Sample
 FRAME_HZ = STEP_HZ
 
 
+GRID_TOLERANCE = 0.01  # of a frame: a last sample this much before a step instant still reaches it
+
+
 def frame_offsets(duration: float, hz: int = FRAME_HZ) -> np.ndarray:
     """k / hz for every step k in [0, duration]: computed from k, never summed, so frame k is
-    exactly k/hz seconds after the first one."""
-    n = int(np.floor(duration * hz + 1e-9)) + 1
+    exactly k/hz seconds after the first one. A recording's times are written rounded (to 4
+    decimals in docs/formats.md's example, 6 by `record`): a last sample at 0.0333 s is the step
+    at 1/30 s (GRID_TOLERANCE), or a 60 Hz recording read back loses its last frame."""
+    n = int(np.floor(duration * hz + GRID_TOLERANCE)) + 1
     return np.arange(n, dtype=np.float64) / hz
 
 

@@ -36,8 +36,10 @@ def profile_summary(trace: dict) -> dict:
     f_args = [e.get("args") or {} for e in frames]
     wait_us = np.array([float(a.get("wait_us", 0.0)) for a in f_args])
     unacc_us = np.array([float(a.get("unaccounted_us", 0.0)) for a in f_args])
-    steps = [int(a.get("steps", 0)) for a in f_args]
-    dropped = int(sum(int(a.get("dropped", 0)) for a in f_args))
+    timed_steps, timed_nested = _by_time(xs, frames)
+    steps = [int(a["steps"]) if "steps" in a else n for a, n in zip(f_args, timed_steps, strict=True)]
+    dropped = int(sum(int(a.get("dropped", 0)) for a in f_args)) if any("dropped" in a for a in f_args) \
+        else _counter_total(trace["traceEvents"], "dropped_steps")
     work_us = f_dur - wait_us
 
     durations: dict[str, list[float]] = {}
@@ -46,7 +48,8 @@ def profile_summary(trace: dict) -> dict:
         if e["name"] == "frame":
             continue
         durations.setdefault(e["name"], []).append(float(e["dur"]))
-        if (e.get("args") or {}).get("depth", 0):
+        args = e.get("args") or {}
+        if args.get("depth", 0) if "depth" in args else id(e) in timed_nested:
             nested.add(e["name"])
     durations.setdefault(UNACCOUNTED, []).extend(unacc_us.tolist())
 
@@ -75,6 +78,37 @@ def profile_summary(trace: dict) -> dict:
         "_frame_ts": f_ts,  # for the plot, with the frame events in time order; dropped before printing
         "_frames": frames,
     }
+
+
+def _by_time(xs: list[dict], frames: list[dict]) -> tuple[list[int], set[int]]:
+    """What docs/formats.md alone says of a trace, for one from another writer (this project's
+    own carry `steps`, `dropped` and `depth` in their args): each frame's steps, the most events
+    of one stage directly inside it (the render stage aside: one a frame), and the ids of the
+    events nested inside a stage; both from the events' times on their thread."""
+    index = {id(f): k for k, f in enumerate(frames)}
+    counts: list[Counter] = [Counter() for _ in frames]
+    nested: set[int] = set()
+    stack: list[dict] = []
+    for e in sorted(xs, key=lambda e: (str(e.get("pid")), str(e.get("tid")), e["ts"], -e["dur"])):
+        while stack and (stack[-1].get("pid"), stack[-1].get("tid")) != (e.get("pid"), e.get("tid")):
+            stack.pop()
+        while stack and stack[-1]["ts"] + stack[-1]["dur"] < e["ts"] + e["dur"]:
+            stack.pop()  # ended before this one does: not around it
+        inside = [o for o in stack if o["name"] != "frame"]
+        if e["name"] != "frame":
+            if inside:
+                nested.add(id(e))
+            elif stack and stack[-1]["name"] == "frame" and not e["name"].startswith("render"):
+                counts[index[id(stack[-1])]][e["name"]] += 1
+        stack.append(e)
+    return [max(c.values(), default=0) for c in counts], nested
+
+
+def _counter_total(events: list[dict], name: str) -> int:
+    """The last value of a `C` counter (a running total, as docs/formats.md's dropped steps)."""
+    counter = sorted((e for e in events if e.get("ph") == "C" and e.get("name") == name), key=lambda e: e.get("ts", 0))
+    values = [v for e in counter for v in (e.get("args") or {}).values() if isinstance(v, (int, float))]
+    return int(values[-1]) if values else 0
 
 
 def format_table(s: dict) -> str:

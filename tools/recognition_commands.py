@@ -240,8 +240,9 @@ def cmd_recognize(args: argparse.Namespace) -> int:
     try:
         out = open(args.output, "w", encoding="utf-8") if args.output else sys.stdout
         try:
+            t0 = float(rec_file.t[0])  # events carry the recording's own seconds (docs/formats.md)
             for t, f in zip(times, frames, strict=True):
-                for e in rec.push(f, t=float(t)):
+                for e in rec.push(f, t=t0 + float(t)):
                     out.write(json.dumps(e.to_dict()) + "\n")
         finally:
             if args.output:

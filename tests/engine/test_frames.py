@@ -9,7 +9,7 @@ import pytest
 from engine.clock import VirtualClock
 from engine.frames import FRAME_HZ, FrameResampler, recording_frames, resample
 from engine.loop import FixedStepLoop
-from engine.recording import read_recording
+from engine.recording import Recording, read_recording, write_recording
 from engine.sensors import Sample, open_source
 
 
@@ -115,3 +115,17 @@ def test_replay_of_the_phone_recording_through_loop_and_resampler(shared_data):
     assert np.all(np.diff(times) == pytest.approx(1 / 60, abs=1e-12))
     _, offline = resample(rel, rec.accel)
     np.testing.assert_array_equal(np.array(frames), offline)
+
+
+def test_a_last_sample_written_rounded_still_reaches_its_step(tmp_path):
+    # docs/formats.md's example writes t to 4 decimals: 0.0333 is the step at 1/30 s. The grid
+    # ended at floor(duration * 60 + 1e-9): the last sample of a 60 Hz file written rounded down
+    # was lost (`synth --session 20` wrote 1200 frames and read back 1199)
+    rec = Recording(np.array([0.0, 0.0167, 0.0333]), np.tile([0.0, 0.0, 1.0], (3, 1, 1)), ["", "", ""])
+    assert len(recording_frames(rec)[1]) == 3
+    exact = Recording(np.arange(1200) / 60.0, np.tile([0.0, 0.0, 1.0], (1200, 1, 1)), [""] * 1200)
+    path = tmp_path / "s.csv"
+    write_recording(path, exact)
+    assert len(recording_frames(read_recording(path))[1]) == 1200
+    short = Recording(np.array([0.0, 0.0167, 0.0320]), np.tile([0.0, 0.0, 1.0], (3, 1, 1)), ["", "", ""])
+    assert len(recording_frames(short)[1]) == 2  # 0.0320 is not 1/30 s: no step made up

@@ -125,8 +125,9 @@ def test_a_plot_of_thousands_of_stages_draws_the_largest_and_sums_the_rest(tmp_p
     from tools.profile import MAX_PLOT_STAGES, plot_profile
 
     frame = {"ph": "X", "name": "frame", "ts": 0, "dur": 10_000, "args": {"steps": 1}}
-    stages = [{"ph": "X", "name": f"s{i}", "ts": 1 + i, "dur": 1 + i % 7} for i in range(3000)]
-    stages.append({"ph": "X", "name": "physics", "ts": 1, "dur": 5000})
+    # one after the other (a span inside another is nested in it, docs/formats.md)
+    stages = [{"ph": "X", "name": f"s{i}", "ts": 1 + 3 * i, "dur": 1 + i % 2} for i in range(3000)]
+    stages.append({"ph": "X", "name": "physics", "ts": 9100, "dur": 800})
     path = tmp_path / "many.json"
     path.write_text(json.dumps({"traceEvents": [frame, *stages]}))
     trace = read_chrome_trace(path)
@@ -134,3 +135,29 @@ def test_a_plot_of_thousands_of_stages_draws_the_largest_and_sums_the_rest(tmp_p
     assert len(limits["stages"]) == MAX_PLOT_STAGES and limits["stages"][0] == "physics"
     n, rest = limits["stages"][-1].split(" ", 1)  # the rest, with the loop's own "unaccounted" time
     assert rest == "other stages" and int(n) >= 3001 - (MAX_PLOT_STAGES - 1)
+
+
+def test_a_trace_from_another_writer_is_read_by_the_contract_alone(tmp_path):
+    """docs/formats.md says what a trace holds: stage events, one per stage per step, inside a
+    `frame` event; spans inside a stage nest inside it; a `C` counter of dropped steps. A trace
+    written by another tool (no `steps`, `dropped` or `depth` args, which this project's writer
+    adds) read as 0 steps, 0 dropped, and its nested span as a stage of its own."""
+    from tools.profile import profile_summary
+
+    ev = []
+    for ts, dropped in ((0, 0), (20_000, 3)):
+        ev.append({"ph": "X", "name": "frame", "ts": ts, "dur": 16_000, "pid": 1, "tid": 1})
+        for step in range(2):
+            at = ts + 100 + 5000 * step
+            ev.append({"ph": "X", "name": "physics", "ts": at, "dur": 3000, "pid": 1, "tid": 1})
+            ev.append({"ph": "X", "name": "solver", "ts": at + 500, "dur": 1000, "pid": 1, "tid": 1})
+        ev.append({"ph": "X", "name": "render_scene", "ts": ts + 11_000, "dur": 4000, "pid": 1, "tid": 1})
+        ev.append({"ph": "C", "name": "dropped_steps", "ts": ts + 16_000, "pid": 1, "tid": 1, "args": {"dropped": dropped}})
+    ev.append({"ph": "M", "name": "process_name", "pid": 1, "tid": 1, "args": {"name": "other tool"}})
+    path = tmp_path / "other.json"
+    for order in (ev, ev[::-1]):
+        path.write_text(json.dumps({"traceEvents": order}))
+        s = profile_summary(read_chrome_trace(path))
+        assert (s["frames"], s["steps"], s["dropped_steps"], s["steps_per_frame"]) == (2, 4, 3, {"2": 2})
+        assert s["stages"]["solver"]["nested"] and not s["stages"]["physics"]["nested"]
+        assert s["stages"]["physics"]["n"] == 4 and s["stages"]["solver"]["n"] == 4

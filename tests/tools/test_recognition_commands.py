@@ -501,3 +501,18 @@ def test_templates_build_and_evaluate_keep_usable_trials(tmp_path, trials_dir, c
     with pytest.raises(SystemExit) as exit_info:
         main(["templates", "build", str(trials_dir), "--keep", "best"])
     assert exit_info.value.code == 2 and "'usable'" in capsys.readouterr().err
+
+
+def test_recognize_events_carry_the_recordings_own_seconds(tmp_path, trials_dir, capsys):
+    # docs/formats.md: `t` is "the same instant in the recording's seconds"; it was frame / 60
+    # whatever the recording's first t (a session logged with Unix times, one cut from a longer one)
+    out = tmp_path / "t.npz"
+    assert main(["templates", "build", str(trials_dir), "-o", str(out)]) == 0
+    frames = np.vstack([rest(20), bump(2), rest(30)])
+    rec = tmp_path / "late.csv"
+    t = 1000.5 + np.arange(len(frames)) / 60.0
+    write_recording(rec, Recording(t, frames.reshape(len(frames), 1, 3), [""] * len(frames)))
+    capsys.readouterr()
+    assert main(["recognize", "--templates", str(out), str(rec)]) == 0
+    events = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
+    assert events and all(e["t"] == pytest.approx(1000.5 + e["frame"] / 60.0, abs=1e-3) for e in events)
