@@ -18,21 +18,24 @@ from engine.sample import Sample
 FRAME_HZ = STEP_HZ
 
 
-GRID_TOLERANCE = 0.01  # of a frame: a last sample this much before a step instant still reaches it
+FLOAT_TOLERANCE = 1e-9  # of a frame: float error in a duration computed in memory
+# of a frame: a recording FILE's times are written rounded (to 4 decimals in docs/formats.md's
+# example, 6 by `record`), so its last sample at 0.0333 s is the step at 1/30 s; else a 60 Hz
+# recording read back lost its last frame. 4 decimals are off by up to 0.003 frames.
+WRITTEN_TOLERANCE = 0.005
 
 
-def frame_offsets(duration: float, hz: int = FRAME_HZ) -> np.ndarray:
+def frame_offsets(duration: float, hz: int = FRAME_HZ, tolerance: float = FLOAT_TOLERANCE) -> np.ndarray:
     """k / hz for every step k in [0, duration]: computed from k, never summed, so frame k is
-    exactly k/hz seconds after the first one. A recording's times are written rounded (to 4
-    decimals in docs/formats.md's example, 6 by `record`): a last sample at 0.0333 s is the step
-    at 1/30 s (GRID_TOLERANCE), or a 60 Hz recording read back loses its last frame."""
-    n = int(np.floor(duration * hz + GRID_TOLERANCE)) + 1
+    exactly k/hz seconds after the first one; a last step `tolerance` frames past the duration
+    still counts."""
+    n = int(np.floor(duration * hz + tolerance)) + 1
     return np.arange(n, dtype=np.float64) / hz
 
 
-def frame_times(t0: float, t_end: float, hz: int = FRAME_HZ) -> np.ndarray:
-    """The step grid t0 + k/hz covering [t0, t_end]."""
-    return t0 + frame_offsets(t_end - t0, hz)
+def frame_times(t0: float, t_end: float, hz: int = FRAME_HZ, tolerance: float = FLOAT_TOLERANCE) -> np.ndarray:
+    """The step grid t0 + k/hz covering [t0, t_end] (see frame_offsets)."""
+    return t0 + frame_offsets(t_end - t0, hz, tolerance)
 
 
 def interpolate_at(t: np.ndarray, x: np.ndarray, at: np.ndarray, mode: str = "linear") -> np.ndarray:
@@ -56,12 +59,13 @@ def interpolate_at(t: np.ndarray, x: np.ndarray, at: np.ndarray, mode: str = "li
     return out
 
 
-def resample(t: np.ndarray, accel: np.ndarray, hz: int = FRAME_HZ, mode: str = "linear") -> tuple[np.ndarray, np.ndarray]:
+def resample(t: np.ndarray, accel: np.ndarray, hz: int = FRAME_HZ, mode: str = "linear",
+             tolerance: float = FLOAT_TOLERANCE) -> tuple[np.ndarray, np.ndarray]:
     """Resample (n,) times and (n, sensors, 3) or (n, D) values to the grid t[0] + k/hz.
     Returns (grid_times, frames of shape (m, D)). `mode` is 'linear' or 'hold'."""
     t = np.asarray(t, dtype=np.float64)
     x = np.asarray(accel, dtype=np.float64).reshape(len(t), -1)
-    grid = frame_times(float(t[0]), float(t[-1]), hz)
+    grid = frame_times(float(t[0]), float(t[-1]), hz, tolerance)
     return grid, interpolate_at(t, x, grid, mode)
 
 
@@ -73,9 +77,10 @@ def resample_labels(t: np.ndarray, labels: list[str], grid: np.ndarray) -> list[
 
 def recording_frames(rec: Recording, hz: int = FRAME_HZ) -> tuple[np.ndarray, np.ndarray, list[str]]:
     """(grid times relative to the first sample, exactly k/hz; frames (m, 3*sensors); labels
-    per frame)."""
-    grid, frames = resample(rec.t, rec.accel, hz)
-    return frame_offsets(float(rec.t[-1] - rec.t[0]), hz), frames, resample_labels(rec.t, rec.labels, grid)
+    per frame) of a recording as read from its file (its times rounded: WRITTEN_TOLERANCE)."""
+    grid, frames = resample(rec.t, rec.accel, hz, tolerance=WRITTEN_TOLERANCE)
+    offsets = frame_offsets(float(rec.t[-1] - rec.t[0]), hz, WRITTEN_TOLERANCE)
+    return offsets, frames, resample_labels(rec.t, rec.labels, grid)
 
 
 class FrameResampler:

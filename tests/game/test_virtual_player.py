@@ -131,6 +131,6 @@ def test_shipped_templates_are_rebuilt_by_the_synth_command(tmp_path):
         assert set(b.files) <= set(a.files)
         for k in b.files:
             if a[k].dtype.kind == "f":
-                assert np.allclose(a[k], b[k], rtol=0, atol=1e-9), k
+                assert np.allclose(a[k], b[k], rtol=0, atol=1e-9, equal_nan=True), k
             else:
                 assert np.array_equal(a[k], b[k]), k
