@@ -157,7 +157,7 @@ class FixedStepLoop:
             sid, fn = self._render
             t0 = perf()
             fn(self.alpha)
-            budget.add_span(sid, self.step_index, t0, perf() - t0)
+            budget.add_span(sid, self.step_index - 1, t0, perf() - t0)  # the last step it drew
         wait_start = perf()
         self._wait_next_deadline()
         end = perf()

@@ -481,7 +481,11 @@ class _TrainingStages:
         if trainer.go and self.auto:
             self.perform()
         if trainer.done and not was_done:
-            templates = trainer.templates(self.left_handed, base=base_templates(output), recognizer=self.settings)
+            base = base_templates(output)
+            templates = trainer.templates(self.left_handed, base=base, recognizer=self.settings)
+            if base is not None and base.dim != templates.dim:
+                print(f"quickjab train: the moves you had were for {base.dim // 3} sensor(s), these trials have "
+                      f"{templates.dim // 3}: only the moves trained now are kept", file=sys.stderr)
             output.parent.mkdir(parents=True, exist_ok=True)
             templates.save(output)
             self.screen_view.saved_to = str(output)

@@ -424,7 +424,9 @@ class DecisionRules:
             return True
         per_action = np.minimum.reduceat(scores, self._action_starts)
         first, second = np.partition(per_action, 1)[:2]
-        return second > 0 and (second - first) / second >= self.auto_lead
+        # a second action at inf (left out by `_moving_hand`, or none of its templates fitting)
+        # gives no lead to measure: not yet (as inf / inf was, without its RuntimeWarning)
+        return bool(np.isfinite(second)) and second > 0 and (second - first) / second >= self.auto_lead
 
 
 def shaken_actions(templates, names: list[str], gate: float) -> list[bool]:

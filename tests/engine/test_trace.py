@@ -197,3 +197,17 @@ def test_overruns_are_flagged_in_the_trace():
     loop.run(frames=8)
     xs = [e for e in chrome_trace(loop.budget)["traceEvents"] if e["ph"] == "X" and e["name"] == "slow"]
     assert [e["args"]["step"] for e in xs if e["args"].get("overrun")] == [4]
+
+
+def test_the_render_event_carries_the_last_step_it_drew():
+    """docs/formats.md's example: frame 0's stages and its render are all step 0. The render
+    span was booked with the next step's number (frame 0's render said step 1)."""
+    doc = chrome_trace(traced_loop(frames=12).budget)
+    xs = [e for e in doc["traceEvents"] if e["ph"] == "X"]
+    frames = sorted((e for e in xs if e["name"] == "frame"), key=lambda e: e["ts"])
+    for f in frames:
+        inside = [e for e in xs if e["name"] != "frame" and f["ts"] <= e["ts"] < f["ts"] + f["dur"] + EPS_US]
+        steps = [e["args"]["step"] for e in inside if e["name"] == "sense"]
+        renders = [e["args"]["step"] for e in inside if e["name"] == "render"]
+        if steps:
+            assert renders == [max(steps)], (f["args"], steps, renders)

@@ -219,3 +219,21 @@ def test_retraining_one_move_compares_it_with_the_moves_kept(monkeypatch):
     templates = trainer.templates(base=base)
     assert trainer.dropped == {"jab": (1, 5)}
     assert templates.actions.count("jab") == 4 and templates.actions.count("upper") == 4
+
+
+def test_training_over_a_set_for_other_sensors_says_the_old_moves_go(tmp_path, monkeypatch, capsys):
+    """A saved one-sensor set and a two-sensor training (`train --actions X`): nothing of the old
+    set fits, so only the moves trained now are kept; this used to happen without a word."""
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "xdg"))
+    from engine.recognition import Templates
+    from game.userdata import user_templates_path
+
+    rng = np.random.default_rng(0)
+    one = np.tile([0.0, 0.0, 1.0], (40, 1))
+    one[10:30, 0] += 2.0 * np.sin(np.linspace(0, np.pi, 20))
+    path = user_templates_path()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    Templates.from_trials({"jab": [one + rng.normal(0, 0.01, one.shape) for _ in range(3)]}).save(path)
+    assert train("--actions", "straight_r") == 0
+    assert Templates.load(path).action_names == ["straight_r"]
+    assert "were for 1 sensor(s), these trials have 2: only the moves trained now are kept" in capsys.readouterr().err

@@ -213,3 +213,21 @@ def test_bad_saved_settings_are_an_error_naming_the_file(tmp_path, saved, says):
     with pytest.raises(InputError) as err:
         Templates.load(tmp_path / "bad.npz")
     assert str(err.value).startswith(f"{tmp_path / 'bad.npz'}: ") and says in str(err.value)
+
+
+def test_main_auto_on_two_hands_raises_no_warning(session):
+    """main="auto" measures the best action's lead over the second; the second can be at inf
+    (left out by the moving hand's rule, or no template of it fitting yet), and inf / inf printed
+    a RuntimeWarning on stderr (`recognize --recognizer main=auto`)."""
+    import warnings
+
+    from game.actions import load_library
+    from tools.synth import synth_session, synth_trials
+
+    lib, rng = load_library(), np.random.default_rng(1)
+    three = synth_trials(lib, "experienced", 3, rng, ["hook_l", "straight_r", "uppercut_r"])  # no rest
+    signal, _ = synth_session(lib, 10.0, "experienced", rng)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        out = events(DualBufferRecognizer(Templates.from_trials(three), main="auto"), signal.reshape(len(signal), 6))
+    assert any('"start"' in e for e in out)
