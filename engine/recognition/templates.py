@@ -596,12 +596,17 @@ class Templates:
             raise TemplateFileError(path, f"not a template file ({exc.__class__.__name__}: {exc})") from None
         except Exception as exc:  # zipfile.BadZipFile and friends: still a bad file, not a crash
             raise TemplateFileError(path, f"not a template file ({exc.__class__.__name__})") from None
+        if "format" in data and data["format"].dtype.kind == "S":
+            raise TemplateFileError(path, "its strings are bytes (numpy 'S'); a template file holds unicode strings")
         if str(data.get("format", "")) != "quickjab-templates":
             raise TemplateFileError(path, "not a QuickJab template file (no format marker)")
         try:
+            if data["version"].shape != () or data["version"].dtype.kind not in "iu":
+                raise ValueError(f"version must be the integer {FORMAT_VERSION}, not {data['version'].tolist()!r}")
             version = int(data["version"])
             if version != FORMAT_VERSION:
                 raise TemplateFileError(path, f"template format version {version}, expected {FORMAT_VERSION}")
+            _checked_text(data)
             lengths, signals = _checked_signals(data)
             cuts = np.cumsum(lengths)[:-1]
             meta = dict(zip(data["meta_keys"].tolist(), data["meta_values"].tolist(), strict=True))
@@ -623,9 +628,21 @@ class Templates:
                 raise ValueError(f"unknown feature {t.feature!r}")
         except TemplateFileError:
             raise
-        except (KeyError, ValueError, TypeError, IndexError) as exc:
+        except KeyError as exc:
+            raise TemplateFileError(path, f"corrupt template file: no {exc.args[0]!r} array") from None
+        except (ValueError, TypeError, IndexError) as exc:
             raise TemplateFileError(path, f"corrupt template file: {exc}") from None
         return t
+
+
+def _checked_text(data: Mapping[str, np.ndarray]) -> None:
+    """The file's strings: unicode (numpy 'U'); the names one per template, the notes in pairs.
+    ValueError says what is wrong."""
+    for k in ("actions", "method", "feature", "meta_keys", "meta_values"):
+        if data[k].dtype.kind != "U" and data[k].size:  # (an empty one has no strings to be)
+            raise ValueError(f"{k} must hold unicode strings, not {data[k].dtype}")
+    if data["actions"].ndim != 1 or data["meta_keys"].ndim != 1 or data["meta_keys"].shape != data["meta_values"].shape:
+        raise ValueError("actions must be one name per template, and meta_keys and meta_values pairs")
 
 
 def _checked_signals(data: Mapping[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
@@ -640,6 +657,8 @@ def _checked_signals(data: Mapping[str, np.ndarray]) -> tuple[np.ndarray, np.nda
         raise ValueError(f"{len(data['lengths'])} templates, at most {MAX_TEMPLATES}")
     lengths = data["lengths"].astype(np.int64)
     signals = data["signals"].astype(np.float64)
+    if lengths.ndim == 1 and not len(lengths):
+        raise ValueError("no templates")
     if lengths.ndim != 1 or lengths.min() < 1 or lengths.sum() != len(signals) or signals.ndim != 2:
         raise ValueError("signal lengths do not match the signal data")
     if not np.all(np.isfinite(signals)):

@@ -252,3 +252,34 @@ def test_fractional_onsets_are_refused_not_truncated(tmp_path, trials):
     _rewritten(path, onsets=t.onsets.astype(str))  # read as numbers by the int64 cast
     with pytest.raises(TemplateFileError, match=r"onsets.npz: .*onsets must hold numbers"):
         Templates.load(path)
+
+
+@pytest.mark.parametrize(("change", "says"), [
+    ({"format": np.array(b"quickjab-templates")}, "bytes"),
+    ({"method": np.array(b"trials")}, "method must hold unicode strings"),
+    ({"version": np.array(1.5)}, "version must be the integer 1"),
+    ({"version": np.array("1")}, "version must be the integer 1"),
+    ({"actions": np.array([["a", "b"]])}, "one name per template"),
+    ({"meta_values": np.array(["x", "y", "z"])}, "pairs"),
+    ({"lengths": np.zeros(0, dtype=int), "signals": np.zeros((0, 6)), "actions": np.zeros(0, dtype="U1"),
+      "gravity": np.zeros((0, 6)), "onsets": np.zeros(0, dtype=int), "thresholds": np.zeros(0)}, "no templates"),
+    ({"version": None}, "no 'version' array"),
+])
+def test_a_template_file_out_of_its_format_says_what_is_wrong(tmp_path, trials, change, says):
+    """Found by a writer from docs/formats.md alone: bytes strings read as "no format marker",
+    versions 1.5 and "1" loaded, and a missing key, unpaired notes or no templates at all gave
+    Python's own words ("'version'", "zip() argument 2 is shorter...", "zero-size array...")."""
+    good = tmp_path / "good.npz"
+    Templates.from_trials(trials).save(good)
+    with np.load(good, allow_pickle=False) as z:
+        arrays = {k: z[k] for k in z.files}
+    for k, v in change.items():
+        if v is None:
+            del arrays[k]
+        else:
+            arrays[k] = v
+    bad = tmp_path / "bad.npz"
+    np.savez(bad, **arrays)
+    with pytest.raises(TemplateFileError, match=says) as info:
+        Templates.load(bad)
+    assert str(bad) in str(info.value)
