@@ -161,3 +161,16 @@ def test_rate_meter_measures_samples_per_second():
     m2 = RateMeter()
     m2.add([Sample(float(t), None) for t in jitter])
     assert m2.rate_hz() == pytest.approx(25, rel=0.2)
+
+
+def test_replay_announces_the_rate_its_file_states_when_its_times_agree(tmp_path):
+    # a 60 Hz file's times written to 6 decimals: 1 / the median interval was 59.9988 Hz, and
+    # `record --source replay://` wrote that as the recording's rate
+    t = np.arange(120) / 60.0
+    accel = np.tile([0.0, 0.0, 1.0], (120, 1, 1))
+    path = tmp_path / "sixty.csv"
+    write_recording(path, Recording(t, accel, [""] * 120, {"rate_hz": "60"}))
+    assert open_source(f"replay://{path}", clock=VirtualClock().seconds).rate_hz == 60.0
+    lying = tmp_path / "lying.csv"
+    write_recording(lying, Recording(t, accel, [""] * 120, {"rate_hz": "100"}))  # its times say 60
+    assert open_source(f"replay://{lying}", clock=VirtualClock().seconds).rate_hz == pytest.approx(60.0, rel=1e-3)
