@@ -39,7 +39,8 @@ def check_visible_window(command: str) -> None:
     driver = pygame.display.get_driver()
     if driver in INVISIBLE_DRIVERS and os.environ.get("SDL_VIDEODRIVER", "").lower() != driver:
         raise InputError(f"no display: SDL opened its {driver!r} video driver, so no window would show; "
-                         f"run it where a display is (DISPLAY / WAYLAND_DISPLAY), or use `quickjab {command} --headless --frames N`")
+                         f"run it where a display is (DISPLAY / WAYLAND_DISPLAY), or use `quickjab {command} --headless --frames N` "
+                         f"(in a clone: .venv/bin/quickjab {command} --headless --frames 600)")
 
 
 def headless_frames(frames: int | None, headless: bool, command: str) -> int | None:

@@ -381,7 +381,7 @@ def seat_templates(profile: str | None, templates: str | None) -> tuple[Path | s
         return None, None
     if path.exists():
         return path, None
-    return None, f"profile {profile!r} has no trained templates yet (quickjab train --profile {profile}); using the default set"
+    return None, f"profile {profile!r} has no trained templates yet (quickjab train --profile {profile}); using the default profile's templates"
 
 
 def run_match(args) -> int:

@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import signal as sig
 import sys
 import time
 from dataclasses import asdict
@@ -125,14 +126,23 @@ def run_emulate(args: argparse.Namespace) -> int:
 
     board = EmulatorDef(sensors, rate_hz=args.rate, ticks_start=args.ticks_start, seed=args.seed)
     emu = Emulator.from_def(signal, board, faults=faults, link=args.link, on_port=on_port, on_event=on_event)
+    # `kill` ends it as Ctrl-C does: the port closes and the --link symlink goes (left behind, it
+    # pointed at a pty number another terminal may get)
+    previous = sig.signal(sig.SIGTERM, _interrupt)
     try:
         stats = emu.run(args.seconds)
     except KeyboardInterrupt:
         emu.stop()
         stats = emu.stats
+    finally:
+        sig.signal(sig.SIGTERM, previous)
     if not args.quiet:
         print("emulator: " + " ".join(f"{k}={v}" for k, v in asdict(stats).items()), file=sys.stderr)
     return 0
+
+
+def _interrupt(signum: int, frame: object) -> None:
+    raise KeyboardInterrupt
 
 
 def run_faults(args: argparse.Namespace) -> int:

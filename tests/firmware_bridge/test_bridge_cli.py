@@ -135,3 +135,20 @@ def test_boot_id_is_random_per_boot_unless_seeded():
     a, b = boot_ids(None), boot_ids(None)
     assert len(set(a + b)) == 6  # every boot of every run its own (2^-32 chance of a clash)
     assert boot_ids(5) == boot_ids(5) and len(set(boot_ids(5))) == 3
+
+
+def test_a_terminated_emulator_removes_its_link(tmp_path):
+    # killed (SIGTERM, as `kill` and `timeout` send), it left the --link symlink pointing at a pty
+    # number another terminal may get later
+    link = tmp_path / "port"
+    emu = subprocess.Popen([sys.executable, "-m", "tools.cli", "bridge", "emulate", "--seconds", "30", "--link", str(link),
+                            "--quiet"], cwd=REPO, stdout=subprocess.PIPE, text=True)
+    try:
+        assert emu.stdout.readline().startswith("port: /dev/pts/")
+        assert os.path.islink(link)
+        emu.terminate()
+        assert emu.wait(10) == 0
+    finally:
+        if emu.poll() is None:
+            emu.kill()
+    assert not os.path.lexists(link)
