@@ -376,10 +376,10 @@ class DualBufferRecognizer(TemplateSet, DecisionRules, Adaptation):
                 events.append(self._event("end", self.action_names[self.action], None, reason="complete" if complete else None))
             elif self.pending:
                 events.append(self._event("reject", None, None))
-            if self.action is None and self.gate.auto and not self._moved:
-                # Nothing has ever started and this motion was rejected: the sensor's noise
-                # crossing a gate set too low (e.g. from quieter training trials) holds the gate
-                # open, so its frames count as rest too.
+            if self.action is None and self.gate.auto and not self._moved and self._peak_act_seen < self._action_bar.min():
+                # Nothing has started yet and this motion, rejected and weaker than any template's
+                # start, was noise crossing a gate set too low: its frames count as rest (a punch
+                # no template matched, learnt as rest, raised the gate over every later punch).
                 for a in self._acts[: min(self.dtw.n, self.window)]:
                     self.gate.learn(float(a))
             self._after_peak = self._peak_act_seen if complete else 0.0

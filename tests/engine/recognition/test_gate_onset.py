@@ -378,3 +378,20 @@ def test_the_gates_percentile_is_numpys_bit_for_bit():
     kept = a.copy()
     percentile(a, 90)
     assert np.array_equal(a, kept)  # the caller's buffer is left as it was
+
+
+def test_a_first_punch_no_template_matches_does_not_raise_the_gate_over_the_rest():
+    """Before any start, a rejected motion's frames count as resting noise (a gate set too low
+    by quiet training trials). A real punch that matched nothing (here: thresholds of 0, or a
+    move no template has) was learnt as rest too: the gate jumped to 2 g and every later punch
+    stayed under it."""
+    rng = np.random.default_rng(5)
+    gentle = {name: [np.vstack([rest(30, 0.01, rng), bump(axis, 1.2) + rng.normal(0, 0.02, (24, 3)), rest(10, 0.01, rng)])
+                     for _ in range(3)] for name, axis in (("jab", 0), ("upper", 2))}
+    tm = Templates.from_trials(gentle)
+    stream = np.vstack([rest(60, 0.01, rng), bump(1, 3.0, 30), rest(60, 0.01, rng)]  # an unknown, strong move first
+                       + [np.vstack([bump(axis, 1.2), rest(60, 0.01, rng)]) for axis in (0, 2, 0, 2)])
+    rec = DualBufferRecognizer(tm)
+    events = run(rec, stream)
+    assert [e["action"] for e in events if e["event"] == "start"] == ["jab", "upper", "jab", "upper"]
+    assert rec.noise_g < 1.0
