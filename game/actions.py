@@ -44,6 +44,7 @@ MAX_ROOT_M = 100.0
 # Hit reactions: hit_<where>_<side>_<strength>; side is where the blow comes FROM as seen by
 # the boxer who is hit (a right hook from the opponent lands on the left: "left").
 REACTION_WHERE = ("head", "body")
+GUARD_KINDS = ("block", "parry")  # GuardWindow.kind
 REACTION_SIDES = ("left", "right", "front")
 REACTION_STRENGTHS = ("light", "heavy")
 REACTION_NAMES: tuple[str, ...] = tuple(
@@ -238,9 +239,9 @@ def action_from_json(data: dict, source: str = "") -> Action:
             raise ActionError(f"{where}: root keys, damage and reach must be finite numbers")
         if np.abs(key_poses).max() > MAX_POSE_M or (len(root) and np.abs(root[:, 1:]).max() > MAX_ROOT_M):
             raise ActionError(f"{where}: poses must lie within {MAX_POSE_M:g} m and root keys within {MAX_ROOT_M:g} m")
-        for w in attacks:
-            if w.hand not in ("l", "r") or not 0 <= w.start <= w.end < frames:
-                raise ActionError(f"{where}: bad attack window {w}")
+        if data.get("fps", FPS) != FPS:
+            raise ActionError(f"{where}: fps must be {FPS} (clips play one frame a step), not {data['fps']!r}")
+        _check_windows(where, attacks, guards, frames)
         return Action(
             name=data["name"], kind=kind, frames=frames, key_frames=key_frames,
             key_poses=key_poses, root_keys=root, attacks=attacks, guards=guards,
@@ -251,6 +252,21 @@ def action_from_json(data: dict, source: str = "") -> Action:
         raise
     except (KeyError, TypeError, ValueError, IndexError, OverflowError) as exc:  # OverflowError: int(Infinity)
         raise ActionError(f"{where}: malformed action ({type(exc).__name__}: {exc})") from None
+
+
+def _check_windows(where: str, attacks: list[AttackWindow], guards: list[GuardWindow], frames: int) -> None:
+    """Attack and guard windows the referee can score: inside the clip, on a head or a body, a
+    block or a parry, no negative damage or reach; else an ActionError naming `where`."""
+    for w in attacks:
+        if w.hand not in ("l", "r") or not 0 <= w.start <= w.end < frames or w.damage < 0 or w.reach < 0 \
+                or not w.targets or not set(w.targets) <= set(REACTION_WHERE):
+            raise ActionError(f"{where}: bad attack window {w} (hand l or r, frames inside the clip, "
+                              f"targets of {', '.join(REACTION_WHERE)}, damage and reach >= 0)")
+    for g in guards:
+        if g.kind not in GUARD_KINDS or not 0 <= g.start <= g.end < frames or not g.covers \
+                or not set(g.covers) <= set(REACTION_WHERE):
+            raise ActionError(f"{where}: bad guard window {g} (kind {' or '.join(GUARD_KINDS)}, frames inside "
+                              f"the clip, covers of {', '.join(REACTION_WHERE)})")
 
 
 def load_action(path: str | Path) -> Action:

@@ -230,3 +230,25 @@ def test_contact_sheet_command_draws_every_action(tmp_path):
     w, h = image.get_size()
     rows = (len(LIB) + 1) // 2
     assert w > 1000 and h > rows * 200  # one strip of key frames per action, two per row
+
+
+@pytest.mark.parametrize(("name", "change", "says"), [
+    ("hook_r", lambda g: _with_first(g, "attacks", damage=-5.0), "attack window"),
+    ("hook_r", lambda g: _with_first(g, "attacks", targets=["elbow"]), "attack window"),
+    ("hook_r", lambda g: _with_first(g, "attacks", targets=[]), "attack window"),
+    ("block", lambda g: _with_first(g, "guards", kind="dodge"), "guard window"),
+    ("block", lambda g: _with_first(g, "guards", covers=["knee"]), "guard window"),
+    ("block", lambda g: _with_first(g, "guards", end=10_000), "guard window"),
+    ("hook_r", lambda g: dict(g, fps=30), "fps must be 60"),
+])
+def test_an_action_the_referee_cannot_score_is_refused(tmp_path, name, change, says):
+    """Found by a writer from the docs alone: negative damage, a target "elbow", a guard "dodge"
+    covering a "knee", a guard past the clip's end and fps 30 all loaded (exit 0)."""
+    good = json.loads(open(LIB[name].source).read())
+    path = tmp_path / f"{name}.json"
+    path.write_text(json.dumps(change(good)))
+    with pytest.raises(ActionError, match=says) as err:
+        load_action(path)
+    assert str(err.value).startswith(f"{path}: ") and "\n" not in str(err.value)
+    path.write_text(json.dumps(good))
+    assert load_action(path).name == name
