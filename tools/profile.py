@@ -36,7 +36,9 @@ def profile_summary(trace: dict) -> dict:
     f_args = [e.get("args") or {} for e in frames]
     wait_us = np.array([float(a.get("wait_us", 0.0)) for a in f_args])
     unacc_us = np.array([float(a.get("unaccounted_us", 0.0)) for a in f_args])
-    timed_steps, timed_nested = _by_time(xs, frames)
+    own = all("steps" in a for a in f_args) and all("depth" in (e.get("args") or {}) for e in xs if e["name"] != "frame")
+    # this project's traces say it in their args; another writer's are read from their times
+    timed_steps, timed_nested = ([0] * len(frames), set()) if own else _by_time(xs, frames)
     steps = [int(a["steps"]) if "steps" in a else n for a, n in zip(f_args, timed_steps, strict=True)]
     dropped = int(sum(int(a.get("dropped", 0)) for a in f_args)) if any("dropped" in a for a in f_args) \
         else _counter_total(trace["traceEvents"], "dropped_steps")
