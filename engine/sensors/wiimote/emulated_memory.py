@@ -110,14 +110,15 @@ class EmulatedMemory:
 
     def read(self, data: bytes, plugged: bool, now: float, latency: float) -> list[tuple[bytes, float]]:
         """A 0x17 read report at `now`: its 0x21 replies with their times, from `latency` on.
-        A read during a read is ignored, as a real remote does."""
+        A read during a read is refused with a busy ack (0x22, error 4) and the first goes on,
+        as Dolphin's HandleReadData says a real remote does."""
         if len(data) < 7:
             self.count("short_output")
             return []
-        if now < self.read_busy_until:
-            self.count("read_ignored")  # a real remote ignores a read during a read
-            return []
         t = now + latency
+        if now < self.read_busy_until:
+            self.count("read_busy")
+            return [(bytes([p.IN_ACK, 0, 0, p.OUT_READ_MEMORY, p.ERR_BUSY]), t)]
         space = (data[1] >> 2) & 0x3
         address = data[3] << 8 | data[4]
         size = data[5] << 8 | data[6]

@@ -5,8 +5,8 @@
 init at 0xF0/0xFB, ID at 0xFA), the reporting mode, LEDs, rumble and battery. It answers the
 real output reports the way Dolphin's WiimoteEmu and WiiBrew describe a real remote:
 
-- 0x17 reads reply in 0x21 chunks of 16 bytes, one read at a time (a second is ignored), error
-  7 for an absent extension, 8 past the EEPROM; 0x16 writes are always acked (0x22);
+- 0x17 reads reply in 0x21 chunks of 16 bytes, one read at a time (a second gets a busy ack,
+  error 4), error 7 for an absent extension, 8 past the EEPROM; 0x16 writes are always acked (0x22);
   LEDs/mode/IR/speaker ack only when byte 1 bit 1 asks; rumble (bit 0) rides on every report.
 - 0x12 with a valid mode starts data reports; continuous ones come every 10 ms (+ jitter).
 - a Nunchuk plug/unplug sends an unsolicited 0x20 and stops data reports until 0x12 comes.

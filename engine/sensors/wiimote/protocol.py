@@ -67,6 +67,7 @@ DATA_LAYOUTS = {
 
 # Read-reply / ack error codes (Dolphin ErrorCode, WiiBrew).
 ERR_OK = 0
+ERR_BUSY = 4  # a read (or write) during an active read
 ERR_INVALID_SPACE = 6
 ERR_NACK = 7  # nothing answered on the i2c bus: no extension plugged
 ERR_INVALID_ADDRESS = 8

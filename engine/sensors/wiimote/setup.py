@@ -17,6 +17,10 @@ PROBE_S = 0.2  # silence after which a status request asks "are you there?"
 LOSS_S = 0.45  # silence after which the remote is gone (the brief: detected within 0.5 s)
 STATUS_EVERY_S = 10.0  # battery refresh (Dolphin does the same)
 MODE_FIX_EVERY_S = 0.5  # at most this often re-assert our mode against another driver
+# An extension the status says is plugged but that did not set up as a Nunchuk (an error, a
+# half-inserted one's all-0xFF ID, another driver's reply taken for the ID) is tried again this
+# often: Linux's hid-wiimote re-checks every 4 s (wiimote_init_check redoes the hot-plug).
+EXT_RETRY_S = 4.0
 
 
 class RemoteSetup:
@@ -32,6 +36,7 @@ class RemoteSetup:
         self.next_status = 0.0
         self.last_mode_fix = -1e18
         self.last_data = 0.0  # when a data report came (or was asked for by setting the mode)
+        self.next_ext_check = 0.0  # when a plugged extension that is not a Nunchuk is tried again
 
     def handshake(self) -> Script:
         src, run = self.src, self.runner
@@ -67,6 +72,7 @@ class RemoteSetup:
         self.set_mode(src.clock())
         src._streaming = True
         self.next_status = src.clock() + STATUS_EVERY_S
+        self.next_ext_check = src.clock() + EXT_RETRY_S
 
     def _drop_extension(self) -> None:
         src = self.src
@@ -89,7 +95,8 @@ class RemoteSetup:
             self._drop_extension()  # unplugged again meanwhile, or it would not answer
             return
         if not p.is_nunchuk_id(ident):
-            self._drop_extension()
+            if src.extension != "unknown":  # tried again (EXT_RETRY_S): not removed meanwhile
+                self._drop_extension()
             src.extension = "unknown"
             src._say(f"ext-{ident.hex()}", f"extension {ident.hex(' ')} is not a Nunchuk; ignoring it")
             return
@@ -179,3 +186,17 @@ class RemoteSetup:
             # stopped reporting. Ask again (no harm if it was only slow).
             src.count("mode_resent")
             self.set_mode(now)
+        self._retry_extension(now)
+
+    def _retry_extension(self, now: float) -> None:
+        """Set up again an extension the status says is plugged that is not a Nunchuk yet."""
+        src = self.src
+        if (
+            src._streaming
+            and not self.runner.running
+            and self.ext_flag
+            and src.extension != "nunchuk"
+            and now >= self.next_ext_check
+        ):
+            src.count("extension_retries")
+            self.runner.start(self.configure_extension(), now)

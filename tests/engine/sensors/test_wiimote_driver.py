@@ -328,3 +328,29 @@ def test_status_requests_mid_stream_keep_data_flowing(rec_path, status_stops):
         samples += got
     assert src.state is SourceState.CONNECTED and "mode_resent" not in src.stats
     check_against_recording(src, samples, read_recording(rec_path))
+
+
+@pytest.mark.parametrize("first_id", [b"\xff" * 6, bytes.fromhex("0000a6200005")])
+def test_extension_that_failed_to_set_up_is_tried_again(rec_path, first_id):
+    """The status says an extension is plugged but its first set-up failed: a half-inserted
+    Nunchuk's all-0xFF ID, or another driver's read reply (hid-wiimote's Motion Plus poll at
+    0xA600FA also answers at 0x00FA) taken for the ID. Linux's hid-wiimote checks again every
+    4 s (wiimote_init_check: EXT_PLUGGED without a known extension redoes the hot-plug); so
+    must we, or the left hand stays dead until the Nunchuk is re-plugged."""
+    vc = VirtualClock()
+    src = open_source(f"wiimote-emu://{rec_path}", clock=vc.seconds)
+    emu = src.emulator
+    real_id = bytes(emu.memory.ext_regs[0xFA:0x100])
+    emu.memory.ext_regs[0xFA:0x100] = first_id
+    for _ in range(60):  # 1 s: set up with the bad ID
+        vc.advance(STEP_NS)
+        src.poll()
+    assert src.extension in ("none", "unknown") and src.state is SourceState.CONNECTED
+    emu.memory.ext_regs[0xFA:0x100] = real_id  # seated now; no new status report comes
+    samples = []
+    for _ in range(6 * 60):
+        vc.advance(STEP_NS)
+        samples += src.poll()
+    assert src.extension == "nunchuk" and src.state is SourceState.CONNECTED
+    assert src.stats["nunchuk_plugged"] == 1 and "extension_removed" not in src.stats
+    assert not np.array_equal(samples[-1].accel[1], [0.0, 0.0, 1.0])  # the left hand moves

@@ -33,11 +33,16 @@ def drain(vc, emu, seconds=0.1):
 def test_read_in_16_byte_chunks_and_one_read_at_a_time():
     vc, emu = remote()
     emu.handle_output(p.build_read(0x0000, 40))
-    emu.handle_output(p.build_read(0x0016, 10))  # ignored: a read is in progress
-    replies = drain(vc, emu)
+    # Refused while a read is in progress: Dolphin HandleReadData, "a real wm+ sends a busy
+    # ack" (0x22 for 0x17, ErrorCode::Busy 4), and the first read goes on.
+    emu.handle_output(p.build_read(0x0016, 10))
+    out = drain(vc, emu)
+    acks = [(r.acked_report, r.error) for r in out if r.report_id == p.IN_ACK]
+    replies = [r for r in out if r.report_id == p.IN_READ_REPLY]
+    assert acks == [(p.OUT_READ_MEMORY, p.ERR_BUSY)]
     assert [(r.address, r.size, r.error) for r in replies] == [(0x00, 16, 0), (0x10, 16, 0), (0x20, 8, 0)]
     assert replies[1].payload[6:16] == p.encode_calibration(emu.wiimote_cal)
-    assert emu.stats["read_ignored"] == 1
+    assert emu.stats["read_busy"] == 1
 
 
 def test_read_errors():
