@@ -354,3 +354,16 @@ def test_extension_that_failed_to_set_up_is_tried_again(rec_path, first_id):
     assert src.extension == "nunchuk" and src.state is SourceState.CONNECTED
     assert src.stats["nunchuk_plugged"] == 1 and "extension_removed" not in src.stats
     assert not np.array_equal(samples[-1].accel[1], [0.0, 0.0, 1.0])  # the left hand moves
+
+
+def test_an_extension_that_is_not_a_nunchuk_is_tried_again_every_4_s_not_every_poll(rec_path):
+    """A Classic Controller (or any extension that never sets up as a Nunchuk) stays plugged:
+    hid-wiimote's check every 4 s, not a set-up script after every poll."""
+    vc = VirtualClock()
+    src = open_source(f"wiimote-emu://{rec_path}", clock=vc.seconds)
+    src.emulator.memory.ext_regs[0xFA:0x100] = bytes.fromhex("0000a4200101")  # a Classic Controller
+    for _ in range(10 * 60):  # 10 s
+        vc.advance(STEP_NS)
+        src.poll()
+    assert src.extension == "unknown" and src.state is SourceState.CONNECTED
+    assert 1 <= src.stats["extension_retries"] <= 3, src.stats
