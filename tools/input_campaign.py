@@ -834,6 +834,9 @@ def _valid_cases(q: list[str], d: Path, good_rec: str, tpl: str, out: Path) -> l
     emu = f"wiimote-emu://{good_rec}"
     cases.append(Case("ok/recognize-good", q + ["recognize", good_rec, "--templates", tpl], expect="ok"))
     cases.append(Case("ok/graph-info-shipped", q + ["graph", "info"], expect="ok"))
+    still = _write(d, "eval/trials-still/straight_r/1.csv", GOOD_REC)  # every frame alike: its onset was an IndexError
+    cases.append(Case("ok/evaluate-still-trial", q + ["evaluate", str(Path(still).parent.parent), "--train",
+                                                      str(d / "eval" / "trials-ok"), "--mains", "6"], expect="ok"))
     stages = [{"ph": "X", "name": f"s{i}", "ts": 1, "dur": 1} for i in range(50_000)]  # a band each: minutes to draw
     many = _write(d, "trace/stages50000.json", json.dumps({"traceEvents": [{"ph": "X", "name": "frame", "ts": 0, "dur": 9}, *stages]}))
     cases.append(Case("ok/profile-plot-50000-stages", q + ["profile", many, "--plot", str(out / "p.png")], expect="ok"))
