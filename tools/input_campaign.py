@@ -200,6 +200,8 @@ def bad_templates(d: Path, bomb_gb: float = 1.5) -> dict[str, str]:
     variant("version-text", version=np.array("x"))
     variant("method-bad", method=np.array("nope"))
     variant("float-lengths", lengths=good["lengths"].astype(float) + 0.5)
+    variant("lengths-wrap-int64", lengths=np.array([2**62] * 3 + [2**62 + len(good["signals"])]),  # sum wraps to the frame count
+            actions=good["actions"][:4], gravity=g[:4], onsets=np.zeros(4, np.int64), thresholds=good["thresholds"][:4])
     variant("signals-no-columns", signals=good["signals"][:, :0], gravity=g[:, :0])  # D = 0
     variant("onsets-fraction", onsets=good["onsets"] + 0.5)  # was cut to a whole frame
     variant("recognizer-unknown", recognizer=np.array('{"gate": 0.5}'))

@@ -659,7 +659,9 @@ def _checked_signals(data: Mapping[str, np.ndarray]) -> tuple[np.ndarray, np.nda
     signals = data["signals"].astype(np.float64)
     if lengths.ndim == 1 and not len(lengths):
         raise ValueError("no templates")
-    if lengths.ndim != 1 or lengths.min() < 1 or lengths.sum() != len(signals) or signals.ndim != 2:
+    # each length at most the data's: their sum in int64 cannot wrap round to the frame count
+    if lengths.ndim != 1 or lengths.min() < 1 or lengths.max() > len(signals) or lengths.sum() != len(signals) \
+            or signals.ndim != 2:
         raise ValueError("signal lengths do not match the signal data")
     if not np.all(np.isfinite(signals)):
         raise ValueError("non-finite values in the signals")
