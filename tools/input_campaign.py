@@ -348,6 +348,11 @@ def bad_traces(d: Path) -> dict[str, str]:
         tr("deep", "[" * 100_000 + "]" * 100_000),
         tr("deep-obj", '{"traceEvents": ' + "[" * 50_000 + "]" * 50_000 + "}"),
         tr("bool-ts", ev(ts=True, dur=False)),
+        # another writer's dropped-steps counter: int(Infinity) and a sort of "5" with 6 were tracebacks
+        tr("counter-inf", '{"traceEvents": [{"ph": "X", "name": "frame", "ts": 0, "dur": 1}, '
+                          '{"ph": "C", "name": "dropped_steps", "ts": 1, "args": {"dropped": Infinity}}]}'),
+        tr("counter-ts-text", {"traceEvents": [frame, {"ph": "C", "name": "dropped_steps", "ts": "5", "args": {"dropped": 1}},
+                                               {"ph": "C", "name": "dropped_steps", "ts": 6, "args": {"dropped": 2}}]}),
         tr("empty", ""),
         tr("number", "5"),
         tr("no-frame", {"traceEvents": [stage]}),
