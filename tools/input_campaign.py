@@ -683,6 +683,8 @@ def _url_cases(q: list[str], good_rec: str, out: Path) -> list[Case]:
     """Source URLs with bad parameters, through record and scope."""
     cases: list[Case] = []
     emu = f"wiimote-emu://{good_rec}"
+    # two samples a nanosecond apart, looped: a billion a second owed at every poll (a hang, 6 GB)
+    one_ns = _write(Path(good_rec).parent, "rec/one-ns.csv", "t,rx,ry,rz\n0,0,0,1\n1e-9,0,0,1\n")
     urls = {
         "demo-rate-1e9": "demo://?rate=1e9",
         "demo-rate-nan": "demo://?rate=nan",
@@ -708,6 +710,7 @@ def _url_cases(q: list[str], good_rec: str, out: Path) -> list[Case]:
         "replay-speed-inf": f"replay://{good_rec}?speed=inf",
         "replay-speed-tiny": f"replay://{good_rec}?speed=1e-300",
         "replay-speed-huge": f"replay://{good_rec}?speed=1e300",
+        "replay-loop-1ns": f"replay://{one_ns}?loop=1",
         "serial-retry-nan": "serial:///dev/quickjab-none?retry=nan",  # never reopened a lost port
         "serial-window-inf": "serial:///dev/quickjab-none?window=inf",  # the clock's deque never shrank
         "unknown": "nope://x",
