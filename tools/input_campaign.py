@@ -446,7 +446,8 @@ def bad_action_dirs(d: Path) -> dict[str, str]:
                          ("pose-1e307", {"keyframes": [{**good["keyframes"][0],
                                                         "pose": [[1e307] * 3] * len(good["keyframes"][0]["pose"])},
                                                        *good["keyframes"][1:]]}),  # loaded; the sheet overflowed
-                         ("not-object", None)):  # a JSON list: AttributeError
+                         ("not-object", None),  # a JSON list: AttributeError
+                         ("dup-name", None)):  # a second hook_r file: it replaced the first, exit 0
         folder = d / "actions" / name
         if folder.exists():
             shutil.rmtree(folder)
@@ -459,6 +460,8 @@ def bad_action_dirs(d: Path) -> dict[str, str]:
             os.mkfifo(target)
         elif name == "not-object":
             target.write_text(json.dumps([good]))
+        elif name == "dup-name":
+            (folder / "zz_hook_r_v2.json").write_text(json.dumps({**good, "description": "a copy"}))
         else:
             target.write_text(json.dumps({**good, **change}))
         out[name] = str(folder)
