@@ -155,6 +155,8 @@ def _bad_event(ev: object) -> str | None:
     args = ev.get("args")
     if args is not None and not isinstance(args, dict):
         return "has args that are not an object"
+    if ev["ph"] == "C" and ev["name"] == "dropped_steps":
+        return _bad_counter(ev, args or {})
     if ev["ph"] != "X":
         return None
     ts, dur = ev.get("ts"), ev.get("dur")
@@ -170,6 +172,15 @@ def _bad_event(ev: object) -> str | None:
         for k in _FRAME_ARGS_COUNTS:
             if k in args and not (_number(args[k]) and 0 <= args[k] <= _MAX_COUNT):
                 return f"(frame) has args.{k} that is not a count"
+    return None
+
+
+def _bad_counter(ev: dict, args: dict) -> str | None:
+    """Why a `dropped_steps` counter (its last value is the trace's dropped steps when the frames
+    do not say them) cannot be read, or None: a time that is a number, values that are counts
+    (infinity, NaN or a time of text or null were tracebacks, -7 was read as -7 dropped steps)."""
+    if ("ts" in ev and not _number(ev["ts"])) or not all(_number(v) and 0 <= v <= _MAX_COUNT for v in args.values()):
+        return "(dropped_steps) needs a numeric ts and counts for values"
     return None
 
 

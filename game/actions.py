@@ -300,6 +300,8 @@ def load_library(directory: str | Path | None = None) -> dict[str, Action]:
         lib = {}
         for f in files:
             a = load_action(f)
+            if a.name in lib:  # the later file in name order replaced the other one, unsaid
+                raise ActionError(f"{f}: action {a.name!r} is also {lib[a.name].source}; one file per action")
             lib[a.name] = a
         missing = [n for n in (*ACTION_NAMES, "guard") if n not in lib]
         if missing:

@@ -127,12 +127,14 @@ def _away_from_rest(frames: np.ndarray, rest: np.ndarray, threshold_g: float = O
 
 def true_onset(trial: np.ndarray, fraction: float = 0.1) -> int:
     """A trial's true onset: the first frame ONSET_G away from the rest (the mean of its first
-    REST_FRAMES frames); else the first frame whose activity reaches `fraction` of its peak."""
+    REST_FRAMES frames); else the first frame whose activity reaches `fraction` of its peak; 0
+    for a trial that never moves (every frame alike: no activity reaches that)."""
     away = _away_from_rest(trial, rest_gravity(trial, REST_FRAMES))
     if len(away):
         return int(away[0])
     act = activity(trial, rest_gravity(trial))
-    return int(np.flatnonzero(act >= fraction * max(float(act.max()), 1e-12))[0])
+    moving = np.flatnonzero(act >= fraction * max(float(act.max()), 1e-12))
+    return int(moving[0]) if len(moving) else 0
 
 
 def stream_onset(frames: np.ndarray, first: int, end: int, prev_end: int = 0) -> int:

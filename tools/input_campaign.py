@@ -200,6 +200,8 @@ def bad_templates(d: Path, bomb_gb: float = 1.5) -> dict[str, str]:
     variant("version-text", version=np.array("x"))
     variant("method-bad", method=np.array("nope"))
     variant("float-lengths", lengths=good["lengths"].astype(float) + 0.5)
+    variant("lengths-wrap-int64", lengths=np.array([2**62] * 3 + [2**62 + len(good["signals"])]),  # sum wraps to the frame count
+            actions=good["actions"][:4], gravity=g[:4], onsets=np.zeros(4, np.int64), thresholds=good["thresholds"][:4])
     variant("signals-no-columns", signals=good["signals"][:, :0], gravity=g[:, :0])  # D = 0
     variant("onsets-fraction", onsets=good["onsets"] + 0.5)  # was cut to a whole frame
     variant("recognizer-unknown", recognizer=np.array('{"gate": 0.5}'))
@@ -346,6 +348,11 @@ def bad_traces(d: Path) -> dict[str, str]:
         tr("deep", "[" * 100_000 + "]" * 100_000),
         tr("deep-obj", '{"traceEvents": ' + "[" * 50_000 + "]" * 50_000 + "}"),
         tr("bool-ts", ev(ts=True, dur=False)),
+        # another writer's dropped-steps counter: int(Infinity) and a sort of "5" with 6 were tracebacks
+        tr("counter-inf", '{"traceEvents": [{"ph": "X", "name": "frame", "ts": 0, "dur": 1}, '
+                          '{"ph": "C", "name": "dropped_steps", "ts": 1, "args": {"dropped": Infinity}}]}'),
+        tr("counter-ts-text", {"traceEvents": [frame, {"ph": "C", "name": "dropped_steps", "ts": "5", "args": {"dropped": 1}},
+                                               {"ph": "C", "name": "dropped_steps", "ts": 6, "args": {"dropped": 2}}]}),
         tr("empty", ""),
         tr("number", "5"),
         tr("no-frame", {"traceEvents": [stage]}),
@@ -439,7 +446,8 @@ def bad_action_dirs(d: Path) -> dict[str, str]:
                          ("pose-1e307", {"keyframes": [{**good["keyframes"][0],
                                                         "pose": [[1e307] * 3] * len(good["keyframes"][0]["pose"])},
                                                        *good["keyframes"][1:]]}),  # loaded; the sheet overflowed
-                         ("not-object", None)):  # a JSON list: AttributeError
+                         ("not-object", None),  # a JSON list: AttributeError
+                         ("dup-name", None)):  # a second hook_r file: it replaced the first, exit 0
         folder = d / "actions" / name
         if folder.exists():
             shutil.rmtree(folder)
@@ -452,6 +460,8 @@ def bad_action_dirs(d: Path) -> dict[str, str]:
             os.mkfifo(target)
         elif name == "not-object":
             target.write_text(json.dumps([good]))
+        elif name == "dup-name":
+            (folder / "zz_hook_r_v2.json").write_text(json.dumps({**good, "description": "a copy"}))
         else:
             target.write_text(json.dumps({**good, **change}))
         out[name] = str(folder)
@@ -676,6 +686,8 @@ def _url_cases(q: list[str], good_rec: str, out: Path) -> list[Case]:
     """Source URLs with bad parameters, through record and scope."""
     cases: list[Case] = []
     emu = f"wiimote-emu://{good_rec}"
+    # two samples a nanosecond apart, looped: a billion a second owed at every poll (a hang, 6 GB)
+    one_ns = _write(Path(good_rec).parent, "rec/one-ns.csv", "t,rx,ry,rz\n0,0,0,1\n1e-9,0,0,1\n")
     urls = {
         "demo-rate-1e9": "demo://?rate=1e9",
         "demo-rate-nan": "demo://?rate=nan",
@@ -701,6 +713,7 @@ def _url_cases(q: list[str], good_rec: str, out: Path) -> list[Case]:
         "replay-speed-inf": f"replay://{good_rec}?speed=inf",
         "replay-speed-tiny": f"replay://{good_rec}?speed=1e-300",
         "replay-speed-huge": f"replay://{good_rec}?speed=1e300",
+        "replay-loop-1ns": f"replay://{one_ns}?loop=1",
         "serial-retry-nan": "serial:///dev/quickjab-none?retry=nan",  # never reopened a lost port
         "serial-window-inf": "serial:///dev/quickjab-none?window=inf",  # the clock's deque never shrank
         "unknown": "nope://x",
@@ -834,6 +847,9 @@ def _valid_cases(q: list[str], d: Path, good_rec: str, tpl: str, out: Path) -> l
     emu = f"wiimote-emu://{good_rec}"
     cases.append(Case("ok/recognize-good", q + ["recognize", good_rec, "--templates", tpl], expect="ok"))
     cases.append(Case("ok/graph-info-shipped", q + ["graph", "info"], expect="ok"))
+    still = _write(d, "eval/trials-still/straight_r/1.csv", GOOD_REC)  # every frame alike: its onset was an IndexError
+    cases.append(Case("ok/evaluate-still-trial", q + ["evaluate", str(Path(still).parent.parent), "--train",
+                                                      str(d / "eval" / "trials-ok"), "--mains", "6"], expect="ok"))
     stages = [{"ph": "X", "name": f"s{i}", "ts": 1, "dur": 1} for i in range(50_000)]  # a band each: minutes to draw
     many = _write(d, "trace/stages50000.json", json.dumps({"traceEvents": [{"ph": "X", "name": "frame", "ts": 0, "dur": 9}, *stages]}))
     cases.append(Case("ok/profile-plot-50000-stages", q + ["profile", many, "--plot", str(out / "p.png")], expect="ok"))

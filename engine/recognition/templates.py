@@ -249,6 +249,8 @@ def _check_trials(trials: Mapping[str, Sequence[np.ndarray]]) -> tuple[dict[str,
                 dim = a.shape[1]
             elif a.shape[1] != dim:
                 raise ValueError(f"all trials need the same D; {action!r} has {a.shape[1]}, others {dim}")
+        if str(action) in out:  # {1: ..., "1": ...}: the second one's trials replaced the first's
+            raise ValueError(f"action {str(action)!r} given twice ({action!r})")
         out[str(action)] = arrs
     return out, int(dim)
 
@@ -485,8 +487,9 @@ class Templates:
         if keep == "usable":
             trials = usable_trials(trials, feature)
         elif keep is not None:
-            if isinstance(keep, str) or keep < 1:
-                raise ValueError(f"keep must be >= 1 or 'usable', not {keep!r}")
+            # a whole count: 2.5 kept 2 trials, nan and inf all of them, True 1
+            if isinstance(keep, bool) or not isinstance(keep, (int, np.integer)) or keep < 1:
+                raise ValueError(f"keep must be a whole number >= 1 or 'usable', not {keep!r}")
             trials = {a: representative_trials(ts, keep, feature) for a, ts in trials.items()}
         actions, signals, gravity, onsets, thresholds = [], [], [], [], []
         for action, items in trials.items():
@@ -659,7 +662,9 @@ def _checked_signals(data: Mapping[str, np.ndarray]) -> tuple[np.ndarray, np.nda
     signals = data["signals"].astype(np.float64)
     if lengths.ndim == 1 and not len(lengths):
         raise ValueError("no templates")
-    if lengths.ndim != 1 or lengths.min() < 1 or lengths.sum() != len(signals) or signals.ndim != 2:
+    # each length at most the data's: their sum in int64 cannot wrap round to the frame count
+    if lengths.ndim != 1 or lengths.min() < 1 or lengths.max() > len(signals) or lengths.sum() != len(signals) \
+            or signals.ndim != 2:
         raise ValueError("signal lengths do not match the signal data")
     if not np.all(np.isfinite(signals)):
         raise ValueError("non-finite values in the signals")

@@ -21,6 +21,9 @@ from engine.sensors.source import (
 )
 
 MIN_SPEED, MAX_SPEED = 0.01, 1000.0  # replay speed factors
+# Samples a second a looped replay may owe (speed included): a 430 Hz phone file at the top speed
+# owes 430,000. A loop of samples a nanosecond apart owed a billion: every poll a hang.
+MAX_LOOP_RATE = 1e6
 
 
 def _stated_rate(text: str | None) -> float | None:
@@ -43,6 +46,9 @@ class ReplaySource(Source):
         self._rel = rec.t - rec.t[0]
         period = float(np.median(np.diff(self._rel))) if len(rec) > 1 else STEP_DT
         self._length = float(self._rel[-1]) + period  # one loop's duration
+        if loop and len(rec) * speed > MAX_LOOP_RATE * self._length:  # once through, at most the file's samples
+            raise SourceError(f"{url}: looped at speed {speed:g}, its {len(rec)} samples every {self._length:.3g} s come at "
+                              f"{len(rec) * speed / self._length:.3g} a second, over the {MAX_LOOP_RATE:g} a second a replay delivers")
         # the rate the file says its samples came at (docs/formats.md) when its times agree within
         # 1 %, else the median period's: times written to 6 decimals made a 60 Hz file's 59.9988
         # (and `record` wrote that); a stated rate its times contradict is not taken

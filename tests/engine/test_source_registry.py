@@ -116,6 +116,21 @@ def test_replay_speed_and_loop(tmp_path):
     assert looped.state is SourceState.CONNECTED
 
 
+def test_a_loop_of_a_recording_faster_than_any_sensor_is_refused(tmp_path):
+    """Two samples a nanosecond apart, looped: every poll owed a billion samples a second of
+    replay (`record --seconds 0.3` ran past a minute and 6 GB). Once through, it is two samples."""
+    path = tmp_path / "tiny.csv"
+    path.write_text("t,rx,ry,rz\n0,0,0,1\n0.000000001,0,0,1\n")
+    with pytest.raises(SourceError, match=r"tiny.csv\?loop=1: looped .* over the 1e\+06 a second"):
+        open_source(f"replay://{path}?loop=1", clock=VirtualClock().seconds)
+    clock = VirtualClock()
+    once = open_source(f"replay://{path}", clock=clock.seconds)
+    clock.advance(1_000_000)
+    assert len(once.poll()) == 2
+    rec, _ = write_rec(tmp_path)  # 100 Hz, as fast as a replay goes: still looped
+    assert open_source(f"replay://{rec}?loop=1&speed=1000", clock=clock.seconds).rate_hz == pytest.approx(100)
+
+
 @pytest.mark.parametrize("url,match", [("replay://{p}?speed=0", "speed"), ("replay://{p}?speed=x", "speed"), ("replay://", "no file")])
 def test_replay_bad_arguments(tmp_path, url, match):
     path, _ = write_rec(tmp_path)

@@ -252,3 +252,20 @@ def test_an_action_the_referee_cannot_score_is_refused(tmp_path, name, change, s
     assert str(err.value).startswith(f"{path}: ") and "\n" not in str(err.value)
     path.write_text(json.dumps(good))
     assert load_action(path).name == name
+
+
+def test_two_files_of_one_action_name_are_refused_naming_both(tmp_path):
+    """A copy of hook_r.json with other damage (zz_hook_r_v2.json) silently replaced the
+    original: `actions list --dir` showed one hook_r, the copy's. Which file counts is not for
+    the sort order to decide."""
+    import shutil
+
+    from game.actions import default_actions_dir
+
+    folder = tmp_path / "actions"
+    shutil.copytree(default_actions_dir(), folder)
+    copy = json.loads((folder / "hook_r.json").read_text())
+    (folder / "zz_hook_r_v2.json").write_text(json.dumps(_with_first(copy, "attacks", damage=99.0)))
+    with pytest.raises(ActionError, match=r"zz_hook_r_v2.json: action 'hook_r' is also .*hook_r.json") as err:
+        load_library(folder)
+    assert "\n" not in str(err.value)

@@ -172,6 +172,21 @@ def test_true_onset_is_the_first_frame_0_3_g_from_the_rest_before():
     assert stream_onset(rest(30), 10, 30) == 10  # never 0.3 g away: the first labelled frame
 
 
+def test_a_still_trial_is_evaluated_as_a_missed_one(tmp_path, trials_dir, capsys):
+    """A test trial that never moves (every frame the same) has its onset at its first frame: its
+    activity never reaches a share of a peak of 0 (an IndexError traceback), and the trial is a
+    miss, not a crash."""
+    from tools.evaluate_recognition import true_onset
+
+    assert true_onset(rest(30)) == 0
+    still = tmp_path / "still"
+    (still / "jab").mkdir(parents=True)
+    write(still / "jab" / "1.csv", rest(40))
+    assert main(["evaluate", str(still), "--train", str(trials_dir), "--mains", "6", "--json"]) == 0
+    row = json.loads(capsys.readouterr().out.splitlines()[0])
+    assert row["n"] == 1 and row["correct"] == 0
+
+
 def test_stream_onset_finds_the_rest_before_a_label_that_starts_mid_motion():
     """Hand labels begin after the hand has left the rest: the onset is where it left, not
     0.3 g after wherever the motion was 5 frames before the label."""

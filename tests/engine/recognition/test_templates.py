@@ -283,3 +283,20 @@ def test_a_template_file_out_of_its_format_says_what_is_wrong(tmp_path, trials, 
     with pytest.raises(TemplateFileError, match=says) as info:
         Templates.load(bad)
     assert str(bad) in str(info.value)
+
+
+def test_template_lengths_that_only_add_up_past_int64_are_refused(tmp_path, trials):
+    """Four lengths of 2**62 frames and more sum, wrapped in int64, to the file's frame count:
+    they passed the check, the signal split into empty templates, and `recognize` ended in a
+    traceback (reshape of size 0). No template is longer than the signal data."""
+    good = tmp_path / "good.npz"
+    Templates.from_trials(trials).save(good)
+    with np.load(good, allow_pickle=False) as z:
+        arrays = {k: z[k] for k in z.files}
+    n = len(arrays["signals"])
+    arrays.update(lengths=np.array([2**62, 2**62, 2**62, 2**62 + n], dtype=np.int64), actions=np.array(["a", "b", "c", "d"]),
+                  gravity=arrays["gravity"][:1].repeat(4, axis=0), onsets=np.zeros(4, np.int64), thresholds=np.ones(4))
+    bad = tmp_path / "wrapped.npz"
+    np.savez(bad, **arrays)
+    with pytest.raises(TemplateFileError, match="wrapped.npz: .*signal lengths do not match the signal data"):
+        Templates.load(bad)

@@ -119,3 +119,23 @@ def test_keep_is_a_count_or_usable():
         Templates.from_trials(recorded, keep="best")
     with pytest.raises(ValueError, match="usable"):
         Templates.from_trials(recorded, keep=0)
+
+
+@pytest.mark.parametrize("keep", [2.5, float("nan"), float("inf"), True, "3", "USABLE", [3], -1])
+def test_keep_is_a_whole_count(keep):
+    """keep=2.5 kept 2 trials, nan and inf kept every one and True kept 1, as if asked; a list
+    was a TypeError. Each is a ValueError saying what keep takes; a numpy integer is a count."""
+    rng = np.random.default_rng(3)
+    recorded = {"jab": [trial(0, 3.0, rng) for _ in range(3)]}
+    with pytest.raises(ValueError, match="keep must be"):
+        Templates.from_trials(recorded, keep=keep)
+    assert len(Templates.from_trials(recorded, keep=np.int64(2))) == 2
+
+
+def test_two_actions_of_one_name_are_refused_not_merged():
+    """{1: ..., "1": ...}: both are action "1", and the second one's trials replaced the first's."""
+    rng = np.random.default_rng(4)
+    jabs, uppers = [trial(0, 3.0, rng) for _ in range(3)], [trial(2, 3.0, rng) for _ in range(3)]
+    for build in (Templates.from_trials, usable_trials):
+        with pytest.raises(ValueError, match="action '1' given twice"):
+            build({1: jabs, "1": uppers})
