@@ -53,7 +53,8 @@ def profile_summary(trace: dict) -> dict:
         args = e.get("args") or {}
         if args.get("depth", 0) if "depth" in args else id(e) in timed_nested:
             nested.add(e["name"])
-    durations.setdefault(UNACCOUNTED, []).extend(unacc_us.tolist())
+    if any("unaccounted_us" in a for a in f_args):  # this project's arg: another writer's is not known, not 0
+        durations.setdefault(UNACCOUNTED, []).extend(unacc_us.tolist())
 
     stages = {}
     for name, d in durations.items():

@@ -161,3 +161,28 @@ def test_a_trace_from_another_writer_is_read_by_the_contract_alone(tmp_path):
         assert (s["frames"], s["steps"], s["dropped_steps"], s["steps_per_frame"]) == (2, 4, 3, {"2": 2})
         assert s["stages"]["solver"]["nested"] and not s["stages"]["physics"]["nested"]
         assert s["stages"]["physics"]["n"] == 4 and s["stages"]["solver"]["n"] == 4
+
+
+def test_a_trace_that_does_not_say_its_unaccounted_time_gets_no_row_of_zeros(tmp_path, capsys):
+    """`unaccounted_us` is this project's frame arg, not the contract's: a trace without it
+    (another writer's) was summarized with an `unaccounted` row of 0.000 ms in every column,
+    a measurement nobody made. This project's traces keep the row."""
+    ev = [{"ph": "X", "name": "frame", "ts": 0, "dur": 16_000, "pid": 1, "tid": 1},
+          {"ph": "X", "name": "physics", "ts": 100, "dur": 3000, "pid": 1, "tid": 1},
+          {"ph": "X", "name": "render", "ts": 11_000, "dur": 4000, "pid": 1, "tid": 1}]
+    path = tmp_path / "other.json"
+    path.write_text(json.dumps({"traceEvents": ev}))
+    s = profile_summary(read_chrome_trace(path))
+    assert set(s["stages"]) == {"physics", "render"}
+    assert main(["profile", str(path)]) == 0
+    assert "unaccounted" not in capsys.readouterr().out
+    assert "unaccounted" in profile_summary(read_chrome_trace(traced_path(tmp_path)))["stages"]
+
+
+def traced_path(tmp_path) -> str:
+    loop = FixedStepLoop(clock=VirtualClock(), auto_freeze_gc=False)
+    loop.add_stage("physics", lambda s, dt: None, budget_ms=1.0)
+    loop.run(frames=3)
+    path = tmp_path / "own.json"
+    write_chrome_trace(loop.budget, path)
+    return str(path)
