@@ -70,6 +70,7 @@ def profile_summary(trace: dict) -> dict:
         }
     return {
         "frames": len(frames),
+        "frames_total": _frames_total(other, len(frames)),
         "steps": int(sum(steps)),
         "dropped_steps": dropped,
         "frame_budget_ms": budget_ms,
@@ -81,6 +82,15 @@ def profile_summary(trace: dict) -> dict:
         "_frame_ts": f_ts,  # for the plot, with the frame events in time order; dropped before printing
         "_frames": frames,
     }
+
+
+def _frames_total(other: dict, held: int) -> int:
+    """The run's frames, otherData.frames_total: more than the `held` frames in the trace when
+    the loop's ring kept only the last ones. A value that is not a count is ignored, not refused."""
+    total = other.get("frames_total")
+    if isinstance(total, int) and not isinstance(total, bool) and 0 <= total <= 10**12:
+        return max(total, held)
+    return held
 
 
 def _by_time(xs: list[dict], frames: list[dict]) -> tuple[list[int], set[int]]:
@@ -116,8 +126,10 @@ def _counter_total(events: list[dict], name: str) -> int:
 
 def format_table(s: dict) -> str:
     b = s["frame_budget_ms"]
+    total = s.get("frames_total", s["frames"])
+    held = f" (the last of {total} run)" if total > s["frames"] else ""
     lines = [
-        f"{s['frames']} frames, {s['steps']} steps, {s['dropped_steps']} dropped steps; "
+        f"{s['frames']} frames{held}, {s['steps']} steps, {s['dropped_steps']} dropped steps; "
         f"step budget {b:.1f} ms, frame period {s['frame_period_ms']:.1f} ms",
         "",
         f"{'stage':<22}{'n':>7}{'p50 ms':>9}{'p95 ms':>9}{'p99 ms':>9}{'max ms':>9}{'p99/budget':>11}{'budget':>8}{'overruns':>9}",

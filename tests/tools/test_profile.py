@@ -186,3 +186,33 @@ def traced_path(tmp_path) -> str:
     path = tmp_path / "own.json"
     write_chrome_trace(loop.budget, path)
     return str(path)
+
+
+def test_a_trace_that_holds_the_last_frames_of_a_longer_run_says_so(tmp_path, capsys):
+    """The loop keeps its last 3600 frames (a minute): `play --trace` after ten minutes wrote
+    3600 frames of 36,618 and `profile` printed "3600 frames" with nothing to say the rest of
+    the run is not in it (otherData.frames_total says it)."""
+    from engine.budget import FrameBudget
+
+    loop = FixedStepLoop(clock=VirtualClock(), auto_freeze_gc=False, budget=FrameBudget(capacity_frames=10))
+    loop.add_stage("physics", lambda s, dt: None, budget_ms=1.0)
+    loop.run(frames=25)
+    path = tmp_path / "ring.json"
+    write_chrome_trace(loop.budget, path)
+    s = profile_summary(read_chrome_trace(path))
+    assert (s["frames"], s["frames_total"]) == (10, 25)
+    assert main(["profile", str(path)]) == 0
+    assert capsys.readouterr().out.splitlines()[0].startswith("10 frames (the last of 25 run), 10 steps")
+    whole = traced_path(tmp_path)  # a run the trace holds whole: the line as before
+    assert profile_summary(read_chrome_trace(whole))["frames_total"] == 3
+    assert main(["profile", whole]) == 0
+    assert capsys.readouterr().out.startswith("3 frames, 3 steps")
+
+
+@pytest.mark.parametrize("total", [float("nan"), 1e400, -5, "many", True, 10**400, 2.5])
+def test_a_frames_total_that_is_not_a_count_is_ignored(tmp_path, total):
+    doc = json.loads(open(traced_path(tmp_path)).read())
+    doc["otherData"]["frames_total"] = total
+    path = tmp_path / "odd.json"
+    path.write_text(json.dumps(doc))
+    assert profile_summary(read_chrome_trace(path))["frames_total"] == 3
