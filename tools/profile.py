@@ -102,7 +102,8 @@ def _by_time(xs: list[dict], frames: list[dict]) -> tuple[list[int], set[int]]:
     counts: list[Counter] = [Counter() for _ in frames]
     nested: set[int] = set()
     stack: list[dict] = []
-    for e in sorted(xs, key=lambda e: (str(e.get("pid")), str(e.get("tid")), e["ts"], -e["dur"])):
+    # outer first; of two events with the same times the `frame` is the outer one
+    for e in sorted(xs, key=lambda e: (str(e.get("pid")), str(e.get("tid")), e["ts"], -e["dur"], e["name"] != "frame")):
         while stack and (stack[-1].get("pid"), stack[-1].get("tid")) != (e.get("pid"), e.get("tid")):
             stack.pop()
         while stack and stack[-1]["ts"] + stack[-1]["dur"] < e["ts"] + e["dur"]:

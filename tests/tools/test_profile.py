@@ -216,3 +216,19 @@ def test_a_frames_total_that_is_not_a_count_is_ignored(tmp_path, total):
     path = tmp_path / "odd.json"
     path.write_text(json.dumps(doc))
     assert profile_summary(read_chrome_trace(path))["frames_total"] == 3
+
+
+def test_a_stage_as_long_as_its_frame_is_read_inside_it_whatever_the_order(tmp_path):
+    """Another writer's stage that starts and ends with its `frame` event (a frame of one stage,
+    or whole-microsecond times) and is listed before it was read as the frame's parent: the
+    frame then held 0 steps. docs/formats.md: stages nest inside the `frame` event."""
+    ev = []
+    for k in range(3):
+        ev += [{"ph": "X", "name": "sim", "ts": k * 20_000, "dur": 16_000, "pid": 1, "tid": 1},
+               {"ph": "X", "name": "frame", "ts": k * 20_000, "dur": 16_000, "pid": 1, "tid": 1}]
+    path = tmp_path / "tie.json"
+    for order in (ev, ev[::-1]):
+        path.write_text(json.dumps({"traceEvents": order}))
+        s = profile_summary(read_chrome_trace(path))
+        assert (s["frames"], s["steps"], s["steps_per_frame"]) == (3, 3, {"1": 3})
+        assert not s["stages"]["sim"]["nested"]
