@@ -155,6 +155,8 @@ def _bad_event(ev: object) -> str | None:
     args = ev.get("args")
     if args is not None and not isinstance(args, dict):
         return "has args that are not an object"
+    if ev["ph"] == "C" and ev["name"] == "dropped_steps":
+        return _bad_dropped_counter(ev)
     if ev["ph"] != "X":
         return None
     ts, dur = ev.get("ts"), ev.get("dur")
@@ -170,6 +172,16 @@ def _bad_event(ev: object) -> str | None:
         for k in _FRAME_ARGS_COUNTS:
             if k in args and not (_number(args[k]) and 0 <= args[k] <= _MAX_COUNT):
                 return f"(frame) has args.{k} that is not a count"
+    return None
+
+
+def _bad_dropped_counter(ev: dict) -> str | None:
+    """The `dropped_steps` counter, which `quickjab profile` reads when frames do not say their
+    dropped steps: a time and running totals that are counts."""
+    if not (_number(ev.get("ts")) and abs(ev["ts"]) < 1e15):
+        return "(dropped_steps) needs a finite numeric ts"
+    if not all(_number(v) and 0 <= v <= _MAX_COUNT for v in (ev.get("args") or {}).values()):
+        return "(dropped_steps) has a value that is not a count"
     return None
 
 
