@@ -27,6 +27,7 @@ class Stage:
     name: str
     budget_ms: float
     overruns: int = 0  # cumulative, not limited to the ring
+    nested: bool = False  # a span inside a stage (`loop.span`), not a stage the loop runs
 
 
 def percentiles_ms(durations_ns: np.ndarray) -> dict[str, float]:
@@ -80,7 +81,12 @@ class FrameBudget:
         return self._index[name]
 
     def stage_id(self, name: str) -> int:
-        return self._index[name] if name in self._index else self.register(name, 0.0)
+        """The id of `name`; a name not registered yet is a span's, and is registered as one."""
+        if name in self._index:
+            return self._index[name]
+        sid = self.register(name, 0.0)
+        self.stages[sid].nested = True
+        return sid
 
     # -- recording -----------------------------------------------------------------------
     def begin_frame(self, start_ns: int) -> None:

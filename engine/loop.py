@@ -70,6 +70,7 @@ class FixedStepLoop:
         self._anchor_ns = 0
         self._deadline_k = 0
         self._depth = 0
+        self._span_step = 0  # the step of the stage running now: what its spans are booked to
 
     # -- set-up ---------------------------------------------------------------------------
     def add_stage(self, name: str, fn: StageFn, budget_ms: float) -> None:
@@ -111,7 +112,7 @@ class FixedStepLoop:
         finally:
             self._depth -= 1
             self.budget.add_span(
-                self.budget.stage_id(name), self.step_index, start,
+                self.budget.stage_id(name), self._span_step, start,
                 time.perf_counter_ns() - start, self._depth + 1,
             )
 
@@ -147,6 +148,7 @@ class FixedStepLoop:
         self.dropped_steps += dropped
         for _ in range(run):
             step, dt = self.step_index, self.dt
+            self._span_step = step
             for sid, fn in self._stages:
                 t0 = perf()
                 fn(step, dt)
@@ -155,6 +157,7 @@ class FixedStepLoop:
         self.alpha = min(self._acc, NS_PER_S) / NS_PER_S
         if self._render is not None:
             sid, fn = self._render
+            self._span_step = self.step_index - 1
             t0 = perf()
             fn(self.alpha)
             budget.add_span(sid, self.step_index - 1, t0, perf() - t0)  # the last step it drew

@@ -156,7 +156,7 @@ def _bad_event(ev: object) -> str | None:
     if args is not None and not isinstance(args, dict):
         return "has args that are not an object"
     if ev["ph"] == "C" and ev["name"] == "dropped_steps":
-        return _bad_counter(ev, args or {})
+        return _bad_dropped_counter(ev)
     if ev["ph"] != "X":
         return None
     ts, dur = ev.get("ts"), ev.get("dur")
@@ -175,12 +175,13 @@ def _bad_event(ev: object) -> str | None:
     return None
 
 
-def _bad_counter(ev: dict, args: dict) -> str | None:
-    """Why a `dropped_steps` counter (its last value is the trace's dropped steps when the frames
-    do not say them) cannot be read, or None: a time that is a number, values that are counts
-    (infinity, NaN or a time of text or null were tracebacks, -7 was read as -7 dropped steps)."""
-    if ("ts" in ev and not _number(ev["ts"])) or not all(_number(v) and 0 <= v <= _MAX_COUNT for v in args.values()):
-        return "(dropped_steps) needs a numeric ts and counts for values"
+def _bad_dropped_counter(ev: dict) -> str | None:
+    """The `dropped_steps` counter, which `quickjab profile` reads when frames do not say their
+    dropped steps: a time and running totals that are counts."""
+    if not (_number(ev.get("ts")) and abs(ev["ts"]) < 1e15):
+        return "(dropped_steps) needs a finite numeric ts"
+    if not all(_number(v) and 0 <= v <= _MAX_COUNT for v in (ev.get("args") or {}).values()):
+        return "(dropped_steps) has a value that is not a count"
     return None
 
 

@@ -37,10 +37,11 @@ class BudgetOverlay:
         """A stacked bar per stage against the 16.7 ms line, and each stage's p99."""
         w, h = surf.get_size()
         chart_h = int(90 * u)
-        panel = pygame.Rect(w - int(440 * u), int(130 * u), int(424 * u), int(80 * u + 20 * u * len(budget.stages)) + chart_h)
+        # the stages the loop runs, not the spans inside them (those never run at depth 0)
+        names = [s.name for s in budget.stages if s.name not in (WAIT, UNACCOUNTED) and not s.nested] + [UNACCOUNTED]
+        panel = pygame.Rect(w - int(440 * u), int(130 * u), int(424 * u), int(80 * u + 20 * u * (len(names) + 1)) + chart_h)
         surf.blit(hud._translucent(panel.size, (0, 0, 0, 190)), panel)
         last = budget.last_frame_ms()
-        names = [s.name for s in budget.stages if s.name not in (WAIT, UNACCOUNTED)] + [UNACCOUNTED]
         scale_ms = 2.0 * budget.frame_budget_ms  # the bar spans two frame budgets
         bar = pygame.Rect(panel.left + int(10 * u), panel.top + int(26 * u), panel.width - int(20 * u), int(18 * u))
         hud.blit(surf, f"frame budget {budget.frame_budget_ms:.1f} ms   dropped {budget.dropped_steps}", int(18 * u), (panel.left + 10 * u, panel.top + 6 * u), TEXT)

@@ -53,7 +53,8 @@ def profile_summary(trace: dict) -> dict:
         args = e.get("args") or {}
         if args.get("depth", 0) if "depth" in args else id(e) in timed_nested:
             nested.add(e["name"])
-    durations.setdefault(UNACCOUNTED, []).extend(unacc_us.tolist())
+    if any("unaccounted_us" in a for a in f_args):  # this project's arg: another writer's is not known, not 0
+        durations.setdefault(UNACCOUNTED, []).extend(unacc_us.tolist())
 
     stages = {}
     for name, d in durations.items():
@@ -69,6 +70,7 @@ def profile_summary(trace: dict) -> dict:
         }
     return {
         "frames": len(frames),
+        "frames_total": _frames_total(other, len(frames)),
         "steps": int(sum(steps)),
         "dropped_steps": dropped,
         "frame_budget_ms": budget_ms,
@@ -82,6 +84,15 @@ def profile_summary(trace: dict) -> dict:
     }
 
 
+def _frames_total(other: dict, held: int) -> int:
+    """The run's frames, otherData.frames_total: more than the `held` frames in the trace when
+    the loop's ring kept only the last ones. A value that is not a count is ignored, not refused."""
+    total = other.get("frames_total")
+    if isinstance(total, int) and not isinstance(total, bool) and 0 <= total <= 10**12:
+        return max(total, held)
+    return held
+
+
 def _by_time(xs: list[dict], frames: list[dict]) -> tuple[list[int], set[int]]:
     """What docs/formats.md alone says of a trace, for one from another writer (this project's
     own carry `steps`, `dropped` and `depth` in their args): each frame's steps, the most events
@@ -91,7 +102,8 @@ def _by_time(xs: list[dict], frames: list[dict]) -> tuple[list[int], set[int]]:
     counts: list[Counter] = [Counter() for _ in frames]
     nested: set[int] = set()
     stack: list[dict] = []
-    for e in sorted(xs, key=lambda e: (str(e.get("pid")), str(e.get("tid")), e["ts"], -e["dur"])):
+    # outer first; of two events with the same times the `frame` is the outer one
+    for e in sorted(xs, key=lambda e: (str(e.get("pid")), str(e.get("tid")), e["ts"], -e["dur"], e["name"] != "frame")):
         while stack and (stack[-1].get("pid"), stack[-1].get("tid")) != (e.get("pid"), e.get("tid")):
             stack.pop()
         while stack and stack[-1]["ts"] + stack[-1]["dur"] < e["ts"] + e["dur"]:
@@ -115,8 +127,10 @@ def _counter_total(events: list[dict], name: str) -> int:
 
 def format_table(s: dict) -> str:
     b = s["frame_budget_ms"]
+    total = s.get("frames_total", s["frames"])
+    held = f" (the last of {total} run)" if total > s["frames"] else ""
     lines = [
-        f"{s['frames']} frames, {s['steps']} steps, {s['dropped_steps']} dropped steps; "
+        f"{s['frames']} frames{held}, {s['steps']} steps, {s['dropped_steps']} dropped steps; "
         f"step budget {b:.1f} ms, frame period {s['frame_period_ms']:.1f} ms",
         "",
         f"{'stage':<22}{'n':>7}{'p50 ms':>9}{'p95 ms':>9}{'p99 ms':>9}{'max ms':>9}{'p99/budget':>11}{'budget':>8}{'overruns':>9}",

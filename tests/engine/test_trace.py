@@ -230,3 +230,41 @@ def test_the_render_event_carries_the_last_step_it_drew():
         renders = [e["args"]["step"] for e in inside if e["name"] == "render"]
         if steps:
             assert renders == [max(steps)], (f["args"], steps, renders)
+
+
+def test_a_span_carries_the_step_of_the_stage_it_nests_in():
+    """A span inside the render said the next step's number (frame 0's render.hud said step 1,
+    a step not yet run) while its render said step 0; spans inside step stages were right."""
+    doc = chrome_trace(traced_loop(frames=12).budget)
+    xs = sorted((e for e in doc["traceEvents"] if e["ph"] == "X" and e["name"] != "frame"), key=lambda e: e["ts"])
+    stages = [e for e in xs if e["args"]["depth"] == 0]
+    spans = [e for e in xs if e["args"]["depth"] >= 1]
+    assert {e["name"] for e in spans} == {"sense.decode", "sense.decode.crc", "render.hud"}
+    for span in spans:
+        parent = [s for s in stages if s["ts"] - EPS_US <= span["ts"] and span["ts"] + span["dur"] <= s["ts"] + s["dur"] + EPS_US]
+        assert len(parent) == 1, span
+        assert span["args"]["step"] == parent[0]["args"]["step"], (span, parent[0])
+
+
+_COUNTER = '{"ph": "C", "name": "dropped_steps", "pid": 1, "tid": 1'
+
+
+@pytest.mark.parametrize("counter", [  # `quickjab profile` reads this counter when frames lack `dropped`
+    _COUNTER + ', "ts": 0, "args": {"dropped": Infinity}}',  # OverflowError
+    _COUNTER + ', "ts": 0, "args": {"dropped": NaN}}',  # ValueError
+    _COUNTER + ', "ts": 0, "args": {"dropped": -4}}',  # printed "-4 dropped steps"
+    _COUNTER + ', "ts": 0, "args": {"dropped": 1e300}}',  # printed a 301-digit count
+    _COUNTER + ', "ts": 0, "args": {"dropped": true}}',  # printed "1 dropped steps"
+    _COUNTER + ', "ts": "late", "args": {"dropped": 3}}, ' + _COUNTER + ', "ts": 5, "args": {"dropped": 3}}',  # TypeError
+])
+def test_a_dropped_steps_counter_that_is_not_a_count_is_refused_naming_the_file(tmp_path, counter):
+    path = tmp_path / "counter.json"
+    path.write_text('{"traceEvents": [' + _FRAME + '}, ' + counter + ']}')
+    with pytest.raises(InputError, match="counter.json: "):
+        read_chrome_trace(path)
+
+
+def test_a_dropped_steps_counter_that_is_a_count_is_read(tmp_path):
+    path = tmp_path / "counter.json"
+    path.write_text('{"traceEvents": [' + _FRAME + '}, ' + _COUNTER + ', "ts": 100, "args": {"dropped": 7}}]}')
+    assert read_chrome_trace(path)["traceEvents"][1]["args"] == {"dropped": 7}

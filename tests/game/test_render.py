@@ -242,3 +242,25 @@ def test_budget_overlay_has_a_header_over_its_columns() -> None:
     # the header row sits between the stacked bar and the first stage row, left in the panel
     band = (slice(SIZE[0] - 440, SIZE[0] - 300), slice(178, 200))
     assert (drawn["stage"][band] != drawn[""][band]).any(axis=2).sum() > 30
+
+
+def test_budget_overlay_lists_stages_not_the_spans_inside_them() -> None:
+    """docs/engine.md's `with loop.span("physics.collide")` inside a stage gave the F3 overlay a
+    row of its own that always read 0.00 ms last and 0.00 p99 (the overlay reads stage runs,
+    depth 0, only), however long the span took."""
+    from engine.clock import VirtualClock
+    from engine.loop import FixedStepLoop
+
+    pygame.init()
+    loop = FixedStepLoop(VirtualClock(), auto_freeze_gc=False)
+
+    def physics(step: int, dt: float) -> None:
+        with loop.span("physics.collide"):
+            sum(range(2000))
+
+    loop.add_stage("physics", physics, 3.0)
+    loop.set_render(lambda a: None, 8.0)
+    loop.run(frames=5)
+    hud = Hud()
+    hud.draw(pygame.Surface(SIZE), HudState(show_budget=True), loop.budget)
+    assert [row[0] for row in hud._rows_text] == ["physics", "render", "unaccounted"]

@@ -161,3 +161,74 @@ def test_a_trace_from_another_writer_is_read_by_the_contract_alone(tmp_path):
         assert (s["frames"], s["steps"], s["dropped_steps"], s["steps_per_frame"]) == (2, 4, 3, {"2": 2})
         assert s["stages"]["solver"]["nested"] and not s["stages"]["physics"]["nested"]
         assert s["stages"]["physics"]["n"] == 4 and s["stages"]["solver"]["n"] == 4
+
+
+def test_a_trace_that_does_not_say_its_unaccounted_time_gets_no_row_of_zeros(tmp_path, capsys):
+    """`unaccounted_us` is this project's frame arg, not the contract's: a trace without it
+    (another writer's) was summarized with an `unaccounted` row of 0.000 ms in every column,
+    a measurement nobody made. This project's traces keep the row."""
+    ev = [{"ph": "X", "name": "frame", "ts": 0, "dur": 16_000, "pid": 1, "tid": 1},
+          {"ph": "X", "name": "physics", "ts": 100, "dur": 3000, "pid": 1, "tid": 1},
+          {"ph": "X", "name": "render", "ts": 11_000, "dur": 4000, "pid": 1, "tid": 1}]
+    path = tmp_path / "other.json"
+    path.write_text(json.dumps({"traceEvents": ev}))
+    s = profile_summary(read_chrome_trace(path))
+    assert set(s["stages"]) == {"physics", "render"}
+    assert main(["profile", str(path)]) == 0
+    assert "unaccounted" not in capsys.readouterr().out
+    assert "unaccounted" in profile_summary(read_chrome_trace(traced_path(tmp_path)))["stages"]
+
+
+def traced_path(tmp_path) -> str:
+    loop = FixedStepLoop(clock=VirtualClock(), auto_freeze_gc=False)
+    loop.add_stage("physics", lambda s, dt: None, budget_ms=1.0)
+    loop.run(frames=3)
+    path = tmp_path / "own.json"
+    write_chrome_trace(loop.budget, path)
+    return str(path)
+
+
+def test_a_trace_that_holds_the_last_frames_of_a_longer_run_says_so(tmp_path, capsys):
+    """The loop keeps its last 3600 frames (a minute): `play --trace` after ten minutes wrote
+    3600 frames of 36,618 and `profile` printed "3600 frames" with nothing to say the rest of
+    the run is not in it (otherData.frames_total says it)."""
+    from engine.budget import FrameBudget
+
+    loop = FixedStepLoop(clock=VirtualClock(), auto_freeze_gc=False, budget=FrameBudget(capacity_frames=10))
+    loop.add_stage("physics", lambda s, dt: None, budget_ms=1.0)
+    loop.run(frames=25)
+    path = tmp_path / "ring.json"
+    write_chrome_trace(loop.budget, path)
+    s = profile_summary(read_chrome_trace(path))
+    assert (s["frames"], s["frames_total"]) == (10, 25)
+    assert main(["profile", str(path)]) == 0
+    assert capsys.readouterr().out.splitlines()[0].startswith("10 frames (the last of 25 run), 10 steps")
+    whole = traced_path(tmp_path)  # a run the trace holds whole: the line as before
+    assert profile_summary(read_chrome_trace(whole))["frames_total"] == 3
+    assert main(["profile", whole]) == 0
+    assert capsys.readouterr().out.startswith("3 frames, 3 steps")
+
+
+@pytest.mark.parametrize("total", [float("nan"), 1e400, -5, "many", True, 10**400, 2.5])
+def test_a_frames_total_that_is_not_a_count_is_ignored(tmp_path, total):
+    doc = json.loads(open(traced_path(tmp_path)).read())
+    doc["otherData"]["frames_total"] = total
+    path = tmp_path / "odd.json"
+    path.write_text(json.dumps(doc))
+    assert profile_summary(read_chrome_trace(path))["frames_total"] == 3
+
+
+def test_a_stage_as_long_as_its_frame_is_read_inside_it_whatever_the_order(tmp_path):
+    """Another writer's stage that starts and ends with its `frame` event (a frame of one stage,
+    or whole-microsecond times) and is listed before it was read as the frame's parent: the
+    frame then held 0 steps. docs/formats.md: stages nest inside the `frame` event."""
+    ev = []
+    for k in range(3):
+        ev += [{"ph": "X", "name": "sim", "ts": k * 20_000, "dur": 16_000, "pid": 1, "tid": 1},
+               {"ph": "X", "name": "frame", "ts": k * 20_000, "dur": 16_000, "pid": 1, "tid": 1}]
+    path = tmp_path / "tie.json"
+    for order in (ev, ev[::-1]):
+        path.write_text(json.dumps({"traceEvents": order}))
+        s = profile_summary(read_chrome_trace(path))
+        assert (s["frames"], s["steps"], s["steps_per_frame"]) == (3, 3, {"1": 3})
+        assert not s["stages"]["sim"]["nested"]
