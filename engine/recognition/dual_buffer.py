@@ -122,6 +122,7 @@ from engine.recognition.rules import (
 from engine.recognition.speed import SpeedEstimate
 from engine.recognition.template_set import TemplateSet
 from engine.recognition.templates import Templates, activity, linear
+from engine.recognition.tilt import TILT_DEG
 
 # re-exported: the names tests and tools read from here
 __all__ = [
@@ -163,6 +164,7 @@ class DualBufferRecognizer(TemplateSet, DecisionRules, Adaptation):
         closed_after: int = 1,
         extend: bool = True,
         adapt: int = ADAPT_PER_ACTION,
+        tilt_deg: float = TILT_DEG,
     ):
         if not isinstance(templates, Templates):
             raise TypeError("templates must be a Templates")
@@ -187,7 +189,7 @@ class DualBufferRecognizer(TemplateSet, DecisionRules, Adaptation):
         self.window = max(self.supplementary, AUTO_MAX_MAIN if main == "auto" else int(main))
         self.adapt = max(0, int(adapt))  # recent whole motions per action that join the templates (`_adapt`)
         self._dtw_method = dtw_method
-        self._build_templates(templates, reject, extend)
+        self._build_templates(templates, reject, extend, float(tilt_deg))
         self._motion = np.empty((max(self.window, self._extend_to), self.dim))  # features since the onset
         self._acts = np.empty(len(self._motion))  # the gate's activity since the onset
         self._recent = np.empty((BACKDATE_MAX, self.dim))  # the last idle frames (ring), for back-dating
@@ -196,8 +198,7 @@ class DualBufferRecognizer(TemplateSet, DecisionRules, Adaptation):
 
     @classmethod
     def from_config(cls, templates: Templates, config: RecognizerConfig | None = None) -> DualBufferRecognizer:
-        """The recognizer `config` describes (engine/recognition/config.py; None: the defaults),
-        the same as passing its fields as keywords."""
+        """The recognizer `config` (None: the defaults) describes: its fields passed as keywords."""
         return cls(templates, **(config or RecognizerConfig()).kwargs())
 
     # -- state -------------------------------------------------------------------------------
@@ -354,7 +355,7 @@ class DualBufferRecognizer(TemplateSet, DecisionRules, Adaptation):
                 self._stopped = True
             self._was_closed = closed
             if in_window:
-                usable = self._moving_hand(scores if self.action is None else self._usable(scores))  # first: ADOPTED_LEAD
+                usable = self._moving_hand(self._first_usable(scores) if self.action is None else self._usable(scores))
                 self._decide(usable, events)
                 complete = self._complete(usable)
             else:

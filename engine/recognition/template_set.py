@@ -13,6 +13,7 @@ from engine.recognition import rules
 from engine.recognition.dtw import IncrementalDTW
 from engine.recognition.rules import ENERGY_FRAMES, EXTEND_FACTOR, shaken_actions
 from engine.recognition.templates import Templates, activity, features, linear, sensor_activity
+from engine.recognition.tilt import tilted_copies
 
 
 def _inserted(a: np.ndarray, i: int, value) -> np.ndarray:
@@ -35,23 +36,32 @@ def hand_shares(templates: Templates, names: list[str]) -> np.ndarray:
 class TemplateSet:
     """Templates sorted by action, with the trained set kept for adaptation (`_adopt`)."""
 
-    def _build_templates(self, templates: Templates, reject: bool, extend: bool) -> None:
-        """The templates sorted by action and their bookkeeping (thresholds, peaks, lengths, the
-        action's energy bar), the DTW over them cut at the gate, and the trained set kept for
-        adaptation."""
+    def _build_templates(self, templates: Templates, reject: bool, extend: bool, tilt_deg: float) -> None:
+        """The templates and their tilted copies (tilt.py) sorted by action and their bookkeeping
+        (thresholds, peaks, lengths, the action's energy bar), the DTW over them cut at the gate,
+        and the trained set kept for adaptation."""
+        given = templates
+        templates, self._source = tilted_copies(given, tilt_deg)  # a copy's activity is its source's
+        self._trained = templates  # with the copies (`self.templates` is the caller's set)
         # Templates sorted by action so per-action minima are one reduceat.
         names = templates.action_names
         index = {a: i for i, a in enumerate(names)}
         order = np.argsort([index[a] for a in templates.actions], kind="stable")
         self._order = order
+        copies = self._source != np.arange(len(templates))
+        self._base_copy = copies[order]  # the trained order's copies; adopted templates are none
+        self._has_copies = bool(copies.any())
+        self._is_copy, self._not_copy = self._base_copy, ~self._base_copy
         self._cut_gate = self.gate.noise_g  # the gate the trained templates are cut at (see _recut)
         # each template's activity and features, whole: a cut is a slice of them (see _recut)
+        acts = [activity(s, g) for s, g in zip(given.signals, given.gravity, strict=True)]
         self._whole = [
-            (activity(s, g), features(s, g, self.feature)) for s, g in zip(templates.signals, templates.gravity, strict=True)
+            (acts[k], features(s, g, self.feature)) for k, s, g in zip(self._source, templates.signals, templates.gravity, strict=True)
         ]
         self.action_names = names
         self._hands = templates.dim // 3
-        self._hand_share = hand_shares(templates, names)
+        self._hand_share = hand_shares(given, names)  # the copies' shares are their sources'
+
         self._barely = self._hand_share < rules.OTHER_HAND_SHARE  # (actions, sensors): the action barely moves it
         self._other_hands = self._barely.tolist()
         self._hand_mask: np.ndarray | None = None  # per template, for the sensor in _hand_mask_key (_moving_hand)
@@ -65,12 +75,13 @@ class TemplateSet:
         self._action_starts = np.flatnonzero(np.r_[True, np.diff(self._tmpl_action) != 0])
         self._action_ends = np.r_[self._action_starts[1:], len(order)]
         self.thresholds = templates.thresholds[order] if reject else np.full(len(order), np.inf)
-        cut = [self._cut_at_gate(templates, k) for k in order]
-        self._peak_act = self._template_peaks(templates, order)  # (T, 2): early and window peaks
+        starts = self._gate_starts(templates, order)
+        cut = [self._whole[k][1][on:] for k, on in zip(order, starts, strict=True)]
+        self._peak_act = np.array([self._peaks(self._whole[k][0][on:]) for k, on in zip(order, starts, strict=True)])  # (T, 2)
         self._action_bar = np.minimum.reduceat(self._peak_act[:, 0], self._action_starts)  # per action
-        self._turn_bar = np.minimum.reduceat(self._template_lin_share(templates, order), self._action_starts)  # per action
+        self._turn_bar = np.minimum.reduceat(self._template_lin_share(given, order, starts), self._action_starts)  # per action
         self.template_lengths = np.array([len(c) for c in cut])
-        self._strokes = shaken_actions(templates, self.action_names, self.gate.noise_g)  # a relaunch ends none of these
+        self._strokes = shaken_actions(given, self.action_names, self.gate.noise_g)  # a relaunch ends none of these
         self.dtw = IncrementalDTW(cut, method=self._dtw_method, min_progress=self.min_progress)
         self._stop_scores = np.empty(len(cut))  # the scores when the hand stopped (`_stopped`)
         # A decided motion that outlasts the supplementary buffer keeps its DTW growing (one
@@ -113,6 +124,17 @@ class TemplateSet:
             self._hand_mask_key = (self._tmpl_action, m)
         return scores if self._hand_mask is None else np.where(self._hand_mask, np.inf, scores)
 
+    def _first_usable(self, scores: np.ndarray) -> np.ndarray:
+        """The scores the first decision sees: the tilted copies left out while any other template
+        fits under its threshold (tilt.py: where the trained templates fit, a copy would blur a
+        resting tilt that tells the kinds apart). Adopted templates have their own rule there
+        (rules.ADOPTED_LEAD)."""
+        if not self._has_copies:
+            return scores
+        fits = scores <= self.thresholds
+        fits &= self._not_copy
+        return np.where(self._is_copy, np.inf, scores) if fits.any() else scores
+
     def _recut(self) -> None:
         """The trained templates cut again for the DTW at the gate now. A live motion starts where
         the gate opens, so the templates must start where the same gate opens on them: with
@@ -122,8 +144,8 @@ class TemplateSet:
         changed since the last cut; adopted templates are live motions and stay as they are. What
         was sized at construction stays: `_extend_to` (from the templates' first-cut lengths) and
         the motion buffers sized by it: a motion's DTW still grows for at most that many frames."""
-        t, order = self.templates, self._order
-        cut = [self._cut_at_gate(t, k) for k in order]
+        order = self._order
+        cut = [self._whole[k][1][on:] for k, on in zip(order, self._gate_starts(self._trained, order), strict=True)]
         # Only the DTW's cut: the energy and turn bars (and which actions are shakes) stay the
         # trained motions' own at the gate they were first cut at (bars following the gate down
         # let a wiggle at rest start: the phone-boxing stream's false starts 1 -> 2).
@@ -131,22 +153,25 @@ class TemplateSet:
         self._cut_gate = self.gate.noise_g
         self._set_templates()
 
-    def _template_peaks(self, templates: Templates, order: np.ndarray) -> np.ndarray:
-        """(T, 2) each template's peak activity from its onset over its first ENERGY_FRAMES frames
-        (the energy rule of a start) and over `window` frames (a motion that never gets near it
-        is called off)."""
-        return np.array([self._peaks(self._whole[k][0][self.gate.start_on(templates, k, self._whole[k][0]) :]) for k in order])
-
-    def _template_lin_share(self, templates: Templates, order: np.ndarray) -> np.ndarray:
-        """(T,) each template's peak of `linear` over its peak activity, both over its first
-        ENERGY_FRAMES frames from its onset: how little of its early activity a turn of the hand
-        explains (see rules.TURN_RATIO)."""
-        out = []
+    def _gate_starts(self, templates: Templates, order: np.ndarray) -> list[int]:
+        """Where the gate now opens on each template of `order` (`NoiseGate.start_on`), once per
+        source: a tilted copy's activity and onset are its source's."""
+        at: dict[int, int] = {}
         for k in order:
-            whole = self._whole[k][0]
-            on = self.gate.start_on(templates, k, whole)
-            act = whole[on : on + ENERGY_FRAMES]
-            lin = linear(templates.signals[k], templates.gravity[k])[on : on + ENERGY_FRAMES]
+            src = int(self._source[k])
+            if src not in at:
+                at[src] = self.gate.start_on(templates, src, self._whole[src][0])
+        return [at[int(self._source[k])] for k in order]
+
+    def _template_lin_share(self, given: Templates, order: np.ndarray, starts: list[int]) -> np.ndarray:
+        """(T,) each template's peak of `linear` over its peak activity, both over its first
+        ENERGY_FRAMES frames from its onset (`starts`): how little of its early activity a turn of
+        the hand explains (see rules.TURN_RATIO). A copy's is its source's (in `given`)."""
+        out = []
+        for k, on in zip(order, starts, strict=True):
+            src = int(self._source[k])
+            act = self._whole[src][0][on : on + ENERGY_FRAMES]
+            lin = linear(given.signals[src], given.gravity[src])[on : on + ENERGY_FRAMES]
             out.append(float(lin.max() / act.max()) if len(act) and act.max() > 0 else 0.0)
         return np.array(out)
 
@@ -155,11 +180,6 @@ class TemplateSet:
         if not len(act):
             return 0.0, 0.0
         return float(act[:ENERGY_FRAMES].max()), float(act[: self.window].max())
-
-    def _cut_at_gate(self, templates: Templates, k: int) -> np.ndarray:
-        """Template k from its gate onset, in the recognizer's feature space."""
-        act, whole = self._whole[k]
-        return whole[self.gate.start_on(templates, k, act) :]
 
     def _adopt(self, motion: np.ndarray, peak: tuple[float, float]) -> None:
         """The current action's newest adapted template: in place of its oldest once `adapt`
@@ -181,6 +201,8 @@ class TemplateSet:
             self._peak_act = _inserted(self._peak_act, hi, peak)
             self.template_lengths = _inserted(self.template_lengths, hi, len(motion))
             self._is_adapted = _inserted(self._is_adapted, hi, True)
+            self._is_copy = _inserted(self._is_copy, hi, False)
+            self._not_copy = ~self._is_copy
             self.dtw.add_templates([motion], at=[hi])
             self._stop_scores = np.empty(self.dtw.T)
         elif len(kept) == self.adapt + 1 and first < hi:  # the oldest adapted one makes room
@@ -210,6 +232,8 @@ class TemplateSet:
         cut = [*cut, *(motion for motion, _, _ in extra)]
         order = np.argsort(acts, kind="stable")
         self._is_adapted = order >= len(self._base[1])
+        self._is_copy = np.r_[self._base_copy, np.zeros(len(extra), dtype=bool)][order]
+        self._not_copy = ~self._is_copy
         self._tmpl_action = acts[order]
         self._action_starts = np.flatnonzero(np.r_[True, np.diff(self._tmpl_action) != 0])
         self._action_ends = np.r_[self._action_starts[1:], len(order)]

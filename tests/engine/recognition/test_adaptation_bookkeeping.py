@@ -48,6 +48,8 @@ class RebuildingRecognizer(DualBufferRecognizer):
         cut = [*cut, *(motion for motion, _, _ in extra)]
         order = np.argsort(acts, kind="stable")
         self._is_adapted = order >= len(self._base[1])
+        self._is_copy = np.r_[self._base_copy, np.zeros(len(extra), dtype=bool)][order]  # tilted copies (tilt.py)
+        self._not_copy = ~self._is_copy
         self._tmpl_action = acts[order]
         self._action_starts = np.flatnonzero(np.r_[True, np.diff(self._tmpl_action) != 0])
         self._action_ends = np.r_[self._action_starts[1:], len(order)]
@@ -67,7 +69,7 @@ class RebuildingRecognizer(DualBufferRecognizer):
 
 def assert_same_templates(new: DualBufferRecognizer, ref: RebuildingRecognizer) -> None:
     for name in ("_tmpl_action", "_action_starts", "_action_ends", "thresholds", "_peak_act", "template_lengths",
-                 "_is_adapted", "_action_bar"):
+                 "_is_adapted", "_is_copy", "_action_bar"):
         np.testing.assert_array_equal(getattr(new, name), getattr(ref, name), err_msg=name)
     assert new.dtw.T == ref.dtw.T and len(new._stop_scores) == len(ref._stop_scores)
     np.testing.assert_array_equal(new.dtw.lengths, ref.dtw.lengths)

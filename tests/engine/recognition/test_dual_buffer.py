@@ -391,17 +391,19 @@ def test_adaptation_follows_a_player_drifting_away_from_the_trials(templates):
     # fits no trained template well enough and is rejected (from 30 with the stricter open end
     # min_progress=1.25 used before), unless the templates follow
     drift = [tilted_bump(d) for d in range(0, 61, 10)]
-    fixed = DualBufferRecognizer(templates, adapt=0)
+    # (adaptation alone: tilted copies, test_tilt.py, follow a drift of their own and count
+    # among the templates)
+    fixed = DualBufferRecognizer(templates, adapt=0, tilt_deg=0)
     assert final_actions(fixed, drift) == ["jab"] * 4 + [None] * 3
     # A player who throws uppercuts too: both actions have the player's motions, and the jab is
     # followed all the way (at 60 degrees it is nearer the trained uppercut than the trained jab).
-    both = DualBufferRecognizer(templates)
+    both = DualBufferRecognizer(templates, tilt_deg=0)
     played = [m for d in drift for m in (d, bump(2, 3.0))]
     assert final_actions(both, played) == ["jab", "upper"] * len(drift)
     # Jabs alone: followed while nearer the trained jab than the trained uppercut (to 50 degrees);
     # past that, with no uppercut of the player's to weigh it against, the trained templates
     # decide (Adaptation._usable)
-    rec = DualBufferRecognizer(templates)
+    rec = DualBufferRecognizer(templates, tilt_deg=0)
     assert final_actions(rec, drift) == ["jab"] * (len(drift) - 1) + ["upper"]
     # the trained templates stay; at most `adapt` recent motions are kept per action
     assert rec.dtw.T == len(templates.actions) + 3 and rec.dtw.T == len(rec._tmpl_action)
@@ -412,7 +414,7 @@ def test_adaptation_follows_a_player_drifting_away_from_the_trials(templates):
 
 
 def test_only_confident_complete_motions_adapt(templates):
-    rec = DualBufferRecognizer(templates)
+    rec = DualBufferRecognizer(templates, tilt_deg=0)  # adaptation alone (see above)
     # a rejected motion never adapts
     assert final_actions(rec, [tilted_bump(45)]) == [None]
     assert rec.dtw.T == len(templates.actions)
@@ -432,7 +434,7 @@ def test_adopted_motions_do_not_give_the_first_decision(templates):
     wind_up = np.tile(G, (10, 1))
     wind_up[:, 0] += 2.4 * np.sin(np.linspace(0, np.pi, 10))  # a jab's opening, a little gentler
     upper = np.vstack([wind_up, bump(2, 3.0)])
-    rec = DualBufferRecognizer(templates, reject=False)
+    rec = DualBufferRecognizer(templates, reject=False, tilt_deg=0)  # adaptation alone (see above)
     assert final_actions(rec, [upper]) == ["upper"]
     assert rec.dtw.T == len(templates.actions) + 1  # adopted
     jab = bump(0, 2.4)  # the same gentler opening, then a whole jab
@@ -456,7 +458,7 @@ def test_an_adopted_motion_that_fits_clearly_better_gives_the_first_decision(lea
         name: [np.vstack([rest(5), bump(axis, a) + rng.normal(0, 0.02, (24, 3)), rest(5)]) for a in (2.2, 3.0, 3.8)]
         for name, axis in (("jab", 0), ("upper", 2))
     }
-    rec = DualBufferRecognizer(Templates.from_trials(trials))
+    rec = DualBufferRecognizer(Templates.from_trials(trials), tilt_deg=0)  # adaptation alone (see above)
     opening = rest(8)
     opening[:, 2] += np.sin(np.linspace(0, np.pi, 8))
     mine = np.vstack([opening, bump(0, 3.0)])
