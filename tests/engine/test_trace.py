@@ -167,19 +167,19 @@ def test_an_integer_no_float_holds_is_refused_naming_the_file(tmp_path, content)
         read_chrome_trace(path)
 
 
-_COUNTER = '{"ph": "C", "name": "dropped_steps", "ts": 5, "args": {"dropped": 1}}'
+_TIMED_COUNTER = '{"ph": "C", "name": "dropped_steps", "ts": 5, "args": {"dropped": 1}}'
 
 
 @pytest.mark.parametrize("counter", [  # the dropped-steps counter of another writer's trace
-    _COUNTER.replace('"dropped": 1', '"dropped": Infinity'),  # int(): OverflowError
-    _COUNTER.replace('"dropped": 1', '"dropped": NaN'),  # int(): ValueError
-    _COUNTER.replace('"ts": 5', '"ts": "5"') + ", " + _COUNTER,  # sorted by ts: TypeError
-    _COUNTER.replace('"ts": 5', '"ts": null') + ", " + _COUNTER,
-    _COUNTER.replace('"dropped": 1', '"dropped": -7'),  # read as -7 dropped steps
-    _COUNTER.replace('"dropped": 1', '"dropped": 1e300'),  # read as a 301-digit count
-    _COUNTER.replace('"dropped": 1', '"dropped": true'),
+    _TIMED_COUNTER.replace('"dropped": 1', '"dropped": Infinity'),  # int(): OverflowError
+    _TIMED_COUNTER.replace('"dropped": 1', '"dropped": NaN'),  # int(): ValueError
+    _TIMED_COUNTER.replace('"ts": 5', '"ts": "5"') + ", " + _TIMED_COUNTER,  # sorted by ts: TypeError
+    _TIMED_COUNTER.replace('"ts": 5', '"ts": null') + ", " + _TIMED_COUNTER,
+    _TIMED_COUNTER.replace('"dropped": 1', '"dropped": -7'),  # read as -7 dropped steps
+    _TIMED_COUNTER.replace('"dropped": 1', '"dropped": 1e300'),  # read as a 301-digit count
+    _TIMED_COUNTER.replace('"dropped": 1', '"dropped": true'),
 ])
-def test_a_dropped_steps_counter_that_is_not_a_count_is_refused_naming_the_file(tmp_path, counter):
+def test_a_dropped_steps_counter_that_is_not_a_count_is_refused_naming_the_event(tmp_path, counter):
     path = tmp_path / "counter.json"
     path.write_text('{"traceEvents": [' + _FRAME + '}, ' + counter + ']}')
     with pytest.raises(InputError, match="counter.json: event 1 .*dropped_steps"):
