@@ -94,10 +94,10 @@ class RecognizerConfig:
     # templates; this many recent ones are kept (a player drifting from the training trials,
     # docs/recognition.md, fifth round); 0 turns adaptation off.
     adapt: int = 3
-    # Tilt (degrees): four copies of each trained template, turned this far about the two axes
-    # across its resting gravity, tolerate a grip that differs from the trials' (before the first
-    # decision they count only where no trained template fits; engine/recognition/tilt.py).
-    # 10: uWave's day 1 -> days 2-7 with a fresh recognizer 90.2 -> 92.3 %; 0 turns it off.
+    # Tilt (degrees): three copies of each trained template, turned this far towards three
+    # directions across its resting gravity, tolerate a grip that differs from the trials' (before
+    # the first decision they count only where no trained template fits; engine/recognition/tilt.py).
+    # 10: uWave's day 1 -> days 2-7 with a fresh recognizer 90.2 -> 92.0 %; 0 turns it off.
     tilt_deg: float = 10.0
 
     def __post_init__(self) -> None:

@@ -61,7 +61,6 @@ class TemplateSet:
         self.action_names = names
         self._hands = templates.dim // 3
         self._hand_share = hand_shares(given, names)  # the copies' shares are their sources'
-
         self._barely = self._hand_share < rules.OTHER_HAND_SHARE  # (actions, sensors): the action barely moves it
         self._other_hands = self._barely.tolist()
         self._hand_mask: np.ndarray | None = None  # per template, for the sensor in _hand_mask_key (_moving_hand)
