@@ -267,7 +267,7 @@ class DualBufferRecognizer(TemplateSet, DecisionRules, Adaptation):
         if x.shape[0] != self.dim:
             raise ValueError(f"frame has {x.shape[0]} values, the templates have D = {self.dim}")
         self.frame += 1
-        self._t = t
+        self._t = t if t is None or abs(t) < 1e300 else None  # NaN or inf: no time (it is not JSON)
         events, self._queued = self._queued, []
         if not np.isfinite(x).all():  # the method: no fromnumeric wrapper (~1 us a frame)
             return events  # a malformed frame is dropped, not a crash

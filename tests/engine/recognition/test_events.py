@@ -63,3 +63,14 @@ def test_the_recognizer_emits_typed_events_that_round_trip():
     for e in events:
         assert isinstance(e, RecognizerEvent)
         assert RecognizerEvent.from_dict(json.loads(json.dumps(e.to_dict()))) == e
+
+
+@pytest.mark.parametrize("t", [float("nan"), float("inf"), -float("inf")])
+def test_a_time_that_is_not_a_number_gives_events_without_one(t):
+    """push(frame, t=nan) wrote "t": NaN into the event's JSON line, which no JSON reader takes: a
+    time that is no number is left out, as when none is given."""
+    rng = np.random.default_rng(0)
+    rec = DualBufferRecognizer(Templates.from_trials({"jab": [_jab(rng) for _ in range(3)]}))
+    events = [e for f in _jab(rng, 60) for e in rec.push(f, t=t)]
+    assert events and all("t" not in e.to_dict() for e in events)
+    json.loads(json.dumps([e.to_dict() for e in events], allow_nan=False))
