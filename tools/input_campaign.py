@@ -603,6 +603,9 @@ def bad_evaluate_inputs(d: Path, tpl: str, out: Path) -> dict[str, list[str]]:
     _write(e, "uw-onerow/U1/gesture1/d2-r01.csv", _rec(_bump_rows("x", hands=1), header=one_hand))
     _write(e, "uw-mismatch/U1/gesture1/d1-r01.csv", _rec(_bump_rows("x", hands=1), header=one_hand))
     _write(e, "uw-mismatch/U1/gesture1/d2-r01.csv", _rec(_bump_rows("x")))
+    for g, days in (("gesture1", (1, 2)), ("gesture2", (2,))):  # gesture2: tests, no day-1 reps (counted as misses, exit 0)
+        for day in days:
+            _write(e, f"uw-nod1/U1/{g}/d{day}-r01.csv", _rec(_bump_rows("x", hands=1), header=one_hand))
     accel = _write(e, "accel-1e306.csv", _rec([f"{i / 60:.5f},1e306,0,1,0,0,1," for i in range(3)]))
     m6 = ["--mains", "6"]
     return {
@@ -616,6 +619,7 @@ def bad_evaluate_inputs(d: Path, tpl: str, out: Path) -> dict[str, list[str]]:
         "pb-onerow": ["evaluate", "--punchbuddy", str(e / "pb-onerow"), *m6],
         "uw-onerow": ["evaluate", "--uwave", str(e / "uw-onerow"), "--users", "1", *m6],
         "uw-mismatch": ["evaluate", "--uwave", str(e / "uw-mismatch"), "--users", "1", *m6],
+        "uw-nod1": ["evaluate", "--uwave", str(e / "uw-nod1"), "--users", "1", *m6],
         "trials-huge/build": ["templates", "build", str(e / "trials-huge"), "-o", str(out / "huge.npz")],
         "trials-huge/train": ["evaluate", str(e / "trials-ok"), "--train", str(e / "trials-huge"), *m6],
         "accel-1e306/bridge-emulate": ["bridge", "emulate", "--replay", accel, "--seconds", "2"],

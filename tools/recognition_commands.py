@@ -320,6 +320,8 @@ def _evaluate_uwave(args: argparse.Namespace, kw: dict, tk: dict) -> dict[str, l
         root = Path(args.uwave) / f"U{u}"
         day1 = load_trials_dir(root, "d1-*.csv")  # in rep order
         tests = {a: ts[:: args.every] for a, ts in load_trials_dir(root, "d[2-7]-*.csv").items()}
+        if untrained := sorted(set(tests) - set(day1)):  # their tests were counted as misses, unsaid
+            raise InputError(f"{root}: {', '.join(untrained)}: tests on days 2-7 but no day-1 reps to make templates from")
         for d in range(args.draws):
             reps = f"d1 reps {d * args.trials + 1}-{(d + 1) * args.trials}"
             cut = {a: ts[d * args.trials : (d + 1) * args.trials] for a, ts in day1.items()}

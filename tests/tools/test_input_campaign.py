@@ -22,7 +22,7 @@ SAMPLE = [  # one or two per input kind
     "rec/accel-1e300/recognize", "tpl/signals-1e200/evaluate", "eval/pp-unlabelled", "eval/stream-all-label/folds",
     "eval/trials-huge/build", "eval/accel-1e306/bridge-emulate",
     "same/recognize-o-recording", "full/play-screenshot", "url/bracket-missing/record", "actions/not-object/list",
-    "arg/record-o-dev-full", "ok/bvh-export-guard", "ok/evaluate-still-trial",
+    "arg/record-o-dev-full", "ok/bvh-export-guard", "ok/evaluate-still-trial", "eval/uw-nod1",
 ]
 
 
