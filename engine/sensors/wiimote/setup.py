@@ -49,7 +49,7 @@ class RemoteSetup:
             cal = p.parse_calibration(block) if block else None
             if cal is not None:
                 if where != p.EEPROM_CALIBRATION:
-                    src._say("wiimote-copy", "Wiimote calibration at 0x16 failed its checksum; using the copy at 0x20")
+                    src._say("wiimote-copy", "Wiimote calibration at 0x16 unreadable or unusable (a read error, its checksum or its 1 g point); using the copy at 0x20")
                 break
         if cal is None:
             cal = p.WIIMOTE_TYPICAL
@@ -104,7 +104,7 @@ class RemoteSetup:
         cal = p.parse_nunchuk_calibration(block) if block else None
         if cal is None:
             cal = p.NUNCHUK_TYPICAL
-            src._say("nunchuk-typical", "Nunchuk calibration fails its checksum (a clone?); using typical values")
+            src._say("nunchuk-typical", "Nunchuk calibration unreadable or unusable (a read error, its checksums or its 1 g point; a clone?); using typical values")
         src.nunchuk_calibration = cal
         src._accel.set_nunchuk(cal)
         if src.extension != "nunchuk":
