@@ -355,7 +355,7 @@ class DualBufferRecognizer(TemplateSet, DecisionRules, Adaptation):
                 self._stopped = True
             self._was_closed = closed
             if in_window:
-                usable = self._moving_hand(self._first_usable(scores) if self.action is None else self._usable(scores))
+                usable = self._first_usable(self._moving_hand(scores)) if self.action is None else self._moving_hand(self._usable(scores))
                 self._decide(usable, events)
                 complete = self._complete(usable)
             else:

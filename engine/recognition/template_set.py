@@ -126,7 +126,8 @@ class TemplateSet:
     def _first_usable(self, scores: np.ndarray) -> np.ndarray:
         """The scores the first decision sees: the tilted copies left out while any other template
         fits under its threshold (tilt.py: where the trained templates fit, a copy would blur a
-        resting tilt that tells the kinds apart). Adopted templates have their own rule there
+        resting tilt that tells the kinds apart). Takes the scores after `_moving_hand`: a template
+        of an action it rules out fits nothing. Adopted templates have their own rule there
         (rules.ADOPTED_LEAD)."""
         if not self._has_copies:
             return scores

@@ -107,3 +107,27 @@ def test_tilt_outside_0_to_45_degrees_is_refused(templates, value):
         RecognizerConfig(tilt_deg=value)
     with pytest.raises(ValueError, match="tilt_deg"):
         DualBufferRecognizer(templates, tilt_deg=value)
+
+
+def test_a_template_the_moving_hand_rules_out_does_not_leave_the_copies_out():
+    """Two sensors: the right hand (sensor 0) moves alone, so the left hand's action is ruled out
+    (`_moving_hand`). That its trained templates fit must not leave out the right hand's copies,
+    the only templates of a usable action that fit: the first decision is theirs."""
+    g2 = np.r_[G, G]
+    rng = np.random.default_rng(0)
+
+    def hand(col: int) -> np.ndarray:
+        x = np.tile(g2, (24, 1))
+        x[:, col] += 3.0 * np.sin(np.linspace(0, 2 * np.pi, 24))
+        return np.vstack([np.tile(g2, (5, 1)), x + rng.normal(0, 0.02, (24, 6)), np.tile(g2, (5, 1))])
+
+    tm = Templates.from_trials({"right": [hand(0) for _ in range(3)], "left": [hand(3) for _ in range(3)]})
+    rec = DualBufferRecognizer(tm, adapt=0)
+    a_left = rec.action_names.index("left")
+    left = rec._tmpl_action == a_left
+    assert rec._barely[a_left, 0] and not rec._barely[1 - a_left, 0]  # the left barely moves sensor 0
+    fitting = (left & ~rec._is_copy) | (~left & rec._is_copy)  # the left's trained ones and the right's copies
+    real_push = rec.dtw.push
+    rec.dtw.push = lambda f: np.where(fitting, 0.5, 3.0) * rec.thresholds + 0.0 * real_push(f)
+    frames = np.vstack([np.tile(g2, (10, 1)), hand(0), np.tile(g2, (20, 1))])  # sensor 0 alone moves
+    assert decided(rec, frames)[0] == "right"
