@@ -128,10 +128,15 @@ class TemplateSet:
         fits under its threshold (tilt.py: where the trained templates fit, a copy would blur a
         resting tilt that tells the kinds apart). Takes the scores after `_moving_hand`: a template
         of an action it rules out fits nothing. Adopted templates have their own rule there
-        (rules.ADOPTED_LEAD)."""
+        (rules.ADOPTED_LEAD). A template of one trial has no threshold (inf), which every score is
+        under: it fits where the loosest known threshold would take it (with `reject` off every
+        threshold is inf, and the copies stay out of the first decision)."""
         if not self._has_copies:
             return scores
-        fits = scores <= self.thresholds
+        bar = self.thresholds
+        if self.reject and np.isinf(bar).any() and np.isfinite(bar).any():
+            bar = np.where(np.isinf(bar), bar[np.isfinite(bar)].max(), bar)
+        fits = scores <= bar
         fits &= self._not_copy
         return np.where(self._is_copy, np.inf, scores) if fits.any() else scores
 

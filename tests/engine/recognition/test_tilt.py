@@ -131,3 +131,20 @@ def test_a_template_the_moving_hand_rules_out_does_not_leave_the_copies_out():
     rec.dtw.push = lambda f: np.where(fitting, 0.5, 3.0) * rec.thresholds + 0.0 * real_push(f)
     frames = np.vstack([np.tile(g2, (10, 1)), hand(0), np.tile(g2, (20, 1))])  # sensor 0 alone moves
     assert decided(rec, frames)[0] == "right"
+
+
+def test_an_action_of_one_trial_does_not_keep_the_copies_out(templates):
+    """A template of one trial has no threshold (inf: nothing to measure its spread on), so it
+    'fit' every motion and kept every other action's copies out of the first decision: a jab held
+    20 degrees otherwise was missed once a one-trial action joined. Such a template fits where the
+    loosest known threshold would take it."""
+    sway = rest(34)
+    sway[5:29, 1] += np.sin(np.linspace(0, np.pi, 24))
+    rng = np.random.default_rng(0)
+    trials = {name: [np.vstack([rest(5), bump(axis) + rng.normal(0, 0.02, (24, 3)), rest(5)]) for _ in range(3)]
+              for name, axis in (("jab", 0), ("upper", 2))}
+    with_sway = Templates.from_trials({**trials, "sway": [sway]})
+    assert np.isinf(with_sway.thresholds[-1])
+    turn = _turns(np.array([1.0, 0.0, 0.0]), np.radians(20.0))
+    played = np.vstack([rest(10), bump(0), rest(20)]) @ turn.T
+    assert decided(DualBufferRecognizer(with_sway, adapt=0), played) == ("jab", "jab")
