@@ -1,5 +1,6 @@
-"""The F3 overlay: the last frame's stages as a stacked bar against the 16.7 ms line, a chart of
-the last HISTORY_FRAMES frames, and per stage its last ms, p99 against its budget and overruns.
+"""The F3 overlay: the last frame's stages as a stacked bar against the frame's period (the
+16.7 ms line; 33.3 ms in low power), a chart of the last HISTORY_FRAMES frames, and per stage
+its last ms, p99 against its budget and overruns.
 Drawn by the HUD (game/hud.py) with its text and backgrounds."""
 
 from __future__ import annotations
@@ -34,7 +35,8 @@ class BudgetOverlay:
         self.text_frame = -10**9
 
     def draw(self, hud, surf: pygame.Surface, budget: FrameBudget, u: float) -> None:
-        """A stacked bar per stage against the 16.7 ms line, and each stage's p99."""
+        """A stacked bar per stage against the frame's period (the 16.7 ms line; 33.3 ms in low
+        power, where a frame holds two steps), and each stage's p99."""
         w, h = surf.get_size()
         chart_h = int(90 * u)
         # the stages the loop runs, not the spans inside them (those never run at depth 0)
@@ -42,9 +44,9 @@ class BudgetOverlay:
         panel = pygame.Rect(w - int(440 * u), int(130 * u), int(424 * u), int(80 * u + 20 * u * (len(names) + 1)) + chart_h)
         surf.blit(hud._translucent(panel.size, (0, 0, 0, 190)), panel)
         last = budget.last_frame_ms()
-        scale_ms = 2.0 * budget.frame_budget_ms  # the bar spans two frame budgets
+        scale_ms = 2.0 * budget.frame_period_ms  # the bar spans two frame periods
         bar = pygame.Rect(panel.left + int(10 * u), panel.top + int(26 * u), panel.width - int(20 * u), int(18 * u))
-        hud.blit(surf, f"frame budget {budget.frame_budget_ms:.1f} ms   dropped {budget.dropped_steps}", int(18 * u), (panel.left + 10 * u, panel.top + 6 * u), TEXT)
+        hud.blit(surf, f"frame budget {budget.frame_period_ms:.1f} ms   dropped {budget.dropped_steps}", int(18 * u), (panel.left + 10 * u, panel.top + 6 * u), TEXT)
         self._bar(surf, bar, names, last, budget, scale_ms)
         self._update_p99(budget, names)
         chart = pygame.Rect(bar.left, panel.bottom - chart_h - int(4 * u), bar.width, chart_h)
@@ -61,7 +63,7 @@ class BudgetOverlay:
             if wpx >= 1:
                 pygame.draw.rect(surf, STAGE_COLORS[k % len(STAGE_COLORS)], (int(x), bar.top, int(np.ceil(wpx)), bar.height))
             x += max(wpx, 0.0)
-        line_x = bar.left + bar.width * budget.frame_budget_ms / scale_ms
+        line_x = bar.left + bar.width * budget.frame_period_ms / scale_ms
         pygame.draw.line(surf, REJECT_COLOR, (line_x, bar.top - 4), (line_x, bar.bottom + 4), 2)
 
     def _update_p99(self, budget: FrameBudget, names: list[str]) -> None:
@@ -75,7 +77,7 @@ class BudgetOverlay:
 
     def _chart(self, surf: pygame.Surface, chart: pygame.Rect, names: list[str], last: dict,
                budget: FrameBudget, scale_ms: float) -> None:
-        # history: a stacked column per frame against the same 16.7 ms line, newest on the right.
+        # history: a stacked column per frame against the same period line, newest on the right.
         # The chart keeps its own surface and scrolls it one column per frame, so a frame draws
         # one column, not 120 (drawing them all cost ~2 ms a frame: the overlay ate its budget)
         new = budget.frames != self.history_frame
@@ -94,7 +96,7 @@ class BudgetOverlay:
             self.chart.fill(CHART_BG, (chart.width - col_w, 0, col_w, chart.height))
             self._chart_column(chart.width - col_w, col_w, self.history[-1], px_per_ms)
         surf.blit(self.chart, chart)
-        line_y = chart.bottom - budget.frame_budget_ms * px_per_ms
+        line_y = chart.bottom - budget.frame_period_ms * px_per_ms
         pygame.draw.line(surf, REJECT_COLOR, (chart.left, line_y), (chart.right, line_y), 1)
 
     def _chart_column(self, x0: int, col_w: int, ms: np.ndarray, px_per_ms: float) -> None:

@@ -264,3 +264,23 @@ def test_budget_overlay_lists_stages_not_the_spans_inside_them() -> None:
     hud = Hud()
     hud.draw(pygame.Surface(SIZE), HudState(show_budget=True), loop.budget)
     assert [row[0] for row in hud._rows_text] == ["physics", "render", "unaccounted"]
+
+
+@pytest.mark.parametrize("render_hz, period", [(60, "16.7"), (30, "33.3")])
+def test_budget_overlay_measures_a_frame_against_its_period(render_hz, period, monkeypatch) -> None:
+    """Low power renders every other step: a frame holds two steps' stages, so its line is the
+    33.3 ms a frame has, not one step's 16.7 ms (frames within their period looked over it)."""
+    from engine.clock import VirtualClock
+    from engine.loop import FixedStepLoop
+
+    pygame.init()
+    loop = FixedStepLoop(VirtualClock(), render_hz=render_hz)
+    loop.add_stage("physics", lambda s, dt: None, 3.0)
+    loop.set_render(lambda a: None, 8.0)
+    loop.run(frames=5)
+    said = []
+    hud = Hud()
+    real = hud.blit
+    monkeypatch.setattr(hud, "blit", lambda surf, text, *a, **k: (said.append(text), real(surf, text, *a, **k))[1])
+    hud.draw(pygame.Surface(SIZE), HudState(show_budget=True), loop.budget)
+    assert any(t.startswith(f"frame budget {period} ms") for t in said), said[:3]
