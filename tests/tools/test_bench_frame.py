@@ -83,3 +83,13 @@ def test_naive_peer_swaps_in_and_keeps_the_decisions() -> None:
 def test_bench_frame_rejects_bad_arguments(tmp_path) -> None:
     r = run_cli(["--steps", "0"], tmp_path)
     assert r.returncode == 2 and "--steps" in r.stderr and r.stderr.count("\n") == 1
+
+
+def test_the_simulations_row_shows_its_per_step_target(tmp_path) -> None:
+    """The SIM/step row (every stage but the render, per step) printed a budget of 0.00."""
+    from tools.bench_frame import SIM_TARGET_P99_MS
+
+    r = run_cli(["--steps", "60", "--repeats", "1", "--no-naive", "--realtime-seconds", "0.2", "--size", "320x180"], tmp_path)
+    assert r.returncode == 0, r.stderr
+    row = next(line for line in r.stdout.splitlines() if line.startswith("SIM/step"))
+    assert float(row.split()[1]) == SIM_TARGET_P99_MS and row.rstrip().endswith("-"), row
