@@ -61,6 +61,12 @@ def _time_frames(reset: Callable[[], object], push: Callable[[np.ndarray], objec
     return best * 1e6
 
 
+def _cell(value: float, width: int) -> str:
+    """A figure of the table, or '-' where it was not measured (numpy at thousands of templates,
+    numba or dtaidistance missing): it printed nan."""
+    return f"{value:{width}.1f}" if value == value else f"{'-':>{width}}"
+
+
 def _time_incremental(templates: list[np.ndarray], query: np.ndarray, method: str, repeat: int) -> float:
     from engine.recognition.dtw import IncrementalDTW
 
@@ -147,7 +153,8 @@ def run(args: argparse.Namespace) -> int:
             peer, how = float("nan"), "dtaidistance not installed"
         chosen = times[auto] if auto in times else _time_incremental(tm, query, auto, args.repeat)
         ratio, push_ratio = peer / chosen, peer / push
-        print(f"{label:>9} | {times['scan']:8.1f} | {times['loop']:8.1f} | {times['jit']:8.1f} | {auto:>6} | {push:8.1f} | {times['native']:9.1f} | {peer:15.1f} | {ratio:8.1f} | {push_ratio:6.1f} | {how}")
+        print(f"{label:>9} | {_cell(times['scan'], 8)} | {_cell(times['loop'], 8)} | {_cell(times['jit'], 8)} | {auto:>6} | "
+              f"{push:8.1f} | {_cell(times['native'], 9)} | {_cell(peer, 15)} | {_cell(ratio, 8)} | {_cell(push_ratio, 6)} | {how}")
         if per_action == 1 and n in TARGETS:
             max_us, min_ratio = TARGETS[n]
             checks = [(f"{auto} <= {max_us:g} us", chosen <= max_us), (f">= {min_ratio:g}x", ratio >= min_ratio)]

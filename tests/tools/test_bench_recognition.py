@@ -36,3 +36,9 @@ def test_bench_recognition_per_action_sizes_give_push_verdicts(capsys):
     assert main(["bench", "recognition", "--sizes", "13x3", "--repeat", "1", "--buffer", "4"]) == 0
     assert re.search(r"13x3: push <= 40 us (yes|NO), push >= 10x (yes|NO)", capsys.readouterr().out)
     assert main(["bench", "recognition", "--sizes", "many"]) == 2
+
+
+def test_a_figure_not_measured_is_a_dash_not_nan():
+    from tools.bench_recognition import _cell
+
+    assert _cell(float("nan"), 8) == "       -" and _cell(12.345, 8) == "    12.3"
