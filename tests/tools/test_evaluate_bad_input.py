@@ -30,6 +30,7 @@ EXPECT = {
     "pb-onerow": ("eval/pb-onerow/right-hook-50-a-combo-lh-1.csv", "a trial must be (n >= 2"),
     "uw-onerow": ("eval/uw-onerow/U1", "a trial must be (n >= 2"),
     "uw-mismatch": ("eval/uw-mismatch/U1", "6 values per frame"),
+    "uw-nod1": ("eval/uw-nod1/U1", "gesture2: tests on days 2-7 but no day-1 reps"),
     "trials-huge/build": ("eval/trials-huge/hook_r/1.csv:", "over the 1000 g"),
     "trials-huge/train": ("eval/trials-huge/hook_r/1.csv:", "over the 1000 g"),
     "accel-1e306/bridge-emulate": ("eval/accel-1e306.csv:", "over the 1000 g"),
