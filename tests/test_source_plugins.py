@@ -144,3 +144,25 @@ def test_quickjab_scope_runs_an_installed_plugin(tmp_path):
                        cwd=tmp_path, env=env, capture_output=True, text=True, timeout=120)
     assert r.returncode == 0, r.stderr
     assert out.is_file() and out.stat().st_size > 0
+
+
+@pytest.mark.parametrize("scheme", ["replay", "demo", "serial", "wiimote", "wiimote-emu"])
+def test_a_built_in_scheme_not_loaded_yet_is_taken_all_the_same(scheme, monkeypatch, registry):
+    # the built-in schemes are registered by their modules on first use; before that an outside
+    # package registering one took it over silently (and the module's own import then failed)
+    monkeypatch.setitem(source_mod._factories, scheme, None)
+    source_mod._factories.pop(scheme)  # as before the module is imported; restored after the test
+    with pytest.raises(ValueError, match=f"'{scheme}' is built in"):
+        register_scheme(scheme, lambda url, clock: None)
+    assert scheme not in source_mod._factories
+
+
+def test_an_installed_package_cannot_take_the_games_keyboard_scheme(tmp_path, monkeypatch, registry):
+    # keyboard:// is the game's (registered when `game` is imported); without the game imported,
+    # a package declaring `keyboard` in its entry points got keyboard:// URLs
+    site = install(tmp_path / "site", schemes={"keyboard": "myimu_source:open_myimu"})
+    monkeypatch.syspath_prepend(str(site))
+    monkeypatch.delitem(source_mod._factories, "keyboard", raising=False)
+    with pytest.raises(SourceError, match="keyboard:// is the game's"):
+        open_source("keyboard://")
+    assert "myimu_source" not in sys.modules

@@ -94,6 +94,10 @@ _builtin_modules: dict[str, str] = {
     "serial": "engine.sensors.serial_source",
     "demo": "engine.sensors.demo",
 }
+# Schemes a package outside engine owns and registers on import: never an entry point's.
+_taken_elsewhere: dict[str, str] = {
+    "keyboard": "the game's: importing the game package registers it",
+}
 
 
 ENTRY_POINT_GROUP = "quickjab.sources"
@@ -104,6 +108,10 @@ def register_scheme(scheme: str, factory: SourceFactory) -> None:
     factory already owns the scheme (registering the same factory again is harmless)."""
     scheme = scheme.lower()
     owner = _factories.get(scheme)
+    home = _builtin_modules.get(scheme)
+    if owner is None and home is not None and getattr(factory, "__module__", None) != home:
+        # a built-in scheme is taken even before its module is loaded (on first use)
+        raise ValueError(f"source scheme {scheme!r} is built in ({home}); {_name_of(factory)} cannot register it")
     if owner is not None and owner is not factory:
         raise ValueError(
             f"source scheme {scheme!r} is already registered by {_name_of(owner)}; "
@@ -126,6 +134,8 @@ def _plugin_entry_points() -> list:
 
 def _load_plugin(scheme: str) -> None:
     """Register `scheme` from its entry point, if an installed package declares one."""
+    if scheme in _taken_elsewhere:
+        raise SourceError(f"{scheme}:// is {_taken_elsewhere[scheme]}; no installed package can declare it")
     declared = {ep.value: ep for ep in _plugin_entry_points() if ep.name.lower() == scheme}
     if not declared:
         return
