@@ -101,3 +101,33 @@ def read_json(array: np.ndarray) -> object:
         raise NpzFileError("JSON nested too deeply") from None
     except ValueError as exc:
         raise NpzFileError(str(exc)) from None
+
+
+def write_replacing(path: str | os.PathLike, write: Callable[[object], None]) -> None:
+    """Call `write(f)` with a binary file that becomes `path` only once it is whole: written
+    beside it and renamed over it, so a full disk or a Ctrl-C halfway leaves the previous file
+    as it was and no part of the new one. A `path` that exists and is not a regular file (a
+    device such as /dev/full, a pipe) is written in place; a link keeps pointing where it did."""
+    import stat
+    import tempfile
+
+    target = os.path.realpath(path)
+    try:
+        mode = os.stat(target).st_mode
+    except FileNotFoundError:
+        mode = None
+    if mode is not None and not stat.S_ISREG(mode):
+        with open(target, "wb") as f:
+            write(f)
+        return
+    fd, tmp = tempfile.mkstemp(dir=os.path.dirname(target), prefix=f".{os.path.basename(target)}.", suffix=".part")
+    try:
+        with os.fdopen(fd, "wb") as f:
+            write(f)
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, stat.S_IMODE(mode) if mode is not None else 0o666 & ~umask)
+        os.replace(tmp, target)
+    except BaseException:
+        os.unlink(tmp)
+        raise

@@ -126,20 +126,39 @@ def load_templates(path: str | Path | None = None, left_handed: bool = False):
 def templates_in_use(path: str | Path | None = None) -> str:
     """What `load_templates(path)` loads, said for the HUD and the console: the player has to
     know when a trained set (perhaps of a few moves) is in play, and how to go back."""
-    from engine.recognition import Templates
-    from game.actions import ACTION_NAMES
     from game.userdata import user_templates_path
 
     if path is not None:
-        return f"templates {Path(path).name}"
+        profile = _profile_of(Path(path))
+        if profile is None:
+            return f"templates {Path(path).name}"
+        return f"your templates ({profile}: {_moves_trained(Path(path))}; `quickjab train --reset --profile {profile}` for the defaults)"
     if user_templates_path().exists():
-        try:
-            trained = [a for a in Templates.load(user_templates_path()).meta.get("trained", "").split(",") if a]
-        except InputError:
-            trained = []
-        mine = f"{len(trained)} of {len(ACTION_NAMES)} moves" if trained and len(trained) < len(ACTION_NAMES) else "all moves"
-        return f"your templates ({mine}; `quickjab train --reset` for the defaults)"
+        return f"your templates ({_moves_trained(user_templates_path())}; `quickjab train --reset` for the defaults)"
     return "default templates"
+
+
+def _profile_of(path: Path) -> str | None:
+    """The player whose trained set `path` is (`train --profile NAME`'s file), else None."""
+    from game.userdata import profile_templates_path
+
+    name = path.stem
+    try:
+        return name if path.absolute() == profile_templates_path(name).absolute() else None
+    except InputError:  # not a profile's name
+        return None
+
+
+def _moves_trained(path: Path) -> str:
+    """How many moves of the set at `path` the player trained: "all moves", "2 of 13 moves"."""
+    from engine.recognition import Templates
+    from game.actions import ACTION_NAMES
+
+    try:
+        trained = [a for a in Templates.load(path).meta.get("trained", "").split(",") if a]
+    except InputError:
+        trained = []
+    return f"{len(trained)} of {len(ACTION_NAMES)} moves" if trained and len(trained) < len(ACTION_NAMES) else "all moves"
 
 
 def load_graph(path: str | Path | None = None):

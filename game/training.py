@@ -29,7 +29,7 @@ import numpy as np
 from engine import arguments
 from engine.clock import STEP_HZ
 from engine.errors import InputError, refuse_overwriting
-from engine.sensors.source import PLAYABLE
+from engine.sensors.source import PLAYABLE, SourceState
 from game.launch import (
     KEYBOARD_SOURCE,
     check_visible_window,
@@ -49,6 +49,7 @@ SHOW_STEPS = 90  # the animation alone before the first trial of an action
 READY_STEPS = 60  # "get ready": the hands held still
 LEAD_IN = 30  # frames of the ready phase kept at the start of a trial (the rest before)
 RECORD_STEPS = 96  # the recording window after GO
+LOST_GIVE_UP_STEPS = 10 * HZ  # headless: a source lost this long is not coming back
 
 SHOW, READY, RECORD, DONE = "show", "ready", "record", "done"
 # the live signal: one colour per hand (as the contact sheet: right red, left blue), x y z in
@@ -87,6 +88,7 @@ class Trainer:
     _buffer: list[np.ndarray] = field(default_factory=list)
     go: bool = False  # True on the step GO is given (the keyboard source performs then)
     dropped: dict[str, tuple[int, int]] = field(default_factory=dict)  # action -> (trials dropped, recorded)
+    waiting: bool = False  # the source is away: the walk holds, the trial under way starts again
 
     @property
     def action(self) -> str:
@@ -100,11 +102,16 @@ class Trainer:
         total = len(self.actions) * self.trials
         return sum(len(v) for v in self.recorded.values()) / total
 
-    def step(self, frame: np.ndarray | None) -> None:
-        """Advance one 60 Hz step with this step's frame (None before the source delivers)."""
+    def step(self, frame: np.ndarray | None, live: bool = True) -> None:
+        """Advance one 60 Hz step with this step's frame (None before the source delivers);
+        `live` False while the source is not connected (its frame is the last sample held)."""
         self.go = False
         if self.phase == DONE:
             return
+        if not live:
+            self._lose()
+            return
+        self.waiting = False
         self.phase_step += 1
         if frame is not None:
             if self.phase == RECORD:
@@ -129,6 +136,15 @@ class Trainer:
                 self._enter(SHOW if self.index < len(self.actions) else DONE)
             else:
                 self._enter(READY)
+
+    def _lose(self) -> None:
+        """The source is away: the walk holds; a trial under way is dropped (no motion came)
+        and starts again from "get ready" once the source is back."""
+        self.waiting = True
+        self._ring.clear()
+        if self.phase in (READY, RECORD):
+            self._buffer = []
+            self._enter(READY)
 
     def _enter(self, phase: str) -> None:
         self.phase = phase
@@ -284,7 +300,9 @@ class TrainingScreen:
         from game.hud import action_label
 
         tr = self.trainer
-        if tr.done:
+        if tr.waiting:
+            title, sub = "SOURCE LOST", "waiting for it: the trial starts again when it is back"
+        elif tr.done:
             title, sub = "ALL DONE", (f"templates saved to {self.saved_to}" if self.saved_to else "building templates...")
         elif tr.phase == SHOW:
             title, sub = action_label(tr.action).upper(), "watch the move, then copy it"
@@ -456,6 +474,9 @@ class _TrainingStages:
         self.trainer, self.screen_view, self.resampler, self.t0 = trainer, screen_view, resampler, t0
         self.output, self.left_handed, self.settings = output, left_handed, settings
         self.frame = None
+        self.lost_steps = 0  # steps since the source was last connected
+        self.give_up_after: int | None = None  # headless: stop when lost this long (no one to wait for it)
+        self.stopped_why = ""  # why the walk stopped before its end (the source ended, or never came back)
 
     def perform(self) -> None:
         # the virtual player behind the keyboard has no handedness: it performs the move itself
@@ -474,25 +495,48 @@ class _TrainingStages:
         self.frame = self.resampler.frame_at(self.t0 + step * dt)
 
     def train(self, step: int, dt: float) -> None:
-        trainer, output = self.trainer, self.output
+        trainer = self.trainer
         was_done = trainer.done
-        trainer.step(self.frame)
-        self.screen_view.push_frame(self.frame)
+        live = self._source_live()
+        if self.stopped_why:
+            self.loop.stop()
+            return
+        trainer.step(self.frame, live)
+        self.screen_view.push_frame(self.frame if live else None)
         if trainer.go and self.auto:
             self.perform()
         if trainer.done and not was_done:
-            base = base_templates(output)
-            templates = trainer.templates(self.left_handed, base=base, recognizer=self.settings)
-            if base is not None and base.dim != templates.dim:
-                print(f"quickjab train: the moves you had were for {base.dim // 3} sensor(s), these trials have "
-                      f"{templates.dim // 3}: only the moves trained now are kept", file=sys.stderr)
-            output.parent.mkdir(parents=True, exist_ok=True)
-            templates.save(output)
-            self.screen_view.saved_to = str(output)
-            for action, (n, of) in trainer.dropped.items():
-                print(f"quickjab train: {action}: dropped {n} of {of} trials (cut off, unlike the others, or like another move)",
-                      file=sys.stderr)
-            print(f"quickjab train: saved {len(templates)} templates to {output}", file=sys.stderr)
+            self.save()
+
+    def _source_live(self) -> bool:
+        """Whether the source delivers now; a source that ended (a replay played out), or that a
+        headless run has waited for too long, stops the walk before anything is saved."""
+        state = self.source.state
+        live = state == SourceState.CONNECTED
+        self.lost_steps = 0 if live else self.lost_steps + 1
+        if self.trainer.done:
+            return live
+        if state == SourceState.ENDED:
+            self.stopped_why = "the source ended"
+        elif self.give_up_after is not None and self.lost_steps > self.give_up_after:
+            self.stopped_why = f"the source was lost for {self.lost_steps / HZ:.0f} s"
+        return live
+
+    def save(self) -> None:
+        """The trials done: build the player's templates, save them, say what was dropped."""
+        trainer, output = self.trainer, self.output
+        base = base_templates(output)
+        templates = trainer.templates(self.left_handed, base=base, recognizer=self.settings)
+        if base is not None and base.dim != templates.dim:
+            print(f"quickjab train: the moves you had were for {base.dim // 3} sensor(s), these trials have "
+                  f"{templates.dim // 3}: only the moves trained now are kept", file=sys.stderr)
+        output.parent.mkdir(parents=True, exist_ok=True)
+        templates.save(output)
+        self.screen_view.saved_to = str(output)
+        for action, (n, of) in trainer.dropped.items():
+            print(f"quickjab train: {action}: dropped {n} of {of} trials (cut off, unlike the others, or like another move)",
+                  file=sys.stderr)
+        print(f"quickjab train: saved {len(templates)} templates to {output}", file=sys.stderr)
 
     def render(self, alpha: float) -> None:
         import pygame
@@ -538,6 +582,8 @@ def run(args: argparse.Namespace) -> int:
     loop = FixedStepLoop(clock)
     stages = _TrainingStages(loop, source, playable, auto, trainer, screen_view, resampler, t0, output,
                              args.left_handed, settings)
+    if args.headless:
+        stages.give_up_after = LOST_GIVE_UP_STEPS
     loop.add_stage("input", stages.input, 0.3)
     loop.add_stage("train", stages.train, 1.0)
     loop.set_render(stages.render, 8.0)
@@ -551,6 +597,9 @@ def run(args: argparse.Namespace) -> int:
         finally:
             source.close()
             pygame.quit()
+    if stages.stopped_why:
+        n = sum(len(v) for v in trainer.recorded.values())
+        raise InputError(f"{source.url}: {stages.stopped_why} after {n} trial{'' if n == 1 else 's'}; nothing saved")
     if not trainer.done:
         print(f"quickjab train: stopped after {sum(len(v) for v in trainer.recorded.values())} trials; nothing saved", file=sys.stderr)
     return 0

@@ -28,7 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from engine.errors import InputError
-from engine.npz_files import NpzFileError, read_json, read_npz
+from engine.npz_files import NpzFileError, read_json, read_npz, write_replacing
 from engine.recognition.config import RecognizerConfigError, check_settings
 from engine.recognition.dtw import IncrementalDTW, dtw_distance
 
@@ -564,25 +564,28 @@ class Templates:
         vals = np.array(list(self.meta.values()), dtype=str)
         # only when set: a file without settings has the keys it always had
         settings = {"recognizer": np.array(json.dumps(self.recognizer, sort_keys=True))} if self.recognizer else {}
+
+        def write(f) -> None:  # a file object: np.savez would append .npz to a name without it
+            np.savez_compressed(
+                f,
+                format=np.array("quickjab-templates"),
+                version=np.array(FORMAT_VERSION),
+                actions=np.array(self.actions, dtype=str),
+                lengths=lengths,
+                signals=np.concatenate(self.signals, axis=0),
+                gravity=self.gravity,
+                onsets=self.onsets,
+                thresholds=self.thresholds,
+                method=np.array(self.method),
+                feature=np.array(self.feature),
+                meta_keys=keys,
+                meta_values=vals,
+                rest_noise=np.array(self.rest_noise),
+                **settings,
+            )
+
         try:
-            with open(path, "wb") as f:  # np.savez would append .npz to a name without it
-                np.savez_compressed(
-                    f,
-                    format=np.array("quickjab-templates"),
-                    version=np.array(FORMAT_VERSION),
-                    actions=np.array(self.actions, dtype=str),
-                    lengths=lengths,
-                    signals=np.concatenate(self.signals, axis=0),
-                    gravity=self.gravity,
-                    onsets=self.onsets,
-                    thresholds=self.thresholds,
-                    method=np.array(self.method),
-                    feature=np.array(self.feature),
-                    meta_keys=keys,
-                    meta_values=vals,
-                    rest_noise=np.array(self.rest_noise),
-                    **settings,
-                )
+            write_replacing(path, write)
         except OSError as exc:  # a full disk: ENOSPC names no file
             raise TemplateFileError(path, f"cannot write ({exc.strerror or exc})") from None
 

@@ -233,3 +233,21 @@ def test_home_button_pauses_and_the_battery_shows() -> None:
     remote.buttons = 0x0080
     s.loop.run(steps=2)
     assert not s.match.paused
+
+
+def test_a_profiles_trained_set_is_said_as_the_players_own_with_its_moves(tmp_path):
+    """`play --profile ana` said "templates ana.npz": not that the set is ana's own, nor how
+    many moves were trained (docs/game.md: "yours, with how many moves you trained")."""
+    from game.session import synthesized_templates, templates_in_use
+    from game.userdata import profile_templates_path
+
+    path = profile_templates_path("ana")
+    path.parent.mkdir(parents=True)
+    t = synthesized_templates(trials=1)
+    t.meta.update({"source": "quickjab train", "trained": "hook_l,hook_r"})
+    t.save(path)
+    said = templates_in_use(path)
+    assert said.startswith("your templates (ana: 2 of 13 moves") and "--profile ana" in said, said
+    other = tmp_path / "built.npz"
+    synthesized_templates(trials=1).save(other)  # `--templates FILE` of another origin: its name
+    assert templates_in_use(other) == "templates built.npz"

@@ -300,3 +300,24 @@ def test_template_lengths_that_only_add_up_past_int64_are_refused(tmp_path, tria
     np.savez(bad, **arrays)
     with pytest.raises(TemplateFileError, match="wrapped.npz: .*signal lengths do not match the signal data"):
         Templates.load(bad)
+
+
+@pytest.mark.parametrize("failure", [OSError(28, "No space left on device"), KeyboardInterrupt()])
+def test_a_save_that_fails_halfway_keeps_the_file_it_was_replacing(tmp_path, trials, monkeypatch, failure):
+    """`quickjab train` saves the player's templates over their previous set: a full disk or a
+    Ctrl-C while writing truncated that set (open(path, "wb") first) and left half a file."""
+    path = tmp_path / "mine.npz"
+    Templates.from_trials(trials, method="trials").save(path)
+    before = path.read_bytes()
+    real = np.savez_compressed
+
+    def fails_halfway(f, **arrays):
+        real(f, **arrays)
+        f.truncate(len(before) // 2)
+        raise failure
+
+    monkeypatch.setattr(np, "savez_compressed", fails_halfway)
+    with pytest.raises((TemplateFileError, KeyboardInterrupt)):
+        Templates.from_trials({"hook_r": trials["hook_r"]}, method="trials").save(path)
+    assert path.read_bytes() == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["mine.npz"]  # no half-written file left

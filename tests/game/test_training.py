@@ -1,0 +1,48 @@
+"""game/training.py: a source lost or ended during `quickjab train`."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from game.training import LEAD_IN, READY_STEPS, RECORD, RECORD_STEPS, SHOW_STEPS, Trainer
+from tools.cli import main
+
+REST = np.array([0.0, 0.0, 1.0, 0.0, 0.0, 1.0])
+
+
+def test_a_trial_during_which_the_source_was_lost_is_recorded_again():
+    """The trainer went on through GO and RECORD with no samples (the resampler holds the last
+    one): a lost source's trial was kept as a flat line, then saved as the player's move."""
+    tr = Trainer(["hook_r"], trials=1)
+    for _ in range(SHOW_STEPS + READY_STEPS):
+        tr.step(REST)
+    assert tr.phase == RECORD
+    for _ in range(10):
+        tr.step(REST + 0.5)
+    for _ in range(RECORD_STEPS):
+        tr.step(REST, live=False)  # the last frame held while the source is away
+    assert not tr.recorded and not tr.done and tr.waiting
+    for _ in range(READY_STEPS + RECORD_STEPS):
+        tr.step(REST + 0.1)  # back: "get ready" again, then the trial
+    assert tr.done and len(tr.recorded["hook_r"]) == 1
+    trial = tr.recorded["hook_r"][0]
+    assert len(trial) == LEAD_IN + RECORD_STEPS and np.allclose(trial, REST + 0.1)
+
+
+def test_training_from_a_source_that_ends_saves_nothing_over_the_players_set(tmp_path, monkeypatch, capsys):
+    """A replay that ended after 2 s: every later trial was its last sample held, and the
+    trained moves were saved as flat lines over the player's templates, exit 0."""
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "xdg"))
+    from game.session import synthesized_templates
+    from game.userdata import user_templates_path
+
+    mine = user_templates_path()
+    mine.parent.mkdir(parents=True)
+    synthesized_templates(trials=1).save(mine)
+    before = mine.read_bytes()
+    rec = tmp_path / "short.csv"
+    rec.write_text("t,rx,ry,rz,lx,ly,lz\n" + "".join(f"{i / 60:.5f},0,0,1,0,0,1\n" for i in range(120)))
+    assert main(["train", "--headless", "--source", f"replay://{rec}", "--actions", "hook_r", "--size", "320x180"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert "ended" in err[-1] and "nothing saved" in err[-1], err
+    assert mine.read_bytes() == before
