@@ -423,6 +423,8 @@ def open_serial(url: str, clock: Clock) -> SerialSource:
         pid = int(params["pid"], 16) if "pid" in params else None
     except ValueError:
         raise SourceError(f"{url}: vid and pid must be hex") from None
+    if pid is not None and vid is None:
+        raise SourceError(f"{url}: pid needs a vid too (e.g. serial://auto?vid=2e8a&pid=0005)")
     return SerialSource(url, clock, target, baud=baud, retry=retry, window_s=window, vid=vid, pid=pid)
 
 

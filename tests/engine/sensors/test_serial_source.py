@@ -427,3 +427,9 @@ def test_a_hello_request_reaches_a_port_with_no_file_descriptor():
         assert port.read(1) == protocol.HELLO_REQUEST
     finally:
         port.close()
+
+
+def test_auto_with_a_pid_but_no_vid_is_an_error_not_ignored():
+    """`serial://auto?pid=0005` used to look for the known boards, silently ignoring the pid."""
+    with pytest.raises(SourceError, match="pid"):
+        open_source("serial://auto?pid=0005")
