@@ -369,19 +369,22 @@ def _wiimote_paths() -> list[str]:
         return []
 
 
-def seat_templates(profile: str | None, templates: str | None) -> tuple[Path | str | None, str | None]:
+def seat_templates(profile: str | None, templates: str | None, option: str = "--profile",
+                   who: str = "") -> tuple[Path | str | None, str | None]:
     """A seat's templates: --templates, else the profile's trained set, else the default chain
-    (the default profile's file, the shipped set...), with a note when a named profile has none."""
+    (the default profile's file, the shipped set...), with a note when a named profile has none.
+    A bad name is an error naming `option`; `who` ("player 2: ") starts the note."""
     from game.userdata import DEFAULT_PROFILE, profile_templates_path
 
     if templates is not None:
         return templates, None
-    path = profile_templates_path(profile)
+    path = profile_templates_path(profile, option)
     if profile in (None, DEFAULT_PROFILE):
         return None, None
     if path.exists():
         return path, None
-    return None, f"profile {profile!r} has no trained templates yet (quickjab train --profile {profile}); using the default profile's templates"
+    return None, (f"{who}profile {profile!r} has no trained templates yet (quickjab train --profile {profile}); "
+                  "using the default profile's templates")
 
 
 def run_match(args) -> int:
@@ -394,8 +397,8 @@ def run_match(args) -> int:
 
     settings = recognizer_settings(getattr(args, "recognizer", None) or ())  # a bad file or value: before any window
     templates, notes = [], []
-    for profile in (args.profile, args.profile2):
-        path, note = seat_templates(profile, args.templates)
+    for i, (option, profile) in enumerate((("--profile", args.profile), ("--profile2", args.profile2))):
+        path, note = seat_templates(profile, args.templates, option, f"player {i + 1}: ")
         templates.append(path)
         if note:
             notes.append(note)

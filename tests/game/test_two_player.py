@@ -263,3 +263,16 @@ def test_the_side_on_camera_keeps_player_one_on_the_left_from_every_side() -> No
     assert side_on_heading(*line(30), current=0) == 0
     assert side_on_heading(*line(35), current=0) == 1
     assert side_on_heading(*line(30)) == 1  # without a current view: the nearest
+
+
+def test_player_two_profile_errors_and_notes_name_profile2(capsys) -> None:
+    from tools.cli import main
+
+    assert main(["play", "--players", "2", "--headless", "--frames", "1", "--source", "keyboard://",
+                 "--source2", "keyboard://", "--profile2", "../x"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--profile2 '../x'" in err[0]
+    assert main(["play", "--players", "2", "--headless", "--frames", "1", "--size", "320x180", "--source", "keyboard://",
+                 "--source2", "keyboard://", "--profile2", "nobody"]) == 0
+    note = [line for line in capsys.readouterr().err.splitlines() if "nobody" in line]
+    assert len(note) == 1 and "player 2" in note[0]
