@@ -359,6 +359,11 @@ def _check_own_keys(urls: list[str]) -> None:
                          "give each player their own half, keys=left and keys=right")
 
 
+def seat_label(i: int, given: str | None) -> str:
+    """Player i's name in a message, with the option that set their source when one did."""
+    return f"player {i + 1}" + (f" ({('--source', '--source2')[i]})" if given is not None else "")
+
+
 def _wiimote_paths() -> list[str]:
     """Paths of the Wiimotes this machine sees (none when the HID backend is missing)."""
     try:
@@ -414,8 +419,11 @@ def run_match(args) -> int:
 
         opened: list[Source] = []
         try:
-            for url in urls:
-                opened.append(open_source(url, clock=clock.seconds))
+            for i, url in enumerate(urls):
+                try:
+                    opened.append(open_source(url, clock=clock.seconds))
+                except (InputError, OSError) as exc:  # which player's source, in the one line
+                    raise InputError(f"{seat_label(i, (args.source, args.source2)[i])}: {exc}") from None
         except BaseException:
             for source in opened:
                 source.close()

@@ -276,3 +276,15 @@ def test_player_two_profile_errors_and_notes_name_profile2(capsys) -> None:
                  "--source2", "keyboard://", "--profile2", "nobody"]) == 0
     note = [line for line in capsys.readouterr().err.splitlines() if "nobody" in line]
     assert len(note) == 1 and "player 2" in note[0]
+
+
+def test_a_source_that_does_not_open_says_which_player(capsys, tmp_path) -> None:
+    from tools.cli import main
+
+    missing = tmp_path / "missing.csv"
+    for option, url in (("--source2", f"replay://{missing}"), ("--source2", "bogus://x"), ("--source", f"wiimote-emu://{missing}")):
+        other = "--source" if option == "--source2" else "--source2"
+        assert main(["play", "--players", "2", "--headless", "--frames", "1", other, "keyboard://", option, url]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        player = 2 if option == "--source2" else 1
+        assert len(err) == 1 and f"player {player} ({option})" in err[0], err
