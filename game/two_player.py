@@ -335,7 +335,7 @@ def source_urls(url1: str | None, url2: str | None, demo: bool, seed: int,
                 elif any(x.startswith("wiimote:///") for x in urls):
                     raise InputError(f"player {i + 1}: {u}: only one Wiimote found; each player needs their own")
                 # else none at all: opening wiimote:// says so, with the pairing help
-    if urls[0] == urls[1] and not urls[0].startswith("keyboard://"):
+    if _same_device(urls[0], urls[1]):
         raise InputError(f"--source and --source2 are the same device ({urls[0]}): each player needs their own")
     keyboards = [i for i, u in enumerate(urls) if u.startswith("keyboard://")]
     for i in keyboards:
@@ -345,6 +345,25 @@ def source_urls(url1: str | None, url2: str | None, demo: bool, seed: int,
     if len(keyboards) == 2:
         _check_own_keys(urls)
     return urls, notes
+
+
+def _same_device(a: str, b: str) -> bool:
+    """Whether two seats' URLs open one device: the same URL, or the same scheme on the same
+    path however spelled (serial:///dev/x?baud=230400, a link to /dev/x; wiimote:///dev/hidraw3
+    with another ?player). The keyboard is shared by halves (_check_own_keys); serial://auto
+    names no port."""
+    from engine.errors import same_file
+    from engine.sensors.source import SourceError, parse_source_url
+
+    if a.startswith("keyboard://") or b.startswith("keyboard://"):
+        return False
+    if a == b:
+        return True
+    try:
+        (scheme_a, path_a, _), (scheme_b, path_b, _) = parse_source_url(a), parse_source_url(b)
+    except SourceError:  # not a URL: opening it says so
+        return False
+    return scheme_a == scheme_b and path_a not in ("", "auto") and path_b not in ("", "auto") and same_file(path_a, path_b)
 
 
 def _check_own_keys(urls: list[str]) -> None:

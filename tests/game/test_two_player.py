@@ -288,3 +288,19 @@ def test_a_source_that_does_not_open_says_which_player(capsys, tmp_path) -> None
         err = capsys.readouterr().err.strip().splitlines()
         player = 2 if option == "--source2" else 1
         assert len(err) == 1 and f"player {player} ({option})" in err[0], err
+
+
+def test_the_same_device_spelled_two_ways_is_refused(tmp_path) -> None:
+    from engine.errors import InputError
+
+    port = tmp_path / "ttyACM0"
+    port.touch()
+    (tmp_path / "link").symlink_to(port)
+    for a, b in ((f"serial://{port}", f"serial://{port}?baud=230400"),  # another speed, the same port
+                 (f"serial://{tmp_path / 'link'}", f"serial://{port}"),  # a link to it (bridge emulate --link)
+                 ("wiimote:///dev/hidraw3", "wiimote:///dev/hidraw3?player=2")):
+        with pytest.raises(InputError, match="same device"):
+            source_urls(a, b, demo=False, seed=0)
+    other = tmp_path / "ttyACM1"
+    urls, _ = source_urls(f"serial://{port}", f"serial://{other}", demo=False, seed=0)
+    assert urls == [f"serial://{port}", f"serial://{other}"]
