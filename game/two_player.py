@@ -332,7 +332,7 @@ def source_urls(url1: str | None, url2: str | None, demo: bool, seed: int,
                 elif u is None:
                     urls[i] = "keyboard://"
                     notes.append(f"player {i + 1}: no Wiimote found, playing from the keyboard")
-                elif any(x.startswith("wiimote:///") for x in urls):
+                elif any(x is not None and x.startswith("wiimote:///") for x in urls):
                     raise InputError(f"player {i + 1}: {u}: only one Wiimote found; each player needs their own")
                 # else none at all: opening wiimote:// says so, with the pairing help
     if _same_device(urls[0], urls[1]):

@@ -304,3 +304,12 @@ def test_the_same_device_spelled_two_ways_is_refused(tmp_path) -> None:
     other = tmp_path / "ttyACM1"
     urls, _ = source_urls(f"serial://{port}", f"serial://{other}", demo=False, seed=0)
     assert urls == [f"serial://{port}", f"serial://{other}"]
+
+
+def test_source_wiimote_without_source2_and_no_wiimote_is_no_traceback() -> None:
+    # `play --players 2 --source wiimote://` with no remote paired: an AttributeError on the
+    # missing --source2 before; now player 2 takes the keyboard and opening wiimote:// says why
+    urls, notes = source_urls("wiimote://", None, demo=False, seed=0, wiimotes=lambda: [])
+    assert urls[0] == "wiimote://" and urls[1].startswith("keyboard://") and "player 2" in notes[0]
+    urls, _ = source_urls(None, "wiimote://", demo=False, seed=0, wiimotes=lambda: [])
+    assert urls[0].startswith("keyboard://") and urls[1] == "wiimote://"
