@@ -61,7 +61,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--budget", action="store_true", help="show the frame-budget overlay from the start (F3 toggles)")
     p.add_argument("--no-sound", action="store_true", help="no sound")
     p.add_argument("--players", type=int, choices=(1, 2), default=1, help="2: a local match between two people, a controller each (game.two_player)")
-    p.add_argument("--source2", default=None, help="player 2's source URL with --players 2 (default: the second Wiimote found, else the keyboard's right half)")
+    p.add_argument("--source2", default=None, help="player 2's source URL with --players 2 (default: the second Wiimote found, else the keyboard: its right half when player 1 plays from it too)")
     p.add_argument("--profile", default=None, metavar="NAME", help="play with the templates `quickjab train --profile NAME` saved (default: your default set)")
     p.add_argument("--profile2", default=None, metavar="NAME", help="player 2's profile with --players 2")
     p.add_argument("--recognizer", action="append", default=[], metavar="NAME=VALUE",

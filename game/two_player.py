@@ -332,10 +332,10 @@ def source_urls(url1: str | None, url2: str | None, demo: bool, seed: int,
                 elif u is None:
                     urls[i] = "keyboard://"
                     notes.append(f"player {i + 1}: no Wiimote found, playing from the keyboard")
-                elif any(x.startswith("wiimote:///") for x in urls):
+                elif any(x is not None and x.startswith("wiimote:///") for x in urls):
                     raise InputError(f"player {i + 1}: {u}: only one Wiimote found; each player needs their own")
                 # else none at all: opening wiimote:// says so, with the pairing help
-    if urls[0] == urls[1] and not urls[0].startswith("keyboard://"):
+    if _same_device(urls[0], urls[1]):
         raise InputError(f"--source and --source2 are the same device ({urls[0]}): each player needs their own")
     keyboards = [i for i, u in enumerate(urls) if u.startswith("keyboard://")]
     for i in keyboards:
@@ -345,6 +345,25 @@ def source_urls(url1: str | None, url2: str | None, demo: bool, seed: int,
     if len(keyboards) == 2:
         _check_own_keys(urls)
     return urls, notes
+
+
+def _same_device(a: str, b: str) -> bool:
+    """Whether two seats' URLs open one device: the same URL, or the same scheme on the same
+    path however spelled (serial:///dev/x?baud=230400, a link to /dev/x; wiimote:///dev/hidraw3
+    with another ?player). The keyboard is shared by halves (_check_own_keys); serial://auto
+    names no port."""
+    from engine.errors import same_file
+    from engine.sensors.source import SourceError, parse_source_url
+
+    if a.startswith("keyboard://") or b.startswith("keyboard://"):
+        return False
+    if a == b:
+        return True
+    try:
+        (scheme_a, path_a, _), (scheme_b, path_b, _) = parse_source_url(a), parse_source_url(b)
+    except SourceError:  # not a URL: opening it says so
+        return False
+    return scheme_a == scheme_b and path_a not in ("", "auto") and path_b not in ("", "auto") and same_file(path_a, path_b)
 
 
 def _check_own_keys(urls: list[str]) -> None:
@@ -359,6 +378,11 @@ def _check_own_keys(urls: list[str]) -> None:
                          "give each player their own half, keys=left and keys=right")
 
 
+def seat_label(i: int, given: str | None) -> str:
+    """Player i's name in a message, with the option that set their source when one did."""
+    return f"player {i + 1}" + (f" ({('--source', '--source2')[i]})" if given is not None else "")
+
+
 def _wiimote_paths() -> list[str]:
     """Paths of the Wiimotes this machine sees (none when the HID backend is missing)."""
     try:
@@ -369,19 +393,22 @@ def _wiimote_paths() -> list[str]:
         return []
 
 
-def seat_templates(profile: str | None, templates: str | None) -> tuple[Path | str | None, str | None]:
+def seat_templates(profile: str | None, templates: str | None, option: str = "--profile",
+                   who: str = "") -> tuple[Path | str | None, str | None]:
     """A seat's templates: --templates, else the profile's trained set, else the default chain
-    (the default profile's file, the shipped set...), with a note when a named profile has none."""
+    (the default profile's file, the shipped set...), with a note when a named profile has none.
+    A bad name is an error naming `option`; `who` ("player 2: ") starts the note."""
     from game.userdata import DEFAULT_PROFILE, profile_templates_path
 
     if templates is not None:
         return templates, None
-    path = profile_templates_path(profile)
+    path = profile_templates_path(profile, option)
     if profile in (None, DEFAULT_PROFILE):
         return None, None
     if path.exists():
         return path, None
-    return None, f"profile {profile!r} has no trained templates yet (quickjab train --profile {profile}); using the default profile's templates"
+    return None, (f"{who}profile {profile!r} has no trained templates yet (quickjab train --profile {profile}); "
+                  "using the default profile's templates")
 
 
 def run_match(args) -> int:
@@ -394,8 +421,8 @@ def run_match(args) -> int:
 
     settings = recognizer_settings(getattr(args, "recognizer", None) or ())  # a bad file or value: before any window
     templates, notes = [], []
-    for profile in (args.profile, args.profile2):
-        path, note = seat_templates(profile, args.templates)
+    for i, (option, profile) in enumerate((("--profile", args.profile), ("--profile2", args.profile2))):
+        path, note = seat_templates(profile, args.templates, option, f"player {i + 1}: ")
         templates.append(path)
         if note:
             notes.append(note)
@@ -411,8 +438,11 @@ def run_match(args) -> int:
 
         opened: list[Source] = []
         try:
-            for url in urls:
-                opened.append(open_source(url, clock=clock.seconds))
+            for i, url in enumerate(urls):
+                try:
+                    opened.append(open_source(url, clock=clock.seconds))
+                except (InputError, OSError) as exc:  # which player's source, in the one line
+                    raise InputError(f"{seat_label(i, (args.source, args.source2)[i])}: {exc}") from None
         except BaseException:
             for source in opened:
                 source.close()

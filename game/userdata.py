@@ -22,9 +22,10 @@ def user_templates_path() -> Path:
 DEFAULT_PROFILE = "default"
 
 
-def profile_templates_path(profile: str | None = None) -> Path:
+def profile_templates_path(profile: str | None = None, option: str = "--profile") -> Path:
     """The templates of a named player (`train --profile NAME`, `play --profile NAME`). The
-    default profile is the file `train` has always saved, so existing sets keep working."""
+    default profile is the file `train` has always saved, so existing sets keep working. A bad
+    name is an error naming `option` (player 2's is --profile2)."""
     import re
 
     from engine.errors import InputError
@@ -32,5 +33,5 @@ def profile_templates_path(profile: str | None = None) -> Path:
     if profile is None or profile == DEFAULT_PROFILE:
         return user_templates_path()
     if not re.fullmatch(r"[A-Za-z0-9][A-Za-z0-9_-]{0,39}", profile):
-        raise InputError(f"--profile {profile!r}: letters, digits, _ and - only (up to 40)")
+        raise InputError(f"{option} {profile!r}: letters, digits, _ and - only (up to 40)")
     return data_dir() / "profiles" / f"{profile}.npz"

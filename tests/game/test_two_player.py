@@ -263,3 +263,53 @@ def test_the_side_on_camera_keeps_player_one_on_the_left_from_every_side() -> No
     assert side_on_heading(*line(30), current=0) == 0
     assert side_on_heading(*line(35), current=0) == 1
     assert side_on_heading(*line(30)) == 1  # without a current view: the nearest
+
+
+def test_player_two_profile_errors_and_notes_name_profile2(capsys) -> None:
+    from tools.cli import main
+
+    assert main(["play", "--players", "2", "--headless", "--frames", "1", "--source", "keyboard://",
+                 "--source2", "keyboard://", "--profile2", "../x"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--profile2 '../x'" in err[0]
+    assert main(["play", "--players", "2", "--headless", "--frames", "1", "--size", "320x180", "--source", "keyboard://",
+                 "--source2", "keyboard://", "--profile2", "nobody"]) == 0
+    note = [line for line in capsys.readouterr().err.splitlines() if "nobody" in line]
+    assert len(note) == 1 and "player 2" in note[0]
+
+
+def test_a_source_that_does_not_open_says_which_player(capsys, tmp_path) -> None:
+    from tools.cli import main
+
+    missing = tmp_path / "missing.csv"
+    for option, url in (("--source2", f"replay://{missing}"), ("--source2", "bogus://x"), ("--source", f"wiimote-emu://{missing}")):
+        other = "--source" if option == "--source2" else "--source2"
+        assert main(["play", "--players", "2", "--headless", "--frames", "1", other, "keyboard://", option, url]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        player = 2 if option == "--source2" else 1
+        assert len(err) == 1 and f"player {player} ({option})" in err[0], err
+
+
+def test_the_same_device_spelled_two_ways_is_refused(tmp_path) -> None:
+    from engine.errors import InputError
+
+    port = tmp_path / "ttyACM0"
+    port.touch()
+    (tmp_path / "link").symlink_to(port)
+    for a, b in ((f"serial://{port}", f"serial://{port}?baud=230400"),  # another speed, the same port
+                 (f"serial://{tmp_path / 'link'}", f"serial://{port}"),  # a link to it (bridge emulate --link)
+                 ("wiimote:///dev/hidraw3", "wiimote:///dev/hidraw3?player=2")):
+        with pytest.raises(InputError, match="same device"):
+            source_urls(a, b, demo=False, seed=0)
+    other = tmp_path / "ttyACM1"
+    urls, _ = source_urls(f"serial://{port}", f"serial://{other}", demo=False, seed=0)
+    assert urls == [f"serial://{port}", f"serial://{other}"]
+
+
+def test_source_wiimote_without_source2_and_no_wiimote_is_no_traceback() -> None:
+    # `play --players 2 --source wiimote://` with no remote paired: an AttributeError on the
+    # missing --source2 before; now player 2 takes the keyboard and opening wiimote:// says why
+    urls, notes = source_urls("wiimote://", None, demo=False, seed=0, wiimotes=lambda: [])
+    assert urls[0] == "wiimote://" and urls[1].startswith("keyboard://") and "player 2" in notes[0]
+    urls, _ = source_urls(None, "wiimote://", demo=False, seed=0, wiimotes=lambda: [])
+    assert urls[0].startswith("keyboard://") and urls[1] == "wiimote://"
