@@ -52,6 +52,7 @@ class TemplateSet:
         self._base_copy = copies[order]  # the trained order's copies; adopted templates are none
         self._has_copies = bool(copies.any())
         self._is_copy, self._not_copy = self._base_copy, ~self._base_copy
+        self._fit_bar: tuple[np.ndarray | None, np.ndarray | None] = (None, None)  # _first_usable's, per thresholds array
         self._cut_gate = self.gate.noise_g  # the gate the trained templates are cut at (see _recut)
         # each template's activity and features, whole: a cut is a slice of them (see _recut)
         acts = [activity(s, g) for s, g in zip(given.signals, given.gravity, strict=True)]
@@ -133,10 +134,12 @@ class TemplateSet:
         threshold is inf, and the copies stay out of the first decision)."""
         if not self._has_copies:
             return scores
-        bar = self.thresholds
-        if self.reject and np.isinf(bar).any() and np.isfinite(bar).any():
-            bar = np.where(np.isinf(bar), bar[np.isfinite(bar)].max(), bar)
-        fits = scores <= bar
+        if self._fit_bar[0] is not self.thresholds:  # thresholds are a new array whenever they change
+            bar = self.thresholds
+            if self.reject and np.isinf(bar).any() and np.isfinite(bar).any():
+                bar = np.where(np.isinf(bar), bar[np.isfinite(bar)].max(), bar)
+            self._fit_bar = (self.thresholds, bar)
+        fits = scores <= self._fit_bar[1]
         fits &= self._not_copy
         return np.where(self._is_copy, np.inf, scores) if fits.any() else scores
 
