@@ -305,7 +305,7 @@ class TrainingScreen:
         elif tr.done:
             title, sub = "ALL DONE", (f"templates saved to {self.saved_to}" if self.saved_to else "building templates...")
         elif tr.phase == SHOW:
-            title, sub = action_label(tr.action).upper(), "watch the move, then copy it"
+            title, sub = action_label(tr.action).upper(), "watch the move, then throw it as you will in a fight"
         elif tr.phase == READY:
             secs = int(np.ceil((READY_STEPS - tr.phase_step) / HZ))
             title, sub = f"GET READY {secs}", f"trial {tr.trial + 1} of {tr.trials}: hold your guard still"
