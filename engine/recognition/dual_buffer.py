@@ -79,7 +79,8 @@ Per 60 Hz frame (`push`):
 
 Events are dicts with the keys of docs/formats.md ("event", "action", "frame", "t" when the caller
 passes it, "from_frame" on switches, "score"), plus estimates of the motion's speed (m/s),
-direction (unit vector in the first sensor's frame) and peak acceleration (g).
+direction (unit vector at the peak speed, in the frame of the sensor that reached it) and peak
+gravity-removed acceleration (g).
 """
 
 from __future__ import annotations
