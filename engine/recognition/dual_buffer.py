@@ -93,6 +93,7 @@ from engine.recognition.config import (
     RecognizerConfig,
     RecognizerConfigError,
     check_settings,
+    config_or_defaults,
 )
 from engine.recognition.events import RecognizerEvent
 from engine.recognition.features import FrameFeatures
@@ -200,7 +201,7 @@ class DualBufferRecognizer(TemplateSet, DecisionRules, Adaptation):
     @classmethod
     def from_config(cls, templates: Templates, config: RecognizerConfig | None = None) -> DualBufferRecognizer:
         """The recognizer `config` (None: the defaults) describes: its fields passed as keywords."""
-        return cls(templates, **(config or RecognizerConfig()).kwargs())
+        return cls(templates, **config_or_defaults(config).kwargs())
 
     # -- state -------------------------------------------------------------------------------
     def reset(self) -> None:
