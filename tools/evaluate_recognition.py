@@ -19,8 +19,9 @@ onset (trials) or its first labelled frame (streams).
 
 Two kinds of input: isolated trials (rest padded before and after, as a player starts from
 the guard) and labelled streams (every labelled interval is one motion; starts outside any
-interval are false starts). In streams a simulated character plays each started action for
-its template's length and then calls `character_finished()`, as the game does.
+interval are false starts). In streams a simulated character plays each started action's clip,
+`clip_frames` (CLIP_FRAMES, 24) from its start (a switch continues the clip at n_p), and then calls
+`character_finished()`, as the game does; clip_frames=0: no character.
 """
 
 from __future__ import annotations

@@ -112,8 +112,12 @@ def _cli_settings(args: argparse.Namespace) -> dict:
 def _rec_kwargs(args: argparse.Namespace, saved: dict | None = None) -> dict:
     """DualBufferRecognizer keywords for evaluate's sweeps (without `main`, which --mains sets):
     the defaults, `saved` (the --templates file's settings), then the command line. evaluate
-    does not read the user's config file: its figures must not depend on a file on this machine."""
-    kwargs = layered(saved or {}, _cli_settings(args), where=["templates", "command line"]).kwargs()
+    does not read the user's config file: its figures must not depend on a file on this machine.
+    `--recognizer main=...` is refused: it would be dropped here, silently."""
+    cli = _cli_settings(args)
+    if "main" in cli:
+        raise InputError(f"--recognizer main={cli['main']}: evaluate sets main with --mains (e.g. --mains {cli['main']})")
+    kwargs = layered(saved or {}, cli, where=["templates", "command line"]).kwargs()
     del kwargs["main"]
     return kwargs
 

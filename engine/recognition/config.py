@@ -223,6 +223,17 @@ def parse_assignments(texts: Iterable[str], where: str = "--recognizer") -> dict
     return out
 
 
+def config_or_defaults(config: RecognizerConfig | None) -> RecognizerConfig:
+    """`DualBufferRecognizer.from_config`'s argument: a RecognizerConfig, or None for the defaults.
+    A dict of settings (e.g. `Templates.recognizer`) is refused naming the way to make one."""
+    if config is None:
+        return RecognizerConfig()
+    if not isinstance(config, RecognizerConfig):
+        raise TypeError(f"from_config takes a RecognizerConfig or None, not {type(config).__name__}: "
+                        "for a dict of settings, RecognizerConfig(**settings)")
+    return config
+
+
 def layered(*layers: Mapping[str, object], where: Iterable[str] = ()) -> RecognizerConfig:
     """The defaults with each layer's settings set in turn (later layers win): e.g. the
     templates' saved settings, then the config file's, then the command line's. `where`

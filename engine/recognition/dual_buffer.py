@@ -79,7 +79,8 @@ Per 60 Hz frame (`push`):
 
 Events are dicts with the keys of docs/formats.md ("event", "action", "frame", "t" when the caller
 passes it, "from_frame" on switches, "score"), plus estimates of the motion's speed (m/s),
-direction (unit vector in the first sensor's frame) and peak acceleration (g).
+direction (unit vector at the peak speed, in the frame of the sensor that reached it) and peak
+gravity-removed acceleration (g).
 """
 
 from __future__ import annotations
@@ -92,6 +93,7 @@ from engine.recognition.config import (
     RecognizerConfig,
     RecognizerConfigError,
     check_settings,
+    config_or_defaults,
 )
 from engine.recognition.events import RecognizerEvent
 from engine.recognition.features import FrameFeatures
@@ -199,7 +201,7 @@ class DualBufferRecognizer(TemplateSet, DecisionRules, Adaptation):
     @classmethod
     def from_config(cls, templates: Templates, config: RecognizerConfig | None = None) -> DualBufferRecognizer:
         """The recognizer `config` (None: the defaults) describes: its fields passed as keywords."""
-        return cls(templates, **(config or RecognizerConfig()).kwargs())
+        return cls(templates, **config_or_defaults(config).kwargs())
 
     # -- state -------------------------------------------------------------------------------
     def reset(self) -> None:

@@ -285,6 +285,16 @@ def test_evaluate_takes_recognizer_settings_like_its_flags(tmp_path, trials_dir,
     assert "unknown recognizer setting 'nope'" in capsys.readouterr().err
 
 
+def test_evaluate_refuses_recognizer_main_which_mains_sets(trials_dir, capsys):
+    """`--recognizer main=8` was silently dropped (the sweep ran main 1-12, or --mains): it is refused
+    with one line naming --mains, as recognize refuses --main with --recognizer main=..."""
+    for options in (["--recognizer", "main=8"], ["--recognizer", "main=auto", "--mains", "6"]):
+        assert main(["evaluate", str(trials_dir), "--train", str(trials_dir), "--json", *options]) == 2
+        out, err = capsys.readouterr()
+        assert out == "" and len(err.strip().splitlines()) == 1
+        assert "--mains" in err and "main=" in err
+
+
 def single_kind_recording(
     rng: np.random.Generator, label: str, axis: int, guard: np.ndarray, reps: int, rest: int, sigma: float, still: int = 0
 ) -> tuple[np.ndarray, list[str]]:

@@ -93,6 +93,15 @@ def test_from_config_none_is_the_defaults(session):
     assert events(DualBufferRecognizer.from_config(templates), frames[:900]) == events(DualBufferRecognizer(templates), frames[:900])
 
 
+def test_from_config_refuses_a_dict_with_a_type_error_naming_the_fix(session):
+    # a dict (say Templates.recognizer, the settings saved with templates) was taken while empty
+    # and failed with "AttributeError: 'dict' object has no attribute 'kwargs'" once not
+    templates, _ = session
+    for settings in ({"noise_g": 0.5}, {}):
+        with pytest.raises(TypeError, match=r"RecognizerConfig\(\*\*settings\)"):
+            DualBufferRecognizer.from_config(templates, settings)  # type: ignore[arg-type]
+
+
 def test_settings_change_the_events(session):
     # the test above could pass with a config that is ignored; this one could not
     templates, frames = session
