@@ -223,14 +223,17 @@ def parse_assignments(texts: Iterable[str], where: str = "--recognizer") -> dict
     return out
 
 
-def config_or_defaults(config: RecognizerConfig | None) -> RecognizerConfig:
-    """`DualBufferRecognizer.from_config`'s argument: a RecognizerConfig, or None for the defaults.
-    A dict of settings (e.g. `Templates.recognizer`) is refused naming the way to make one."""
+def config_or_defaults(config: RecognizerConfig | Mapping[str, object] | None) -> RecognizerConfig:
+    """`DualBufferRecognizer.from_config`'s argument: a RecognizerConfig; None for the defaults; or
+    a mapping of settings (e.g. `Templates.recognizer`, the settings saved with templates), checked
+    and set over the defaults as `layered` does (a bad one is a RecognizerConfigError naming it).
+    Anything else is a TypeError."""
     if config is None:
         return RecognizerConfig()
+    if isinstance(config, Mapping):
+        return layered(config, where=["from_config settings"])
     if not isinstance(config, RecognizerConfig):
-        raise TypeError(f"from_config takes a RecognizerConfig or None, not {type(config).__name__}: "
-                        "for a dict of settings, RecognizerConfig(**settings)")
+        raise TypeError(f"from_config takes a RecognizerConfig, a mapping of settings or None, not {type(config).__name__}")
     return config
 
 

@@ -85,6 +85,8 @@ gravity-removed acceleration (g).
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+
 import numpy as np
 
 from engine.recognition.adaptation import ADAPT_MARGIN, ADAPT_PER_ACTION, Adaptation
@@ -199,8 +201,8 @@ class DualBufferRecognizer(TemplateSet, DecisionRules, Adaptation):
         self.reset()
 
     @classmethod
-    def from_config(cls, templates: Templates, config: RecognizerConfig | None = None) -> DualBufferRecognizer:
-        """The recognizer `config` (None: the defaults) describes: its fields passed as keywords."""
+    def from_config(cls, templates: Templates, config: RecognizerConfig | Mapping[str, object] | None = None) -> DualBufferRecognizer:
+        """The recognizer `config` describes (None: the defaults; a mapping: settings over them)."""
         return cls(templates, **config_or_defaults(config).kwargs())
 
     # -- state -------------------------------------------------------------------------------

@@ -93,13 +93,19 @@ def test_from_config_none_is_the_defaults(session):
     assert events(DualBufferRecognizer.from_config(templates), frames[:900]) == events(DualBufferRecognizer(templates), frames[:900])
 
 
-def test_from_config_refuses_a_dict_with_a_type_error_naming_the_fix(session):
+def test_from_config_takes_a_mapping_of_settings(session):
     # a dict (say Templates.recognizer, the settings saved with templates) was taken while empty
-    # and failed with "AttributeError: 'dict' object has no attribute 'kwargs'" once not
-    templates, _ = session
-    for settings in ({"noise_g": 0.5}, {}):
-        with pytest.raises(TypeError, match=r"RecognizerConfig\(\*\*settings\)"):
-            DualBufferRecognizer.from_config(templates, settings)  # type: ignore[arg-type]
+    # and failed with "AttributeError: 'dict' object has no attribute 'kwargs'" once not: it is
+    # the same as the RecognizerConfig of those settings, and a bad one names itself
+    templates, frames = session
+    a = DualBufferRecognizer.from_config(templates, {"noise_g": 0.5, "main": 4})
+    b = DualBufferRecognizer.from_config(templates, RecognizerConfig(noise_g=0.5, main=4))
+    assert events(a, frames[:900]) == events(b, frames[:900])
+    assert events(DualBufferRecognizer.from_config(templates, {}), frames[:900]) == events(DualBufferRecognizer(templates), frames[:900])
+    with pytest.raises(RecognizerConfigError, match="from_config settings.*gate"):
+        DualBufferRecognizer.from_config(templates, {"gate": 0.5})
+    with pytest.raises(TypeError, match="mapping of settings"):
+        DualBufferRecognizer.from_config(templates, [("noise_g", 0.5)])  # type: ignore[arg-type]
 
 
 def test_settings_change_the_events(session):
