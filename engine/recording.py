@@ -296,11 +296,13 @@ def write_recording(path: str | os.PathLike, rec: Recording) -> None:
 class RecordingWriter:
     """Streams samples to a recording CSV.
 
-    The file is line-buffered, so every row reaches the operating system as it is written: a
-    process killed mid-recording (even by SIGKILL) loses nothing written. On top of that the
-    file is fsynced at least every FLUSH_EVERY_S while rows come in (from `write`, or from
-    `flush_if_due`, which a recording loop calls when a source is silent), so a crash of the
-    whole machine loses at most the last 0.25 s."""
+    The file is unbuffered and each row is one write, so every row reaches the operating system
+    as it is written: a process killed mid-recording (even by SIGKILL) loses nothing written. On
+    top of that the file is fsynced at least every FLUSH_EVERY_S while rows come in (from
+    `write`, or from `flush_if_due`, which a recording loop calls when a source is silent), so a
+    crash of the whole machine loses at most the last 0.25 s. A write that fails part-way (a full
+    disk, a file size limit) is cut back to the last whole row before the error is raised: a
+    partial last row made the whole file unreadable (`N fields, header has M`)."""
 
     def __init__(
         self,
@@ -313,13 +315,11 @@ class RecordingWriter:
         self.sensors = sensors
         self.t0 = t0  # recording time = host time - t0; the first sample sets it when None
         try:
-            self._file = open(self.path, "w", encoding="utf-8", errors=UNENCODABLE, newline="", buffering=1)
+            self._file = open(self.path, "wb", buffering=0)
         except OSError as exc:
             raise RecordingError(self.path, None, f"cannot write: {exc.strerror}") from None
-        try:
-            self._file.write(_file_head(sensors, meta or {}))
-        except OSError as exc:
-            raise self._cannot_write(exc) from None
+        self._size = 0  # bytes of whole lines in the file
+        self._put(_file_head(sensors, meta or {}))
         self._last_flush = time.monotonic()
         self.rows = 0
         self._dirty = False
@@ -332,10 +332,7 @@ class RecordingWriter:
         if len(accel) < self.sensors:  # a short row would make the file unreadable: the caller
             # starts a new file for a new sensor count (tools/record.py)
             raise ValueError(f"{self.path}: a sample with {len(accel)} sensor(s) in a file of {self.sensors}")
-        try:
-            self._file.write(_format_row(sample.t - self.t0, accel, label))
-        except OSError as exc:
-            raise self._cannot_write(exc) from None
+        self._put(_format_row(sample.t - self.t0, accel, label))
         self.rows += 1
         self._dirty = True
         self.flush_if_due()
@@ -345,9 +342,24 @@ class RecordingWriter:
         if self._dirty and time.monotonic() - self._last_flush >= FLUSH_EVERY_S:
             self._flush()
 
+    def _put(self, text: str) -> None:
+        """Write whole lines, or none: a write that fails part-way is cut back to the lines before."""
+        data = memoryview(text.encode("utf-8", UNENCODABLE))
+        size = self._size + len(data)
+        try:
+            while data:
+                data = data[self._file.write(data):]  # a raw write may take only part
+        except OSError as exc:
+            try:
+                os.ftruncate(self._file.fileno(), self._size)
+                self._file.seek(self._size)
+            except OSError:
+                pass  # the error below still names the file; a reader then names the bad line
+            raise self._cannot_write(exc) from None
+        self._size = size
+
     def _flush(self) -> None:
         try:
-            self._file.flush()
             os.fsync(self._file.fileno())
         except OSError as exc:
             raise self._cannot_write(exc) from None

@@ -48,6 +48,7 @@ class Case:
     term_after: float | None = None  # send SIGTERM this many seconds in (expect="term": it must end the run)
     names: str | None = None  # the refusal's line must name this (a file whose error named none)
     fsize_kb: int | None = None  # no file over this size can be written (a full disk), SIGXFSZ ignored
+    reads_back: str | None = None  # a recording the run leaves behind that must still read (cut short, not broken)
 
 
 @dataclass
@@ -554,6 +555,10 @@ def build_cases(d: Path, big_mb: int, bomb_gb: float = 1.5) -> list[Case]:
                              ("profile-plot", ["profile", _write(d, "trace/ok.json", '{"traceEvents": [{"ph": "X", "name": "frame", "ts": 0, "dur": 9}]}'),
                                                "--plot"], out / "plot.png")):
         cases.append(Case(f"full/{name}", q + argv + [str(path)], names=str(path), fsize_kb=8))
+    # a recording cut short by a full disk: it ended in half a row, and no reader took the file
+    full_rec = str(out / "full.csv")
+    cases.append(Case("full/record", q + ["record", "--source", f"replay://{good_rec}?speed=1000&loop=1", "--seconds", "10",
+                                          "-o", full_rec], names=full_rec, fsize_kb=4, reads_back=full_rec))
     # SDL turned SIGTERM into a quit event nothing in a soak reads: only SIGKILL ended it
     cases.append(Case("signal/soak-sigterm", q + ["soak", "--minutes", "10", "--quiet"], expect="term", term_after=8.0))
     if big_mb:  # ~12,000 empty members a MB: zipfile read them all (6.7x the file) before the count was checked
@@ -957,7 +962,19 @@ def judge(o: Outcome, max_rss_mb: float) -> str:
     # (status lines such as "no Wiimote found: playing from the keyboard" may come before it)
     if not (lines and lines[-1].startswith("quickjab")):
         return "no-message"
-    return "unnamed" if o.case.names and o.case.names not in lines[-1] else "ok"
+    if o.case.names and o.case.names not in lines[-1]:
+        return "unnamed"
+    return "unreadable-output" if o.case.reads_back and not _reads_back(o.case.reads_back) else "ok"
+
+
+def _reads_back(path: str) -> bool:
+    from engine.recording import RecordingError, read_recording
+
+    try:
+        read_recording(path)
+    except RecordingError:
+        return False
+    return True
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -21,7 +21,7 @@ SAMPLE = [  # one or two per input kind
     "config/wrong-type/play", "config/fifo/recognize", "config/dev-zero/play", "tpl/recognizer-unknown/recognize", "arg/play-recognizer-unknown",
     "rec/accel-1e300/recognize", "tpl/signals-1e200/evaluate", "eval/pp-unlabelled", "eval/stream-all-label/folds",
     "eval/trials-huge/build", "eval/accel-1e306/bridge-emulate",
-    "same/recognize-o-recording", "full/play-screenshot", "url/bracket-missing/record", "actions/not-object/list",
+    "same/recognize-o-recording", "full/play-screenshot", "full/record", "url/bracket-missing/record", "actions/not-object/list",
     "arg/record-o-dev-full", "ok/bvh-export-guard", "ok/evaluate-still-trial", "eval/uw-nod1",
 ]
 

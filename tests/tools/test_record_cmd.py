@@ -1,10 +1,19 @@
-"""`quickjab record` with a source that never connects: a clear error and exit 2, no file."""
+"""`quickjab record` with a source that never connects: a clear error and exit 2, no file; a
+recording cut short by a full disk still reads back."""
 
 from __future__ import annotations
 
+import os
+import resource
+import subprocess
+import sys
 import time
+from pathlib import Path
 
+from engine.recording import read_recording
 from tools.cli import main
+
+REPO = Path(__file__).resolve().parents[2]
 
 
 def test_record_from_a_missing_serial_port_exits_2(tmp_path, capsys):
@@ -32,3 +41,29 @@ def test_record_with_seconds_shorter_than_the_timeout_still_fails(tmp_path, caps
     rc = main(["record", "--source", f"serial://{tmp_path / 'nothing'}", "-o", str(tmp_path / "o.csv"), "--seconds", "0.2"])
     assert rc == 2
     assert "never connected" in capsys.readouterr().err
+
+
+def test_a_full_disk_leaves_a_recording_that_reads_to_its_last_whole_row(tmp_path):
+    """A write that fails part-way (a full disk; here a file size limit, EFBIG) left half a row at
+    the end, and the whole file was unreadable (`N fields, header has M`): the crash lost every
+    row, not the last second. The writer cuts the file back to its last whole row."""
+    src = tmp_path / "long.csv"
+    rows = "".join(f"{i / 200:.6f},0.0123,-0.0456,1.0078,0.0011,-0.0222,0.9988,\n" for i in range(3000))
+    src.write_text("# rate_hz: 200\nt,rx,ry,rz,lx,ly,lz,label\n" + rows)
+    out = tmp_path / "out.csv"
+    limit = 20_000  # bytes: not a multiple of any row's length
+
+    def small_files() -> None:  # Python ignores SIGXFSZ: a write past the limit fails with EFBIG
+        resource.setrlimit(resource.RLIMIT_FSIZE, (limit, resource.RLIM_INFINITY))
+
+    proc = subprocess.run(
+        [sys.executable, "-m", "tools.cli", "record", "--source", f"replay://{src}?speed=50", "-o", str(out), "--seconds", "20"],
+        cwd=REPO, env={**os.environ, "PYTHONPATH": str(REPO)}, capture_output=True, text=True, timeout=60,
+        preexec_fn=small_files,
+    )
+    assert proc.returncode == 2, proc.stderr
+    assert "Traceback" not in proc.stderr and f"{out}: cannot write" in proc.stderr
+    data = out.read_bytes()
+    assert 0 < len(data) <= limit and data.endswith(b"\n")
+    rec = read_recording(out)  # raised RecordingError: a partial last row
+    assert len(rec) > 100 and rec.sensors == 2
