@@ -32,8 +32,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     b.add_argument("--seed", type=arguments.seed, default=0, help="random seed (the build is deterministic for it)")
     b.add_argument("--states", type=arguments.int_range(10, 1_000_000), default=60000, help="states to keep (most visited cells)")
     b.add_argument("--bouts", type=arguments.int_range(1, 65_536), default=None, help="sampling bouts run at once")
-    b.add_argument("--opponent-max", type=arguments.positive_float, default=None,
-                   help="1 = min-max (opponent's best response), 0 = its expectation; blends between")
+    b.add_argument("--opponent-max", type=arguments.float_range(0.0, 1.0), default=None,
+                   help="1 = min-max (opponent's best response), 0 = its expectation; blends between (default 0.5)")
     b.add_argument("--quiet", action="store_true", help="no progress lines")
     b.set_defaults(func=cmd_build)
 

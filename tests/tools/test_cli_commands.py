@@ -73,6 +73,22 @@ def test_a_bad_argument_is_one_line_and_exit_2(capsys, argv):
     assert err.count("\n") == 1 and err.startswith("quickjab") and "usage" not in err, err
 
 
+@pytest.mark.parametrize("value", ["0", "0.5", "1"])
+def test_graph_build_takes_every_opponent_max_its_help_names(value):
+    """docs/interaction_graph.md: 1 = pure min-max, 0 = a random opponent (its expectation),
+    blends between; 0 rebuilds that graph, so the parser must take it."""
+    args = build_parser("graph").parse_args(["graph", "build", "-o", "g.npz", "--opponent-max", value])
+    assert args.opponent_max == float(value)
+
+
+@pytest.mark.parametrize("value", ["-0.1", "1.5", "nan"])
+def test_graph_build_refuses_an_opponent_max_outside_0_to_1(capsys, value):
+    with pytest.raises(SystemExit) as exit_:  # the parser alone: a value it took would not build a graph here
+        build_parser("graph").parse_args(["graph", "build", "-o", "g.npz", "--opponent-max", value])
+    assert exit_.value.code == 2
+    assert "--opponent-max" in capsys.readouterr().err
+
+
 def test_no_command_prints_help(capsys):
     assert main([]) == 0
     assert "COMMAND" in capsys.readouterr().out
