@@ -8,6 +8,18 @@ import json
 import sys
 
 
+def no_device_hint(url: str) -> str:
+    """What to check when `url` never connected (`record`, `scope`): a Wiimote is paired and woken,
+    a serial board plugged in; the advice for the device the URL names."""
+    scheme = url.split(":", 1)[0].lower()
+    if scheme == "wiimote":
+        return ("check that the Wiimote is paired and awake (press 1 and 2; `quickjab devices` lists the ones found; "
+                "docs/wiimote.md)")
+    if scheme == "serial":
+        return "check the port (`quickjab devices`) and that the board is plugged in"
+    return "check that the device is connected (`quickjab devices` lists Wiimotes and serial ports)"
+
+
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("devices", help="list Wiimotes and serial ports", description=__doc__)
     p.add_argument("--json", action="store_true", help="print one JSON object instead of text")

@@ -13,6 +13,7 @@ from engine.errors import InputError, refuse_overwriting
 from engine.recording import RecordingWriter
 from engine.sensors import SourceState, open_source
 from engine.sensors.source import url_file
+from tools.devices import no_device_hint
 
 CONNECT_TIMEOUT_S = 3.0  # a source that never connects (no port, no board) is an error by then
 RATE_PROBE_S = 0.5  # without an announced rate, the rate is measured over the first samples
@@ -107,7 +108,7 @@ def _poll_into(parts: _RecordingParts, seconds: float | None, poll_s: float, con
             break
         if not parts.connected and time.perf_counter() - start >= connect_timeout:
             raise InputError(f"{url}: no device connected after {connect_timeout:g} s (source {source.state.value}); "
-                             "check the port (`quickjab devices`) and that the board is plugged in")
+                             + no_device_hint(url))
         time.sleep(poll_s)
 
 

@@ -27,6 +27,7 @@ from engine.sensors import Sample, Source, SourceError, SourceState, open_source
 from engine.sensors.rate import RateMeter
 from engine.state_hash import state_hash
 from engine.trace import write_chrome_trace
+from tools.devices import no_device_hint
 
 AXIS_COLORS = ((235, 85, 85), (90, 205, 90), (95, 145, 255))  # x, y, z
 BACKGROUND = (16, 17, 22)
@@ -374,7 +375,7 @@ def run(args: argparse.Namespace) -> int:
                       connect_timeout=args.connect_timeout)
     if scope.timed_out:
         raise InputError(f"{args.source}: no device connected after {args.connect_timeout:g} s "
-                         f"(source {scope.final_state.value}); check the port (`quickjab devices`) and that the board is plugged in")
+                         f"(source {scope.final_state.value}); {no_device_hint(args.source)}")
     print(f"scope: {scope.samples} samples from {args.source} in {scope.loop.frame_index} frames, "
           f"source {scope.final_state.value}", file=sys.stderr)
     if args.headless:  # reproducible: the same source and frame count give the same hash

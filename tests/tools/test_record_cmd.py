@@ -37,6 +37,16 @@ def test_record_from_serial_auto_without_a_board_exits_2(tmp_path, capsys):
     assert not out.exists()
 
 
+def test_a_wiimote_that_never_connects_gets_wiimote_advice(tmp_path, capsys):
+    # the advice was the serial board's ("check the port ... the board is plugged in") for any source
+    out = tmp_path / "out.csv"
+    rc = main(["record", "--source", f"wiimote://{tmp_path / 'no-such-hidraw'}?wait=1", "-o", str(out), "--connect-timeout", "0.3"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 2 and not out.exists()
+    assert "no device connected after 0.3 s" in err[-1] and "Wiimote is paired" in err[-1]
+    assert "board" not in err[-1]
+
+
 def test_record_with_seconds_shorter_than_the_timeout_still_fails(tmp_path, capsys):
     rc = main(["record", "--source", f"serial://{tmp_path / 'nothing'}", "-o", str(tmp_path / "o.csv"), "--seconds", "0.2"])
     assert rc == 2
