@@ -341,9 +341,9 @@ class Hud:
                 title = f"{st.match.result} - {'YOU WIN' if st.match.winner == 0 else 'CPU WINS'}"
             self._banner(surf, title, big, (w // 2, h * 0.42))
             if not st.demo:
-                self.blit(surf, "Enter: a new match", mid, (w // 2, h * 0.42 + 60 * u), DIM, "midtop")
+                self.menu_line(surf, "Enter: a new match", mid, (w // 2, h * 0.42 + 60 * u), DIM, u)
                 if st.difficulty:
-                    self.blit(surf, f"D: difficulty {st.difficulty}", int(30 * u), (w // 2, h * 0.42 + 104 * u), DIM, "midtop")
+                    self.menu_line(surf, f"D: difficulty {st.difficulty}", int(30 * u), (w // 2, h * 0.42 + 104 * u), DIM, u)
         elif st.match.phase == "count" and st.match.down is not None:
             # left of the ring's centre line: in the middle of the screen it sat over the far
             # corner post, white on white
@@ -352,11 +352,19 @@ class Hud:
             self.blit(surf, "KNOCKDOWN", mid, (cx, h * 0.40 + 70 * u), SWITCH_COLOR, "midtop")
         elif st.match.paused and not st.disconnected:
             self._banner(surf, "PAUSED", big, (w // 2, h * 0.42))
-            self.blit(surf, "Esc or Home to resume", mid, (w // 2, h * 0.42 + 56 * u), DIM, "midtop")
+            self.menu_line(surf, "Esc or Home to resume", mid, (w // 2, h * 0.42 + 56 * u), DIM, u)
             if st.difficulty:
-                self.blit(surf, f"D: difficulty {st.difficulty}", mid, (w // 2, h * 0.42 + 100 * u), SWITCH_COLOR, "midtop")
+                self.menu_line(surf, f"D: difficulty {st.difficulty}", mid, (w // 2, h * 0.42 + 100 * u), SWITCH_COLOR, u)
         elif st.message and st.message_age < 90:
             self._banner(surf, st.message, big, (w // 2, h * 0.42))
+
+    def menu_line(self, surf: pygame.Surface, text: str, size: int, midtop, color, u: float) -> pygame.Rect:
+        """A line under a banner (Enter: a new match, D: difficulty...) on a dark ground of its
+        own: drawn straight on the ring, its grey was the canvas's grey (contrast 1.0)."""
+        img = self.text.render(text, size, color)
+        ground = img.get_rect(midtop=(int(midtop[0]), int(midtop[1]))).inflate(int(16 * u), int(6 * u))
+        surf.blit(self._translucent(ground.size, (8, 8, 12, 200)), ground)
+        return self.blit(surf, text, size, midtop, color, "midtop")
 
     def _banner(self, surf: pygame.Surface, text: str, size: int, center, alpha: int = 150) -> pygame.Rect:
         img = self.text.render(text, size, TEXT)

@@ -113,4 +113,4 @@ class TwoPlayerHud(Hud):
         title = "DRAW" if st.match.winner is None else f"{st.match.result} - {st.names[st.match.winner]} WINS"
         self._banner(surf, title, int(96 * u), (w // 2, h * 0.42))
         if not st.demo:
-            self.blit(surf, "Enter: a new match", int(40 * u), (w // 2, h * 0.42 + 60 * u), TEXT, "midtop")
+            self.menu_line(surf, "Enter: a new match", int(40 * u), (w // 2, h * 0.42 + 60 * u), TEXT, u)

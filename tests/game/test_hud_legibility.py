@@ -25,14 +25,16 @@ def scene():
             local_to_world(lib["guard"].posture(0), (0.0, 0.9, np.pi))]
 
 
-def drawn_texts(hud: Hud, monkeypatch) -> list[tuple[str, pygame.Rect]]:
-    """Every string the HUD blits, with where it went."""
-    seen: list[tuple[str, pygame.Rect]] = []
+def drawn_texts(hud: Hud, monkeypatch) -> list[tuple[str, pygame.Rect, tuple]]:
+    """Every string the HUD blits, with where it went and its colour."""
+    from game.hud import TEXT
+
+    seen: list[tuple[str, pygame.Rect, tuple]] = []
     blit = hud.blit
 
-    def record(surf, text, size, pos, color=None, anchor="topleft"):
-        rect = blit(surf, text, size, pos, color, anchor) if color is not None else blit(surf, text, size, pos, anchor=anchor)
-        seen.append((text, rect))
+    def record(surf, text, size, pos, color=TEXT, anchor="topleft"):
+        rect = blit(surf, text, size, pos, color, anchor)
+        seen.append((text, rect, tuple(color)))
         return rect
 
     monkeypatch.setattr(hud, "blit", record)
@@ -53,7 +55,48 @@ def test_the_lost_controller_message_stays_inside_its_box(size, players, monkeyp
     texts = drawn_texts(hud, monkeypatch)
     hud.draw(surf, st)
     box = hud.lost_box
-    inside = [(t, r) for t, r in texts if r.colliderect(box)]
+    inside = [(t, r) for t, r, _ in texts if r.colliderect(box)]
     assert any(LONG_URL in t for t, _ in inside) and any("resumes" in t for t, _ in inside)
     for text, rect in inside:
         assert box.contains(rect), (text, rect, box)
+
+
+def luminance(rgb: np.ndarray) -> np.ndarray:
+    """WCAG relative luminance of sRGB pixels (..., 3) in 0-255."""
+    c = rgb.astype(float) / 255.0
+    lin = np.where(c <= 0.03928, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
+    return lin @ np.array([0.2126, 0.7152, 0.0722])
+
+
+def contrast(surf: pygame.Surface, rect: pygame.Rect, colour) -> float:
+    """The contrast ratio of `colour` against the ground under `rect` (its median pixel: the
+    letters cover the lesser part of their rectangle)."""
+    rect = rect.clip(surf.get_rect())
+    px = pygame.surfarray.array3d(surf)[rect.left:rect.right, rect.top:rect.bottom].reshape(-1, 3)
+    ground = float(np.median(luminance(px)))
+    text = float(luminance(np.array(colour)))
+    hi, lo = max(ground, text), min(ground, text)
+    return (hi + 0.05) / (lo + 0.05)
+
+
+MENU_LINES = ("Esc or Home to resume", "Enter: a new match", "D: difficulty")
+
+
+@pytest.mark.parametrize("size", [(1280, 720), (800, 450)])
+@pytest.mark.parametrize("screen", ["paused", "over", "over_two"])
+def test_menu_lines_under_a_banner_read_against_the_canvas(size, screen, monkeypatch, scene) -> None:
+    pygame.init()
+    surf = pygame.Surface(size)
+    Renderer(size).draw(surf, scene)
+    if screen == "paused":
+        hud, st = Hud(), HudState(match=MatchSnapshot(paused=True), difficulty="normal")
+    else:
+        st = HudState(match=MatchSnapshot(phase="over", winner=0, result="KO"), difficulty="normal")
+        hud = Hud() if screen == "over" else TwoPlayerHud(HudState())
+    texts = drawn_texts(hud, monkeypatch)
+    hud.draw(surf, st)
+    lines = [(t, r, c) for t, r, c in texts if t.startswith(MENU_LINES)]
+    assert len(lines) == (1 if screen == "over_two" else 2), texts
+    for text, rect, colour in lines:
+        ratio = contrast(surf, rect, colour)
+        assert ratio >= 4.5, (text, rect, ratio)  # WCAG AA for normal text
