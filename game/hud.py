@@ -128,6 +128,16 @@ def action_label(action: str) -> str:
     return name
 
 
+def result_title(result: str, winner: int | None, wins: tuple[str, str]) -> str:
+    """The banner after the last bell: "KO - YOU WIN", "CPU WINS ON POINTS", "DRAW" (not the
+    match's own word for it, "points - YOU WIN"); `wins` says each side's win."""
+    if winner is None:
+        return "DRAW"
+    if result in ("KO", "TKO"):
+        return f"{result} - {wins[winner]}"
+    return f"{wins[winner]} ON POINTS"
+
+
 class TextCache:
     def __init__(self) -> None:
         self._fonts: dict[int, pygame.font.Font] = {}
@@ -335,10 +345,7 @@ class Hud:
         w, h = surf.get_size()
         big, mid = int(96 * u), int(40 * u)
         if st.match.phase == "over":
-            if st.match.winner is None:
-                title = "DRAW"
-            else:
-                title = f"{st.match.result} - {'YOU WIN' if st.match.winner == 0 else 'CPU WINS'}"
+            title = result_title(st.match.result, st.match.winner, ("YOU WIN", "CPU WINS"))
             self._banner(surf, title, big, (w // 2, h * 0.42))
             if not st.demo:
                 self.menu_line(surf, "Enter: a new match", mid, (w // 2, h * 0.42 + 60 * u), DIM, u)

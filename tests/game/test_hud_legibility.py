@@ -100,3 +100,25 @@ def test_menu_lines_under_a_banner_read_against_the_canvas(size, screen, monkeyp
     for text, rect, colour in lines:
         ratio = contrast(surf, rect, colour)
         assert ratio >= 4.5, (text, rect, ratio)  # WCAG AA for normal text
+
+
+@pytest.mark.parametrize("players", [1, 2])
+@pytest.mark.parametrize("result, winner, title", [
+    ("points", 0, "{} ON POINTS"), ("points", 1, "{} ON POINTS"), ("KO", 0, "KO - {}"), ("TKO", 1, "TKO - {}"),
+    ("draw", None, "DRAW"),
+])
+def test_the_result_banner_reads_as_words(players, result, winner, title, monkeypatch) -> None:
+    pygame.init()
+    size = (1280, 720)
+    surf = pygame.Surface(size)
+    if players == 1:
+        hud, names = Hud(), ("YOU WIN", "CPU WINS")
+    else:
+        hud, names = TwoPlayerHud(HudState()), ("P1 WINS", "P2 WINS")
+    banners: list[str] = []
+    banner = hud._banner
+    monkeypatch.setattr(hud, "_banner", lambda s, text, *a, **k: banners.append(text) or banner(s, text, *a, **k))
+    st = HudState(names=("YOU", "CPU") if players == 1 else ("P1", "P2"),
+                  match=MatchSnapshot(phase="over", winner=winner, result=result))
+    hud.draw(surf, st)
+    assert banners == [title.format(names[winner]) if winner is not None else title]
