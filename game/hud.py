@@ -72,6 +72,7 @@ class HudState:
     action: str = ""
     score: float | None = None
     last_event: str = ""
+    rejected: bool = False  # the action shown is what a rejected motion matched best, not a recognition
     switch_age: int = MARK_STEPS
     switch_from: int = 0  # n_p: the clip frame the character continued from
     reject_age: int = MARK_STEPS
@@ -98,11 +99,15 @@ class HudState:
         if kind in ("start", "switch"):
             self.action = event.get("action", "")
             self.score = event.get("score")
+            self.rejected = False
+            if kind == "start":
+                self.reject_age = MARK_STEPS  # a new motion: the last one's REJECT mark goes out
         if kind == "switch":
             self.switch_age = 0
             self.switch_from = int(event.get("from_frame", 0) or 0)
         elif kind == "reject":
             self.reject_age = 0
+            self.rejected = True
             self.action = event.get("action", "") or "no match"
             self.score = event.get("score")
 
@@ -282,7 +287,9 @@ class Hud:
         panel = pygame.Rect(int(16 * u), h - int(170 * u), int(330 * u), int(118 * u))
         surf.blit(self._translucent(panel.size, (10, 10, 16, 170)), panel)
         x, y = panel.left + 12 * u, panel.top + 8 * u
-        self.blit(surf, "RECOGNIZED", int(18 * u), (x, y), DIM)
+        # a rejected motion keeps its name up (the closest action) under REJECTED: under
+        # RECOGNIZED it read as recognized once the REJECT mark went out
+        self.blit(surf, "REJECTED" if st.rejected else "RECOGNIZED", int(18 * u), (x, y), REJECT_COLOR if st.rejected else DIM)
         name = action_label(st.action) if st.action else "-"
         r = self.blit(surf, name, int(34 * u), (x, y + 16 * u), TEXT)
         if st.score is not None:

@@ -122,3 +122,34 @@ def test_the_result_banner_reads_as_words(players, result, winner, title, monkey
                   match=MatchSnapshot(phase="over", winner=winner, result=result))
     hud.draw(surf, st)
     assert banners == [title.format(names[winner]) if winner is not None else title]
+
+
+def test_a_rejected_motion_is_not_shown_as_recognized_once_its_mark_fades(monkeypatch) -> None:
+    pygame.init()
+    surf = pygame.Surface((1280, 720))
+    st = HudState()
+    st.mark({"event": "start", "action": "uppercut_l", "score": 0.3})
+    st.mark({"event": "reject", "action": "uppercut_l", "score": 0.09, "called_off": True})
+    for _ in range(60):
+        st.tick()  # the REJECT mark has gone out
+    hud = Hud()
+    texts = drawn_texts(hud, monkeypatch)
+    hud.draw(surf, st)
+    words = [t for t, _, _ in texts]
+    assert "uppercut L" in words  # the motion it matched best is still named ...
+    assert "RECOGNIZED" not in words and "REJECTED" in words  # ... as rejected, not recognized
+    # a reject, then the next motion starts while the REJECT mark is still lit: the mark was
+    # the last motion's, so it goes out with the new recognition beside it
+    from game.hud import REJECT_COLOR
+
+    st.mark({"event": "reject", "action": None})
+    st.tick()
+    st.mark({"event": "start", "action": "hook_r", "score": 0.2})
+    surf.fill((0, 0, 0))
+    texts.clear()
+    hud.draw(surf, st)
+    words = [t for t, _, _ in texts]
+    assert "RECOGNIZED" in words and "REJECTED" not in words and "hook R" in words
+    panel = pygame.Rect(0, 720 - 180, 360, 180)
+    red = pygame.surfarray.array3d(surf)[panel.left:panel.right, panel.top:panel.bottom].reshape(-1, 3).astype(int)
+    assert int((np.abs(red - np.array(REJECT_COLOR)).max(axis=1) <= 5).sum()) == 0  # no REJECT mark
