@@ -170,6 +170,19 @@ class TextCache:
             self._cache[key] = surf
         return surf
 
+    def fit(self, text: str, size: int, width: int, smallest: int = 12) -> tuple[str, int]:
+        """`text` at `size`, or smaller down to `smallest`, so it is at most `width` pixels wide
+        (with its shadow); still too wide, its middle gives way to "...". Returns (text, size)."""
+        font_w = lambda t, s: self.render(t, s).get_width()  # noqa: E731
+        while size > smallest and font_w(text, size) > width:
+            size -= 1
+        if font_w(text, size) > width:
+            keep = len(text)
+            while keep > 2 and font_w(f"{text[:keep // 2]}...{text[len(text) - keep // 2:]}", size) > width:
+                keep -= 2
+            text = f"{text[:keep // 2]}...{text[len(text) - keep // 2:]}"
+        return text, size
+
 
 class Hud:
     def __init__(self) -> None:
@@ -398,22 +411,9 @@ class Hud:
         self.blit(surf, "CONTROLLER DISCONNECTED", int(54 * u), (w // 2, box.top + 22 * u), TEXT, "midtop")
         # the source on a line of its own, smaller if its URL is long (a two-player seat's
         # keyboard URL ran past both sides of the box), then what happens next
-        line, size = self.fit(f"{st.source.url}: {st.source.state}", int(24 * u), box.width - int(24 * u))
+        line, size = self.text.fit(f"{st.source.url}: {st.source.state}", int(24 * u), box.width - int(24 * u))
         self.blit(surf, line, size, (w // 2, box.top + 80 * u), TEXT, "midtop")
         self.blit(surf, "the match resumes when it is back", int(24 * u), (w // 2, box.top + 108 * u), TEXT, "midtop")
-
-    def fit(self, text: str, size: int, width: int, smallest: int = 12) -> tuple[str, int]:
-        """`text` at `size`, or smaller down to `smallest`, so it is at most `width` pixels wide
-        (with its shadow); still too wide, its middle gives way to "...". Returns (text, size)."""
-        font_w = lambda t, s: self.text.render(t, s).get_width()  # noqa: E731
-        while size > smallest and font_w(text, size) > width:
-            size -= 1
-        if font_w(text, size) > width:
-            keep = len(text)
-            while keep > 2 and font_w(f"{text[:keep // 2]}...{text[len(text) - keep // 2:]}", size) > width:
-                keep -= 2
-            text = f"{text[:keep // 2]}...{text[len(text) - keep // 2:]}"
-        return text, size
 
     def _budget(self, surf: pygame.Surface, budget: FrameBudget, u: float) -> None:
         """The F3 overlay (game/hud_budget.py)."""
