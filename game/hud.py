@@ -72,6 +72,7 @@ class HudState:
     action: str = ""
     score: float | None = None
     last_event: str = ""
+    rejected: bool = False  # the action shown is what a rejected motion matched best, not a recognition
     switch_age: int = MARK_STEPS
     switch_from: int = 0  # n_p: the clip frame the character continued from
     reject_age: int = MARK_STEPS
@@ -98,11 +99,15 @@ class HudState:
         if kind in ("start", "switch"):
             self.action = event.get("action", "")
             self.score = event.get("score")
+            self.rejected = False
+            if kind == "start":
+                self.reject_age = MARK_STEPS  # a new motion: the last one's REJECT mark goes out
         if kind == "switch":
             self.switch_age = 0
             self.switch_from = int(event.get("from_frame", 0) or 0)
         elif kind == "reject":
             self.reject_age = 0
+            self.rejected = True
             self.action = event.get("action", "") or "no match"
             self.score = event.get("score")
 
@@ -126,6 +131,16 @@ def action_label(action: str) -> str:
     if name.endswith(" l") or name.endswith(" r"):
         name = name[:-1] + name[-1].upper()
     return name
+
+
+def result_title(result: str, winner: int | None, wins: tuple[str, str]) -> str:
+    """The banner after the last bell: "KO - YOU WIN", "CPU WINS ON POINTS", "DRAW" (not the
+    match's own word for it, "points - YOU WIN"); `wins` says each side's win."""
+    if winner is None:
+        return "DRAW"
+    if result in ("KO", "TKO"):
+        return f"{result} - {wins[winner]}"
+    return f"{wins[winner]} ON POINTS"
 
 
 class TextCache:
@@ -155,6 +170,19 @@ class TextCache:
             self._cache[key] = surf
         return surf
 
+    def fit(self, text: str, size: int, width: int, smallest: int = 12) -> tuple[str, int]:
+        """`text` at `size`, or smaller down to `smallest`, so it is at most `width` pixels wide
+        (with its shadow); still too wide, its middle gives way to "...". Returns (text, size)."""
+        font_w = lambda t, s: self.render(t, s).get_width()  # noqa: E731
+        while size > smallest and font_w(text, size) > width:
+            size -= 1
+        if font_w(text, size) > width:
+            keep = len(text)
+            while keep > 2 and font_w(f"{text[:keep // 2]}...{text[len(text) - keep // 2:]}", size) > width:
+                keep -= 2
+            text = f"{text[:keep // 2]}...{text[len(text) - keep // 2:]}"
+        return text, size
+
 
 class Hud:
     def __init__(self) -> None:
@@ -163,6 +191,7 @@ class Hud:
         self._fills: dict[tuple, pygame.Surface] = {}  # translucent backgrounds, by size and colour
         self.key_panel: pygame.Rect | None = None  # where the key legend was drawn last (tests)
         self.count_rect: pygame.Rect | None = None  # where the knockdown count was drawn last
+        self.lost_box: pygame.Rect | None = None  # where the lost-controller box was drawn last
 
     # layout helpers (fractions of the window, so resizes keep the layout)
     @staticmethod
@@ -271,7 +300,9 @@ class Hud:
         panel = pygame.Rect(int(16 * u), h - int(170 * u), int(330 * u), int(118 * u))
         surf.blit(self._translucent(panel.size, (10, 10, 16, 170)), panel)
         x, y = panel.left + 12 * u, panel.top + 8 * u
-        self.blit(surf, "RECOGNIZED", int(18 * u), (x, y), DIM)
+        # a rejected motion keeps its name up (the closest action) under REJECTED: under
+        # RECOGNIZED it read as recognized once the REJECT mark went out
+        self.blit(surf, "REJECTED" if st.rejected else "RECOGNIZED", int(18 * u), (x, y), REJECT_COLOR if st.rejected else DIM)
         name = action_label(st.action) if st.action else "-"
         r = self.blit(surf, name, int(34 * u), (x, y + 16 * u), TEXT)
         if st.score is not None:
@@ -334,15 +365,12 @@ class Hud:
         w, h = surf.get_size()
         big, mid = int(96 * u), int(40 * u)
         if st.match.phase == "over":
-            if st.match.winner is None:
-                title = "DRAW"
-            else:
-                title = f"{st.match.result} - {'YOU WIN' if st.match.winner == 0 else 'CPU WINS'}"
+            title = result_title(st.match.result, st.match.winner, ("YOU WIN", "CPU WINS"))
             self._banner(surf, title, big, (w // 2, h * 0.42))
             if not st.demo:
-                self.blit(surf, "Enter: a new match", mid, (w // 2, h * 0.42 + 60 * u), DIM, "midtop")
+                self.menu_line(surf, "Enter: a new match", mid, (w // 2, h * 0.42 + 60 * u), DIM, u)
                 if st.difficulty:
-                    self.blit(surf, f"D: difficulty {st.difficulty}", int(30 * u), (w // 2, h * 0.42 + 104 * u), DIM, "midtop")
+                    self.menu_line(surf, f"D: difficulty {st.difficulty}", int(30 * u), (w // 2, h * 0.42 + 104 * u), DIM, u)
         elif st.match.phase == "count" and st.match.down is not None:
             # left of the ring's centre line: in the middle of the screen it sat over the far
             # corner post, white on white
@@ -351,11 +379,19 @@ class Hud:
             self.blit(surf, "KNOCKDOWN", mid, (cx, h * 0.40 + 70 * u), SWITCH_COLOR, "midtop")
         elif st.match.paused and not st.disconnected:
             self._banner(surf, "PAUSED", big, (w // 2, h * 0.42))
-            self.blit(surf, "Esc or Home to resume", mid, (w // 2, h * 0.42 + 56 * u), DIM, "midtop")
+            self.menu_line(surf, "Esc or Home to resume", mid, (w // 2, h * 0.42 + 56 * u), DIM, u)
             if st.difficulty:
-                self.blit(surf, f"D: difficulty {st.difficulty}", mid, (w // 2, h * 0.42 + 100 * u), SWITCH_COLOR, "midtop")
+                self.menu_line(surf, f"D: difficulty {st.difficulty}", mid, (w // 2, h * 0.42 + 100 * u), SWITCH_COLOR, u)
         elif st.message and st.message_age < 90:
             self._banner(surf, st.message, big, (w // 2, h * 0.42))
+
+    def menu_line(self, surf: pygame.Surface, text: str, size: int, midtop, color, u: float) -> pygame.Rect:
+        """A line under a banner (Enter: a new match, D: difficulty...) on a dark ground of its
+        own: drawn straight on the ring, its grey was the canvas's grey (contrast 1.0)."""
+        img = self.text.render(text, size, color)
+        ground = img.get_rect(midtop=(int(midtop[0]), int(midtop[1]))).inflate(int(16 * u), int(6 * u))
+        surf.blit(self._translucent(ground.size, (8, 8, 12, 200)), ground)
+        return self.blit(surf, text, size, midtop, color, "midtop")
 
     def _banner(self, surf: pygame.Surface, text: str, size: int, center, alpha: int = 150) -> pygame.Rect:
         img = self.text.render(text, size, TEXT)
@@ -369,11 +405,15 @@ class Hud:
         surf.blit(self._translucent((w, h), (10, 0, 0, 170)), (0, 0))
         box = pygame.Rect(0, 0, int(w * 0.6), int(150 * u))
         box.center = (w // 2, h // 2)
+        self.lost_box = box
         pygame.draw.rect(surf, (120, 20, 24), box, border_radius=int(10 * u))
         pygame.draw.rect(surf, REJECT_COLOR, box, 3, border_radius=int(10 * u))
         self.blit(surf, "CONTROLLER DISCONNECTED", int(54 * u), (w // 2, box.top + 22 * u), TEXT, "midtop")
-        self.blit(surf, f"{st.source.url}: {st.source.state} - the match resumes when it is back",
-                  int(24 * u), (w // 2, box.top + 88 * u), TEXT, "midtop")
+        # the source on a line of its own, smaller if its URL is long (a two-player seat's
+        # keyboard URL ran past both sides of the box), then what happens next
+        line, size = self.text.fit(f"{st.source.url}: {st.source.state}", int(24 * u), box.width - int(24 * u))
+        self.blit(surf, line, size, (w // 2, box.top + 80 * u), TEXT, "midtop")
+        self.blit(surf, "the match resumes when it is back", int(24 * u), (w // 2, box.top + 108 * u), TEXT, "midtop")
 
     def _budget(self, surf: pygame.Surface, budget: FrameBudget, u: float) -> None:
         """The F3 overlay (game/hud_budget.py)."""

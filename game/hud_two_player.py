@@ -11,7 +11,7 @@ from __future__ import annotations
 import pygame
 
 from engine.budget import FrameBudget
-from game.hud import DIM, OK_COLOR, REJECT_COLOR, SWITCH_COLOR, TEXT, Hud, HudState
+from game.hud import DIM, OK_COLOR, REJECT_COLOR, SWITCH_COLOR, TEXT, Hud, HudState, result_title
 
 PANEL_W, PANEL_MARGIN = 330, 16  # the recognition panel's width and margin (game.hud, at 720 p)
 LEGEND_LIFT = 20  # the recognition panel moves up this much (720 p) over a three-line key legend
@@ -110,7 +110,7 @@ class TwoPlayerHud(Hud):
                 self._centre(surf, st, u)
             return
         w, h = surf.get_size()
-        title = "DRAW" if st.match.winner is None else f"{st.match.result} - {st.names[st.match.winner]} WINS"
+        title = result_title(st.match.result, st.match.winner, (f"{st.names[0]} WINS", f"{st.names[1]} WINS"))
         self._banner(surf, title, int(96 * u), (w // 2, h * 0.42))
         if not st.demo:
-            self.blit(surf, "Enter: a new match", int(40 * u), (w // 2, h * 0.42 + 60 * u), TEXT, "midtop")
+            self.menu_line(surf, "Enter: a new match", int(40 * u), (w // 2, h * 0.42 + 60 * u), TEXT, u)
