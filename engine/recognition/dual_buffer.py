@@ -185,8 +185,7 @@ class DualBufferRecognizer(TemplateSet, DecisionRules, Adaptation):
         self.complete_fraction = float(complete_fraction)
         self.complete_frames = int(complete_frames)
         self.closed_after = int(closed_after) if closed_after > 0 else 1 << 30
-        self.dim = templates.dim
-        self.feature = templates.feature
+        self.dim, self.feature = templates.dim, templates.feature
         self.frame_features = FrameFeatures(self.feature, self.dim)  # owns its buffer
         self.speed = SpeedEstimate(self.dim)  # the motion estimates on start and switch events
         self.min_progress = float(min_progress)
@@ -210,6 +209,7 @@ class DualBufferRecognizer(TemplateSet, DecisionRules, Adaptation):
         """Back to idle, forgetting gravity and any motion in progress."""
         self.state = IDLE
         self.frame = -1
+        self.dropped_frames = 0  # frames with a NaN or inf reading: counted and dropped (push)
         self._t: float | None = None
         self.gate.reset()
         self._queued: list[RecognizerEvent] = []
@@ -233,8 +233,7 @@ class DualBufferRecognizer(TemplateSet, DecisionRules, Adaptation):
         self._done = 0
         self._extended = False  # the DTW ran past the supplementary buffer (a long motion)
         self._was_closed = False
-        self._stopped = False
-        self._stop_n = 0
+        self._stopped, self._stop_n = False, 0  # the hand stopped (closed-end scores kept), at query frame n
 
     @property
     def noise_g(self) -> float:
@@ -274,7 +273,8 @@ class DualBufferRecognizer(TemplateSet, DecisionRules, Adaptation):
         self._t = t if t is None or abs(t) < 1e300 else None  # NaN or inf: no time (it is not JSON)
         events, self._queued = self._queued, []
         if not np.isfinite(x).all():  # the method: no fromnumeric wrapper (~1 us a frame)
-            return events  # a malformed frame is dropped, not a crash
+            self.dropped_frames += 1  # a malformed frame is counted and dropped, not a crash
+            return events
         valid = self.gate.step(x, self.state == ACTIVE, self.count >= self.window)
         self._xs, self._act, self._lin = self.gate.xs, self.gate.act, self.gate.lin
         self._relaunch(valid, events)  # a double or the other hand's punch: this frame is an onset

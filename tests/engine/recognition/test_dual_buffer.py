@@ -221,10 +221,16 @@ def test_two_hands_and_bad_frames(templates):
     tm = Templates.from_trials({"r": [two(t) for t in trials_of(bump(0, 3.0), rng)]})
     rec = DualBufferRecognizer(tm)
     assert rec.push(np.full(6, np.nan)) == []  # dropped, not a crash
+    bad = two(rest(1))[0]
+    bad[4] = np.inf
+    assert rec.push(bad) == [] and rec.dropped_frames == 2  # ... and counted
     with pytest.raises(ValueError):
         rec.push(np.zeros(3))
     events = run(rec, two(np.vstack([rest(10), bump(0, 3.0), rest(20)])))
     assert [e["event"] for e in events] == ["start", "end"]
+    assert rec.dropped_frames == 2  # clean frames count nothing
+    rec.reset()
+    assert rec.dropped_frames == 0
 
 
 @pytest.mark.parametrize("noise_sd", [0.0, 0.03, 0.05])
