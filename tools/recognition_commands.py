@@ -170,7 +170,7 @@ def _register_evaluate(sub: argparse._SubParsersAction) -> None:
     e.add_argument("--uwave", default=None, metavar="DIR", help="the uWave protocol on DIR/U<n>/gesture<k>/d<day>-r<rep>.csv")
     e.add_argument("--users", type=_users, default="1-6", help="uWave users (default 1-6)")
     e.add_argument("--fresh", action="store_true",
-                   help="trials (and --isolated): a fresh recognizer for every trial (forget the adaptation); default: one player's session")
+                   help="trials (and --isolated): a new recognizer for every trial (no adaptation, no gate learnt from the trials before); default: one player's session")
     e.add_argument("--phone-punches", default=None, metavar="DIR",
                    help="cross-session: DIR/<hand>_<punch>_<fast|slow>.csv; per hand, templates from the first "
                         "--trials punches of each kind in one set, tested on every punch of the other set, and on "

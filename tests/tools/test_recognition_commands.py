@@ -541,3 +541,21 @@ def test_recognize_events_carry_the_recordings_own_seconds(tmp_path, trials_dir,
     assert main(["recognize", "--templates", str(out), str(rec)]) == 0
     events = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
     assert events and all(e["t"] == pytest.approx(1000.5 + e["frame"] / 60.0, abs=1e-3) for e in events)
+
+
+def test_fresh_trials_go_through_a_new_recognizer_each(trials_dir):
+    """`evaluate --fresh` (uWave, --isolated): a new recognizer per trial, as the issue's "fresh
+    recognizer per trial" reads; until the twenty-second round one recognizer forgot only its
+    adaptation, and the gate it had learnt from the trials before still decided the next one."""
+    from tools.evaluate_recognition import evaluate_trials
+    from tools.trial_files import load_trials_dir
+
+    templates = Templates.from_trials(load_trials_dir(trials_dir))
+    rng = np.random.default_rng(3)
+    noisy = np.vstack([rest(200) + rng.normal(0, 0.3, (200, 3)), bump(0), rest(8)])  # teaches a high gate
+    gentle = np.vstack([rest(8), bump(2, 1.6), rest(8)])
+    alone = evaluate_trials(templates, {"upper": [gentle]}, [6], fresh=True)[0].outcomes[0]
+    after = evaluate_trials(templates, {"jab": [noisy], "upper": [gentle]}, [6], fresh=True)[0].outcomes[1]
+    assert after == alone and alone.final == "upper"
+    kept = evaluate_trials(templates, {"jab": [noisy], "upper": [gentle]}, [6], fresh=False)[0].outcomes[1]
+    assert kept != alone  # one recognizer across trials: the noisy rest's gate holds the gentle one back
