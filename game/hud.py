@@ -31,6 +31,7 @@ from game.hud_style import (  # noqa: F401
     HISTORY_FRAMES,
     KEY_TEXT,
     MARK_STEPS,
+    MIN_TEXT_PX,
     OK_COLOR,
     OPPONENT_COLOR,
     PLAYER_COLOR,
@@ -39,7 +40,9 @@ from game.hud_style import (  # noqa: F401
     SWITCH_COLOR,
     TEXT,
     TEXT_EVERY,
+    text_scale,
 )
+from game.hud_text import TextCache, TextLayer  # noqa: F401 (TextCache: importable from here as before)
 from game.match import MatchSnapshot
 from game.rules import MAX_HEALTH
 
@@ -143,52 +146,10 @@ def result_title(result: str, winner: int | None, wins: tuple[str, str]) -> str:
     return f"{wins[winner]} ON POINTS"
 
 
-class TextCache:
+class Hud(TextLayer):
     def __init__(self) -> None:
-        self._fonts: dict[int, pygame.font.Font] = {}
-        self._cache: dict[tuple, pygame.Surface] = {}
-
-    def font(self, size: int) -> pygame.font.Font:
-        if size not in self._fonts:
-            self._fonts[size] = pygame.font.Font(None, size)
-        return self._fonts[size]
-
-    def render(self, text: str, size: int, color=TEXT, shadow: bool = True) -> pygame.Surface:
-        key = (text, size, color, shadow)
-        surf = self._cache.get(key)
-        if surf is None:
-            if len(self._cache) > 512:
-                self._cache.clear()
-            font = self.font(size)
-            fg = font.render(text, True, color)
-            if shadow:
-                surf = pygame.Surface((fg.get_width() + 2, fg.get_height() + 2), pygame.SRCALPHA)
-                surf.blit(font.render(text, True, (0, 0, 0)), (2, 2))
-                surf.blit(fg, (0, 0))
-            else:
-                surf = fg
-            self._cache[key] = surf
-        return surf
-
-    def fit(self, text: str, size: int, width: int, smallest: int = 12) -> tuple[str, int]:
-        """`text` at `size`, or smaller down to `smallest`, so it is at most `width` pixels wide
-        (with its shadow); still too wide, its middle gives way to "...". Returns (text, size)."""
-        font_w = lambda t, s: self.render(t, s).get_width()  # noqa: E731
-        while size > smallest and font_w(text, size) > width:
-            size -= 1
-        if font_w(text, size) > width:
-            keep = len(text)
-            while keep > 2 and font_w(f"{text[:keep // 2]}...{text[len(text) - keep // 2:]}", size) > width:
-                keep -= 2
-            text = f"{text[:keep // 2]}...{text[len(text) - keep // 2:]}"
-        return text, size
-
-
-class Hud:
-    def __init__(self) -> None:
-        self.text = TextCache()
+        super().__init__()
         self.budget_overlay = BudgetOverlay()  # F3
-        self._fills: dict[tuple, pygame.Surface] = {}  # translucent backgrounds, by size and colour
         self.key_panel: pygame.Rect | None = None  # where the key legend was drawn last (tests)
         self.count_rect: pygame.Rect | None = None  # where the knockdown count was drawn last
         self.lost_box: pygame.Rect | None = None  # where the lost-controller box was drawn last
@@ -202,26 +163,11 @@ class Hud:
         y = int(h * 0.04)
         return pygame.Rect(int(w * 0.03), y, bw, bh), pygame.Rect(w - int(w * 0.03) - bw, y, bw, bh)
 
-    def blit(self, surf: pygame.Surface, text: str, size: int, pos, color=TEXT, anchor: str = "topleft") -> pygame.Rect:
-        img = self.text.render(text, size, color)
-        rect = img.get_rect(**{anchor: (int(pos[0]), int(pos[1]))})
-        surf.blit(img, rect)
-        return rect
-
-    def _translucent(self, size: tuple[int, int], rgba: tuple[int, int, int, int]) -> pygame.Surface:
-        """A translucent background of this size and colour, made once (not once a frame)."""
-        key = (tuple(size), rgba)
-        bg = self._fills.get(key)
-        if bg is None:
-            if len(self._fills) > 64:  # window resizes leave old sizes behind
-                self._fills.clear()
-            bg = self._fills[key] = pygame.Surface(size, pygame.SRCALPHA)
-            bg.fill(rgba)
-        return bg
-
     def draw(self, surf: pygame.Surface, st: HudState, budget: FrameBudget | None = None) -> None:
         w, h = surf.get_size()
         u = h / 720.0  # type scale
+        self.panels = {"screen": surf.get_rect()}
+        self.panel = "screen"
         self._health(surf, st, u)
         self._clock(surf, st, u)
         self._source(surf, st, u)
@@ -260,26 +206,43 @@ class Hud:
     def _clock(self, surf: pygame.Surface, st: HudState, u: float) -> None:
         w, _ = surf.get_size()
         secs = max(0, int(np.ceil(st.match.seconds_left)))
+        u = text_scale(u)
         box = pygame.Rect(0, 0, int(120 * u), int(78 * u))
         box.midtop = (w // 2, int(12 * u))
         pygame.draw.rect(surf, (12, 12, 18), box, border_radius=int(8 * u))
         pygame.draw.rect(surf, (90, 86, 96), box, 2, border_radius=int(8 * u))
+        self.enter_panel("clock", box)
         label = "BREAK" if st.match.phase == "break" else f"ROUND {st.match.round}/{st.match.rounds}"
         self.blit(surf, label, int(22 * u), (w // 2, box.top + 6 * u), DIM, "midtop")
         col = REJECT_COLOR if st.match.phase == "fight" and secs <= 10 else TEXT
         self.blit(surf, f"{secs // 60}:{secs % 60:02d}", int(50 * u), (w // 2, box.top + 26 * u), col, "midtop")
         mode = "  ".join(m for m in (st.mode, "DEMO" if st.demo else "") if m)
         if mode:
+            self.enter_panel("screen", None)
             self.blit(surf, mode, int(22 * u), (w // 2, box.bottom + 4 * u), SWITCH_COLOR, "midtop")
+        self.enter_panel("screen", None)
+
+    def clock_box(self, size: tuple[int, int], u: float) -> pygame.Rect:
+        """The round clock's box (lines beside it stop short of it)."""
+        t = text_scale(u)
+        box = pygame.Rect(0, 0, int(120 * t), int(78 * t))
+        box.midtop = (size[0] // 2, int(12 * t))
+        return box
 
     def _source(self, surf: pygame.Surface, st: HudState, u: float) -> None:
         left, _ = self.health_rects(surf.get_size())
+        u0, u = u, text_scale(u)
         y = left.bottom + 32 * u
         state_col = OK_COLOR if st.source.state == "connected" else (SWITCH_COLOR if st.source.state in ("reconnecting", "connecting") else REJECT_COLOR)
         pygame.draw.circle(surf, state_col, (int(left.left + 7 * u), int(y + 8 * u)), int(6 * u))
-        r = self.blit(surf, f"{st.source.url}  {st.source.state}", int(22 * u), (left.left + 18 * u, y), DIM)
+        # short of the round clock (its battery after it): a long URL gives way in its middle
+        clock = self.clock_box(surf.get_size(), u0)  # level with it on small windows
+        room = (clock.left if y < clock.bottom else surf.get_width()) - int(left.left + 18 * u) - int((56 if st.source.battery is not None else 8) * u)
+        line, size = self.text.fit(f"{st.source.url}  {st.source.state}", int(22 * u), room)
+        r = self.blit(surf, line, size, (left.left + 18 * u, y), DIM)
         if st.templates:
-            self.blit(surf, st.templates, int(18 * u), (left.left + 18 * u, y + 22 * u), DIM)
+            line, size = self.text.fit(st.templates, int(18 * u), room)
+            self.blit(surf, line, size, (left.left + 18 * u, y + 22 * u), DIM)
         if st.source.battery is not None:
             bx, by = r.right + 12 * u, y + 2 * u
             body = pygame.Rect(int(bx), int(by), int(34 * u), int(14 * u))
@@ -293,12 +256,16 @@ class Hud:
             img = self.text.render(msg, int(24 * u), (20, 20, 20), shadow=False)
             box = img.get_rect(midtop=(w // 2, int(118 * u))).inflate(int(24 * u), int(10 * u))
             pygame.draw.rect(surf, SWITCH_COLOR, box, border_radius=int(6 * u))
-            surf.blit(img, img.get_rect(center=box.center))
+            self.enter_panel("keyboard banner", box)
+            self.put(surf, img, img.get_rect(center=box.center), msg)
+            self.enter_panel("screen", None)
 
     def _recognition(self, surf: pygame.Surface, st: HudState, u: float) -> None:
         _, h = surf.get_size()
+        u = text_scale(u)
         panel = pygame.Rect(int(16 * u), h - int(170 * u), int(330 * u), int(118 * u))
         surf.blit(self._translucent(panel.size, (10, 10, 16, 170)), panel)
+        self.enter_panel(f"recognition {len([p for p in self.panels if p.startswith('recognition')]) + 1}", panel, surf)
         x, y = panel.left + 12 * u, panel.top + 8 * u
         # a rejected motion keeps its name up (the closest action) under REJECTED: under
         # RECOGNIZED it read as recognized once the REJECT mark went out
@@ -326,16 +293,18 @@ class Hud:
         pygame.draw.rect(surf, (60, 60, 70), gauge)
         f = min(1.0, st.supp_fill / max(1, st.supp_size))
         pygame.draw.rect(surf, (120, 190, 255), (gauge.left, gauge.top, int(gauge.width * f), gauge.height))
+        self.enter_panel("screen", None)
 
     def _mark(self, surf: pygame.Surface, text: str, color, topright, u: float) -> None:
         img = self.text.render(text, int(20 * u), (15, 15, 15), shadow=False)
         box = img.get_rect(topright=(int(topright[0]), int(topright[1]))).inflate(int(10 * u), int(4 * u))
         pygame.draw.rect(surf, color, box, border_radius=int(4 * u))
-        surf.blit(img, img.get_rect(center=box.center))
+        self.put(surf, img, img.get_rect(center=box.center), text)
 
     def _keys(self, surf: pygame.Surface, st: HudState, u: float) -> None:
         w, h = surf.get_size()
         _, right = self.health_rects(surf.get_size())
+        u = text_scale(u)
         self.blit(surf, "Esc pause   F3 budget   F11 fullscreen", int(20 * u), (right.right, right.bottom + 32 * u), DIM, "topright")
         if not st.keys:
             return
@@ -357,8 +326,10 @@ class Hud:
         panel = pygame.Rect(0, 0, widest + int(24 * u), line_h * len(lines) + int(8 * u))
         setattr(panel, anchor, (int(pos[0]), int(pos[1])))
         surf.blit(self._translucent(panel.size, (8, 8, 12, 215)), panel)
+        self.enter_panel(f"keys {len([p for p in self.panels if p.startswith('keys')]) + 1}", panel, surf)
         for n, text in enumerate(lines):
             self.blit(surf, text, size, (panel.centerx, panel.top + int(4 * u) + n * line_h), KEY_TEXT, "midtop")
+        self.enter_panel("screen", None)
         return panel
 
     def _centre(self, surf: pygame.Surface, st: HudState, u: float) -> None:
@@ -385,21 +356,6 @@ class Hud:
         elif st.message and st.message_age < 90:
             self._banner(surf, st.message, big, (w // 2, h * 0.42))
 
-    def menu_line(self, surf: pygame.Surface, text: str, size: int, midtop, color, u: float) -> pygame.Rect:
-        """A line under a banner (Enter: a new match, D: difficulty...) on a dark ground of its
-        own: drawn straight on the ring, its grey was the canvas's grey (contrast 1.0)."""
-        img = self.text.render(text, size, color)
-        ground = img.get_rect(midtop=(int(midtop[0]), int(midtop[1]))).inflate(int(16 * u), int(6 * u))
-        surf.blit(self._translucent(ground.size, (8, 8, 12, 200)), ground)
-        return self.blit(surf, text, size, midtop, color, "midtop")
-
-    def _banner(self, surf: pygame.Surface, text: str, size: int, center, alpha: int = 150) -> pygame.Rect:
-        img = self.text.render(text, size, TEXT)
-        box = img.get_rect(center=(int(center[0]), int(center[1]))).inflate(40, 16)
-        surf.blit(self._translucent(box.size, (0, 0, 0, alpha)), box)
-        surf.blit(img, img.get_rect(center=box.center))
-        return box
-
     def _disconnected(self, surf: pygame.Surface, st: HudState, u: float) -> None:
         w, h = surf.get_size()
         surf.blit(self._translucent((w, h), (10, 0, 0, 170)), (0, 0))
@@ -408,12 +364,14 @@ class Hud:
         self.lost_box = box
         pygame.draw.rect(surf, (120, 20, 24), box, border_radius=int(10 * u))
         pygame.draw.rect(surf, REJECT_COLOR, box, 3, border_radius=int(10 * u))
+        self.enter_panel("lost", box)
         self.blit(surf, "CONTROLLER DISCONNECTED", int(54 * u), (w // 2, box.top + 22 * u), TEXT, "midtop")
         # the source on a line of its own, smaller if its URL is long (a two-player seat's
         # keyboard URL ran past both sides of the box), then what happens next
         line, size = self.text.fit(f"{st.source.url}: {st.source.state}", int(24 * u), box.width - int(24 * u))
         self.blit(surf, line, size, (w // 2, box.top + 80 * u), TEXT, "midtop")
         self.blit(surf, "the match resumes when it is back", int(24 * u), (w // 2, box.top + 108 * u), TEXT, "midtop")
+        self.enter_panel("screen", None)
 
     def _budget(self, surf: pygame.Surface, budget: FrameBudget, u: float) -> None:
         """The F3 overlay (game/hud_budget.py)."""

@@ -21,6 +21,7 @@ from game.hud_style import (
     STAGE_COLORS,
     TEXT,
     TEXT_EVERY,
+    text_scale,
 )
 
 
@@ -39,10 +40,13 @@ class BudgetOverlay:
         power, where a frame holds two steps), and each stage's p99."""
         w, h = surf.get_size()
         chart_h = int(90 * u)
+        t = text_scale(u)  # the text and its rows stop shrinking (game/hud_style.py); the chart does not
         # the stages the loop runs, not the spans inside them (those never run at depth 0)
         names = [s.name for s in budget.stages if s.name not in (WAIT, UNACCOUNTED) and not s.nested] + [UNACCOUNTED]
-        panel = pygame.Rect(w - int(440 * u), int(130 * u), int(424 * u), int(80 * u + 20 * u * (len(names) + 1)) + chart_h)
+        panel = pygame.Rect(w - int(440 * t), int(130 * u), int(424 * t), int(80 * t + 20 * t * (len(names) + 1)) + chart_h)
         surf.blit(hud._translucent(panel.size, (0, 0, 0, 190)), panel)
+        hud.enter_panel("budget", panel)
+        u = t
         last = budget.last_frame_ms()
         scale_ms = 2.0 * budget.frame_period_ms  # the bar spans two frame periods
         bar = pygame.Rect(panel.left + int(10 * u), panel.top + int(26 * u), panel.width - int(20 * u), int(18 * u))
@@ -52,6 +56,7 @@ class BudgetOverlay:
         chart = pygame.Rect(bar.left, panel.bottom - chart_h - int(4 * u), bar.width, chart_h)
         self._chart(surf, chart, names, last, budget, scale_ms)
         self._rows(hud, surf, panel, bar, names, last, budget, u)
+        hud.enter_panel("screen", None)
 
     @staticmethod
     def _bar(surf: pygame.Surface, bar: pygame.Rect, names: list[str], last: dict, budget: FrameBudget, scale_ms: float) -> None:

@@ -22,3 +22,18 @@ COUNT_X = 0.3  # the knockdown count's centre, as a fraction of the width
 BUDGET_HEADERS = ("stage", "last ms", "p99 / budget ms", "overruns")
 BUDGET_COLUMNS = (0, 110, 185, 320)  # their x in the F3 panel (720p pixels from the colour key)
 HISTORY_FRAMES = 120  # the F3 overlay's chart: the last two seconds, a stacked column a frame
+
+# The smallest text drawn (pygame's default font at 16 px: caps 8 px, line 12 px), the size of the
+# smallest text at 1280x720 (the F3 table's headers, the training plot's legend). The HUD's type
+# scales with the window's height, u = height / 720; below 720 p text stops shrinking here (at
+# 800x450, u = 0.625, the 18 px labels were 11 px: caps 5 px). Pixels on a 7-inch 800x480 screen
+# at arm's length subtend about what a television's do from the sofa, so what reads at 720 p
+# reads there at the same pixel size.
+MIN_TEXT_PX = 16
+TEXT_SCALE_FLOOR = MIN_TEXT_PX / 18  # the panels holding 18 px (720 p) labels scale no further down
+
+
+def text_scale(u: float) -> float:
+    """The scale of the panels and lines that hold small text: the window's u, down to the point
+    where their 18 px labels reach MIN_TEXT_PX (so a panel grows around text that stops shrinking)."""
+    return max(u, TEXT_SCALE_FLOOR)

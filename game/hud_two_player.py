@@ -12,6 +12,7 @@ import pygame
 
 from engine.budget import FrameBudget
 from game.hud import DIM, OK_COLOR, REJECT_COLOR, SWITCH_COLOR, TEXT, Hud, HudState, result_title
+from game.hud_style import text_scale
 
 PANEL_W, PANEL_MARGIN = 330, 16  # the recognition panel's width and margin (game.hud, at 720 p)
 LEGEND_LIFT = 20  # the recognition panel moves up this much (720 p) over a three-line key legend
@@ -50,18 +51,21 @@ class TwoPlayerHud(Hud):
     def draw(self, surf: pygame.Surface, st: HudState, budget: FrameBudget | None = None) -> None:
         w, h = surf.get_size()
         u = h / 720.0
+        t = text_scale(u)  # the panels that hold small text (game/hud_style.py)
         two = self.second
+        self.panels = {"screen": surf.get_rect()}
+        self.panel = "screen"
         self._health(surf, st, u)
         self._clock(surf, st, u)
         self._source(surf, st, u)
         self._source_right(surf, two, u)
         # each recognition panel lifted over its player's key legend (when they have one): the
         # one-player drawing on a shorter surface
-        lift = [int(LEGEND_LIFT * u) if s.keys else 0 for s in (st, two)]
+        lift = [int(LEGEND_LIFT * t) if s.keys else 0 for s in (st, two)]
         self._recognition(surf.subsurface(pygame.Rect(0, 0, w, h - lift[0])), st, u)
         # player 2's panel: the same drawing on a strip of the screen's right edge, so the
         # panel sits mirrored at the bottom right
-        strip_w = min(w, int((PANEL_W + 2 * PANEL_MARGIN) * u))
+        strip_w = min(w, int((PANEL_W + 2 * PANEL_MARGIN) * t))
         self._recognition(surf.subsurface(pygame.Rect(w - strip_w, 0, strip_w, h - lift[1])), two, u)
         self._legends(surf, st, two, u)
         self._centre_two(surf, st, u)
@@ -74,6 +78,7 @@ class TwoPlayerHud(Hud):
     def _source_right(self, surf: pygame.Surface, st: HudState, u: float) -> None:
         """Player 2's source, state and battery under the right health bar, right-aligned."""
         _, right = self.health_rects(surf.get_size())
+        u0, u = u, text_scale(u)
         y = right.bottom + 32 * u
         state_col = OK_COLOR if st.source.state == "connected" else (
             SWITCH_COLOR if st.source.state in ("reconnecting", "connecting") else REJECT_COLOR)
@@ -87,15 +92,21 @@ class TwoPlayerHud(Hud):
             pygame.draw.rect(surf, OK_COLOR if b > 0.25 else REJECT_COLOR,
                              (body.left + 3, body.top + 3, int((body.width - 6) * b), body.height - 6))
             x = body.left - 12 * u
-        r = self.blit(surf, f"{st.source.url}  {st.source.state}", int(22 * u), (x, y), DIM, "topright")
+        # short of the round clock: a long URL gives way in its middle
+        clock = self.clock_box(surf.get_size(), u0)  # level with it (small windows), its dot just clear of it
+        room = int(x - 18 * u) - (clock.right if y < clock.bottom else 0)
+        line, size = self.text.fit(f"{st.source.url}  {st.source.state}", int(22 * u), room)
+        r = self.blit(surf, line, size, (x, y), DIM, "topright")
         if st.templates:
-            self.blit(surf, st.templates, int(18 * u), (right.right, y + 22 * u), DIM, "topright")
+            line, size = self.text.fit(st.templates, int(18 * u), room)
+            self.blit(surf, line, size, (right.right, y + 22 * u), DIM, "topright")
         pygame.draw.circle(surf, state_col, (int(r.left - 11 * u), int(y + 8 * u)), int(6 * u))
 
     def _legends(self, surf: pygame.Surface, one: HudState, two: HudState, u: float) -> None:
         """Each keyboard player's keys under their own panel, on the one-player legend's dark
         panel; the shared keys in the middle."""
         w, h = surf.get_size()
+        u = text_scale(u)
         self.key_panels = []
         for st, x, anchor in ((one, PANEL_MARGIN * u, "bottomleft"), (two, w - PANEL_MARGIN * u, "bottomright")):
             if st.keys:

@@ -230,6 +230,9 @@ class TrainingScreen:
         self.history: list[np.ndarray] = []
         self.anim_frame = 0.0
         self.saved_to: str = ""
+        # tests: a list to collect every text drawn (text, rectangle, panel: "stage", "list", "plot")
+        self.layout: list | None = None
+        self.panels: dict = {}
 
     def push_frame(self, frame: np.ndarray | None) -> None:
         if frame is not None:
@@ -240,7 +243,6 @@ class TrainingScreen:
         import pygame
 
         from game.camera import Camera
-        from game.hud import action_label
         from game.render import Renderer
         from game.skeleton import local_to_world
 
@@ -266,33 +268,50 @@ class TrainingScreen:
         body = local_to_world(posture, (float(root[0]), float(root[1]), float(root[2])))
         sub = surf.subsurface(stage)
         self.renderer.draw(sub, [body])
-        # right panel
-        panel = pygame.Rect(stage.right, 0, w - stage.right, h)
+        # right panel: the checklist, the progress and the live signal
+        self.panels = {"stage": stage}
+        self._checklist(surf, pygame.Rect(stage.right, 0, w - stage.right, h), u)
+        # the instruction over the stage
+        self._instruction(surf, stage, u)
+
+    def _checklist(self, surf: pygame.Surface, panel: pygame.Rect, u: float) -> None:
+        """The actions with their trials, the progress bar and the live plot, in `panel`. Its text
+        stops shrinking at game.hud_style's minimum, and so does its layout."""
+        import pygame
+
+        from game.hud import action_label
+        from game.hud_style import text_scale
+
+        h = surf.get_height()
+        tr = self.trainer
+        self.panels["list"] = panel
         pygame.draw.rect(surf, (18, 18, 26), panel)
+        u0, u = u, text_scale(u)
         x = panel.left + int(24 * u)
         self._text(surf, "TRAIN YOUR MOVES", int(40 * u), (x, 20 * u), (242, 240, 232))
-        self._text(surf, f"source {self.source_url}" + ("   left-handed" if self.left_handed else ""), int(20 * u), (x, 58 * u), (170, 166, 160))
+        source, size = self.text.fit(f"source {self.source_url}" + ("   left-handed" if self.left_handed else ""), int(20 * u),
+                                     panel.right - x - int(8 * u))
+        self._text(surf, source, size, (x, 58 * u), (170, 166, 160))
         y = 88 * u
+        row = 24 * max(u0, 0.75)  # the checklist's line (18 px at least: its 16 px text and a gap)
         for i, a in enumerate(tr.actions):
             done = len(tr.recorded.get(a, []))
             current = i == tr.index and not tr.done
             col = (255, 200, 40) if current else ((90, 220, 120) if done >= tr.trials else (200, 196, 190))
-            self._text(surf, action_label(a), int(24 * u), (x + 18 * u, y), col)
+            self._text(surf, action_label(a), int(row), (x + 18 * u, y), col)
             for k in range(tr.trials):
                 c = (int(x + 190 * u + k * 16 * u), int(y + 9 * u))
                 pygame.draw.circle(surf, (90, 220, 120) if k < done else (70, 70, 80), c, int(5 * u))
             if current:
                 pygame.draw.polygon(surf, col, [(x, y + 3 * u), (x + 10 * u, y + 9 * u), (x, y + 15 * u)])
-            y += 24 * u
+            y += row
         # progress bar
         bar = pygame.Rect(x, int(y + 10 * u), panel.width - int(48 * u), int(12 * u))
         pygame.draw.rect(surf, (60, 60, 70), bar)
         pygame.draw.rect(surf, (90, 220, 120), (bar.left, bar.top, int(bar.width * tr.progress()), bar.height))
         # live signal plot
         plot = pygame.Rect(x, bar.bottom + int(16 * u), bar.width, h - bar.bottom - int(30 * u))
-        self._plot(surf, plot)
-        # the instruction over the stage
-        self._instruction(surf, stage, u)
+        self._plot(surf, plot, int(row * 2 / 3))  # the legend two thirds of the checklist's size
 
     def _instruction(self, surf: pygame.Surface, stage: pygame.Rect, u: float) -> None:
         import pygame
@@ -313,17 +332,19 @@ class TrainingScreen:
             title, sub = "GO!", f"trial {tr.trial + 1} of {tr.trials}: {action_label(tr.action)}"
         col = (255, 200, 40) if tr.phase == RECORD else (242, 240, 232)
         img = self.text.render(title, int(64 * u), col)
-        surf.blit(img, img.get_rect(midtop=(stage.centerx, int(24 * u))))
-        img2 = self.text.render(sub, int(26 * u), (220, 216, 210))
-        surf.blit(img2, img2.get_rect(midtop=(stage.centerx, int(24 * u) + img.get_height() + 4)))
+        self._put(surf, img, img.get_rect(midtop=(stage.centerx, int(24 * u))), title, "stage")
+        sub, size = self.text.fit(sub, int(26 * u), stage.width - int(16 * u))  # a long saved-to path
+        img2 = self.text.render(sub, size, (220, 216, 210))
+        self._put(surf, img2, img2.get_rect(midtop=(stage.centerx, int(24 * u) + img.get_height() + 4)), sub, "stage")
         if tr.phase == RECORD:
             pygame.draw.circle(surf, (235, 50, 50), (int(stage.left + 30 * u), int(stage.bottom - 30 * u)), int(10 * u))
-            self._text(surf, "REC", int(26 * u), (stage.left + 46 * u, stage.bottom - 40 * u), (235, 50, 50))
+            self._text(surf, "REC", int(26 * u), (stage.left + 46 * u, stage.bottom - 40 * u), (235, 50, 50), "stage")
 
-    def _plot(self, surf: pygame.Surface, rect: pygame.Rect) -> None:
+    def _plot(self, surf: pygame.Surface, rect: pygame.Rect, legend_px: int = 16) -> None:
         import pygame
 
         pygame.draw.rect(surf, (10, 10, 14), rect)
+        self.panels["plot"] = rect
         if rect.height < 20:
             return
         mid = rect.centery
@@ -338,12 +359,18 @@ class TrainingScreen:
         # the legend in each hand's colour: its three axes are shades of it (x light, z dark)
         x = rect.left + 6
         for hand, name in enumerate(("Wiimote (right) x y z", "Nunchuk (left) x y z")):
-            img = self.text.render(name, 16, TRACE_COLOURS[hand][1])
-            surf.blit(img, (x, rect.top + 4))
-            x += img.get_width() + 16
+            img = self.text.render(name, legend_px, TRACE_COLOURS[hand][1])
+            self._put(surf, img, img.get_rect(topleft=(x, rect.top + 4)), name, "plot")
+            x += img.get_width() + legend_px
 
-    def _text(self, surf: pygame.Surface, text: str, size: int, pos, color) -> None:
-        surf.blit(self.text.render(text, size, color), (int(pos[0]), int(pos[1])))
+    def _text(self, surf: pygame.Surface, text: str, size: int, pos, color, panel: str = "list") -> None:
+        img = self.text.render(text, size, color)
+        self._put(surf, img, img.get_rect(topleft=(int(pos[0]), int(pos[1]))), text, panel)
+
+    def _put(self, surf: pygame.Surface, img: pygame.Surface, rect: pygame.Rect, text: str, panel: str) -> None:
+        surf.blit(img, rect)
+        if self.layout is not None:
+            self.layout.append((text, rect, panel))
 
 
 def register(sub: argparse._SubParsersAction) -> None:

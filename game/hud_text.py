@@ -1,0 +1,115 @@
+"""The HUD's text: a cache of rendered strings (never under MIN_TEXT_PX, game/hud_style.py) and
+the drawing of text on panels of their own (key legends, lines under a banner, banners), which
+notes, when a test asks, every text drawn, where, and in which panel."""
+
+from __future__ import annotations
+
+import pygame
+
+from game.hud_style import MIN_TEXT_PX, TEXT
+
+
+class TextCache:
+    def __init__(self) -> None:
+        self._fonts: dict[int, pygame.font.Font] = {}
+        self._cache: dict[tuple, pygame.Surface] = {}
+
+    def font(self, size: int) -> pygame.font.Font:
+        if size not in self._fonts:
+            self._fonts[size] = pygame.font.Font(None, size)
+        return self._fonts[size]
+
+    def render(self, text: str, size: int, color=TEXT, shadow: bool = True) -> pygame.Surface:
+        """`text` in pygame's default font at `size` px, never under MIN_TEXT_PX."""
+        size = max(MIN_TEXT_PX, int(size))
+        key = (text, size, color, shadow)
+        surf = self._cache.get(key)
+        if surf is None:
+            if len(self._cache) > 512:
+                self._cache.clear()
+            font = self.font(size)
+            fg = font.render(text, True, color)
+            if shadow:
+                surf = pygame.Surface((fg.get_width() + 2, fg.get_height() + 2), pygame.SRCALPHA)
+                surf.blit(font.render(text, True, (0, 0, 0)), (2, 2))
+                surf.blit(fg, (0, 0))
+            else:
+                surf = fg
+            self._cache[key] = surf
+        return surf
+
+    def fit(self, text: str, size: int, width: int, smallest: int = MIN_TEXT_PX) -> tuple[str, int]:
+        """`text` at `size`, or smaller down to `smallest`, so it is at most `width` pixels wide
+        (with its shadow); still too wide, its middle gives way to "...". Returns (text, size)."""
+        font_w = lambda t, s: self.render(t, s).get_width()  # noqa: E731
+        while size > smallest and font_w(text, size) > width:
+            size -= 1
+        if font_w(text, size) > width:
+            keep = len(text)
+            while keep > 2 and font_w(f"{text[:keep // 2]}...{text[len(text) - keep // 2:]}", size) > width:
+                keep -= 2
+            text = f"{text[:keep // 2]}...{text[len(text) - keep // 2:]}"
+        return text, max(MIN_TEXT_PX, size)
+
+
+class TextLayer:
+    """Text and translucent panels on a surface; the HUD's drawing builds on it."""
+
+    def __init__(self) -> None:
+        self.text = TextCache()
+        self._fills: dict[tuple, pygame.Surface] = {}  # translucent backgrounds, by size and colour
+        # tests: a list to collect every text drawn (text, rectangle, the panel it belongs to);
+        # `panels` holds the panels' rectangles ("screen" for text drawn straight on the ring)
+        self.layout: list[tuple[str, pygame.Rect, str]] | None = None
+        self.panels: dict[str, pygame.Rect] = {}
+        self.panel = "screen"
+
+    def blit(self, surf: pygame.Surface, text: str, size: int, pos, color=TEXT, anchor: str = "topleft") -> pygame.Rect:
+        img = self.text.render(text, size, color)
+        rect = img.get_rect(**{anchor: (int(pos[0]), int(pos[1]))})
+        return self.put(surf, img, rect, text)
+
+    def put(self, surf: pygame.Surface, img: pygame.Surface, rect: pygame.Rect, text: str) -> pygame.Rect:
+        """A rendered text blitted at `rect`, noted in `layout` when tests collect it (on the
+        screen, where a subsurface was drawn on)."""
+        surf.blit(img, rect)
+        if self.layout is not None:
+            self.layout.append((text, rect.move(surf.get_abs_offset()), self.panel))
+        return rect
+
+    def enter_panel(self, name: str, rect: pygame.Rect | None, surf: pygame.Surface | None = None) -> None:
+        """Texts drawn from now on belong to panel `name` (`rect` on `surf`; None: the screen)."""
+        self.panel = name
+        if rect is not None:
+            self.panels[name] = rect.move(surf.get_abs_offset()) if surf is not None else rect
+
+    def _translucent(self, size: tuple[int, int], rgba: tuple[int, int, int, int]) -> pygame.Surface:
+        """A translucent background of this size and colour, made once (not once a frame)."""
+        key = (tuple(size), rgba)
+        bg = self._fills.get(key)
+        if bg is None:
+            if len(self._fills) > 64:  # window resizes leave old sizes behind
+                self._fills.clear()
+            bg = self._fills[key] = pygame.Surface(size, pygame.SRCALPHA)
+            bg.fill(rgba)
+        return bg
+
+    def menu_line(self, surf: pygame.Surface, text: str, size: int, midtop, color, u: float) -> pygame.Rect:
+        """A line under a banner (Enter: a new match, D: difficulty...) on a dark ground of its
+        own: drawn straight on the ring, its grey was the canvas's grey (contrast 1.0)."""
+        img = self.text.render(text, size, color)
+        ground = img.get_rect(midtop=(int(midtop[0]), int(midtop[1]))).inflate(int(16 * u), int(6 * u))
+        surf.blit(self._translucent(ground.size, (8, 8, 12, 200)), ground)
+        self.enter_panel(f"menu {text}", ground)
+        rect = self.blit(surf, text, size, midtop, color, "midtop")
+        self.enter_panel("screen", None)
+        return rect
+
+    def _banner(self, surf: pygame.Surface, text: str, size: int, center, alpha: int = 150) -> pygame.Rect:
+        img = self.text.render(text, size, TEXT)
+        box = img.get_rect(center=(int(center[0]), int(center[1]))).inflate(40, 16)
+        surf.blit(self._translucent(box.size, (0, 0, 0, alpha)), box)
+        self.enter_panel(f"banner {text}", box)
+        self.put(surf, img, img.get_rect(center=box.center), text)
+        self.enter_panel("screen", None)
+        return box

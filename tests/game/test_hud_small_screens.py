@@ -1,0 +1,156 @@
+"""Every screen stays readable on a small window (a Raspberry Pi's 800x480 touchscreen, 800x450):
+no text under game.hud_style.MIN_TEXT_PX (caps 8 px in pygame's default font), and none runs
+into another text of its panel or out of its panel or the window (frames drawn through pygame's
+dummy driver: the fonts and rectangles the game really draws)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pygame
+import pytest
+
+from game.actions import load_library
+from game.hud import Hud, HudState, SourceSnapshot
+from game.hud_two_player import TwoPlayerHud
+from game.keyboard_source import KEYMAPS, key_help
+from game.match import MatchSnapshot
+from game.render import Renderer
+from game.skeleton import local_to_world
+
+SMALL = [(800, 450), (800, 480)]
+MIN_CAP_PX, MIN_LINE_PX = 8, 12  # pygame's default font at 16 px (game.hud_style.MIN_TEXT_PX)
+P2_URL = "P2 keyboard://?profile=experienced&seed=4&keys=right"  # the two-player demo's seat 2
+# the panels a text drawn straight on the screen must keep out of (the overlays cover the rest)
+SOLID = ("clock", "keyboard banner", "recognition", "keys")
+
+
+@pytest.fixture(scope="module")
+def scene():
+    lib = load_library()
+    return [local_to_world(lib["guard"].posture(0), (0.0, -0.9, 0.0)),
+            local_to_world(lib["guard"].posture(0), (0.0, 0.9, np.pi))]
+
+
+@pytest.fixture
+def caps(monkeypatch) -> dict[str, int]:
+    """The cap height (px) of the font each string was rendered in, the smallest if several."""
+    seen: dict[str, int] = {}
+
+    class Font(pygame.font.Font):
+        def render(self, text, *args, **kwargs):
+            cap = self.metrics("H")[0][3]
+            seen[text] = min(seen.get(text, cap), cap)
+            assert self.get_linesize() >= MIN_LINE_PX, (text, self.get_linesize())
+            return super().render(text, *args, **kwargs)
+
+    monkeypatch.setattr(pygame.font, "Font", Font)
+    return seen
+
+
+def busy(n: int = 1, **kw) -> HudState:
+    """A player's HUD with everything lit: a keyboard (its key legend and banner), a long URL,
+    a battery, the templates line, a rejected motion's name and score, both marks."""
+    st = HudState(source=SourceSnapshot(url=P2_URL if n == 2 else "keyboard://?profile=experienced&seed=3",
+                                        state="connected", battery=0.8),
+                  templates="templates: yours (13 moves)", keys=key_help(), mode="LOW POWER", **kw)
+    st.mark({"event": "start", "action": "uppercut_l", "score": 0.31})
+    st.mark({"event": "switch", "action": "uppercut_r", "score": 0.42, "from_frame": 17})
+    st.mark({"event": "reject", "action": "uppercut_r", "score": 0.09})
+    st.main_fill, st.supp_fill = 4, 33
+    return st
+
+
+def seat(n: int, **kw) -> HudState:
+    st = busy(n, **kw)
+    st.keys = key_help(KEYMAPS["left" if n == 1 else "right"])
+    return st
+
+
+def budget():
+    """A real loop's frame budget over the session's stages (the F3 table's rows)."""
+    from engine.clock import VirtualClock
+    from engine.loop import FixedStepLoop
+    from game.stages import STAGES
+
+    loop = FixedStepLoop(VirtualClock())
+    for spec in STAGES:
+        loop.add_stage(spec.name, lambda s, dt: None, spec.budget_ms)
+    loop.set_render(lambda a: None, 8.0)
+    loop.run(frames=5)
+    return loop.budget
+
+
+SCREENS = {
+    "match": lambda: (Hud(), busy(keyboard_banner=True)),
+    "demo": lambda: (Hud(), busy(demo=True)),
+    "budget": lambda: (Hud(), busy(show_budget=True)),
+    "paused": lambda: (Hud(), busy(match=MatchSnapshot(paused=True), difficulty="adaptive")),
+    "over": lambda: (Hud(), busy(match=MatchSnapshot(phase="over", winner=1, result="points"), difficulty="adaptive")),
+    "count": lambda: (Hud(), busy(match=MatchSnapshot(phase="count", down=1, count=7, knockdowns=(0, 2)))),
+    "lost": lambda: (Hud(), busy(2, disconnected=True)),
+    "two": lambda: (TwoPlayerHud(seat(2)), seat(1, names=("P1", "P2"))),
+    "two budget": lambda: (TwoPlayerHud(seat(2)), seat(1, names=("P1", "P2"), show_budget=True)),
+    "two lost": lambda: (TwoPlayerHud(seat(2, disconnected=True)), seat(1, names=("P1", "P2"), match=MatchSnapshot(paused=True))),
+    "two over": lambda: (TwoPlayerHud(seat(2)), seat(1, names=("P1", "P2"), match=MatchSnapshot(phase="over", winner=0, result="KO"))),
+}
+
+
+def check_layout(size, layout, panels, caps) -> None:
+    """Every text at least MIN_CAP_PX high, inside its panel and the window, and clear of the
+    other texts of its panel (and, drawn on the screen, of the solid panels)."""
+    window = pygame.Rect((0, 0), size)
+    assert layout
+    for text, rect, panel in layout:
+        assert caps.get(text, 0) >= MIN_CAP_PX, (text, caps.get(text))
+        assert window.contains(rect), (text, rect, size)
+        assert panels[panel].contains(rect), (text, rect, panel, panels[panel])
+    for i, (text, rect, panel) in enumerate(layout):
+        for other, other_rect, other_panel in layout[i + 1:]:
+            assert not (panel == other_panel and rect.colliderect(other_rect)), (panel, text, rect, other, other_rect)
+        if panel == "screen":
+            for name, box in panels.items():
+                assert not (name.startswith(SOLID) and rect.colliderect(box)), (text, rect, name, box)
+    for name, box in panels.items():
+        assert window.contains(box), (name, box, size)
+
+
+@pytest.mark.parametrize("size", SMALL)
+@pytest.mark.parametrize("screen", list(SCREENS))
+def test_hud_text_is_readable_and_stays_in_its_panel_on_a_small_window(size, screen, scene, caps) -> None:
+    pygame.init()
+    surf = pygame.Surface(size)
+    Renderer(size).draw(surf, scene)
+    hud, st = SCREENS[screen]()
+    hud.draw(surf, st, budget() if st.show_budget else None)
+    small = sorted({t for t, c in caps.items() if c < MIN_CAP_PX})
+    assert not small, f"text under {MIN_CAP_PX} px caps at {size}: {small}"
+    hud.layout = []  # again, noting where each text goes
+    hud.draw(surf, st, budget() if st.show_budget else None)
+    check_layout(size, hud.layout, hud.panels, caps)
+
+
+@pytest.mark.parametrize("size", SMALL)
+@pytest.mark.parametrize("phase", ["show", "ready", "record", "done", "waiting"])
+def test_the_training_screen_is_readable_on_a_small_window(size, phase, caps) -> None:
+    from game.training import READY_STEPS, Trainer, TrainingScreen
+
+    pygame.init()
+    trainer = Trainer(["straight_l", "step_forward", "uppercut_r"] + ["hook_l"] * 10)
+    trainer.phase, trainer.phase_step = ("done", 0) if phase == "waiting" else (phase, READY_STEPS // 2)
+    trainer.waiting = phase == "waiting"
+    trainer.recorded = {"straight_l": [np.zeros((96, 6))] * 5, "step_forward": [np.zeros((96, 6))] * 2}
+    trainer.index = 1
+    screen = TrainingScreen(load_library(), trainer, "keyboard://?profile=experienced&seed=4&auto=1", left_handed=True)
+    screen.saved_to = "/home/player/.local/share/quickjab/profiles/a-rather-long-profile-name.npz"
+    for k in range(60):
+        screen.push_frame(np.sin(np.arange(6) + k / 5.0))
+    surf = pygame.Surface(size)
+    screen.layout = []
+    screen.draw(surf)
+    small = sorted({t for t, c in caps.items() if c < MIN_CAP_PX})
+    assert not small, f"text under {MIN_CAP_PX} px caps at {size}: {small}"
+    check_layout(size, screen.layout, {**screen.panels, "screen": surf.get_rect()}, caps)
+    # the plot's legend no larger than the checklist beside it
+    legend = [caps[t] for t, _, p in screen.layout if p == "plot"]
+    listed = [caps[t] for t, _, p in screen.layout if t in ("step forward", "hook L")]
+    assert legend and max(legend) <= min(listed), (legend, listed)
