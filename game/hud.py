@@ -165,7 +165,7 @@ class Hud(TextLayer):
 
     def draw(self, surf: pygame.Surface, st: HudState, budget: FrameBudget | None = None) -> None:
         w, h = surf.get_size()
-        u = h / 720.0  # type scale
+        u = self.text.for_window(h)  # type scale
         self.panels = {"screen": surf.get_rect()}
         self.panel = "screen"
         self._health(surf, st, u)

@@ -31,9 +31,19 @@ HISTORY_FRAMES = 120  # the F3 overlay's chart: the last two seconds, a stacked 
 # reads there at the same pixel size.
 MIN_TEXT_PX = 16
 TEXT_SCALE_FLOOR = MIN_TEXT_PX / 18  # the panels holding 18 px (720 p) labels scale no further down
+# ... on windows down to 800x450 (u = 0.625, the smallest screen played on). A smaller window (a
+# 640x360 window, a thumbnail) is a picture of the game, not a screen to read at arm's length: the
+# floor shrinks with it, so two players' key legends still fit side by side.
+FLOOR_DOWN_TO_U = 0.625
+
+
+def min_text_px(u: float) -> int:
+    """The smallest text drawn in a window of scale u (= height / 720): MIN_TEXT_PX down to
+    FLOOR_DOWN_TO_U, then shrinking with the window."""
+    return max(1, int(MIN_TEXT_PX * min(1.0, u / FLOOR_DOWN_TO_U)))
 
 
 def text_scale(u: float) -> float:
     """The scale of the panels and lines that hold small text: the window's u, down to the point
-    where their 18 px labels reach MIN_TEXT_PX (so a panel grows around text that stops shrinking)."""
-    return max(u, TEXT_SCALE_FLOOR)
+    where their 18 px labels reach the floor (so a panel grows around text that stops shrinking)."""
+    return max(u, TEXT_SCALE_FLOOR * min(1.0, u / FLOOR_DOWN_TO_U))

@@ -1,4 +1,4 @@
-"""The HUD's text: a cache of rendered strings (never under MIN_TEXT_PX, game/hud_style.py) and
+"""The HUD's text: a cache of rendered strings (never under the window's floor, game/hud_style.py) and
 the drawing of text on panels of their own (key legends, lines under a banner, banners), which
 notes, when a test asks, every text drawn, where, and in which panel."""
 
@@ -6,13 +6,20 @@ from __future__ import annotations
 
 import pygame
 
-from game.hud_style import MIN_TEXT_PX, TEXT
+from game.hud_style import MIN_TEXT_PX, TEXT, min_text_px
 
 
 class TextCache:
     def __init__(self) -> None:
         self._fonts: dict[int, pygame.font.Font] = {}
         self._cache: dict[tuple, pygame.Surface] = {}
+        self.floor = MIN_TEXT_PX  # the smallest size rendered: `for_window` sets it per window
+
+    def for_window(self, height: int) -> float:
+        """Set the floor for a window this tall (min_text_px); returns its type scale u."""
+        u = height / 720.0
+        self.floor = min_text_px(u)
+        return u
 
     def font(self, size: int) -> pygame.font.Font:
         if size not in self._fonts:
@@ -20,8 +27,8 @@ class TextCache:
         return self._fonts[size]
 
     def render(self, text: str, size: int, color=TEXT, shadow: bool = True) -> pygame.Surface:
-        """`text` in pygame's default font at `size` px, never under MIN_TEXT_PX."""
-        size = max(MIN_TEXT_PX, int(size))
+        """`text` in pygame's default font at `size` px, never under the floor."""
+        size = max(self.floor, int(size))
         key = (text, size, color, shadow)
         surf = self._cache.get(key)
         if surf is None:
@@ -38,10 +45,11 @@ class TextCache:
             self._cache[key] = surf
         return surf
 
-    def fit(self, text: str, size: int, width: int, smallest: int = MIN_TEXT_PX) -> tuple[str, int]:
+    def fit(self, text: str, size: int, width: int, smallest: int = 0) -> tuple[str, int]:
         """`text` at `size`, or smaller down to `smallest`, so it is at most `width` pixels wide
         (with its shadow); still too wide, its middle gives way to "...". Returns (text, size)."""
         font_w = lambda t, s: self.render(t, s).get_width()  # noqa: E731
+        smallest = max(smallest, self.floor)
         while size > smallest and font_w(text, size) > width:
             size -= 1
         if font_w(text, size) > width:
@@ -49,7 +57,7 @@ class TextCache:
             while keep > 2 and font_w(f"{text[:keep // 2]}...{text[len(text) - keep // 2:]}", size) > width:
                 keep -= 2
             text = f"{text[:keep // 2]}...{text[len(text) - keep // 2:]}"
-        return text, max(MIN_TEXT_PX, size)
+        return text, max(self.floor, size)
 
 
 class TextLayer:

@@ -50,7 +50,7 @@ class TwoPlayerHud(Hud):
 
     def draw(self, surf: pygame.Surface, st: HudState, budget: FrameBudget | None = None) -> None:
         w, h = surf.get_size()
-        u = h / 720.0
+        u = self.text.for_window(h)
         t = text_scale(u)  # the panels that hold small text (game/hud_style.py)
         two = self.second
         self.panels = {"screen": surf.get_rect()}

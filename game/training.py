@@ -247,7 +247,7 @@ class TrainingScreen:
         from game.skeleton import local_to_world
 
         w, h = surf.get_size()
-        u = h / 720.0
+        u = self.text.for_window(h)
         stage = pygame.Rect(0, 0, int(w * 0.58), h)
         if self.renderer is None or self.renderer.camera.size != stage.size:
             self.renderer = Renderer(stage.size)

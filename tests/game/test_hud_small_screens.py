@@ -154,3 +154,14 @@ def test_the_training_screen_is_readable_on_a_small_window(size, phase, caps) ->
     legend = [caps[t] for t, _, p in screen.layout if p == "plot"]
     listed = [caps[t] for t, _, p in screen.layout if t in ("step forward", "hook L")]
     assert legend and max(legend) <= min(listed), (legend, listed)
+
+
+def test_the_text_floor_holds_down_to_800x450_and_shrinks_with_smaller_windows() -> None:
+    # a 640x360 window (two players' legends side by side) and thumbnails are pictures of the game:
+    # the 16 px floor there made the two key legends overlap
+    from game.hud_style import MIN_TEXT_PX, min_text_px, text_scale
+
+    assert [min_text_px(h / 720) for h in (720, 480, 450)] == [MIN_TEXT_PX] * 3
+    assert min_text_px(360 / 720) == 12 and min_text_px(180 / 720) == 6
+    assert text_scale(1.0) == 1.0 and text_scale(450 / 720) == MIN_TEXT_PX / 18
+    assert text_scale(360 / 720) < MIN_TEXT_PX / 18
