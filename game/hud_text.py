@@ -13,6 +13,7 @@ class TextCache:
     def __init__(self) -> None:
         self._fonts: dict[int, pygame.font.Font] = {}
         self._cache: dict[tuple, pygame.Surface] = {}
+        self._fits: dict[tuple, tuple[str, int]] = {}  # fit's answers, by text, size, width and floor
         self.floor = MIN_TEXT_PX  # the smallest size rendered: `for_window` sets it per window
 
     def for_window(self, height: int) -> float:
@@ -45,19 +46,31 @@ class TextCache:
             self._cache[key] = surf
         return surf
 
+    def width(self, text: str, size: int) -> int:
+        """The width `render(text, size)` has (its shadow's 2 px included), without rendering it."""
+        return self.font(max(self.floor, int(size))).size(text)[0] + 2
+
     def fit(self, text: str, size: int, width: int, smallest: int = 0) -> tuple[str, int]:
         """`text` at `size`, or smaller down to `smallest`, so it is at most `width` pixels wide
-        (with its shadow); still too wide, its middle gives way to "...". Returns (text, size)."""
-        font_w = lambda t, s: self.render(t, s).get_width()  # noqa: E731
+        (with its shadow); still too wide, its middle gives way to "...". Returns (text, size).
+        Measured, not rendered (the candidates used to fill the render cache: 30 surfaces for one
+        long URL, made again after each clear), and the answer kept for the next frame."""
+        key = (text, size, width, smallest, self.floor)
+        done = self._fits.get(key)
+        if done is not None:
+            return done
         smallest = max(smallest, self.floor)
-        while size > smallest and font_w(text, size) > width:
+        while size > smallest and self.width(text, size) > width:
             size -= 1
-        if font_w(text, size) > width:
+        if self.width(text, size) > width:
             keep = len(text)
-            while keep > 2 and font_w(f"{text[:keep // 2]}...{text[len(text) - keep // 2:]}", size) > width:
+            while keep > 2 and self.width(f"{text[:keep // 2]}...{text[len(text) - keep // 2:]}", size) > width:
                 keep -= 2
             text = f"{text[:keep // 2]}...{text[len(text) - keep // 2:]}"
-        return text, max(self.floor, size)
+        if len(self._fits) > 64:  # window resizes leave old widths behind
+            self._fits.clear()
+        done = self._fits[key] = (text, max(self.floor, size))
+        return done
 
 
 class TextLayer:
