@@ -97,7 +97,8 @@ class RecognizerConfig:
     # Tilt (degrees): three copies of each trained template, turned this far towards three
     # directions across its resting gravity, tolerate a grip that differs from the trials' (before
     # the first decision they count only where no trained template fits; engine/recognition/tilt.py).
-    # 10: uWave's day 1 -> days 2-7 with a fresh recognizer 90.2 -> 92.0 %; 0 turns it off.
+    # 10: uWave's day 1 -> days 2-7, adaptation forgotten before each trial, 90.2 -> 92.0 % (a new
+    # recognizer per trial: 91.8 %, docs/recognition.md twenty-second round); 0 turns it off.
     tilt_deg: float = 10.0
 
     def __post_init__(self) -> None:

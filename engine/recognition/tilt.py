@@ -16,9 +16,10 @@ import numpy as np
 
 from engine.recognition.templates import Templates
 
-# How far a copy is turned: uWave's day 1 -> days 2-7, fresh recognizer, 90.2 -> 92.0 %; 7
-# degrees: 91.6 %; 15: 93.2 %, but the phone punches' left slow -> fast final 98.5 -> 89.4 %
-# (docs/recognition.md, twenty-first round).
+# How far a copy is turned: uWave's day 1 -> days 2-7, adaptation forgotten before each trial,
+# 90.2 -> 92.0 %; 7 degrees: 91.6 %; 15: 93.2 %, but the phone punches' left slow -> fast final
+# 98.5 -> 89.4 % (docs/recognition.md, twenty-first round; a new recognizer per trial gives 91.8 %
+# at 10 degrees, twenty-second round).
 TILT_DEG = 10.0
 # The directions (radians, about the resting gravity) the copies lean to: three, 120 degrees
 # apart, do what four at 90 degrees did (uWave 96.0 / 92.0 % against 96.2 / 92.3 %, phone-boxing
