@@ -38,6 +38,7 @@ from game.hud_style import (  # noqa: F401
     REJECT_COLOR,
     STAGE_COLORS,
     SWITCH_COLOR,
+    TAIL_STEPS,
     TEXT,
     TEXT_EVERY,
     text_scale,
@@ -79,6 +80,7 @@ class HudState:
     switch_age: int = MARK_STEPS
     switch_from: int = 0  # n_p: the clip frame the character continued from
     reject_age: int = MARK_STEPS
+    end_age: int = TAIL_STEPS  # steps since the last `end`: a plain reject sooner is its return
     main_fill: int = 0
     main_size: int = 6
     supp_fill: int = 0
@@ -108,6 +110,10 @@ class HudState:
         if kind == "switch":
             self.switch_age = 0
             self.switch_from = int(event.get("from_frame", 0) or 0)
+        elif kind == "end":
+            self.end_age = 0
+        elif kind == "reject" and not event.get("called_off") and self.end_age < TAIL_STEPS:
+            pass  # the hand coming back from the motion that just ended: nothing the player tried
         elif kind == "reject":
             self.reject_age = 0
             self.rejected = True
@@ -118,6 +124,7 @@ class HudState:
         """Advance timed marks by one step."""
         self.switch_age = min(MARK_STEPS, self.switch_age + 1)
         self.reject_age = min(MARK_STEPS, self.reject_age + 1)
+        self.end_age = min(TAIL_STEPS, self.end_age + 1)
         self.message_age += 1
         health = self.match.health
         for i in (0, 1):

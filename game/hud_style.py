@@ -16,6 +16,10 @@ STAGE_COLORS = [
     (255, 217, 47), (229, 196, 148), (179, 179, 179), (120, 200, 240), (240, 120, 120),
 ]
 MARK_STEPS = 45  # how long a switch / reject mark stays lit
+# A plain reject this soon after a motion's `end` is that motion's return (the virtual player's
+# demo: 63 such rejects in 2 minutes, 6-19 steps after the end, against 113 recognized moves): the
+# HUD keeps the recognized move up and lights no REJECT mark, which had flashed after most punches.
+TAIL_STEPS = 30
 CHART_BG = (30, 30, 36)
 TEXT_EVERY = 10  # frames between refreshes of the F3 overlay's numbers
 COUNT_X = 0.3  # the knockdown count's centre, as a fraction of the width

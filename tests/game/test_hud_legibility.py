@@ -153,3 +153,24 @@ def test_a_rejected_motion_is_not_shown_as_recognized_once_its_mark_fades(monkey
     panel = pygame.Rect(0, 720 - 180, 360, 180)
     red = pygame.surfarray.array3d(surf)[panel.left:panel.right, panel.top:panel.bottom].reshape(-1, 3).astype(int)
     assert int((np.abs(red - np.array(REJECT_COLOR)).max(axis=1) <= 5).sum()) == 0  # no REJECT mark
+
+
+def test_the_return_after_a_recognized_move_is_not_flagged_as_rejected() -> None:
+    # after most punches the hand's return is a short motion the recognizer rejects (no template):
+    # the panel flipped to "REJECTED no match" and the REJECT mark flashed after nearly every punch
+    from game.hud_style import MARK_STEPS, TAIL_STEPS
+
+    st = HudState()
+    st.mark({"event": "start", "action": "straight_l", "score": 0.1})
+    st.mark({"event": "end", "action": "straight_l"})
+    for _ in range(10):
+        st.tick()
+    st.mark({"event": "reject", "action": None})
+    assert st.action == "straight_l" and not st.rejected and st.reject_age == MARK_STEPS
+    for _ in range(TAIL_STEPS):
+        st.tick()
+    st.mark({"event": "reject", "action": None})  # a motion long after: the player tried something
+    assert st.rejected and st.action == "no match" and st.reject_age == 0
+    st.mark({"event": "start", "action": "hook_r"})
+    st.mark({"event": "reject", "action": "hook_r", "called_off": True})  # a start called off: shown
+    assert st.rejected and st.reject_age == 0
