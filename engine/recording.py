@@ -322,6 +322,11 @@ class RecordingWriter:
         self._put(_file_head(sensors, meta or {}))
         self._last_flush = time.monotonic()
         self.rows = 0
+        # t must increase (docs/formats.md; a reader refuses a row whose time goes back): a
+        # sample timed at or before the previous row (a burst mapped to one host time, a narrow
+        # device clock) is written 1 us after it, and counted
+        self.nudged = 0
+        self._last_us: int | None = None
         self._dirty = False
         self._flush()
 
@@ -332,7 +337,12 @@ class RecordingWriter:
         if len(accel) < self.sensors:  # a short row would make the file unreadable: the caller
             # starts a new file for a new sensor count (tools/record.py)
             raise ValueError(f"{self.path}: a sample with {len(accel)} sensor(s) in a file of {self.sensors}")
-        self._put(_format_row(sample.t - self.t0, accel, label))
+        t_us = round((sample.t - self.t0) * 1e6)
+        if self._last_us is not None and t_us <= self._last_us:
+            t_us = self._last_us + 1
+            self.nudged += 1
+        self._put(_format_row(t_us / 1e6, accel, label))
+        self._last_us = t_us
         self.rows += 1
         self._dirty = True
         self.flush_if_due()

@@ -84,6 +84,8 @@ def record(url: str, output: str, seconds: float | None, label: str = "", poll_s
     rows = parts.finish()
     names = ", ".join(str(f) for f in parts.files)
     print(f"wrote {rows} samples to {names}", file=sys.stderr)
+    if parts.nudged:  # t must increase: a burst timed alike, or a narrow device clock
+        print(f"{parts.nudged} sample time(s) at or before the one before: written 1 us after it", file=sys.stderr)
     if "frames_ok" in source.stats:
         print(f"link: {link_counts(source.stats)}", file=sys.stderr)
     return rows
@@ -122,6 +124,7 @@ class _RecordingParts:
         self.writer: RecordingWriter | None = None
         self.pending: list = []  # samples held until the rate is known
         self.rows = 0  # rows in the part files already closed
+        self.nudged = 0  # ... and of them, rows whose time was moved past the one before
         self.files: list[Path] = []
         self.t0: float | None = None  # every file of a run keeps the run's time origin
         self.connected = False  # the source has connected or delivered a sample
@@ -144,6 +147,7 @@ class _RecordingParts:
             width = len(sample.accel)
             if self.writer is not None and width != self.writer.sensors:
                 self.rows += self.writer.rows
+                self.nudged += self.writer.nudged
                 self.writer.close()
                 print(f"source {self.url}: now {width} sensor(s), continuing in a new file", file=sys.stderr)
                 self.writer = None
@@ -173,6 +177,7 @@ class _RecordingParts:
             self.writer.close()
         if self.writer is not None:
             self.rows += self.writer.rows
+            self.nudged += self.writer.nudged
         return self.rows
 
 

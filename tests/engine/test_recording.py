@@ -83,6 +83,17 @@ def test_streaming_writer_round_trips(tmp_path, sensors):
     assert back.labels == rec.labels and back.meta["source"] == "stream"
 
 
+def test_writer_keeps_time_increasing(tmp_path):
+    # docs/formats.md: t increases. A burst timed alike or a device clock that steps back would
+    # write rows at one time (or going back, which the reader refuses: the whole file lost)
+    path = tmp_path / "t.csv"
+    with RecordingWriter(path, 1, t0=0.0) as w:
+        for t in (0.0, 0.005, 0.005, 0.005, 0.004, 0.02):
+            w.write(Sample(t, np.ones((1, 3))))
+    assert w.nudged == 3
+    assert read_recording(path).t.tolist() == [0.0, 0.005, 0.005001, 0.005002, 0.005003, 0.02]
+
+
 def test_writer_starts_time_at_the_first_sample(tmp_path):
     path = tmp_path / "t.csv"
     with RecordingWriter(path, 1) as w:
