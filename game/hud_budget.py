@@ -43,7 +43,15 @@ class BudgetOverlay:
         t = text_scale(u)  # the text and its rows stop shrinking (game/hud_style.py); the chart does not
         # the stages the loop runs, not the spans inside them (those never run at depth 0)
         names = [s.name for s in budget.stages if s.name not in (WAIT, UNACCOUNTED) and not s.nested] + [UNACCOUNTED]
-        panel = pygame.Rect(w - int(440 * t), int(130 * u), int(424 * t), int(80 * t + 20 * t * (len(names) + 1)) + chart_h)
+        # below the clock and the mode line under it (LOW POWER, DEMO), whose text stops shrinking
+        # with the window: at 800x480 the panel's top (130 u) ran over "LOW POWER  DEMO"
+        top = max(int(130 * u), hud.clock_box((w, h), u).bottom + int(30 * t))
+        panel = pygame.Rect(w - int(440 * t), top, int(424 * t), int(80 * t + 20 * t * (len(names) + 1)) + chart_h)
+        key = getattr(hud, "key_panel", None)  # the key legend under it: the chart gives way (800x450)
+        if key is not None and panel.colliderect(key.inflate(0, int(8 * t))):
+            cut = min(panel.bottom - (key.top - int(4 * t)), chart_h - int(24 * t))
+            chart_h -= cut
+            panel.height -= cut
         surf.blit(hud._translucent(panel.size, (0, 0, 0, 190)), panel)
         hud.enter_panel("budget", panel)
         u = t

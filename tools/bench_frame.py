@@ -10,7 +10,8 @@ the thread's CPU time (thread_time_ns), which leaves out the time the scheduler 
 processes: on a shared machine the wall p99 is mostly other processes, the CPU p99 is ours. The match is deterministic, so it is played
 `--repeats` times and each call's minimum wall time is kept ("least"): the cost of that step
 without other processes; the targets are checked on those. A separate short run on the real
-clock at 60 Hz reports the dropped steps that really happen.
+clock at 60 Hz reports the dropped steps that really happen (one per mode with --all-modes;
+the virtual clock never drops a step, so only these runs can fail a dropped-steps target).
 
 Configurations: `full` (the game as shipped), `low_power` (--low-power: 30 Hz render on a
 half-size surface, fewer solver iterations, no antialiasing) and `naive`: the same match with
@@ -280,7 +281,13 @@ def run(args: argparse.Namespace) -> int:
                                                   configs["one_player"])
     if args.realtime_seconds > 0:
         out["realtime"] = realtime(args, size, low_power=args.low_power and not args.all_modes)
+        if args.all_modes:  # the scripted match's virtual clock never drops a step: each mode on the real one
+            out["realtime_low_power"] = realtime(args, size, low_power=True)
     out["targets"] = targets(configs, getattr(args, "players", 1))
+    for key in ("realtime", "realtime_low_power"):
+        if key in out:
+            rt = out[key]
+            out["targets"][f"{'low_power' if rt['low_power'] else 'full'}_real_clock_zero_dropped_steps"] = rt["dropped_steps"] == 0
     if args.json:
         print(json.dumps(out, indent=2))
     else:
@@ -306,7 +313,9 @@ def naive_ratios(naive: dict, ref: dict) -> dict:
 
 def targets(configs: dict, players: int = 1) -> dict:
     """Issue 9's done-when figures on the least-disturbed timings: sim p99 <= 1.5 ms, render
-    p99 <= 8 ms (low-power 4 ms), zero dropped steps in the scripted match. Two players
+    p99 <= 8 ms (low-power 4 ms), zero dropped steps in the scripted match (on its virtual
+    clock: a check of the schedule; the real-clock runs' dropped steps are targets of their own,
+    added by run()). Two players
     (issue 19): sim p99 <= 1.2 ms with both recognizers and sources."""
     out = {}
     sim_target = SIM_TARGET_P99_MS_TWO_PLAYERS if players == 2 else SIM_TARGET_P99_MS
@@ -371,8 +380,7 @@ def format_report(out: dict) -> str:
         r = out["two_over_one_player"]
         lines += ["two players / one player, same run (least-disturbed): " + "; ".join(
             f"{name} mean {r[name]['mean'] or 0:.1f}x, p99 {r[name]['p99'] or 0:.1f}x" for name in r)]
-    if "realtime" in out:
-        rt = out["realtime"]
+    for rt in (out[k] for k in ("realtime", "realtime_low_power") if k in out):
         lines += ["", f"real clock, 60 Hz{' low-power' if rt['low_power'] else ''}: {rt['steps']} steps in "
                   f"{rt['seconds']:.1f} s, {rt['frames']} frames, dropped {rt['dropped_steps']} steps, "
                   f"{rt['frame_overruns']} frames over period, {rt['stalls']} stalls; steps per frame {rt['steps_per_frame']}"]

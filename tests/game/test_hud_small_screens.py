@@ -165,3 +165,18 @@ def test_the_text_floor_holds_down_to_800x450_and_shrinks_with_smaller_windows()
     assert min_text_px(360 / 720) == 12 and min_text_px(180 / 720) == 6
     assert text_scale(1.0) == 1.0 and text_scale(450 / 720) == MIN_TEXT_PX / 18
     assert text_scale(360 / 720) < MIN_TEXT_PX / 18
+
+
+@pytest.mark.parametrize("size", [*SMALL, (1280, 720)])
+def test_the_budget_overlay_clears_the_mode_line_and_the_key_legend(size, scene) -> None:
+    """F3 in low power on a small window: the overlay's panel (its top was 130 u while the clock
+    and the mode line under it stop shrinking) ran over "LOW POWER  DEMO" at 800x480."""
+    pygame.init()
+    surf = pygame.Surface(size)
+    hud, st = Hud(), busy(show_budget=True, demo=True)
+    hud.layout = []
+    hud.draw(surf, st, budget())
+    overlay = hud.panels["budget"]
+    mode = [rect for text, rect, _ in hud.layout if text == "LOW POWER  DEMO"]
+    assert mode and not overlay.colliderect(mode[0]), (overlay, mode)
+    assert not overlay.colliderect(hud.panels["keys 1"]), (overlay, hud.panels["keys 1"])

@@ -41,6 +41,11 @@ def test_bench_frame_json(tmp_path) -> None:
     assert "render" not in out["configs"]["naive"]["stages"]
     assert set(out["naive_over_game"]) == {"recognize", "physics", "sim_per_step"}
     assert out["realtime"]["steps"] == 30
+    # every mode is also played on the real clock, its dropped steps a target of its own (the
+    # scripted match's virtual clock can never drop one, so its zero was no check of the mode)
+    assert out["realtime"]["low_power"] is False and out["realtime_low_power"]["low_power"] is True
+    assert out["realtime_low_power"]["steps"] == 30 and out["realtime_low_power"]["frames"] <= 16
+    assert {"full_real_clock_zero_dropped_steps", "low_power_real_clock_zero_dropped_steps"} <= set(out["targets"])
     assert any(k.startswith("full_sim_p99") for k in out["targets"])
     # issue 14's low-power-board targets, on the least-disturbed p99s
     assert {"full_sim_p99_le_1.2ms", "full_render_p99_le_6ms"} <= set(out["targets"])
