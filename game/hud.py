@@ -314,6 +314,7 @@ class Hud(TextLayer):
         u = text_scale(u)
         self.blit(surf, "Esc pause   F3 budget   F11 fullscreen", int(20 * u), (right.right, right.bottom + 32 * u), DIM, "topright")
         if not st.keys:
+            self.key_panel = None  # none drawn this frame (the F3 chart gives way only to a drawn one)
             return
         parts = [f"{k} {action_label(a)}" for k, a in st.keys]
         line = "   ".join(parts)
