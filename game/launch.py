@@ -170,6 +170,10 @@ def run_session(args: argparse.Namespace, caption: str, open_sources: Callable[[
             print(f"quickjab play: {line}", file=sys.stderr)
         session.hud_state.show_budget = args.budget
         session.on_toggle_fullscreen = pygame.display.toggle_fullscreen
+        # one frame drawn before the loop's clock starts: the first draw builds the ring's static
+        # layers and the HUD's fonts (26 ms here against 2.6 for a frame, ~120 ms on a core shared
+        # five ways), which in the loop's first frame dropped steps on a slow board
+        session.render(0.0)
         try:
             session.loop.run(frames=frames)
         finally:

@@ -177,3 +177,27 @@ def test_mirror_posture_swaps_sides() -> None:
     m = mirror_posture(p)
     assert np.allclose(m[joint_index("fist_l")], p[joint_index("fist_r")] * [-1, 1, 1])
     assert np.allclose(mirror_posture(m), p)
+
+
+def test_play_draws_its_first_frame_before_the_loop_starts(tmp_path, monkeypatch, graph_path):  # noqa: F811
+    """The first draw builds the ring's static layers (26 ms here, a frame being ~2.6 ms): done
+    inside the loop's first frame, it dropped steps on a slow board; it is done before the loop."""
+    from engine.loop import FixedStepLoop
+    from game.render import Renderer
+
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "xdg"))
+    running, built_while = [False], []
+    run, build = FixedStepLoop.run, Renderer._build_static
+
+    def loop_run(self, *a, **k):
+        running[0] = True
+        return run(self, *a, **k)
+
+    def build_static(self):
+        built_while.append(running[0])
+        return build(self)
+
+    monkeypatch.setattr(FixedStepLoop, "run", loop_run)
+    monkeypatch.setattr(Renderer, "_build_static", build_static)
+    assert main(["play", "--demo", "--headless", "--frames", "5", "--graph", graph_path, "--no-sound"]) == 0
+    assert built_while and built_while[0] is False
