@@ -222,10 +222,10 @@ def evaluate_trials(
     and kept its learnt gate: uWave 92.0 % against 91.8 % this way; docs/recognition.md)."""
     out = []
     for main in mains:
-        rec = DualBufferRecognizer(templates, main=main, **rec_kwargs)
+        rec = None
         s = Summary(main)
         for action, trial in session_order(tests):
-            if fresh:
+            if fresh or rec is None:
                 rec = DualBufferRecognizer(templates, main=main, **rec_kwargs)
             events, offset = replay_trial(rec, trial)
             first, final, last_np, at = _decisions(events)
