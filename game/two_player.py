@@ -174,7 +174,7 @@ class TwoPlayerSession(Session):
             if self.config.demo:
                 self._pilot_seat(seat)
             samples = seat.source.poll()
-            seat.buttons = pause_on_home(seat.source, seat.buttons, self.match)
+            seat.buttons = pause_on_home(seat.source, seat.buttons, self)
             seat.resampler.push(samples)
             lost = seat.disconnected
             if not lost and seat.hud.disconnected:
@@ -190,6 +190,10 @@ class TwoPlayerSession(Session):
             if self.match.paused:
                 self.match.toggle_pause()
             self._auto_paused = False
+
+    def source_lost(self) -> bool:
+        """Whether either player's source is away (Esc and Home do not resume the match then)."""
+        return any(seat.hud.disconnected for seat in self.seats)
 
     def _pilot_seat(self, seat: Seat) -> None:
         """The demo's player at this seat: a random move (an attack when within reach, else a

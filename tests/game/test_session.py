@@ -122,6 +122,32 @@ def test_disconnect_shows_overlay_and_reconnect_clears_it() -> None:
     assert s.match.clock_steps < clock_before
 
 
+def escape() -> pygame.event.Event:
+    return pygame.event.Event(pygame.KEYDOWN, key=pygame.K_ESCAPE, mod=0, unicode="", scancode=0)
+
+
+def test_escape_while_the_controller_is_lost_keeps_the_match_paused() -> None:
+    """Esc toggled the pause under the lost-controller overlay: the round clock ran and the CPU
+    boxed on while the overlay still said the match waits for the controller."""
+    s = make_session("keyboard://?seed=4", display=True)
+    surf = pygame.display.get_surface()
+    probe = (SIZE[0] // 2, int(SIZE[1] * 0.93))
+    s.loop.run(frames=5)
+    bright = sum(surf.get_at(probe)[:3])
+    s.source.disconnect()
+    s.loop.run(frames=5)
+    clock_before = s.match.clock_steps
+    for _ in range(2):  # once, and again: neither resumes it
+        pygame.event.post(escape())
+        s.loop.run(frames=30)
+        assert s.match.paused and s.match.clock_steps == clock_before
+        assert s.hud_state.disconnected and sum(surf.get_at(probe)[:3]) < 0.5 * bright  # the overlay stays
+    s.source.reconnect()
+    s.loop.run(frames=5)
+    assert not s.hud_state.disconnected and not s.match.paused  # back: it resumes by itself
+    assert s.match.clock_steps < clock_before
+
+
 def test_rumble_on_the_player_when_hit() -> None:
     s = make_session("keyboard://?seed=6", render=False)
     calls = []
