@@ -13,6 +13,7 @@ is reproducible to the bit (`state_hash`).
 
 from __future__ import annotations
 
+import sys
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -57,6 +58,17 @@ LOW_POWER_RENDER_BUDGET_MS = 4.0
 # (game/difficulty.py), so that a human (whose moves wait for the recognizer) has a fair fight.
 HOME_BUTTON = 0x0080  # Wiimote core buttons: Home
 RUMBLE_MS = 120
+# the states in which a source delivers nothing: the match pauses under the lost-source overlay.
+# One that ended (a replay played out) never comes back: the match stays paused (before, it went
+# on as if the player stood still)
+LOST_STATES = (SourceState.DISCONNECTED, SourceState.RECONNECTING, SourceState.CONNECTING, SourceState.ENDED)
+
+
+def say_if_ended(source: Source, was_lost: bool) -> None:
+    """The console's line when a source has just ended: a headless run shows no overlay."""
+    if source.state == SourceState.ENDED and not was_lost:
+        print(f"quickjab play: {source.url}: the source ended (nothing more to play); the match is paused",
+              file=sys.stderr)
 
 
 def pause_on_home(source, held: int, session) -> int:
@@ -287,7 +299,8 @@ class Session(Ring):
 
     def _watch_connection(self) -> None:
         """A lost source pauses the match; back, the recognizer learns gravity afresh."""
-        disconnected = self.source.state in (SourceState.DISCONNECTED, SourceState.RECONNECTING, SourceState.CONNECTING)
+        disconnected = self.source.state in LOST_STATES
+        say_if_ended(self.source, self.hud_state.disconnected)
         if disconnected:
             if not self.match.paused:  # held every step (a new match under the overlay too)
                 self.match.toggle_pause()
