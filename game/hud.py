@@ -322,7 +322,7 @@ class Hud(TextLayer):
         u = text_scale(u)
         self.blit(surf, "Esc pause   F3 budget   F11 fullscreen", int(20 * u), (right.right, right.bottom + 32 * u), DIM, "topright")
         if not st.keys:
-            self.key_panel = None  # none drawn this frame (the F3 chart gives way only to a drawn one)
+            self.key_panel = None  # none drawn this frame
             return
         parts = [f"{k} {action_label(a)}" for k, a in st.keys]
         line = "   ".join(parts)
@@ -391,8 +391,9 @@ class Hud(TextLayer):
         self.enter_panel("screen", None)
 
     def _budget(self, surf: pygame.Surface, budget: FrameBudget, u: float) -> None:
-        """The F3 overlay (game/hud_budget.py)."""
-        self.budget_overlay.draw(self, surf, budget, u)
+        """The F3 overlay (game/hud_budget.py), clear of the panels drawn this frame under it."""
+        below = [rect for name, rect in self.panels.items() if name.startswith(("recognition", "keys"))]
+        self.budget_overlay.draw(self, surf, budget, u, below)
 
     # the overlay's chart and rows, under the names tests read
     @property
