@@ -153,6 +153,14 @@ def result_title(result: str, winner: int | None, wins: tuple[str, str]) -> str:
     return f"{wins[winner]} ON POINTS"
 
 
+def lost_lines(state: str) -> tuple[str, str]:
+    """The lost-source overlay's title and what happens next, for the source's state: one that
+    ended (a replay played out) is not coming back."""
+    if state == "ended":
+        return "SOURCE ENDED", "nothing more to play: close the window to quit"
+    return "CONTROLLER DISCONNECTED", "the match resumes when it is back"
+
+
 class Hud(TextLayer):
     def __init__(self) -> None:
         super().__init__()
@@ -314,7 +322,7 @@ class Hud(TextLayer):
         u = text_scale(u)
         self.blit(surf, "Esc pause   F3 budget   F11 fullscreen", int(20 * u), (right.right, right.bottom + 32 * u), DIM, "topright")
         if not st.keys:
-            self.key_panel = None  # none drawn this frame (the F3 chart gives way only to a drawn one)
+            self.key_panel = None  # none drawn this frame
             return
         parts = [f"{k} {action_label(a)}" for k, a in st.keys]
         line = "   ".join(parts)
@@ -373,17 +381,19 @@ class Hud(TextLayer):
         pygame.draw.rect(surf, (120, 20, 24), box, border_radius=int(10 * u))
         pygame.draw.rect(surf, REJECT_COLOR, box, 3, border_radius=int(10 * u))
         self.enter_panel("lost", box)
-        self.blit(surf, "CONTROLLER DISCONNECTED", int(54 * u), (w // 2, box.top + 22 * u), TEXT, "midtop")
+        title, then = lost_lines(st.source.state)
+        self.blit(surf, title, int(54 * u), (w // 2, box.top + 22 * u), TEXT, "midtop")
         # the source on a line of its own, smaller if its URL is long (a two-player seat's
         # keyboard URL ran past both sides of the box), then what happens next
         line, size = self.text.fit(f"{st.source.url}: {st.source.state}", int(24 * u), box.width - int(24 * u))
         self.blit(surf, line, size, (w // 2, box.top + 80 * u), TEXT, "midtop")
-        self.blit(surf, "the match resumes when it is back", int(24 * u), (w // 2, box.top + 108 * u), TEXT, "midtop")
+        self.blit(surf, then, int(24 * u), (w // 2, box.top + 108 * u), TEXT, "midtop")
         self.enter_panel("screen", None)
 
     def _budget(self, surf: pygame.Surface, budget: FrameBudget, u: float) -> None:
-        """The F3 overlay (game/hud_budget.py)."""
-        self.budget_overlay.draw(self, surf, budget, u)
+        """The F3 overlay (game/hud_budget.py), clear of the panels drawn this frame under it."""
+        below = [rect for name, rect in self.panels.items() if name.startswith(("recognition", "keys"))]
+        self.budget_overlay.draw(self, surf, budget, u, below)
 
     # the overlay's chart and rows, under the names tests read
     @property

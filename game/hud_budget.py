@@ -6,6 +6,7 @@ Drawn by the HUD (game/hud.py) with its text and backgrounds."""
 from __future__ import annotations
 
 from collections import deque
+from collections.abc import Sequence
 
 import numpy as np
 import pygame
@@ -34,10 +35,13 @@ class BudgetOverlay:
         self.chart: pygame.Surface | None = None  # the chart, scrolled a column per frame
         self.rows_text: list = []
         self.text_frame = -10**9
+        self.rows_shown = 0  # the stages listed last frame: fewer than all where the room ran out
 
-    def draw(self, hud, surf: pygame.Surface, budget: FrameBudget, u: float) -> None:
+    def draw(self, hud, surf: pygame.Surface, budget: FrameBudget, u: float,
+             below: Sequence[pygame.Rect] = ()) -> None:
         """A stacked bar per stage against the frame's period (the 16.7 ms line; 33.3 ms in low
-        power, where a frame holds two steps), and each stage's p99."""
+        power, where a frame holds two steps), and each stage's p99; clear of the panels `below`
+        (the HUD's, drawn this frame: key legends, player 2's recognition panel)."""
         w, h = surf.get_size()
         chart_h = int(90 * u)
         t = text_scale(u)  # the text and its rows stop shrinking (game/hud_style.py); the chart does not
@@ -47,18 +51,17 @@ class BudgetOverlay:
         # with the window: at 800x480 the panel's top (130 u) ran over "LOW POWER  DEMO"
         top = max(int(130 * u), hud.clock_box((w, h), u).bottom + int(30 * t))
         panel = pygame.Rect(w - int(440 * t), top, int(424 * t), int(80 * t + 20 * t * (len(names) + 1)) + chart_h)
-        key = getattr(hud, "key_panel", None)  # the key legend under it: the chart gives way (800x450)
-        if key is not None and panel.colliderect(key.inflate(0, int(8 * t))):
-            cut = min(panel.bottom - (key.top - int(4 * t)), chart_h - int(24 * t))
-            chart_h -= cut
-            panel.height -= cut
+        chart_h, self.rows_shown = give_way(panel, chart_h, len(names), below, t)
+        # (a row's room under the last row is the chart's margin: without a chart, none)
+        panel.height = int(80 * t + 20 * t * (self.rows_shown + (1 if chart_h else 0))) + chart_h
         surf.blit(hud._translucent(panel.size, (0, 0, 0, 190)), panel)
         hud.enter_panel("budget", panel)
         u = t
         last = budget.last_frame_ms()
         scale_ms = 2.0 * budget.frame_period_ms  # the bar spans two frame periods
         bar = pygame.Rect(panel.left + int(10 * u), panel.top + int(26 * u), panel.width - int(20 * u), int(18 * u))
-        hud.blit(surf, f"frame budget {budget.frame_period_ms:.1f} ms   dropped {budget.dropped_steps}", int(18 * u), (panel.left + 10 * u, panel.top + 6 * u), TEXT)
+        busiest = f"   busiest {self.rows_shown} of {len(names)}" if self.rows_shown < len(names) else ""
+        hud.blit(surf, f"frame budget {budget.frame_period_ms:.1f} ms   dropped {budget.dropped_steps}{busiest}", int(18 * u), (panel.left + 10 * u, panel.top + 6 * u), TEXT)
         self._bar(surf, bar, names, last, budget, scale_ms)
         self._update_p99(budget, names)
         chart = pygame.Rect(bar.left, panel.bottom - chart_h - int(4 * u), bar.width, chart_h)
@@ -97,6 +100,9 @@ class BudgetOverlay:
         if new:
             self.history_frame = budget.frames
             self.history.append(np.array([last.get(n, 0.0) for n in names]))
+        if chart.height < 1:  # no room for it this frame: its history is still kept
+            self.chart = None
+            return
         col_w = max(1, chart.width // HISTORY_FRAMES)
         px_per_ms = chart.height / scale_ms
         if self.chart is None or self.chart.get_size() != chart.size:
@@ -139,8 +145,34 @@ class BudgetOverlay:
         y = bar.bottom + 8 * u
         for x, head in zip(cols, BUDGET_HEADERS, strict=True):
             hud.blit(surf, head, int(16 * u), (x, y + 2 * u), DIM)
-        for k, row in enumerate(self.rows_text):
-            y = bar.bottom + 28 * u + k * 20 * u
+        for j, k in enumerate(self._busiest(names, stages, budget.frame_period_ms)):
+            row = self.rows_text[k]
+            y = bar.bottom + 28 * u + j * 20 * u
             pygame.draw.rect(surf, STAGE_COLORS[k % len(STAGE_COLORS)], (int(panel.left + 10 * u), int(y + 3 * u), int(12 * u), int(12 * u)))
             for x, text in zip(cols, row, strict=True):
                 hud.blit(surf, text, int(18 * u), (x, y), TEXT)
+
+    def _busiest(self, names: list[str], stages: dict, period: float) -> list[int]:
+        """The rows shown, in the stages' order: all of them, else the stages nearest their
+        budget (p99 against it; a stage without one against the frame's `period`)."""
+        if self.rows_shown >= len(names):
+            return list(range(len(names)))
+
+        def load(k: int) -> float:
+            return self.p99.get(names[k], 0.0) / (stages[names[k]].budget_ms or period)
+        return sorted(sorted(range(len(names)), key=load, reverse=True)[:self.rows_shown])
+
+
+def give_way(panel: pygame.Rect, chart_h: int, rows: int, below: Sequence[pygame.Rect], t: float) -> tuple[int, int]:
+    """The chart's height and the number of stage rows that keep `panel` clear of the panels
+    under it (at 800x450 it ran over the key legend, and with two players over player 2's
+    recognition panel and legend): the chart gives way first, down to 24 t, then altogether;
+    then the rows of the least loaded stages (never under 1)."""
+    under = [r.top for r in below if r.left < panel.right and r.right > panel.left and r.bottom > panel.top]
+    room = min(under, default=panel.bottom + int(4 * t)) - int(4 * t) - panel.top
+    over = panel.height - room
+    if over <= 0:
+        return chart_h, rows
+    if chart_h - over >= int(24 * t):
+        return chart_h - over, rows
+    return 0, max(1, min(rows, int((room - 80 * t) // (20 * t))))

@@ -13,6 +13,7 @@ is reproducible to the bit (`state_hash`).
 
 from __future__ import annotations
 
+import sys
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -57,14 +58,26 @@ LOW_POWER_RENDER_BUDGET_MS = 4.0
 # (game/difficulty.py), so that a human (whose moves wait for the recognizer) has a fair fight.
 HOME_BUTTON = 0x0080  # Wiimote core buttons: Home
 RUMBLE_MS = 120
+# the states in which a source delivers nothing: the match pauses under the lost-source overlay.
+# One that ended (a replay played out) never comes back: the match stays paused (before, it went
+# on as if the player stood still)
+LOST_STATES = (SourceState.DISCONNECTED, SourceState.RECONNECTING, SourceState.CONNECTING, SourceState.ENDED)
 
 
-def pause_on_home(source, held: int, match) -> int:
-    """Toggle the match's pause when the source's Home button goes down (a press, not a hold:
-    `held` is the buttons held at the last poll); returns the buttons held now."""
+def say_if_ended(source: Source, was_lost: bool) -> None:
+    """The console's line when a source has just ended: a headless run shows no overlay."""
+    if source.state == SourceState.ENDED and not was_lost:
+        print(f"quickjab play: {source.url}: the source ended (nothing more to play); the match is paused",
+              file=sys.stderr)
+
+
+def pause_on_home(source, held: int, session) -> int:
+    """Toggle the pause when the source's Home button goes down (a press, not a hold: `held` is
+    the buttons held at the last poll), through `session.toggle_pause()` (which keeps a match
+    paused for a lost source paused); returns the buttons held now."""
     buttons = int(source.buttons or 0)
     if buttons & HOME_BUTTON and not held & HOME_BUTTON:
-        match.toggle_pause()
+        session.toggle_pause()
     return buttons
 
 
@@ -280,15 +293,16 @@ class Session(Ring):
         if self.config.demo:
             self.pilot.step(self.source, self.match.fighting, self.player, self.opponent)
         samples = self.source.poll()
-        self._buttons = pause_on_home(self.source, self._buttons, self.match)
+        self._buttons = pause_on_home(self.source, self._buttons, self)
         self.resampler.push(samples)
         self._watch_connection()
 
     def _watch_connection(self) -> None:
         """A lost source pauses the match; back, the recognizer learns gravity afresh."""
-        disconnected = self.source.state in (SourceState.DISCONNECTED, SourceState.RECONNECTING, SourceState.CONNECTING)
-        if disconnected and not self.hud_state.disconnected:
-            if not self.match.paused:
+        disconnected = self.source.state in LOST_STATES
+        say_if_ended(self.source, self.hud_state.disconnected)
+        if disconnected:
+            if not self.match.paused:  # held every step (a new match under the overlay too)
                 self.match.toggle_pause()
                 self._auto_paused = True
         elif not disconnected and self.hud_state.disconnected:
@@ -304,7 +318,7 @@ class Session(Ring):
             self.loop.stop()
         elif event.type == pygame.KEYDOWN:
             if event.key == pygame.K_ESCAPE:
-                self.match.toggle_pause()
+                self.toggle_pause()
             elif event.key == pygame.K_F3:
                 self.hud_state.show_budget = not self.hud_state.show_budget
             elif event.key == pygame.K_F11:
@@ -316,6 +330,16 @@ class Session(Ring):
                 self.cycle_difficulty()  # the pause menu
             elif KEYS in self.source.capabilities and not self.match.paused:
                 self.source.press_key(pygame.key.name(event.key))
+
+    def toggle_pause(self) -> None:
+        """Esc or Home: pause, or resume; not while a source is lost: the overlay says the match
+        resumes when it is back (resumed under it, the clock ran and the CPU boxed on)."""
+        if not (self.match.paused and self.source_lost()):
+            self.match.toggle_pause()
+
+    def source_lost(self) -> bool:
+        """Whether the player's source is away (the lost-controller overlay is up)."""
+        return self.hud_state.disconnected
 
     def _frames(self, step: int, dt: float) -> None:
         if self._t0 is None:

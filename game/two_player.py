@@ -29,7 +29,7 @@ from engine.arguments import SEED_MAX
 from engine.clock import RealClock, VirtualClock
 from engine.errors import InputError
 from engine.frames import FrameResampler
-from engine.sensors.source import KEYS, PLAYABLE, Source, SourceState
+from engine.sensors.source import KEYS, PLAYABLE, Source
 from game.difficulty import DifficultySetting
 from game.history import History
 from game.hits import Hit
@@ -41,12 +41,14 @@ from game.pilot import PILOT_ATTACKS, PILOT_REACH, PILOT_SETTLE_STEPS
 from game.rules import RING_LIMIT, blow_damage
 from game.session import (
     LOG_KEPT,
+    LOST_STATES,
     RUMBLE_MS,
     Session,
     SessionConfig,
     _event_key,
     load_templates,
     pause_on_home,
+    say_if_ended,
     templates_in_use,
 )
 from game.session_view import SessionView
@@ -76,7 +78,7 @@ class Seat:
 
     @property
     def disconnected(self) -> bool:
-        return self.source.state in (SourceState.DISCONNECTED, SourceState.RECONNECTING, SourceState.CONNECTING)
+        return self.source.state in LOST_STATES
 
 
 def _seat_event_key(item: tuple[int, dict]) -> tuple:
@@ -174,9 +176,10 @@ class TwoPlayerSession(Session):
             if self.config.demo:
                 self._pilot_seat(seat)
             samples = seat.source.poll()
-            seat.buttons = pause_on_home(seat.source, seat.buttons, self.match)
+            seat.buttons = pause_on_home(seat.source, seat.buttons, self)
             seat.resampler.push(samples)
             lost = seat.disconnected
+            say_if_ended(seat.source, seat.hud.disconnected)
             if not lost and seat.hud.disconnected:
                 # back: the controller may sit differently in the hand; learn gravity afresh
                 seat.recognizer.reset()
@@ -190,6 +193,10 @@ class TwoPlayerSession(Session):
             if self.match.paused:
                 self.match.toggle_pause()
             self._auto_paused = False
+
+    def source_lost(self) -> bool:
+        """Whether either player's source is away (Esc and Home do not resume the match then)."""
+        return any(seat.hud.disconnected for seat in self.seats)
 
     def _pilot_seat(self, seat: Seat) -> None:
         """The demo's player at this seat: a random move (an attack when within reach, else a

@@ -180,3 +180,27 @@ def test_the_budget_overlay_clears_the_mode_line_and_the_key_legend(size, scene)
     mode = [rect for text, rect, _ in hud.layout if text == "LOW POWER  DEMO"]
     assert mode and not overlay.colliderect(mode[0]), (overlay, mode)
     assert not overlay.colliderect(hud.panels["keys 1"]), (overlay, hud.panels["keys 1"])
+
+
+@pytest.mark.parametrize("size", [(640, 360), *SMALL, (960, 540), (1280, 720)])
+def test_the_budget_overlay_gives_way_to_player_twos_panels(size, scene) -> None:
+    """F3 with two players on a small window: the overlay's panel (on the right, like player 2's
+    panels) covered player 2's recognition panel and key legend. Their pixels are now the same
+    with F3 on as off; the chart gives way first, then the least loaded stages' rows."""
+    pygame.init()
+    frames = {}
+    for shown in (False, True):
+        surf = pygame.Surface(size)
+        Renderer(size).draw(surf, scene)
+        hud, st = TwoPlayerHud(seat(2)), seat(1, names=("P1", "P2"), show_budget=shown)
+        hud.draw(surf, st, budget())
+        frames[shown] = pygame.surfarray.array3d(surf)
+    mine = [hud.panels[name] for name in ("recognition 2", "keys 2")]
+    for rect in mine:
+        region = (slice(rect.left, rect.right), slice(rect.top, rect.bottom))
+        assert (frames[True][region] == frames[False][region]).all(), (rect, hud.panels["budget"])
+    rows = len(hud._rows_text)
+    shown_rows = hud.budget_overlay.rows_shown
+    assert 4 <= shown_rows <= rows  # at 800x450: the busiest stages, their numbers readable
+    if size == (1280, 720):  # room for all of it: as before
+        assert shown_rows == rows and hud._chart.get_height() == 90

@@ -122,6 +122,58 @@ def test_disconnect_shows_overlay_and_reconnect_clears_it() -> None:
     assert s.match.clock_steps < clock_before
 
 
+def escape() -> pygame.event.Event:
+    return pygame.event.Event(pygame.KEYDOWN, key=pygame.K_ESCAPE, mod=0, unicode="", scancode=0)
+
+
+def test_escape_while_the_controller_is_lost_keeps_the_match_paused() -> None:
+    """Esc toggled the pause under the lost-controller overlay: the round clock ran and the CPU
+    boxed on while the overlay still said the match waits for the controller."""
+    s = make_session("keyboard://?seed=4", display=True)
+    surf = pygame.display.get_surface()
+    probe = (SIZE[0] // 2, int(SIZE[1] * 0.93))
+    s.loop.run(frames=5)
+    bright = sum(surf.get_at(probe)[:3])
+    s.source.disconnect()
+    s.loop.run(frames=5)
+    clock_before = s.match.clock_steps
+    for _ in range(2):  # once, and again: neither resumes it
+        pygame.event.post(escape())
+        s.loop.run(frames=30)
+        assert s.match.paused and s.match.clock_steps == clock_before
+        assert s.hud_state.disconnected and sum(surf.get_at(probe)[:3]) < 0.5 * bright  # the overlay stays
+    s.source.reconnect()
+    s.loop.run(frames=5)
+    assert not s.hud_state.disconnected and not s.match.paused  # back: it resumes by itself
+    assert s.match.clock_steps < clock_before
+
+
+def test_a_replay_that_plays_out_pauses_the_match_and_says_so(tmp_path, capsys) -> None:
+    """A replay's source ends: the match went on as if the player stood still, the round clock
+    running and the CPU boxing; now it pauses for good under an overlay that says the source ended."""
+    from tools.cli import main
+
+    rec = tmp_path / "short.csv"
+    assert main(["synth", "--session", "1", "--seed", "2", "-o", str(rec)]) == 0
+    s = make_session(f"replay://{rec}", display=True)
+    surf = pygame.display.get_surface()
+    probe = (SIZE[0] // 2, int(SIZE[1] * 0.93))
+    s.loop.run(frames=30)
+    assert s.source.state == SourceState.CONNECTED and s.match.fighting
+    bright = sum(surf.get_at(probe)[:3])
+    s.view.hud.layout = []
+    s.loop.run(frames=60)  # 1.5 s: played out
+    assert s.source.state == SourceState.ENDED
+    assert s.match.paused and s.hud_state.disconnected
+    clock = s.match.clock_steps
+    pygame.event.post(escape())  # nothing to resume with
+    s.loop.run(frames=60)
+    assert s.match.paused and s.match.clock_steps == clock
+    assert sum(surf.get_at(probe)[:3]) < 0.5 * bright  # the overlay
+    said = {text for text, _, panel in s.view.hud.layout if panel == "lost"}
+    assert "SOURCE ENDED" in said and any(t.startswith("replay://") and t.endswith(": ended") for t in said), said
+    assert capsys.readouterr().err.count("the source ended") == 1  # and on the console, once
+
 def test_rumble_on_the_player_when_hit() -> None:
     s = make_session("keyboard://?seed=6", render=False)
     calls = []
