@@ -75,12 +75,19 @@ def resample_labels(t: np.ndarray, labels: list[str], grid: np.ndarray) -> list[
     return [labels[i] for i in idx]
 
 
-def recording_frames(rec: Recording, hz: int = FRAME_HZ) -> tuple[np.ndarray, np.ndarray, list[str]]:
+def recording_frames(rec: Recording, hz: int = FRAME_HZ, phase: float = 0.0) -> tuple[np.ndarray, np.ndarray, list[str]]:
     """(grid times relative to the first sample, exactly k/hz; frames (m, 3*sensors); labels
-    per frame) of a recording as read from its file (its times rounded: WRITTEN_TOLERANCE)."""
-    grid, frames = resample(rec.t, rec.accel, hz, tolerance=WRITTEN_TOLERANCE)
-    offsets = frame_offsets(float(rec.t[-1] - rec.t[0]), hz, WRITTEN_TOLERANCE)
-    return offsets, frames, resample_labels(rec.t, rec.labels, grid)
+    per frame) of a recording as read from its file (its times rounded: WRITTEN_TOLERANCE).
+    `phase` (0 <= phase < 1) moves the grid that fraction of a step later, to (k + phase)/hz: where a
+    recording's first sample falls between two steps is chance, and the evaluation pools over it
+    (`quickjab evaluate --phases`)."""
+    if not 0.0 <= phase < 1.0:
+        raise ValueError(f"phase must be a fraction of a step in [0, 1), not {phase!r}")
+    t0 = float(rec.t[0]) + phase / hz
+    offsets = frame_offsets(float(rec.t[-1]) - t0, hz, WRITTEN_TOLERANCE)
+    grid = t0 + offsets
+    frames = interpolate_at(np.asarray(rec.t, dtype=np.float64), np.asarray(rec.accel, dtype=np.float64).reshape(len(rec.t), -1), grid)
+    return offsets + phase / hz, frames, resample_labels(rec.t, rec.labels, grid)
 
 
 class FrameResampler:

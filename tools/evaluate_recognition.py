@@ -33,12 +33,10 @@ from pathlib import Path
 import numpy as np
 
 from engine.errors import InputError
-from engine.frames import recording_frames
 from engine.recognition import DualBufferRecognizer, Templates
 from engine.recognition.templates import activity, rest_gravity, window_spread
-from engine.recording import read_recording
 from tools.evaluation_settings import CLIP_FRAMES
-from tools.trial_files import templates_from_trials
+from tools.trial_files import read_labelled_frames, templates_from_trials
 
 UNNOTICEABLE_FRAMES = 6
 PAD_BEFORE, PAD_AFTER = 20, 40
@@ -559,8 +557,7 @@ def evaluate_phone_punches(
 
     def load(f: Path) -> tuple[np.ndarray, list[str]]:
         if f not in loaded:
-            _, frames, labels = recording_frames(read_recording(f))
-            loaded[f] = (frames, labels)
+            loaded[f] = read_labelled_frames(f)
         return loaded[f]
 
     out = {}

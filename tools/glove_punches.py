@@ -17,9 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from engine.errors import InputError
-from engine.frames import recording_frames
 from engine.recognition import DualBufferRecognizer
-from engine.recording import read_recording
 from tools.evaluate_recognition import (
     CLIP_FRAMES,
     Summary,
@@ -28,7 +26,7 @@ from tools.evaluate_recognition import (
     stream_onset,
     stream_trials,
 )
-from tools.trial_files import templates_from_trials
+from tools.trial_files import read_frames, templates_from_trials
 
 GLOVE_PEAK_G = 3.0  # a punch: the glove's |a| at least this far (g) from 1 g ...
 GLOVE_END_G = 1.0  # ... widened to the frames around it at least this far
@@ -108,7 +106,7 @@ class _Loaded:
     def __call__(self, f: GloveFile) -> tuple[np.ndarray, list[Interval], list[int]]:
         path, left, right = f
         if path not in self._cache:
-            _, frames, _ = recording_frames(read_recording(path))
+            frames = read_frames(path)
             if frames.shape[1] != 6:
                 raise InputError(f"{path}: {frames.shape[1] // 3} sensor(s); a two-glove recording has 2 (right, left)")
             self._cache[path] = (frames, *glove_intervals(frames, left, right))

@@ -7,6 +7,7 @@ import argparse
 import json
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from engine import arguments
 from engine.errors import InputError, refuse_overwriting
@@ -16,6 +17,9 @@ from engine.recognition.config import layered, parse_assignments
 from engine.recognition.templates import FEATURES, METHODS
 from engine.recording import read_recording
 from tools.evaluation_settings import CLIP_FRAMES
+
+if TYPE_CHECKING:
+    from tools.evaluate_recognition import Summary
 
 # Start-up (issue 14): the evaluation's modules (tools.evaluate_recognition, glove_punches,
 # trial_files) are imported inside the commands that use them, so `recognize` and every `--help`
@@ -167,6 +171,25 @@ def _register_evaluate(sub: argparse._SubParsersAction) -> None:
     e.add_argument("inputs", nargs="*", metavar="INPUT", help="trial dirs (<root>/<action>/*.csv) or labelled recording CSVs")
     e.add_argument("--templates", default=None, metavar="T.npz")
     e.add_argument("--train", default=None, metavar="TRIALS_DIR", help="build templates from these trials")
+    _data_set_args(e)
+    e.add_argument("--keep", type=_keep, default=None,
+                   help="templates: keep each action's KEEP most representative trials (e.g. --trials 5 --keep 3), "
+                        "or 'usable': every trial not cut off, odd or like another action's (as `train` does)")
+    e.add_argument("--every", type=arguments.int_range(1, 1_000_000), default=1, help="use every k-th test trial (quicker sweeps)")
+    e.add_argument("--folds", type=arguments.int_range(2, MAX_FOLDS), default=2, help="labelled CSV without templates: K contiguous folds (default 2)")
+    e.add_argument("--mains", type=_mains, default=_mains("1-12"), help="main-buffer sizes (default 1-12; e.g. 6 or 1-12,auto)")
+    e.add_argument("--method", choices=METHODS, default=None, help="template method when building")
+    e.add_argument("--feature", choices=FEATURES, default=None, help="template feature when building (default log)")
+    e.add_argument("--plot", type=arguments.plot_file, default=None, metavar="PNG", help="draw Figs. 8-9 style bars")
+    e.add_argument("--clip-frames", type=arguments.int_range(0, MAX_BUFFER), default=CLIP_FRAMES,
+                   help=f"streams: the simulated character's clip length, then character_finished() (default {CLIP_FRAMES}; 0 = never)")
+    e.add_argument("--json", action="store_true", help="print the rows as JSON lines instead of a table")
+    _recognizer_args(e)
+    e.set_defaults(func=cmd_evaluate)
+
+
+def _data_set_args(e: argparse.ArgumentParser) -> None:
+    """`evaluate`'s data sets and their protocols' options."""
     e.add_argument("--uwave", default=None, metavar="DIR", help="the uWave protocol on DIR/U<n>/gesture<k>/d<day>-r<rep>.csv")
     e.add_argument("--users", type=_users, default="1-6", help="uWave users (default 1-6)")
     e.add_argument("--fresh", action="store_true",
@@ -193,21 +216,11 @@ def _register_evaluate(sub: argparse._SubParsersAction) -> None:
     e.add_argument("--draws", type=arguments.int_range(1, 100), default=1,
                    help="--phone-punches, --uwave: pool this many disjoint draws of --trials templates per kind "
                         "(punches or reps 1-3, 4-6, ...; default 1)")
+    e.add_argument("--phases", type=arguments.int_range(1, 60), default=1,
+                   help="pool every row over this many phases of the 60 Hz grid (the first step 0, 1/P, 2/P, ... of a "
+                        "step after a recording's first sample; default 1: the first sample's instant). Where the "
+                        "first sample falls between two steps is chance, and it moves a row by a few points")
     e.add_argument("--seed", type=arguments.seed, default=0, help="--mixed: the shuffle's seed (default 0)")
-    e.add_argument("--keep", type=_keep, default=None,
-                   help="templates: keep each action's KEEP most representative trials (e.g. --trials 5 --keep 3), "
-                        "or 'usable': every trial not cut off, odd or like another action's (as `train` does)")
-    e.add_argument("--every", type=arguments.int_range(1, 1_000_000), default=1, help="use every k-th test trial (quicker sweeps)")
-    e.add_argument("--folds", type=arguments.int_range(2, MAX_FOLDS), default=2, help="labelled CSV without templates: K contiguous folds (default 2)")
-    e.add_argument("--mains", type=_mains, default=_mains("1-12"), help="main-buffer sizes (default 1-12; e.g. 6 or 1-12,auto)")
-    e.add_argument("--method", choices=METHODS, default=None, help="template method when building")
-    e.add_argument("--feature", choices=FEATURES, default=None, help="template feature when building (default log)")
-    e.add_argument("--plot", type=arguments.plot_file, default=None, metavar="PNG", help="draw Figs. 8-9 style bars")
-    e.add_argument("--clip-frames", type=arguments.int_range(0, MAX_BUFFER), default=CLIP_FRAMES,
-                   help=f"streams: the simulated character's clip length, then character_finished() (default {CLIP_FRAMES}; 0 = never)")
-    e.add_argument("--json", action="store_true", help="print the rows as JSON lines instead of a table")
-    _recognizer_args(e)
-    e.set_defaults(func=cmd_evaluate)
 
 
 def cmd_build(args: argparse.Namespace) -> int:
@@ -260,7 +273,7 @@ def cmd_recognize(args: argparse.Namespace) -> int:
 
 def cmd_evaluate(args: argparse.Namespace) -> int:
     from tools import evaluate_recognition as ev
-    from tools.trial_files import load_trials_dir, templates_from_trials
+    from tools.trial_files import grid_phase
 
     if args.plot:  # said before minutes of evaluation, not after
         refuse_overwriting({"--plot": args.plot}, [*args.inputs, args.templates])
@@ -268,9 +281,30 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
             import matplotlib  # noqa: F401
         except ImportError:
             raise InputError("--plot needs matplotlib (pip install 'quickjab[dev]')") from None
+    if not (args.uwave or args.phone_punches or args.punchbuddy or args.inputs):
+        raise InputError("nothing to evaluate: give INPUTs, --uwave DIR, --phone-punches DIR, --punchbuddy DIR, or see --help")
+
+    def at_phase(k: int) -> dict[str, list[ev.Summary]]:
+        with grid_phase(k / args.phases):
+            return _evaluate_sets(args)
+
+    pooled = ev.pooled_draws(at_phase, args.phases, args.mains)
+    results = {title: [s.row() for s in summaries] for title, summaries in pooled.items()}
+    _print_results(args, results)
+    if args.plot:
+        ev.plot(results, args.plot)
+        print(f"wrote {args.plot}")
+    return 0
+
+
+def _evaluate_sets(args: argparse.Namespace) -> dict[str, list[Summary]]:
+    """Every set the command line names, once: {title: one Summary per main}."""
+    from tools import evaluate_recognition as ev
+    from tools.trial_files import load_trials_dir, templates_from_trials
+
     kw = _rec_kwargs(args)
     tk = {k: v for k, v in (("method", args.method), ("feature", args.feature), ("keep", args.keep)) if v}
-    results: dict[str, list[dict]] = {}
+    results: dict[str, list[Summary]] = {}
     if args.uwave:
         results.update(_evaluate_uwave(args, kw, tk))
     if args.phone_punches:
@@ -282,7 +316,7 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         )
         if not res:
             raise InputError(f"{args.phone_punches}: no <hand>_<punch>_<fast|slow>.csv recordings")
-        results.update({title: [s.row() for s in summaries] for title, summaries in res.items()})
+        results.update(res)
     if args.punchbuddy:
         results.update(_evaluate_punchbuddy(args, kw, tk))
     templates = Templates.load(args.templates) if args.templates else None
@@ -293,13 +327,7 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         kw = _rec_kwargs(args, templates.recognizer)  # a --templates file's saved settings under the command line's
     for inp in args.inputs:
         results[Path(inp).name] = _evaluate_input(args, inp, templates, kw, tk, source)
-    if not results:
-        raise InputError("nothing to evaluate: give INPUTs, --uwave DIR, --phone-punches DIR, --punchbuddy DIR, or see --help")
-    _print_results(args, results)
-    if args.plot:
-        ev.plot(results, args.plot)
-        print(f"wrote {args.plot}")
-    return 0
+    return results
 
 
 def _keep(text: str) -> int | str:
@@ -312,7 +340,7 @@ def _keep(text: str) -> int | str:
         raise argparse.ArgumentTypeError(f"{exc} (or 'usable')") from None
 
 
-def _evaluate_uwave(args: argparse.Namespace, kw: dict, tk: dict) -> dict[str, list[dict]]:
+def _evaluate_uwave(args: argparse.Namespace, kw: dict, tk: dict) -> dict[str, list[Summary]]:
     """The uWave users' rows pooled: each user's first --trials day-1 reps are the templates
     (with --draws k, the next ones too, each draw on its own), days 2-7 the tests."""
     from tools import evaluate_recognition as ev
@@ -342,10 +370,10 @@ def _evaluate_uwave(args: argparse.Namespace, kw: dict, tk: dict) -> dict[str, l
                 for p, r in zip(pooled, res, strict=True):
                     p.add(r)
     order = "fresh recognizer per trial" if args.fresh else "session order"
-    return {f"uWave users {args.users}, noise_g {kw['noise_g']}, {order}": [s.row() for s in pooled]}
+    return {f"uWave users {args.users}, noise_g {kw['noise_g']}, {order}": pooled}
 
 
-def _evaluate_punchbuddy(args: argparse.Namespace, kw: dict, tk: dict) -> dict[str, list[dict]]:
+def _evaluate_punchbuddy(args: argparse.Namespace, kw: dict, tk: dict) -> dict[str, list[Summary]]:
     """The two-glove rows (tools/glove_punches.py): across each person's sessions and across people."""
     from tools import glove_punches
 
@@ -357,16 +385,16 @@ def _evaluate_punchbuddy(args: argparse.Namespace, kw: dict, tk: dict) -> dict[s
     if not res:
         raise InputError(f"{args.punchbuddy}: no recording to test: a person's other session, or another person's, "
                          "with the punch kinds of the templates")
-    return {title: [s.row() for s in summaries] for title, summaries in res.items()}
+    return res
 
 
 def _evaluate_input(args: argparse.Namespace, inp: str, templates: Templates | None, kw: dict,
-                    tk: dict, source: str | None = None) -> list[dict]:
+                    tk: dict, source: str | None = None) -> list[Summary]:
     """One INPUT's rows: a trial directory against the templates, or a labelled recording
     against the templates or, without them, in folds that learn from the rest of it. `source`
     names the templates in messages (the --templates file, or what --train built them from)."""
     from tools import evaluate_recognition as ev
-    from tools.trial_files import load_trials_dir, trials_dim
+    from tools.trial_files import load_trials_dir, read_labelled_frames, trials_dim
 
     path = Path(inp)
     if path.is_dir():
@@ -376,7 +404,7 @@ def _evaluate_input(args: argparse.Namespace, inp: str, templates: Templates | N
         _check_dim(inp, trials_dim(tests), templates, source)
         res = ev.evaluate_trials(templates, tests, args.mains, fresh=args.fresh, **kw)
     else:
-        _, frames, labels = recording_frames(read_recording(path))
+        frames, labels = read_labelled_frames(path)
         if not any(labels):
             raise InputError(f"{inp}: no labelled intervals (label column empty)")
         if templates is None:
@@ -387,7 +415,7 @@ def _evaluate_input(args: argparse.Namespace, inp: str, templates: Templates | N
         else:
             _check_dim(inp, frames.shape[1], templates, source)
             res = ev.evaluate_stream(templates, frames, labels, args.mains, clip_frames=args.clip_frames, **kw)
-    return [s.row() for s in res]
+    return res
 
 
 def _check_dim(inp: str, dim: int, templates: Templates, source: str | None) -> None:

@@ -3,7 +3,8 @@
 from __future__ import annotations
 
 import fnmatch
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -14,11 +15,31 @@ from engine.frames import recording_frames
 from engine.recognition import Templates
 from engine.recording import read_recording
 
+# The grid phase every recording is read at (`quickjab evaluate --phases`: each set at several
+# phases, pooled); 0 everywhere else. Set only through `grid_phase`.
+_grid_phase = 0.0
+
+
+@contextmanager
+def grid_phase(phase: float) -> Iterator[None]:
+    """Recordings read in this block are put on the grid (k + phase) / 60 (engine.frames.recording_frames)."""
+    global _grid_phase
+    before, _grid_phase = _grid_phase, float(phase)
+    try:
+        yield
+    finally:
+        _grid_phase = before
+
+
+def read_labelled_frames(path: str | Path) -> tuple[np.ndarray, list[str]]:
+    """A recording's (m, D) frames on the 60 Hz grid (at the `grid_phase`) and a label per frame."""
+    _, frames, labels = recording_frames(read_recording(path), phase=_grid_phase)
+    return frames, labels
+
 
 def read_frames(path: str | Path) -> np.ndarray:
-    """A recording's (m, D) frames on the 60 Hz grid."""
-    _, frames, _ = recording_frames(read_recording(path))
-    return frames
+    """A recording's (m, D) frames on the 60 Hz grid (at the `grid_phase`)."""
+    return read_labelled_frames(path)[0]
 
 
 def trial_paths(root: str | Path, pattern: str = "*.csv") -> dict[str, list[Path]]:

@@ -129,3 +129,22 @@ def test_a_last_sample_written_rounded_still_reaches_its_step(tmp_path):
     assert len(recording_frames(read_recording(path))[1]) == 1200
     short = Recording(np.array([0.0, 0.0167, 0.0320]), np.tile([0.0, 0.0, 1.0], (3, 1, 1)), ["", "", ""])
     assert len(recording_frames(short)[1]) == 2  # 0.0320 is not 1/30 s: no step made up
+
+
+def test_recording_frames_at_a_phase_sit_that_fraction_of_a_step_later():
+    # `quickjab evaluate --phases`: where the first sample falls between two steps is chance
+    t = np.arange(101) / 100.0  # 1 s at 100 Hz, a ramp on every axis: linear interpolation is exact
+    x = np.stack([t, 2 * t, 1 + 0 * t], axis=1)
+    labels = ["a" if s < 0.5 else "b" for s in t]
+    rec = Recording(t, x.reshape(-1, 1, 3), labels)
+    times0, frames0, _ = recording_frames(rec)
+    times, frames, got = recording_frames(rec, phase=0.5)
+    np.testing.assert_allclose(times, (np.arange(len(times)) + 0.5) / 60, rtol=0, atol=1e-12)
+    assert len(times) == 60 and len(times0) == 61  # the last step at 60.5/60 s is past the last sample
+    np.testing.assert_allclose(frames[:, 0], times, atol=1e-12)
+    np.testing.assert_allclose(frames[:, 1], 2 * times, atol=1e-12)
+    assert not np.allclose(frames[:, 0], frames0[:60, 0])
+    assert got == ["a" if s < 0.5 else "b" for s in np.floor(times * 100) / 100]
+    np.testing.assert_array_equal(recording_frames(rec, phase=0.0)[1], resample(t, x)[1])
+    with pytest.raises(ValueError, match="phase"):
+        recording_frames(rec, phase=1.0)

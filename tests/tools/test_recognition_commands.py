@@ -559,3 +559,29 @@ def test_fresh_trials_go_through_a_new_recognizer_each(trials_dir):
     assert after == alone and alone.final == "upper"
     kept = evaluate_trials(templates, {"jab": [noisy], "upper": [gentle]}, [6], fresh=False)[0].outcomes[1]
     assert kept != alone  # one recognizer across trials: the noisy rest's gate holds the gentle one back
+
+
+def test_evaluate_pools_every_row_over_grid_phases(tmp_path, trials_dir, capsys):
+    """--phases 2: every set read at the grid's phase 0 and half a step later, the rows pooled (twice
+    the motions); the frames at the second phase differ, and the phase is back to 0 afterwards."""
+    from tools.trial_files import grid_phase, read_frames
+
+    frames = np.vstack([rest(20), bump(2), rest(30), bump(0), rest(30)])
+    rec = tmp_path / "rec.csv"
+    write(rec, frames, [""] * 20 + ["upper"] * 24 + [""] * 30 + ["jab"] * 24 + [""] * 30)
+    args = ["evaluate", "--train", str(trials_dir), str(rec), str(trials_dir), "--mains", "6", "--json"]
+    assert main(args) == 0
+    one = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
+    assert main([*args, "--phases", "2"]) == 0
+    two = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
+    assert [r["set"] for r in two] == [r["set"] for r in one] == ["rec.csv", "trials"]
+    assert [r["n"] for r in two] == [2 * r["n"] for r in one] == [4, 12]
+    with grid_phase(0.5):
+        half = read_frames(rec)
+    whole = read_frames(rec)  # the phase is 0 again
+    assert len(half) == len(whole) - 1 and not np.allclose(half, whole[:-1])
+    np.testing.assert_allclose(half, (whole[:-1] + whole[1:]) / 2, atol=1e-4)  # 60 Hz samples: halfway (times rounded)
+    np.testing.assert_allclose(whole, frames, atol=1e-4)  # (the file's rounding)
+    with pytest.raises(SystemExit) as exit_:
+        main([*args, "--phases", "0"])
+    assert exit_.value.code == 2 and "--phases: 0 is out of range" in capsys.readouterr().err
