@@ -76,8 +76,8 @@ def resample_labels(t: np.ndarray, labels: list[str], grid: np.ndarray) -> list[
 
 
 def recording_frames(rec: Recording, hz: int = FRAME_HZ, phase: float = 0.0) -> tuple[np.ndarray, np.ndarray, list[str]]:
-    """(grid times relative to the first sample, exactly k/hz; frames (m, 3*sensors); labels
-    per frame) of a recording as read from its file (its times rounded: WRITTEN_TOLERANCE).
+    """(grid times relative to the first sample, exactly (k + phase)/hz; frames (m, 3*sensors);
+    labels per frame) of a recording as read from its file (its times rounded: WRITTEN_TOLERANCE).
     `phase` (0 <= phase < 1) moves the grid that fraction of a step later, to (k + phase)/hz: where a
     recording's first sample falls between two steps is chance, and the evaluation pools over it
     (`quickjab evaluate --phases`)."""

@@ -167,10 +167,11 @@ def test_the_text_floor_holds_down_to_800x450_and_shrinks_with_smaller_windows()
     assert text_scale(360 / 720) < MIN_TEXT_PX / 18
 
 
-@pytest.mark.parametrize("size", [*SMALL, (1280, 720)])
+@pytest.mark.parametrize("size", [*SMALL, (640, 480), (800, 600), (1280, 720)])
 def test_the_budget_overlay_clears_the_mode_line_and_the_key_legend(size, scene) -> None:
     """F3 in low power on a small window: the overlay's panel (its top was 130 u while the clock
-    and the mode line under it stop shrinking) ran over "LOW POWER  DEMO" at 800x480."""
+    and the mode line under it stop shrinking) ran over "LOW POWER  DEMO" at 800x480; on a 4:3
+    window it covered the player's own recognition panel."""
     pygame.init()
     surf = pygame.Surface(size)
     hud, st = Hud(), busy(show_budget=True, demo=True)
@@ -180,6 +181,7 @@ def test_the_budget_overlay_clears_the_mode_line_and_the_key_legend(size, scene)
     mode = [rect for text, rect, _ in hud.layout if text == "LOW POWER  DEMO"]
     assert mode and not overlay.colliderect(mode[0]), (overlay, mode)
     assert not overlay.colliderect(hud.panels["keys 1"]), (overlay, hud.panels["keys 1"])
+    assert not overlay.colliderect(hud.panels["recognition 1"]), (overlay, hud.panels["recognition 1"])
 
 
 @pytest.mark.parametrize("size", [(640, 360), *SMALL, (960, 540), (1280, 720)])

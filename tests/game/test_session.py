@@ -287,6 +287,28 @@ def test_home_button_pauses_and_the_battery_shows() -> None:
     assert not s.match.paused
 
 
+def test_home_while_the_controller_is_lost_keeps_the_match_paused() -> None:
+    """Home toggles the pause as Esc does; under the lost-controller overlay it must not resume the
+    match either (both go through Session.toggle_pause)."""
+    pygame.init()
+    clock = VirtualClock()
+    remote = HeldRemote(clock).source
+    s = Session(remote, SessionConfig(size=SIZE, sound=False, render=False, graph=GRAPH), clock=clock)
+    s.loop.run(steps=10)
+    remote.state = SourceState.RECONNECTING
+    s.loop.run(steps=5)
+    assert s.match.paused and s.hud_state.disconnected
+    clock_before = s.match.clock_steps
+    remote.buttons = 0x0080  # Home down (a press), while the controller is away
+    s.loop.run(steps=5)
+    remote.buttons = 0
+    s.loop.run(steps=30)
+    assert s.match.paused and s.match.clock_steps == clock_before
+    remote.state = SourceState.CONNECTED
+    s.loop.run(steps=5)
+    assert not s.match.paused  # back: it resumes by itself
+
+
 def test_a_profiles_trained_set_is_said_as_the_players_own_with_its_moves(tmp_path):
     """`play --profile ana` said "templates ana.npz": not that the set is ana's own, nor how
     many moves were trained (docs/game.md: "yours, with how many moves you trained")."""
