@@ -33,9 +33,11 @@ import termios
 from collections import deque
 from urllib.parse import parse_qsl
 
+import numpy as np
 import serial
 from serial.tools import list_ports
 
+from engine.sensors.axes import AxisMap, parse_axes
 from engine.sensors.serial_accel import SampleAccel
 from engine.sensors.source import (
     Clock,
@@ -156,8 +158,10 @@ class SerialSource(Source):
     """Samples of shape (sensors, 3) in g from a protocol v1 device."""
 
     def __init__(self, url: str, clock: Clock, target: str | None, *, baud: int = 115200,
-                 retry: float = 0.5, window_s: float = 2.0, vid: int | None = None, pid: int | None = None):
+                 retry: float = 0.5, window_s: float = 2.0, vid: int | None = None, pid: int | None = None,
+                 axes: AxisMap | None = None):
         super().__init__(url=url, sensors=2, clock=clock, description=f"serial bridge {target or 'auto'}")
+        self.axes = axes  # the IMU's axes onto the game's (`?axes=`, engine/sensors/axes.py); None: as they are
         self.target = target  # a path or pyserial URL; None: find by VID/PID
         self.baud = baud
         self.retry = retry
@@ -319,7 +323,8 @@ class SerialSource(Source):
                 # sample times are wrong (PROTOCOL.md, HELLO); the HELLO is valid and taken
                 self.count("narrow_clock")
             kind = {1: "MPU-6050", 2: "LSM6DS3", 3: "simulated"}.get(hello.imu_kind, "IMU")
-            self.description = f"serial bridge {self.port_name} ({kind} x{hello.sensors}, {hello.rate_hz} Hz)"
+            turned = f", axes {self.axes}" if self.axes is not None else ""
+            self.description = f"serial bridge {self.port_name} ({kind} x{hello.sensors}, {hello.rate_hz} Hz{turned})"
         return True
 
     def _samples(self, frames: list[protocol.Frame], now: float) -> list[Sample]:
@@ -389,7 +394,10 @@ class SerialSource(Source):
         # a few samples per poll: plain floats beat numpy calls here
         offset, last = self.devclock.offset, self.devclock.last_t
         out = []
-        for dev, a in zip(times, self._accel.rows(sample_frames, self.hello, self.sensors), strict=True):
+        rows = self._accel.rows(sample_frames, self.hello, self.sensors)
+        if self.axes is not None:
+            rows = self.axes.apply(np.asarray(rows))  # (frames, sensors, 3)
+        for dev, a in zip(times, rows, strict=True):
             last = min(max(dev + offset, last), now)  # never backwards
             out.append(Sample(last, a))
         self.devclock.last_t = last
@@ -410,9 +418,10 @@ def parse_serial_url(url: str) -> tuple[str | None, dict[str, str]]:
 
 def open_serial(url: str, clock: Clock) -> SerialSource:
     target, params = parse_serial_url(url)
-    unknown = set(params) - {"baud", "retry", "window", "vid", "pid"}
+    unknown = set(params) - {"baud", "retry", "window", "vid", "pid", "axes"}
     if unknown:
-        raise SourceError(f"{url}: unknown parameter(s) {', '.join(sorted(unknown))} (known: baud, retry, window, vid, pid)")
+        raise SourceError(f"{url}: unknown parameter(s) {', '.join(sorted(unknown))} (known: baud, retry, window, vid, pid, axes)")
+    axes = parse_axes(url, params["axes"]) if "axes" in params else None
     # finite and in range: nan passed `<= 0`, and a retry of nan never reopened a lost port while
     # a window of nan or inf never dropped an old minimum from the clock (nor from its deque)
     baud = int(url_number(url, params, "baud", 115200, 1, 2**31 - 1, integer=True))
@@ -425,7 +434,7 @@ def open_serial(url: str, clock: Clock) -> SerialSource:
         raise SourceError(f"{url}: vid and pid must be hex") from None
     if pid is not None and vid is None:
         raise SourceError(f"{url}: pid needs a vid too (e.g. serial://auto?vid=2e8a&pid=0005)")
-    return SerialSource(url, clock, target, baud=baud, retry=retry, window_s=window, vid=vid, pid=pid)
+    return SerialSource(url, clock, target, baud=baud, retry=retry, window_s=window, vid=vid, pid=pid, axes=axes)
 
 
 register_scheme("serial", open_serial)
