@@ -49,4 +49,12 @@ def parse_axes(url: str, text: str) -> AxisMap | None:
         raise SourceError(f"{url}: axes must name x, y and z once each, signed or not (e.g. axes=-y,x,z), not {text!r}")
     if order == [0, 1, 2] and signs == [1.0, 1.0, 1.0]:
         return None
-    return AxisMap((order[0], order[1], order[2]), (signs[0], signs[1], signs[2]))
+    turn = AxisMap((order[0], order[1], order[2]), (signs[0], signs[1], signs[2]))
+    if np.linalg.det(np.eye(3)[turn.order] * turn.signs[:, None]) < 0:
+        # A sensor turned any way still has right-handed axes: this mapping is a mirror image,
+        # which no mounting gives (the guard's reading cannot tell: x reads about 0 there), and the
+        # punches would be recognized as their mirror images. x follows from y and z.
+        fixed = AxisMap(turn.order, (-turn.signs[0], turn.signs[1], turn.signs[2]))
+        raise SourceError(f"{url}: axes={text} is a mirror image (no way of strapping a sensor on gives it): "
+                          f"with this y and z, x is {fixed.text.split(',')[0]} (axes={fixed})")
+    return turn

@@ -410,7 +410,7 @@ def parse_serial_url(url: str) -> tuple[str | None, dict[str, str]]:
     if "://" in rest:
         return rest, {}
     path, _, query = rest.partition("?")
-    params = dict(parse_qsl(query))
+    params = dict(parse_qsl(query, keep_blank_values=True))  # `axes=` is an error, not the default
     if not path:
         raise SourceError(f"{url}: no port (expected serial:///dev/ttyACM0, serial://auto or serial://loop://)")
     return (None if path == "auto" else path), params
