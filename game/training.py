@@ -358,7 +358,7 @@ class TrainingScreen:
             pygame.draw.lines(surf, TRACE_COLOURS[d // 3][d % 3], False, np.stack([xs, ys], axis=1).tolist(), 2)
         # the legend in each hand's colour: its three axes are shades of it (x light, z dark)
         x = rect.left + 6
-        for hand, name in enumerate(("Wiimote (right) x y z", "Nunchuk (left) x y z")):
+        for hand, name in enumerate(("right hand x y z", "left hand x y z")):  # a Wiimote and Nunchuk, or IMUs
             img = self.text.render(name, legend_px, TRACE_COLOURS[hand][1])
             self._put(surf, img, img.get_rect(topleft=(x, rect.top + 4)), name, "plot")
             x += img.get_width() + legend_px
