@@ -24,6 +24,10 @@ def register(sub: argparse._SubParsersAction) -> None:
         "Then: quickjab record --source serial:///dev/pts/N -o out.csv (or the --link path, which "
         "survives --unplug-at).")
     e.add_argument("--replay", metavar="REC.CSV", help="feed the simulated IMU from this recording (looped)")
+    e.add_argument("--player", choices=PLAYER_PROFILES, default=None,
+                   help="feed it a virtual player's boxing instead (random actions with rests, both hands, on the "
+                   "game's axes, a minute looped): `play` and `recognize` take its punches as a player's; "
+                   "the default signal is a bare pulse on x over gravity on z, for testing the link")
     e.add_argument("--seconds", type=float, default=None, help="stop after this long (default: Ctrl-C)")
     e.add_argument("--rate", type=int, default=200, help="sample rate in Hz (default 200)")
     e.add_argument("--sensors", type=int, choices=(1, 2), default=None, help="sensors (default: the recording's, or 2)")
@@ -59,6 +63,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     f.set_defaults(func=run_faults)
 
 
+# `emulate --player`: game.virtual_player's profiles (named here: the CLI's parsers load no game
+# module; a test holds the two equal), and the minute of boxing the emulator loops
+PLAYER_PROFILES = ("experienced", "novice")
+PLAYER_SECONDS = 60.0
 MAX_SECONDS = 1e7  # ~116 days: any longer is a typo, and time.sleep overflows on some values
 
 
@@ -91,6 +99,24 @@ def check_emulate_args(args: argparse.Namespace) -> None:
         raise InputError(f"--ticks-start {args.ticks_start}: must be 0..{(1 << 30) - 1} (a 30-bit counter)")
     if args.seed is not None and args.seed < 0:
         raise InputError(f"--seed {args.seed}: must be 0 or more")
+    if args.replay and args.player:
+        raise InputError("--replay and --player: give one signal for the simulated IMU, not both")
+
+
+def player_motion(profile: str, seed: int):
+    """A virtual player's minute of boxing (tools.synth: random actions with rests, in the game's
+    axes, 60 Hz) as the emulator's looped signal, and its sensor count."""
+    from types import SimpleNamespace
+
+    import numpy as np
+
+    from firmware_bridge.emulator import recording_motion
+    from game.actions import load_library
+    from tools.synth import synth_session
+
+    accel, _ = synth_session(load_library(), PLAYER_SECONDS, profile, np.random.default_rng(seed))
+    session = SimpleNamespace(t=np.arange(len(accel)) / 60.0, accel=accel, sensors=accel.shape[1])
+    return recording_motion("virtual player", lambda _: session)
 
 
 def run_emulate(args: argparse.Namespace) -> int:
@@ -106,6 +132,8 @@ def run_emulate(args: argparse.Namespace) -> int:
     check_emulate_args(args)
     if args.replay:
         signal, sensors = recording_motion(args.replay, read_recording)  # RecordingError names the file
+    elif args.player:
+        signal, sensors = player_motion(args.player, args.seed or 0)
     else:
         signal, sensors = synthetic_motion(args.sensors or 2, args.seed or 0), args.sensors or 2
     sensors = min(args.sensors or sensors, sensors)

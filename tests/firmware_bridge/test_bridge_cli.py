@@ -70,6 +70,42 @@ def test_emulate_replay_then_record_end_to_end(tmp_path):
     assert float(got.meta["rate_hz"]) == 200  # the rate the samples came at, not the 60 Hz default
 
 
+def test_emulate_player_streams_a_virtual_boxer_the_recognizer_takes(tmp_path):
+    """emulate --player: the simulated IMU plays a virtual player's boxing on the game's axes, so
+    the no-hardware path (`play --source serial://...`) sees punches the shipped templates know
+    (the default signal, a pulse on x over gravity on z, showed "no match" in the game)."""
+    from engine.frames import recording_frames
+    from engine.recognition import DualBufferRecognizer, Templates
+    from game.virtual_player import PROFILES
+    from tools.bridge import PLAYER_PROFILES
+
+    assert PLAYER_PROFILES == tuple(PROFILES)
+    link = tmp_path / "port"
+    emu = subprocess.Popen([sys.executable, "-m", "tools.cli", "bridge", "emulate", "--player", "experienced", "--seed", "1",
+                            "--seconds", "12", "--link", str(link), "--quiet"], cwd=REPO, stdout=subprocess.PIPE, text=True)
+    try:
+        assert emu.stdout.readline().startswith("port: /dev/pts/")
+        out = tmp_path / "out.csv"
+        rec = subprocess.run([sys.executable, "-m", "tools.cli", "record", "--source", f"serial://{link}", "-o", str(out),
+                              "--seconds", "6"], cwd=REPO, capture_output=True, text=True, timeout=40)
+        assert rec.returncode == 0, rec.stderr
+    finally:
+        emu.terminate()
+        emu.wait(5)
+    got = read_recording(out)
+    # mostly the guard at rest, as the shipped templates expect it: about (0, 0.9, 0.4) g per hand
+    np.testing.assert_allclose(np.median(got.accel, axis=0), [[0, 0.9, 0.4]] * 2, atol=0.12)
+    assert np.abs(np.linalg.norm(got.accel, axis=2) - 1).max() > 1.0  # and punches
+    rec = DualBufferRecognizer(Templates.load(REPO / "game" / "assets" / "templates.npz"))
+    starts = [e for f in recording_frames(got)[1] for e in rec.push(f) if e["event"] == "start"]
+    assert starts
+
+
+def test_emulate_player_and_replay_are_one_or_the_other(tmp_path, capsys):
+    assert main(["bridge", "emulate", "--player", "novice", "--replay", str(tmp_path / "x.csv")]) == 2
+    assert "--replay and --player" in capsys.readouterr().err
+
+
 def test_emulate_prints_a_port_that_opens(tmp_path):
     import serial
 
