@@ -28,6 +28,7 @@ from engine.sensors.source import (
     SourceState,
     parse_source_url,
     url_number,
+    url_params_known,
 )
 
 HZ = STEP_HZ
@@ -153,6 +154,7 @@ def open_keyboard(url: str, clock: Clock) -> KeyboardSource:
     from game.actions import load_library
 
     _, _, params = parse_source_url(url)
+    url_params_known(url, params, ("profile", "seed", "auto", "keys"))
     profile = params.get("profile", "experienced")
     seed = int(url_number(url, params, "seed", 0, 0, 2**63 - 1, integer=True))
     from game.virtual_player import PROFILES

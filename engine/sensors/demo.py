@@ -19,6 +19,7 @@ from engine.sensors.source import (
     parse_source_url,
     register_scheme,
     url_number,
+    url_params_known,
 )
 
 PUNCH_EVERY_S = 0.75
@@ -74,6 +75,7 @@ class DemoSource(Source):
 
 def open_demo(url: str, clock: Clock) -> DemoSource:
     _, _, params = parse_source_url(url)
+    url_params_known(url, params, ("rate",))
     rate = url_number(url, params, "rate", 100.0, MIN_RATE_HZ, MAX_RATE_HZ)
     return DemoSource(url=url, clock=clock, rate_hz=rate)
 

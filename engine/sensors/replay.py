@@ -18,6 +18,7 @@ from engine.sensors.source import (
     parse_source_url,
     register_scheme,
     url_number,
+    url_params_known,
 )
 
 MIN_SPEED, MAX_SPEED = 0.01, 1000.0  # replay speed factors
@@ -87,6 +88,7 @@ def open_replay(url: str, clock: Clock) -> ReplaySource:
     _, path, params = parse_source_url(url)
     if not path:
         raise SourceError(f"{url}: no file (expected replay://path/to/recording.csv)")
+    url_params_known(url, params, ("speed", "loop"))
     speed = url_number(url, params, "speed", 1.0, MIN_SPEED, MAX_SPEED)
     loop = params.get("loop", "0").lower() in ("1", "true", "yes")
     return ReplaySource(read_recording(path), url=url, clock=clock, speed=speed, loop=loop)

@@ -178,6 +178,14 @@ def parse_source_url(url: str) -> tuple[str, str, dict[str, str]]:
     return parts.scheme.lower(), path, dict(parse_qsl(parts.query))
 
 
+def url_params_known(url: str, params: dict[str, str], known: tuple[str, ...]) -> None:
+    """A SourceError naming `url` for a parameter the source does not take: a typo (`replay://
+    rec.csv?sped=4`) played at the default with no word said."""
+    unknown = sorted(set(params) - set(known))
+    if unknown:
+        raise SourceError(f"{url}: unknown parameter(s) {', '.join(unknown)} (known: {', '.join(known) or 'none'})")
+
+
 def url_file(url: str) -> str | None:
     """The file a source URL reads (replay://rec.csv: rec.csv), None when it names none or is no
     URL: what a command writing files must not write over."""

@@ -131,7 +131,11 @@ def test_a_loop_of_a_recording_faster_than_any_sensor_is_refused(tmp_path):
     assert open_source(f"replay://{rec}?loop=1&speed=1000", clock=clock.seconds).rate_hz == pytest.approx(100)
 
 
-@pytest.mark.parametrize("url,match", [("replay://{p}?speed=0", "speed"), ("replay://{p}?speed=x", "speed"), ("replay://", "no file")])
+@pytest.mark.parametrize("url,match", [("replay://{p}?speed=0", "speed"), ("replay://{p}?speed=x", "speed"), ("replay://", "no file"),
+                                       # a typo played at the default with no word said
+                                       ("replay://{p}?sped=4", r"unknown parameter\(s\) sped \(known: speed, loop\)"),
+                                       ("replay://{p}?axes=-y,x,z", "unknown parameter"),
+                                       ("demo://?rat=50", r"demo://\?rat=50: unknown parameter\(s\) rat \(known: rate\)")])
 def test_replay_bad_arguments(tmp_path, url, match):
     path, _ = write_rec(tmp_path)
     with pytest.raises(SourceError, match=match):

@@ -56,6 +56,8 @@ def test_bad_urls_name_themselves() -> None:
         open_source("keyboard://?seed=abc")
     with pytest.raises(SourceError, match="profile"):
         open_source("keyboard://?profile=pro")
+    with pytest.raises(SourceError, match=r"keyboard://\?sead=3: unknown parameter\(s\) sead \(known: profile, seed, auto, keys\)"):
+        open_source("keyboard://?sead=3")  # a typo: it played seed 0 with no word said
 
 
 def test_every_action_has_a_key() -> None:

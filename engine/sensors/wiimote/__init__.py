@@ -28,6 +28,7 @@ from engine.sensors.source import (
     register_scheme,
     url_flag,
     url_number,
+    url_params_known,
 )
 from engine.sensors.wiimote.protocol import (
     Calibration,
@@ -88,6 +89,7 @@ def open_wiimote(url: str, clock: Clock) -> WiimoteSource:
     from engine.sensors.wiimote.driver import WiimoteSource
 
     _, path, params = parse_source_url(url)
+    url_params_known(url, params, ("player", "wait"))
     try:
         backend = hid_backend()
     except BackendMissing as exc:
