@@ -51,6 +51,26 @@ def headless_frames(frames: int | None, headless: bool, command: str) -> int | N
     return frames
 
 
+# Sources paced by a device, whatever clock they are given: under --headless's virtual clock, which
+# runs as fast as the machine does, a minute of frames passed in seconds with a few samples in
+# them (scope said 0 samples/s, train saved templates of held copies). Such a source runs on the
+# real clock, with or without a window.
+LIVE_SCHEMES = ("serial", "wiimote")
+
+
+def run_clock(command: str, headless: bool, urls: list[str | None]):
+    """The clock of a run: virtual for --headless (reproducible), except with a live device among
+    `urls` (LIVE_SCHEMES), said in one line; real otherwise."""
+    from engine.clock import RealClock, VirtualClock
+
+    live = [u for u in urls if u and u.split("://", 1)[0].lower() in LIVE_SCHEMES and "://loop://" not in u]
+    if headless and live:
+        print(f"quickjab {command}: {live[0]} is a live device: --headless runs on the real clock with it "
+              "(its samples come at the device's pace)", file=sys.stderr)
+        return RealClock()
+    return VirtualClock() if headless else RealClock()
+
+
 def headless_env() -> None:
     """No window, no sound device: SDL's dummy drivers (set before pygame initialises)."""
     os.environ["SDL_VIDEODRIVER"] = "dummy"
@@ -152,10 +172,10 @@ def run_session(args: argparse.Namespace, caption: str, open_sources: Callable[[
         headless_env()
     import pygame
 
-    from engine.clock import RealClock, VirtualClock
+    from engine.clock import VirtualClock
     from engine.trace import write_chrome_trace
 
-    clock = VirtualClock() if args.headless or args.virtual_clock else RealClock()
+    clock = VirtualClock() if args.virtual_clock else run_clock("play", args.headless, [args.source, getattr(args, "source2", None)])
     sources: list = []
     try:
         sources.extend(open_sources(clock))

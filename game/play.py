@@ -41,7 +41,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--source", default=None, help=f"source URL (default: {DEFAULT_SOURCE}, else {KEYBOARD_SOURCE})")
     p.add_argument("--demo", action="store_true", help="attract mode: a synthesized session from the virtual player")
-    p.add_argument("--headless", action="store_true", help="no window: SDL dummy driver and a virtual clock (reproducible)")
+    p.add_argument("--headless", action="store_true", help="no window: SDL dummy driver and a virtual clock (reproducible; a live serial:// or wiimote:// device runs on the real clock)")
     p.add_argument("--frames", type=arguments.positive_int, default=None,
                    help=f"stop after N rendered frames (default: until the window closes; {HEADLESS_FRAMES} with --headless)")
     p.add_argument("--screenshot", type=arguments.output_file, metavar="PNG", help="save the last frame to this PNG")

@@ -37,6 +37,7 @@ from game.launch import (
     init_pygame,
     open_player_source,
     parse_size,
+    run_clock,
     save_screenshot,
 )
 
@@ -385,7 +386,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="delete your trained templates (play goes back to the default set) and exit")
     p.add_argument("-o", "--output", default=None, help="where to save the templates (default: your data directory)")
     p.add_argument("--profile", default=None, metavar="NAME", help="save as this player's templates (`play --profile NAME`; default: your default set)")
-    p.add_argument("--headless", action="store_true", help="no window: SDL dummy driver, virtual clock")
+    p.add_argument("--headless", action="store_true", help="no window: SDL dummy driver, virtual clock (a live serial:// or wiimote:// device: the real clock)")
     p.add_argument("--frames", type=arguments.positive_int, default=None, help="stop after N rendered frames")
     p.add_argument("--screenshot", type=arguments.output_file, metavar="PNG", help="save the last frame to this PNG")
     p.add_argument("--seed", type=arguments.seed, default=0)
@@ -594,11 +595,10 @@ def run(args: argparse.Namespace) -> int:
         headless_env()
     import pygame
 
-    from engine.clock import RealClock, VirtualClock
     from engine.frames import FrameResampler
     from engine.loop import FixedStepLoop
 
-    clock = VirtualClock() if args.headless else RealClock()
+    clock = run_clock("train", args.headless, [args.source])
     source, playable, auto = _open_source(args, clock)
     lib = load_library()
     trainer = Trainer(actions)

@@ -327,7 +327,7 @@ def headless_env() -> None:
 
 
 def add_view_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--headless", action="store_true", help="no window: SDL dummy driver and a virtual clock (reproducible)")
+    p.add_argument("--headless", action="store_true", help="no window: SDL dummy driver and a virtual clock (reproducible; a live serial:// or wiimote:// device runs on the real clock)")
     p.add_argument("--frames", type=arguments.positive_int, default=None, help="stop after N frames (default: until the window closes)")
     p.add_argument("--screenshot", type=arguments.output_file, metavar="PNG", help="save the last frame to this PNG")
     p.add_argument("--trace", type=arguments.output_file, metavar="JSON", help="write the loop's Chrome trace here on exit (read it with `quickjab profile`)")
@@ -362,12 +362,13 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from engine.sensors.source import url_file
+    from game.launch import run_clock
 
     refuse_overwriting({"--screenshot": args.screenshot, "--trace": args.trace}, [url_file(args.source)])
     view = view_from_args(args)
     if args.headless:
         headless_env()
-    clock: RealClock | VirtualClock = VirtualClock() if args.headless else RealClock()
+    clock: RealClock | VirtualClock = run_clock("scope", args.headless, [args.source])
     source = open_source(args.source, clock=clock.seconds)
     if not args.connect_timeout > 0:
         raise InputError(f"--connect-timeout {args.connect_timeout}: must be positive")

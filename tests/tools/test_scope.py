@@ -195,3 +195,29 @@ def test_a_long_status_line_stays_inside_the_window(tmp_path):
     color = STATE_COLORS[SourceState.CONNECTED]
     assert count_color(img, color, (0, 0, 480, 24), tol=10) > 50
     assert count_color(img, color, (472, 0, 8, 24), tol=10) == 0  # nothing drawn into the right margin
+
+
+def test_headless_scope_of_a_live_device_runs_on_the_real_clock(tmp_path, capsys):
+    """`scope --headless` on a serial device: the virtual clock ran 300 frames in well under a
+    second and saw 79 of the device's samples ("0.0 samples/s"); a live device runs on the real
+    clock, said in one line, and 90 frames (1.5 s) see about 300 samples at 200 Hz."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    repo = Path(__file__).resolve().parents[2]
+    link = tmp_path / "port"
+    emu = subprocess.Popen([sys.executable, "-m", "tools.cli", "bridge", "emulate", "--seconds", "8", "--link", str(link),
+                            "--quiet"], cwd=repo, stdout=subprocess.PIPE, text=True)
+    try:
+        assert emu.stdout.readline().startswith("port: ")
+        assert main(["scope", "--headless", "--source", f"serial://{link}", "--frames", "90"]) == 0
+    finally:
+        emu.terminate()
+        emu.wait(5)
+    err = capsys.readouterr().err
+    assert "is a live device: --headless runs on the real clock" in err
+    import re
+
+    samples = int(re.search(r"^scope: (\d+) samples", err, re.M).group(1))
+    assert 200 <= samples <= 400, err
