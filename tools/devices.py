@@ -16,7 +16,8 @@ def no_device_hint(url: str) -> str:
         return ("check that the Wiimote is paired and awake (press 1 and 2; `quickjab devices` lists the ones found; "
                 "docs/wiimote.md)")
     if scheme == "serial":
-        return "check the port (`quickjab devices`) and that the board is plugged in"
+        return ("check the port (`quickjab devices` lists USB serial ports; an emulator's is the path `quickjab bridge "
+                "emulate` printed, or its --link) and that the board is plugged in")
     return "check that the device is connected (`quickjab devices` lists Wiimotes and serial ports)"
 
 
