@@ -10,10 +10,12 @@ import argparse
 import os
 import sys
 from collections.abc import Callable
+from typing import TypeVar
 
 from engine import arguments
 from engine.errors import InputError, refuse_overwriting
 
+T = TypeVar("T")
 DEFAULT_SOURCE = "wiimote://"
 KEYBOARD_SOURCE = "keyboard://"
 DEMO_SOURCE = "keyboard://?profile=experienced"
@@ -54,21 +56,35 @@ def headless_frames(frames: int | None, headless: bool, command: str) -> int | N
 # Sources paced by a device, whatever clock they are given: under --headless's virtual clock, which
 # runs as fast as the machine does, a minute of frames passed in seconds with a few samples in
 # them (scope said 0 samples/s, train saved templates of held copies). Such a source runs on the
-# real clock, with or without a window.
+# real clock, with or without a window. Told by the source opened, not the URL typed: the default
+# (no --source) is the first Wiimote found, and --demo opens the keyboard whatever --source says.
 LIVE_SCHEMES = ("serial", "wiimote")
 
 
-def run_clock(command: str, headless: bool, urls: list[str | None]):
-    """The clock of a run: virtual for --headless (reproducible), except with a live device among
-    `urls` (LIVE_SCHEMES), said in one line; real otherwise."""
+def is_live(url: str) -> bool:
+    """Whether a source URL names a device that delivers at its own pace (LIVE_SCHEMES; a
+    pyserial loop:// delivers at once)."""
+    return url.split("://", 1)[0].lower() in LIVE_SCHEMES and "://loop://" not in url
+
+
+def open_on_run_clock(command: str, headless: bool, open_sources: Callable[[object], T],
+                      sources_of: Callable[[T], list]) -> tuple[object, T]:
+    """(clock, what `open_sources(clock)` returned): a real clock with a window; the virtual clock
+    of --headless (reproducible) unless a source it opened is a live device (`is_live`), which is
+    said in one line, closed and opened again on the real clock."""
     from engine.clock import RealClock, VirtualClock
 
-    live = [u for u in urls if u and u.split("://", 1)[0].lower() in LIVE_SCHEMES and "://loop://" not in u]
-    if headless and live:
-        print(f"quickjab {command}: {live[0]} is a live device: --headless runs on the real clock with it "
-              "(its samples come at the device's pace)", file=sys.stderr)
-        return RealClock()
-    return VirtualClock() if headless else RealClock()
+    clock = VirtualClock() if headless else RealClock()
+    opened = open_sources(clock)
+    live = [s.url for s in sources_of(opened) if is_live(s.url)] if headless else []
+    if not live:
+        return clock, opened
+    print(f"quickjab {command}: {live[0]} is a live device: --headless runs on the real clock with it "
+          "(its samples come at the device's pace)", file=sys.stderr)
+    for source in sources_of(opened):
+        source.close()
+    clock = RealClock()
+    return clock, open_sources(clock)
 
 
 def headless_env() -> None:
@@ -175,10 +191,14 @@ def run_session(args: argparse.Namespace, caption: str, open_sources: Callable[[
     from engine.clock import VirtualClock
     from engine.trace import write_chrome_trace
 
-    clock = VirtualClock() if args.virtual_clock else run_clock("play", args.headless, [args.source, getattr(args, "source2", None)])
     sources: list = []
     try:
-        sources.extend(open_sources(clock))
+        if args.virtual_clock:
+            clock = VirtualClock()
+            sources.extend(open_sources(clock))
+        else:
+            clock, opened = open_on_run_clock("play", args.headless, open_sources, list)
+            sources.extend(opened)
         init_pygame(wants_sound(args))
         flags = pygame.RESIZABLE | (pygame.FULLSCREEN if args.fullscreen and not args.headless else 0)
         pygame.display.set_mode(size, flags)

@@ -3,7 +3,8 @@
 Input: `--source URL` (serial://..., replay://..., wiimote-emu://..., keyboard://), by default
 the first Wiimote found, else the keyboard with a banner saying so. `--demo` is the attract
 mode: the virtual player boxes by itself. `--headless --frames N --screenshot out.png --trace
-out.json` runs without a display (SDL dummy driver, virtual clock: reproducible with --seed)
+out.json` runs without a display (SDL dummy driver, virtual clock: reproducible with --seed; a live
+serial:// or wiimote:// device runs on the real clock)
 and writes the last frame and the frame-budget trace.
 
 Keys: Q W E R / U I O P punches and parries, Space block, arrows step; Esc pause, F3 frame
@@ -46,7 +47,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help=f"stop after N rendered frames (default: until the window closes; {HEADLESS_FRAMES} with --headless)")
     p.add_argument("--screenshot", type=arguments.output_file, metavar="PNG", help="save the last frame to this PNG")
     p.add_argument("--trace", type=arguments.output_file, metavar="JSON", help="write the loop's Chrome trace here on exit")
-    p.add_argument("--virtual-clock", action="store_true", help="a virtual clock in a real window: the same frames as --headless (tests)")
+    p.add_argument("--virtual-clock", action="store_true", help="a virtual clock in a real window: the same frames as --headless with a simulated source (tests; a live device too)")
     p.add_argument("--seed", type=arguments.seed, default=0, help="seed for the virtual player and anything random (default 0)")
     p.add_argument("--size", default="1280x720", help="window size WxH (default 1280x720)")
     p.add_argument("--fullscreen", action="store_true", help="start fullscreen (F11 toggles)")

@@ -35,9 +35,9 @@ from game.launch import (
     check_visible_window,
     headless_env,
     init_pygame,
+    open_on_run_clock,
     open_player_source,
     parse_size,
-    run_clock,
     save_screenshot,
 )
 
@@ -598,8 +598,8 @@ def run(args: argparse.Namespace) -> int:
     from engine.frames import FrameResampler
     from engine.loop import FixedStepLoop
 
-    clock = run_clock("train", args.headless, [args.source])
-    source, playable, auto = _open_source(args, clock)
+    clock, (source, playable, auto) = open_on_run_clock("train", args.headless, lambda c: _open_source(args, c),
+                                                        lambda opened: [opened[0]])
     lib = load_library()
     trainer = Trainer(actions)
     _open_window(args, size, source)

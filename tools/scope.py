@@ -362,14 +362,14 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from engine.sensors.source import url_file
-    from game.launch import run_clock
+    from game.launch import open_on_run_clock
 
     refuse_overwriting({"--screenshot": args.screenshot, "--trace": args.trace}, [url_file(args.source)])
     view = view_from_args(args)
     if args.headless:
         headless_env()
-    clock: RealClock | VirtualClock = run_clock("scope", args.headless, [args.source])
-    source = open_source(args.source, clock=clock.seconds)
+    clock, source = open_on_run_clock("scope", args.headless, lambda c: open_source(args.source, clock=c.seconds),
+                                      lambda opened: [opened])
     if not args.connect_timeout > 0:
         raise InputError(f"--connect-timeout {args.connect_timeout}: must be positive")
     scope = run_scope(source, clock=clock, frames=args.frames, screenshot=args.screenshot, trace=args.trace, view=view,

@@ -1,11 +1,14 @@
 """An IMU mounted another way than the game's sensor axes: `?axes=` on a source URL.
 
-The game's axes are the Wiimote's as held in the fist (game/virtual_player.py: y along the
-forearm towards the fist, z the forearm's upper side, x completing a right-handed frame), and
-the shipped templates were made in them. A serial IMU strapped on with its own axes elsewhere
-reads the same motion on other axes; `axes=-y,x,z` names, for the game's x, y and z in turn, the
-IMU axis (and sign) that reads it. Only whole-axis turns and flips: any other mounting is what
-`quickjab train` is for (templates recorded with the sensor as it is worn).
+The game's sensor axes are the virtual player's, which made the shipped templates
+(game/virtual_player.py `sensor_frames`): y along the forearm towards the fist, z the forearm's
+upper side, x = y cross z computed in the game's world (x right, y up, z forward), so that with
+y pointing forward and z up, x points to the wearer's LEFT: a left-handed frame. An IMU chip's axes
+are right-handed (the MPU-6050's and LSM6DS3's datasheets), so the mapping from a chip to the
+game's axes always mirrors one axis: `axes=` names, for the game's x, y and z in turn, the IMU axis
+(and sign) that reads it, and one that keeps the chip's axes right-handed is refused with the x
+that fits. Only whole-axis turns: any other mounting is what `quickjab train` is for (templates
+recorded with the sensor as it is worn, in its own axes, need no mapping).
 """
 
 from __future__ import annotations
@@ -32,9 +35,9 @@ class AxisMap:
         return np.asarray(accel)[..., self.order] * self.signs
 
 
-def parse_axes(url: str, text: str) -> AxisMap | None:
-    """`x,y,z` with each name once, each optionally signed (`-y,x,z`); None for the identity.
-    A SourceError naming `url` otherwise."""
+def parse_axes(url: str, text: str) -> AxisMap:
+    """`x,y,z` with each name once, each optionally signed (`-y,x,z`), mirroring the chip's
+    handedness (the module docstring). A SourceError naming `url` otherwise."""
     names = [part.strip().lower() for part in text.split(",")]
     order, signs = [], []
     for name in names:
@@ -46,15 +49,15 @@ def parse_axes(url: str, text: str) -> AxisMap | None:
         order.append(AXIS_INDEX[axis])
         signs.append(sign)
     if len(order) != 3 or sorted(order) != [0, 1, 2]:
-        raise SourceError(f"{url}: axes must name x, y and z once each, signed or not (e.g. axes=-y,x,z), not {text!r}")
-    if order == [0, 1, 2] and signs == [1.0, 1.0, 1.0]:
-        return None
+        raise SourceError(f"{url}: axes must name x, y and z once each, signed or not (e.g. axes=-x,y,z), not {text!r}")
     turn = AxisMap((order[0], order[1], order[2]), (signs[0], signs[1], signs[2]))
-    if np.linalg.det(np.eye(3)[turn.order] * turn.signs[:, None]) < 0:
-        # A sensor turned any way still has right-handed axes: this mapping is a mirror image,
-        # which no mounting gives (the guard's reading cannot tell: x reads about 0 there), and the
-        # punches would be recognized as their mirror images. x follows from y and z.
+    if np.linalg.det(np.eye(3)[turn.order] * turn.signs[:, None]) > 0:
+        # The chip's axes are right-handed and the game's left-handed (the module docstring): a
+        # mapping that keeps the handedness would hand the recognizer every punch as its mirror
+        # image (a mirrored session: 10 of 42 actions recognized, against 42 of 42), and the
+        # guard's reading cannot tell (x reads about 0 there). x follows from y and z.
         fixed = AxisMap(turn.order, (-turn.signs[0], turn.signs[1], turn.signs[2]))
-        raise SourceError(f"{url}: axes={text} is a mirror image (no way of strapping a sensor on gives it): "
-                          f"with this y and z, x is {fixed.text.split(',')[0]} (axes={fixed})")
+        raise SourceError(f"{url}: axes={text} keeps the IMU's right-handed axes right-handed, but the game's are "
+                          f"left-handed (x to the left when y points to the fist and z up): with this y and z, x is "
+                          f"{fixed.text.split(',')[0]} (axes={fixed})")
     return turn

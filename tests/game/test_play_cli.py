@@ -141,7 +141,32 @@ def test_train_demo_is_the_virtual_player_and_never_opens_a_wiimote(tmp_path, mo
     # the player's own device, named with --source, is still what a demo trains from
     assert main(["train", "--headless", "--demo", "--source", "wiimote://", "--actions", "straight_r",
                  "--size", "320x180", "--frames", "2", "-o", str(tmp_path / "w.npz")]) == 0
-    assert opened == ["wiimote://"]
+    # (opened on --headless's virtual clock, then again on the real one: a Wiimote is a live device)
+    assert opened == ["wiimote://", "wiimote://"]
+    assert "wiimote:// is a live device: --headless runs on the real clock" in capsys.readouterr().err
+
+
+def test_headless_play_runs_a_live_device_found_by_default_on_the_real_clock(tmp_path, monkeypatch, capsys, graph_path):  # noqa: F811
+    """`play --headless` without --source plays the first Wiimote found; the clock was chosen from
+    the URL typed (none), so a connected remote ran on the virtual clock; `--demo` with a --source
+    (which it never opens) ran on the real clock."""
+    from engine.clock import RealClock, VirtualClock
+    from engine.sensors.demo import DemoSource
+
+    clocks = []
+
+    def connected_wiimote(url, clock):
+        clocks.append(type(clock.__self__))
+        return DemoSource(url=url, clock=clock)
+
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "xdg"))
+    monkeypatch.setitem(source_mod._factories, "wiimote", connected_wiimote)
+    assert main(["play", "--headless", "--frames", "3", "--size", "320x180", "--graph", str(graph_path)]) == 0
+    assert clocks == [VirtualClock, RealClock]
+    assert "wiimote:// is a live device" in capsys.readouterr().err
+    assert main(["play", "--headless", "--demo", "--source", "serial:///dev/nonexistent-qj", "--frames", "3",
+                 "--size", "320x180", "--graph", str(graph_path)]) == 0
+    assert "live device" not in capsys.readouterr().err
 
 
 def test_left_handed_play_mirrors_a_right_handed_set(tmp_path, monkeypatch) -> None:

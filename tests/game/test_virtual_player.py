@@ -134,3 +134,13 @@ def test_shipped_templates_are_rebuilt_by_the_synth_command(tmp_path):
                 assert np.allclose(a[k], b[k], rtol=0, atol=1e-9, equal_nan=True), k
             else:
                 assert np.array_equal(a[k], b[k]), k
+
+
+def test_the_sensor_frame_is_left_handed_x_to_the_wearers_left():
+    """engine/sensors/axes.py and the serial docs rest on this: with y (the forearm) pointing
+    forward and z up, the game's sensor x points to the wearer's left (the world's -x: x right,
+    y up, z forward), so a right-handed IMU chip maps onto it by a mirror (`?axes=-x,y,z`)."""
+    from game.virtual_player import sensor_frames
+
+    rot = sensor_frames(np.array([[[0.0, 0.0, 1.0], [0.0, 0.0, 1.0]]]), np.zeros(2))
+    np.testing.assert_allclose(rot[0, 0], [[-1, 0, 0], [0, 0, 1], [0, 1, 0]], atol=1e-12)

@@ -197,11 +197,11 @@ def test_missing_port_is_a_state_not_an_error():
 
 
 def test_an_imu_mounted_another_way_reads_on_the_games_axes():
-    """`?axes=y,z,x`: the game's x is the IMU's y, its y the IMU's z, its z the IMU's x, for
+    """`?axes=-y,z,x`: the game's x is the IMU's -y, its y the IMU's z, its z the IMU's x, for
     every sensor, through a real serial port (a pty pair); the description says so."""
     master, slave = os.openpty()
     tty.setraw(slave)
-    src = open_source(f"serial://{os.ttyname(slave)}?axes=y,z,x&retry=0.05")
+    src = open_source(f"serial://{os.ttyname(slave)}?axes=-y,z,x&retry=0.05")
     try:
         assert os.read(master, 16) == protocol.HELLO_REQUEST
         os.write(master, HELLO2 + samples(5))
@@ -212,18 +212,21 @@ def test_an_imu_mounted_another_way_reads_on_the_games_axes():
                 break
             time.sleep(0.01)
         assert len(got) == 5
-        # the IMU read (0, 0, 1) and (0.5, -1, 0): on the game's axes (y, z, x)
-        np.testing.assert_allclose(got[0].accel, [[0, 1, 0], [-1, 0, 0.5]])
-        assert "axes y,z,x" in src.description
+        # the IMU read (0, 0, 1) and (0.5, -1, 0): on the game's axes (-y, z, x)
+        np.testing.assert_allclose(got[0].accel, [[0, 1, 0], [1, 0, 0.5]])
+        assert "axes -y,z,x" in src.description
     finally:
         src.close()
         os.close(master)
         os.close(slave)
     assert parse_serial_url("serial:///dev/x?axes=-y,z,x") == ("/dev/x", {"axes": "-y,z,x"})
-    assert open_source("serial:///dev/nonexistent-qj?axes=x,y,z").axes is None  # as they are
-    # a mirror image (the guard's reading cannot tell: x reads about 0 there) names the x that fits
-    with pytest.raises(SourceError, match=r"mirror image.*axes=y,z,x"):
-        open_source("serial:///dev/nonexistent-qj?axes=-y,z,x")
+    assert open_source("serial:///dev/nonexistent-qj").axes is None  # no mapping: as they are
+    # the chip's axes are right-handed and the game's left-handed: a mapping that keeps the
+    # handedness (the guard's reading cannot tell: x reads about 0 there) names the x that fits
+    for kept, fits in (("y,z,x", "-y,z,x"), ("x,y,z", "-x,y,z"), ("-y,x,z", "y,x,z")):
+        with pytest.raises(SourceError, match=rf"keeps the IMU's right-handed axes right-handed.*\(axes={fits}\)"):
+            open_source(f"serial:///dev/nonexistent-qj?axes={kept}")
+        assert str(open_source(f"serial:///dev/nonexistent-qj?axes={fits}").axes) == fits
 
 
 @pytest.mark.parametrize("url", ["serial://", "serial:///dev/x?speed=3", "serial:///dev/x?baud=fast",
@@ -233,7 +236,7 @@ def test_an_imu_mounted_another_way_reads_on_the_games_axes():
                                  "serial:///dev/x?retry=nan", "serial:///dev/x?retry=inf", "serial:///dev/x?window=nan",
                                  "serial:///dev/x?window=inf", "serial:///dev/x?window=1e9", "serial:///dev/x?baud=0",
                                  "serial:///dev/x?axes=x,y", "serial:///dev/x?axes=x,x,z", "serial:///dev/x?axes=x,y,w",
-                                 "serial:///dev/x?axes=--x,y,z", "serial:///dev/x?axes=", "serial:///dev/x?axes=x,y,-z"])
+                                 "serial:///dev/x?axes=--x,y,z", "serial:///dev/x?axes=", "serial:///dev/x?axes=x,y,z"])
 def test_bad_urls_name_themselves(url):
     with pytest.raises(SourceError, match="serial://"):
         open_source(url)
