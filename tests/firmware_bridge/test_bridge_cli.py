@@ -39,6 +39,24 @@ def test_emulate_bad_replay_file_exits_2(tmp_path, capsys):
     assert str(bad) in err and len(err.strip().splitlines()) == 1
 
 
+def emulate_and_record(tmp_path: Path, emulate: list[str], seconds: float) -> Recording:
+    """`bridge emulate EMULATE --link` in one process, `record --source serial://LINK` for `seconds`
+    in another: what came back through firmware loop, protocol, pty and source."""
+    link = tmp_path / "port"
+    emu = subprocess.Popen([sys.executable, "-m", "tools.cli", "bridge", "emulate", *emulate, "--link", str(link), "--quiet"],
+                           cwd=REPO, stdout=subprocess.PIPE, text=True)
+    try:
+        assert emu.stdout.readline().startswith("port: /dev/pts/")
+        out = tmp_path / "out.csv"
+        rec = subprocess.run([sys.executable, "-m", "tools.cli", "record", "--source", f"serial://{link}", "-o", str(out),
+                              "--seconds", str(seconds)], cwd=REPO, capture_output=True, text=True, timeout=30 + 2 * seconds)
+        assert rec.returncode == 0, rec.stderr
+    finally:
+        emu.terminate()
+        emu.wait(5)
+    return read_recording(out)
+
+
 def test_emulate_replay_then_record_end_to_end(tmp_path):
     """emulate --replay rec.csv in one process, quickjab record --source serial://... in another:
     the recording comes back through firmware loop, protocol, pty and source."""
@@ -48,19 +66,7 @@ def test_emulate_replay_then_record_end_to_end(tmp_path):
     accel[:, :, 2] = 1.0
     rec_in = tmp_path / "in.csv"
     write_recording(rec_in, Recording(t, accel))
-    link = tmp_path / "port"
-    emu = subprocess.Popen([sys.executable, "-m", "tools.cli", "bridge", "emulate", "--replay", str(rec_in), "--seconds", "5",
-                            "--link", str(link), "--quiet"], cwd=REPO, stdout=subprocess.PIPE, text=True)
-    try:
-        assert emu.stdout.readline().startswith("port: /dev/pts/")
-        out = tmp_path / "out.csv"
-        rec = subprocess.run([sys.executable, "-m", "tools.cli", "record", "--source", f"serial://{link}", "-o", str(out),
-                              "--seconds", "3"], cwd=REPO, capture_output=True, text=True, timeout=30)
-        assert rec.returncode == 0, rec.stderr
-    finally:
-        emu.terminate()
-        emu.wait(5)
-    got = read_recording(out)
+    got = emulate_and_record(tmp_path, ["--replay", str(rec_in), "--seconds", "5"], seconds=3)
     assert got.sensors == 2 and len(got) > 250  # 200 Hz for ~2 s after the first HELLO
     assert np.allclose(got.accel[:, :, 2], 1.0, atol=0.02)  # gravity on z, in g
     assert got.accel[:, 0, 0].max() > 0.5 and got.accel[:, 0, 0].min() < -0.5  # the sine came through
@@ -80,19 +86,7 @@ def test_emulate_player_streams_a_virtual_boxer_the_recognizer_takes(tmp_path):
     from tools.bridge import PLAYER_PROFILES
 
     assert PLAYER_PROFILES == tuple(PROFILES)
-    link = tmp_path / "port"
-    emu = subprocess.Popen([sys.executable, "-m", "tools.cli", "bridge", "emulate", "--player", "experienced", "--seed", "1",
-                            "--seconds", "12", "--link", str(link), "--quiet"], cwd=REPO, stdout=subprocess.PIPE, text=True)
-    try:
-        assert emu.stdout.readline().startswith("port: /dev/pts/")
-        out = tmp_path / "out.csv"
-        rec = subprocess.run([sys.executable, "-m", "tools.cli", "record", "--source", f"serial://{link}", "-o", str(out),
-                              "--seconds", "6"], cwd=REPO, capture_output=True, text=True, timeout=40)
-        assert rec.returncode == 0, rec.stderr
-    finally:
-        emu.terminate()
-        emu.wait(5)
-    got = read_recording(out)
+    got = emulate_and_record(tmp_path, ["--player", "experienced", "--seed", "1", "--seconds", "12"], seconds=6)
     # mostly the guard at rest, as the shipped templates expect it: about (0, 0.9, 0.4) g per hand
     np.testing.assert_allclose(np.median(got.accel, axis=0), [[0, 0.9, 0.4]] * 2, atol=0.12)
     assert np.abs(np.linalg.norm(got.accel, axis=2) - 1).max() > 1.0  # and punches
