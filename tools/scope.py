@@ -41,6 +41,7 @@ STATE_COLORS = {
     SourceState.DISCONNECTED: (235, 85, 85),
     SourceState.ENDED: (150, 150, 160),
 }
+READOUT_S = 0.25  # the numbers beside each hand's traces: their mean over this long (readable, not a blur)
 HAND_NAMES = ("right hand (Wiimote / IMU 1)", "left hand (Nunchuk / IMU 2)")
 CONNECT_TIMEOUT_S = 3.0  # a source that never connects (no port, no board) is an error by then
 AUTO_RANGES = (4.0, 8.0, 16.0, 32.0)  # autoscale steps in g: 4 g is a Wiimote's, 16 g a phone's punch
@@ -160,6 +161,7 @@ class Scope:
         self.timed_out = False
         self._t_open = source.clock()
         self.label_rects: list[tuple[int, int, int, int]] = []  # the g labels drawn last frame (tests)
+        self.readouts: dict[int, tuple[float, float, float] | None] = {}  # each hand's readout, g (_readout)
 
     # -- stages ----------------------------------------------------------------------------
     def poll(self, step: int, dt: float) -> None:
@@ -229,9 +231,22 @@ class Scope:
                 for axis in range(3):
                     pts = v.points(hand, t, x[:, 3 * hand + axis], now)
                     pg.draw.lines(screen, AXIS_COLORS[axis], False, pts.tolist(), 2)
-            for axis, name in enumerate("xyz"):
-                screen.blit(self.small.render(name, True, AXIS_COLORS[axis]), (x0 + w - 40 + 12 * axis, y0 + 4))
+            self._readout(hand, t, x, now, x0 + w - 6, y0 + 4)
         self.draw_status(now)
+
+    def _readout(self, hand: int, t: np.ndarray, x: np.ndarray, now: float, right: int, top: int) -> None:
+        """Each axis's name and mean reading over the last READOUT_S, top right of the hand's
+        panel, in its trace's colour: the traces alone could not tell 0.9 g from 1.0 g, which is
+        how a serial IMU's axes are found (`?axes=`, firmware_bridge/README.md)."""
+        recent = x[t >= now - READOUT_S, 3 * hand : 3 * hand + 3]
+        mean = recent.mean(axis=0) if len(recent) else None
+        self.readouts[hand] = None if mean is None else tuple(float(v) for v in mean)
+        for axis in (2, 1, 0):  # right to left
+            text = f"{'xyz'[axis]} {mean[axis]:+.2f}" if mean is not None else "xyz"[axis]
+            img = self.small.render(text, True, AXIS_COLORS[axis])
+            right -= img.get_width()
+            self.screen.blit(img, (right, top))
+            right -= 10
 
     def draw_status(self, now: float) -> None:
         screen, src = self.screen, self.source

@@ -164,6 +164,9 @@ def test_scope_g_labels_stay_inside_their_panel_and_never_overlap(size):
             assert y + h <= y2 or y2 + h2 <= y, ((x, y, w, h), (x2, y2, w2, h2))
 
 
+READOUT_W = 200  # the right of a panel's top, where each axis's reading is written in its colour
+
+
 def test_scope_autoscales_a_punch_beyond_4_g_and_range_fixes_the_scale(tmp_path):
     t = np.arange(0, 3, 1 / 100)
     accel = np.zeros((len(t), 2, 3))
@@ -175,11 +178,11 @@ def test_scope_autoscales_a_punch_beyond_4_g_and_range_fixes_the_scale(tmp_path)
     write_recording(rec, Recording(t, accel))
     img = scope_shot(tmp_path, "--source", f"replay://{rec}?loop=1", frames=120)
     x0, y0, w, h = VIEW.panel_rect(0)
-    rows = np.nonzero((np.abs(img[y0:y0 + h, x0:x0 + w - 50] - np.array(AXIS_COLORS[0])).max(axis=2) <= 25).any(axis=1))[0]
+    rows = np.nonzero((np.abs(img[y0:y0 + h, x0:x0 + w - READOUT_W] - np.array(AXIS_COLORS[0])).max(axis=2) <= 25).any(axis=1))[0]
     # the x trace peaks inside the panel (16 g scale), not flattened against its edges
     assert rows.min() > 0.1 * h and rows.max() < 0.9 * h
     clipped = scope_shot(tmp_path, "--source", f"replay://{rec}?loop=1", "--range", "4", frames=120, name="c.png")
-    rows = np.nonzero((np.abs(clipped[y0:y0 + h, x0:x0 + w - 50] - np.array(AXIS_COLORS[0])).max(axis=2) <= 25).any(axis=1))[0]
+    rows = np.nonzero((np.abs(clipped[y0:y0 + h, x0:x0 + w - READOUT_W] - np.array(AXIS_COLORS[0])).max(axis=2) <= 25).any(axis=1))[0]
     assert rows.min() <= 2 and rows.max() >= h - 3
 
 
@@ -221,3 +224,18 @@ def test_headless_scope_of_a_live_device_runs_on_the_real_clock(tmp_path, capsys
 
     samples = int(re.search(r"^scope: (\d+) samples", err, re.M).group(1))
     assert 200 <= samples <= 400, err
+
+
+def test_each_hand_shows_its_readings_in_numbers(tmp_path):
+    """The traces alone could not tell 0.9 g from 1.0 g, which is how a serial IMU's axes are
+    found (firmware_bridge/README.md, `?axes=`): each hand's panel shows its axes' mean reading
+    over the last quarter second, in numbers."""
+    from engine.recording import Recording, write_recording
+
+    t = np.arange(0, 3, 1 / 100)
+    accel = np.tile([[0.02, 0.91, 0.41], [-0.5, 0.0, 0.87]], (len(t), 1, 1))
+    rec = tmp_path / "guard.csv"
+    write_recording(rec, Recording(t, accel))
+    scope, _ = scope_with_labels("960x600", f"replay://{rec}?loop=1")
+    np.testing.assert_allclose(scope.readouts[0], (0.02, 0.91, 0.41), atol=1e-3)
+    np.testing.assert_allclose(scope.readouts[1], (-0.5, 0.0, 0.87), atol=1e-3)
