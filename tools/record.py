@@ -80,7 +80,8 @@ def record(url: str, output: str, seconds: float | None, label: str = "", poll_s
     parts.write(parts.pending)  # the source ended, or Ctrl-C, before the rate was known
     parts.close()
     if not parts.connected:
-        raise InputError(f"{url}: the source never connected (state {source.state.value}); nothing recorded")
+        raise InputError(f"{url}: the source never connected (state {source.state.value}); nothing recorded; "
+                         + no_device_hint(url))
     rows = parts.finish()
     names = ", ".join(str(f) for f in parts.files)
     print(f"wrote {rows} samples to {names}", file=sys.stderr)
