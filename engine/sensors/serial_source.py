@@ -47,6 +47,7 @@ from engine.sensors.source import (
     SourceState,
     register_scheme,
     url_number,
+    url_params_known,
 )
 from firmware_bridge import protocol
 
@@ -418,9 +419,7 @@ def parse_serial_url(url: str) -> tuple[str | None, dict[str, str]]:
 
 def open_serial(url: str, clock: Clock) -> SerialSource:
     target, params = parse_serial_url(url)
-    unknown = set(params) - {"baud", "retry", "window", "vid", "pid", "axes"}
-    if unknown:
-        raise SourceError(f"{url}: unknown parameter(s) {', '.join(sorted(unknown))} (known: baud, retry, window, vid, pid, axes)")
+    url_params_known(url, params, ("baud", "retry", "window", "vid", "pid", "axes"))
     axes = parse_axes(url, params["axes"]) if "axes" in params else None
     # finite and in range: nan passed `<= 0`, and a retry of nan never reopened a lost port while
     # a window of nan or inf never dropped an old minimum from the clock (nor from its deque)
