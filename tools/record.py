@@ -47,9 +47,13 @@ def link_counts(stats: dict[str, int]) -> str:
     """The end-of-run line about the link: what came in and what was lost or rejected on the way
     (the counters a source has; a serial source has them all)."""
     rejected = sum(stats.get(k, 0) for k in ("cobs_errors", "oversize", "runts", "unknown_type", "malformed"))
+    jumps = stats.get("seq_jumps", 0)
+    # a reboot whose HELLO was lost shows only as its sequence starting again: said apart, since
+    # a board that reboots without a HELLO is another fault (power dips mid-send) than one that does
+    unannounced = f" ({jumps} seen only as a sequence jump)" if jumps else ""
     return (f"received {stats.get('frames_ok', 0)} frames, lost {stats.get('lost', 0)}, "
             f"CRC-rejected {stats.get('crc_errors', 0)}, other rejects {rejected}, "
-            f"replays dropped {stats.get('replays', 0)}, reboots {stats.get('reboots', 0) + stats.get('seq_jumps', 0)}, "
+            f"replays dropped {stats.get('replays', 0)}, reboots {stats.get('reboots', 0) + jumps}{unannounced}, "
             f"sensor changes {stats.get('sensor_changes', 0)}, sensor conflicts {stats.get('sensor_conflicts', 0)}, "
             f"implausible {stats.get('implausible', 0)}")
 

@@ -20,7 +20,7 @@ from engine.recording import MAX_ACCEL_G, read_recording
 from engine.sensors import open_source
 from engine.sensors.serial_accel import SampleAccel
 from firmware_bridge import protocol
-from tools.record import record
+from tools.record import link_counts, record
 
 
 def hello(seq=0, boot=77, accel=4096, gyro=65500, rate=200, ts_bits=30, flags=3, t_us=0):
@@ -137,6 +137,13 @@ def test_record_continues_in_a_new_file_when_the_sensor_count_changes(tmp_path, 
     assert "now 1 sensor(s), continuing in a new file" in err
     link = next(line for line in err.splitlines() if line.startswith("link:"))
     assert "received 55 frames, lost 9, CRC-rejected 0" in link and "reboots 1" in link and "other rejects 1" in link
+
+
+def test_the_link_line_says_which_reboots_came_without_a_hello():
+    both = link_counts({"frames_ok": 10, "reboots": 1, "seq_jumps": 2})
+    assert "reboots 3 (2 seen only as a sequence jump)," in both
+    announced = link_counts({"frames_ok": 10, "reboots": 1})
+    assert "reboots 1," in announced and "sequence jump" not in announced
 
 
 # -- fuzz ---------------------------------------------------------------------------------
