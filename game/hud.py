@@ -168,6 +168,7 @@ class Hud(TextLayer):
         self.key_panel: pygame.Rect | None = None  # where the key legend was drawn last (tests)
         self.count_rect: pygame.Rect | None = None  # where the knockdown count was drawn last
         self.lost_box: pygame.Rect | None = None  # where the lost-controller box was drawn last
+        self.key_line: pygame.Rect | None = None  # the "Esc pause  F3 budget..." line drawn last
 
     # layout helpers (fractions of the window, so resizes keep the layout)
     @staticmethod
@@ -320,7 +321,7 @@ class Hud(TextLayer):
         w, h = surf.get_size()
         _, right = self.health_rects(surf.get_size())
         u = text_scale(u)
-        self.blit(surf, "Esc pause   F3 budget   F11 fullscreen", int(20 * u), (right.right, right.bottom + 32 * u), DIM, "topright")
+        self.key_line = self.blit(surf, "Esc pause   F3 budget   F11 fullscreen", int(20 * u), (right.right, right.bottom + 32 * u), DIM, "topright")
         if not st.keys:
             self.key_panel = None  # none drawn this frame
             return
@@ -393,7 +394,7 @@ class Hud(TextLayer):
     def _budget(self, surf: pygame.Surface, budget: FrameBudget, u: float) -> None:
         """The F3 overlay (game/hud_budget.py), clear of the panels drawn this frame under it."""
         below = [rect for name, rect in self.panels.items() if name.startswith(("recognition", "keys"))]
-        self.budget_overlay.draw(self, surf, budget, u, below)
+        self.budget_overlay.draw(self, surf, budget, u, below, [self.key_line] if self.key_line else [])
 
     # the overlay's chart and rows, under the names tests read
     @property
