@@ -16,7 +16,7 @@ import pygame
 
 from engine.budget import FrameBudget
 from engine.clock import STEP_HZ
-from engine.sensors.source import Source
+from engine.sensors.source import REWIND, Source
 from game.hud_budget import BudgetOverlay
 
 # the HUD's colours and layout (game/hud_style.py); importable from here as before
@@ -55,11 +55,13 @@ class SourceSnapshot:
     url: str = ""
     state: str = "connected"
     battery: float | None = None
+    rewinds: bool = False  # ended, it can play again from its start (a replay): Enter does it
 
     @classmethod
     def of(cls, source: Source, url: str | None = None) -> SourceSnapshot:
         """The source now; `url` to show another label (two players: "P1 wiimote://")."""
-        return cls(source.url if url is None else url, source.state.value, source.battery)
+        return cls(source.url if url is None else url, source.state.value, source.battery,
+                   REWIND in source.capabilities)
 
 
 @dataclass
@@ -153,9 +155,12 @@ def result_title(result: str, winner: int | None, wins: tuple[str, str]) -> str:
     return f"{wins[winner]} ON POINTS"
 
 
-def lost_lines(state: str) -> tuple[str, str]:
+def lost_lines(state: str, rewinds: bool = False) -> tuple[str, str]:
     """The lost-source overlay's title and what happens next, for the source's state: one that
-    ended (a replay played out) is not coming back."""
+    ended (a replay played out) is not coming back, but one that `rewinds` plays again (the
+    session's Enter rewinds it and starts a new match)."""
+    if state == "ended" and rewinds:
+        return "SOURCE ENDED", "Enter: play it again from the start   (close the window to quit)"
     if state == "ended":
         return "SOURCE ENDED", "nothing more to play: close the window to quit"
     return "CONTROLLER DISCONNECTED", "the match resumes when it is back"
@@ -382,13 +387,14 @@ class Hud(TextLayer):
         pygame.draw.rect(surf, (120, 20, 24), box, border_radius=int(10 * u))
         pygame.draw.rect(surf, REJECT_COLOR, box, 3, border_radius=int(10 * u))
         self.enter_panel("lost", box)
-        title, then = lost_lines(st.source.state)
+        title, then = lost_lines(st.source.state, st.source.rewinds)
         self.blit(surf, title, int(54 * u), (w // 2, box.top + 22 * u), TEXT, "midtop")
         # the source on a line of its own, smaller if its URL is long (a two-player seat's
         # keyboard URL ran past both sides of the box), then what happens next
         line, size = self.text.fit(f"{st.source.url}: {st.source.state}", int(24 * u), box.width - int(24 * u))
         self.blit(surf, line, size, (w // 2, box.top + 80 * u), TEXT, "midtop")
-        self.blit(surf, then, int(24 * u), (w // 2, box.top + 108 * u), TEXT, "midtop")
+        then, size = self.text.fit(then, int(24 * u), box.width - int(24 * u))
+        self.blit(surf, then, size, (w // 2, box.top + 108 * u), TEXT, "midtop")
         self.enter_panel("screen", None)
 
     def _budget(self, surf: pygame.Surface, budget: FrameBudget, u: float) -> None:

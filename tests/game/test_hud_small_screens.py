@@ -80,6 +80,13 @@ def budget():
     return loop.budget
 
 
+def played_out(n: int = 1, **kw) -> HudState:
+    """A HUD under SOURCE ENDED, offering Enter to play the replay again (its longest line)."""
+    st = busy(n, disconnected=True, **kw)
+    st.source = SourceSnapshot(url=P2_URL.replace("keyboard", "replay"), state="ended", rewinds=True)
+    return st
+
+
 SCREENS = {
     "match": lambda: (Hud(), busy(keyboard_banner=True)),
     "demo": lambda: (Hud(), busy(demo=True)),
@@ -90,6 +97,8 @@ SCREENS = {
     "lost": lambda: (Hud(), busy(2, disconnected=True)),
     "two": lambda: (TwoPlayerHud(seat(2)), seat(1, names=("P1", "P2"))),
     "two budget": lambda: (TwoPlayerHud(seat(2)), seat(1, names=("P1", "P2"), show_budget=True)),
+    "ended": lambda: (Hud(), played_out(match=MatchSnapshot(paused=True))),
+    "two ended": lambda: (TwoPlayerHud(played_out(2)), seat(1, names=("P1", "P2"), match=MatchSnapshot(paused=True))),
     "two lost": lambda: (TwoPlayerHud(seat(2, disconnected=True)), seat(1, names=("P1", "P2"), match=MatchSnapshot(paused=True))),
     "two over": lambda: (TwoPlayerHud(seat(2)), seat(1, names=("P1", "P2"), match=MatchSnapshot(phase="over", winner=0, result="KO"))),
 }
