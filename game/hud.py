@@ -360,7 +360,7 @@ class Hud(TextLayer):
         if st.match.phase == "over":
             title = result_title(st.match.result, st.match.winner, ("YOU WIN", "CPU WINS"))
             self._banner(surf, title, big, (w // 2, h * 0.42))
-            if not st.demo:
+            if not st.demo and not st.disconnected:  # the lost-source box hides them; D does nothing there
                 self.menu_line(surf, "Enter: a new match", mid, (w // 2, h * 0.42 + 60 * u), DIM, u)
                 if st.difficulty:
                     self.menu_line(surf, f"D: difficulty {st.difficulty}", int(30 * u), (w // 2, h * 0.42 + 104 * u), DIM, u)

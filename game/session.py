@@ -346,7 +346,8 @@ class Session(Ring):
             elif event.key == pygame.K_RETURN and enter_starts_match(self.match, self.sources()):
                 self.new_match()
             elif event.key == pygame.K_d and (self.match.paused or self.match.over):
-                self.cycle_difficulty()  # the pause menu
+                if not self.source_lost():  # the pause menu; not shown under the lost-source overlay
+                    self.cycle_difficulty()
             elif KEYS in self.source.capabilities and not self.match.paused:
                 self.source.press_key(pygame.key.name(event.key))
 

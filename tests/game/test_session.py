@@ -217,6 +217,36 @@ def test_enter_under_source_ended_plays_the_replay_again_in_a_new_match(tmp_path
     assert capsys.readouterr().err.count("the source ended") == 2
 
 
+def test_d_does_nothing_under_the_lost_source_overlays(tmp_path) -> None:
+    """D (the pause menu's next difficulty) changed the CPU's difficulty under the lost-controller
+    and SOURCE ENDED overlays, where no pause menu shows it; the pause menu's D still works."""
+    s = make_session("keyboard://?seed=4", display=True)
+    start = s.difficulty.name
+    s.loop.run(frames=5)
+    s.source.disconnect()
+    for phase in ("fight", "over"):  # paused under the overlay, and after the last bell
+        s.match.phase = phase
+        s.view.hud.layout = []
+        pygame.event.post(key(pygame.K_d))
+        s.loop.run(frames=3)
+        assert s.source_lost() and s.difficulty.name == start and s.hud_state.difficulty == start
+        assert not any(text.startswith("D: ") for text, _, _ in s.view.hud.layout)  # nothing offers it
+    ended = played_out_replay(tmp_path)
+    pygame.event.post(key(pygame.K_d))
+    ended.loop.run(frames=3)
+    assert ended.difficulty.name == start
+    # the controller back and the match paused by Esc: the menu offers D, and D acts
+    s.match.phase = "fight"
+    s.source.reconnect()
+    s.loop.run(frames=3)
+    pygame.event.post(escape())
+    s.loop.run(frames=3)
+    s.view.hud.layout = []
+    pygame.event.post(key(pygame.K_d))
+    s.loop.run(frames=3)
+    assert s.match.paused and s.difficulty.name != start
+    assert f"D: difficulty {s.difficulty.label}" in [text for text, _, _ in s.view.hud.layout]
+
 def test_rumble_on_the_player_when_hit() -> None:
     s = make_session("keyboard://?seed=6", render=False)
     calls = []
