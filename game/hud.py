@@ -16,7 +16,7 @@ import pygame
 
 from engine.budget import FrameBudget
 from engine.clock import STEP_HZ
-from engine.sensors.source import Source
+from engine.sensors.source import REWIND, Source
 from game.hud_budget import BudgetOverlay
 
 # the HUD's colours and layout (game/hud_style.py); importable from here as before
@@ -55,11 +55,13 @@ class SourceSnapshot:
     url: str = ""
     state: str = "connected"
     battery: float | None = None
+    rewinds: bool = False  # ended, it can play again from its start (a replay): Enter does it
 
     @classmethod
     def of(cls, source: Source, url: str | None = None) -> SourceSnapshot:
         """The source now; `url` to show another label (two players: "P1 wiimote://")."""
-        return cls(source.url if url is None else url, source.state.value, source.battery)
+        return cls(source.url if url is None else url, source.state.value, source.battery,
+                   REWIND in source.capabilities)
 
 
 @dataclass
@@ -153,9 +155,12 @@ def result_title(result: str, winner: int | None, wins: tuple[str, str]) -> str:
     return f"{wins[winner]} ON POINTS"
 
 
-def lost_lines(state: str) -> tuple[str, str]:
+def lost_lines(state: str, rewinds: bool = False) -> tuple[str, str]:
     """The lost-source overlay's title and what happens next, for the source's state: one that
-    ended (a replay played out) is not coming back."""
+    ended (a replay played out) is not coming back, but one that `rewinds` plays again (the
+    session's Enter rewinds it and starts a new match)."""
+    if state == "ended" and rewinds:
+        return "SOURCE ENDED", "Enter: play it again from the start   (close the window to quit)"
     if state == "ended":
         return "SOURCE ENDED", "nothing more to play: close the window to quit"
     return "CONTROLLER DISCONNECTED", "the match resumes when it is back"
@@ -168,6 +173,7 @@ class Hud(TextLayer):
         self.key_panel: pygame.Rect | None = None  # where the key legend was drawn last (tests)
         self.count_rect: pygame.Rect | None = None  # where the knockdown count was drawn last
         self.lost_box: pygame.Rect | None = None  # where the lost-controller box was drawn last
+        self.key_line: pygame.Rect | None = None  # the "Esc pause  F3 budget..." line drawn last
 
     # layout helpers (fractions of the window, so resizes keep the layout)
     @staticmethod
@@ -320,7 +326,7 @@ class Hud(TextLayer):
         w, h = surf.get_size()
         _, right = self.health_rects(surf.get_size())
         u = text_scale(u)
-        self.blit(surf, "Esc pause   F3 budget   F11 fullscreen", int(20 * u), (right.right, right.bottom + 32 * u), DIM, "topright")
+        self.key_line = self.blit(surf, "Esc pause   F3 budget   F11 fullscreen", int(20 * u), (right.right, right.bottom + 32 * u), DIM, "topright")
         if not st.keys:
             self.key_panel = None  # none drawn this frame
             return
@@ -354,7 +360,7 @@ class Hud(TextLayer):
         if st.match.phase == "over":
             title = result_title(st.match.result, st.match.winner, ("YOU WIN", "CPU WINS"))
             self._banner(surf, title, big, (w // 2, h * 0.42))
-            if not st.demo:
+            if not st.demo and not st.disconnected:  # the lost-source box hides them; D does nothing there
                 self.menu_line(surf, "Enter: a new match", mid, (w // 2, h * 0.42 + 60 * u), DIM, u)
                 if st.difficulty:
                     self.menu_line(surf, f"D: difficulty {st.difficulty}", int(30 * u), (w // 2, h * 0.42 + 104 * u), DIM, u)
@@ -381,19 +387,20 @@ class Hud(TextLayer):
         pygame.draw.rect(surf, (120, 20, 24), box, border_radius=int(10 * u))
         pygame.draw.rect(surf, REJECT_COLOR, box, 3, border_radius=int(10 * u))
         self.enter_panel("lost", box)
-        title, then = lost_lines(st.source.state)
+        title, then = lost_lines(st.source.state, st.source.rewinds)
         self.blit(surf, title, int(54 * u), (w // 2, box.top + 22 * u), TEXT, "midtop")
         # the source on a line of its own, smaller if its URL is long (a two-player seat's
         # keyboard URL ran past both sides of the box), then what happens next
         line, size = self.text.fit(f"{st.source.url}: {st.source.state}", int(24 * u), box.width - int(24 * u))
         self.blit(surf, line, size, (w // 2, box.top + 80 * u), TEXT, "midtop")
-        self.blit(surf, then, int(24 * u), (w // 2, box.top + 108 * u), TEXT, "midtop")
+        then, size = self.text.fit(then, int(24 * u), box.width - int(24 * u))
+        self.blit(surf, then, size, (w // 2, box.top + 108 * u), TEXT, "midtop")
         self.enter_panel("screen", None)
 
     def _budget(self, surf: pygame.Surface, budget: FrameBudget, u: float) -> None:
         """The F3 overlay (game/hud_budget.py), clear of the panels drawn this frame under it."""
         below = [rect for name, rect in self.panels.items() if name.startswith(("recognition", "keys"))]
-        self.budget_overlay.draw(self, surf, budget, u, below)
+        self.budget_overlay.draw(self, surf, budget, u, below, [self.key_line] if self.key_line else [])
 
     # the overlay's chart and rows, under the names tests read
     @property

@@ -38,10 +38,11 @@ class BudgetOverlay:
         self.rows_shown = 0  # the stages listed last frame: fewer than all where the room ran out
 
     def draw(self, hud, surf: pygame.Surface, budget: FrameBudget, u: float,
-             below: Sequence[pygame.Rect] = ()) -> None:
+             below: Sequence[pygame.Rect] = (), above: Sequence[pygame.Rect] = ()) -> None:
         """A stacked bar per stage against the frame's period (the 16.7 ms line; 33.3 ms in low
         power, where a frame holds two steps), and each stage's p99; clear of the panels `below`
-        (the HUD's, drawn this frame: key legends, player 2's recognition panel)."""
+        (the HUD's, drawn this frame: key legends, player 2's recognition panel) and under the
+        lines `above` it (two players' shared key line under the clock)."""
         w, h = surf.get_size()
         chart_h = int(90 * u)
         t = text_scale(u)  # the text and its rows stop shrinking (game/hud_style.py); the chart does not
@@ -51,6 +52,9 @@ class BudgetOverlay:
         # with the window: at 800x480 the panel's top (130 u) ran over "LOW POWER  DEMO"
         top = max(int(130 * u), hud.clock_box((w, h), u).bottom + int(30 * t))
         panel = pygame.Rect(w - int(440 * t), top, int(424 * t), int(80 * t + 20 * t * (len(names) + 1)) + chart_h)
+        # under a line above that reaches into its columns: with two players the shared "Esc pause
+        # F3 budget F11 fullscreen" line under the clock ran under its title from 640x360 to 960x540
+        panel.top = max([top] + [r.bottom + int(4 * t) for r in above if r.right > panel.left and r.left < panel.right])
         chart_h, self.rows_shown = give_way(panel, chart_h, len(names), below, t)
         # (a row's room under the last row is the chart's margin: without a chart, none)
         panel.height = int(80 * t + 20 * t * (self.rows_shown + (1 if chart_h else 0))) + chart_h

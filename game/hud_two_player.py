@@ -113,7 +113,7 @@ class TwoPlayerHud(Hud):
                 self.key_panels.append(self.key_legend_panel(surf, compact_keys(st.keys), int(19 * u), anchor,
                                                              (x, h - 2 * u), u))
         # the shared keys under the round clock (the bottom corners are the players')
-        self.blit(surf, "Esc pause  F3 budget  F11 fullscreen", int(18 * u), (w // 2, 118 * u), DIM, "midtop")
+        self.key_line = self.blit(surf, "Esc pause  F3 budget  F11 fullscreen", int(18 * u), (w // 2, 118 * u), DIM, "midtop")
 
     def _centre_two(self, surf: pygame.Surface, st: HudState, u: float) -> None:
         if st.match.phase != "over":

@@ -25,7 +25,7 @@ from engine.clock import STEP_HZ, RealClock, VirtualClock
 from engine.errors import InputError
 from engine.frames import FrameResampler
 from engine.loop import FixedStepLoop
-from engine.sensors.source import KEYS, Source, SourceState
+from engine.sensors.source import KEYS, REWIND, Source, SourceState
 from game.difficulty import DifficultySetting
 from game.history import History
 from game.hits import Hit
@@ -69,6 +69,25 @@ def say_if_ended(source: Source, was_lost: bool) -> None:
     if source.state == SourceState.ENDED and not was_lost:
         print(f"quickjab play: {source.url}: the source ended (nothing more to play); the match is paused",
               file=sys.stderr)
+
+
+def can_play_again(source: Source) -> bool:
+    """Whether `source` ended and can play again from its start (a replay played out): Enter,
+    offered on the SOURCE ENDED overlay, rewinds it and starts a new match."""
+    return source.state == SourceState.ENDED and REWIND in source.capabilities
+
+
+def enter_starts_match(match: Match, sources: list[Source]) -> bool:
+    """Whether Enter starts a new match now: after the last bell, or under SOURCE ENDED when
+    the source can play again (a replay)."""
+    return match.over or any(map(can_play_again, sources))
+
+
+def rewind_ended(sources: list[Source]) -> None:
+    """A new match plays the replays that played out again from their start: else it would
+    pause at once under SOURCE ENDED."""
+    for source in filter(can_play_again, sources):
+        source.rewind()
 
 
 def pause_on_home(source, held: int, session) -> int:
@@ -324,10 +343,11 @@ class Session(Ring):
             elif event.key == pygame.K_F11:
                 if self.on_toggle_fullscreen is not None:
                     self.on_toggle_fullscreen()
-            elif event.key == pygame.K_RETURN and self.match.over:
+            elif event.key == pygame.K_RETURN and enter_starts_match(self.match, self.sources()):
                 self.new_match()
             elif event.key == pygame.K_d and (self.match.paused or self.match.over):
-                self.cycle_difficulty()  # the pause menu
+                if not self.source_lost():  # the pause menu; not shown under the lost-source overlay
+                    self.cycle_difficulty()
             elif KEYS in self.source.capabilities and not self.match.paused:
                 self.source.press_key(pygame.key.name(event.key))
 
@@ -340,6 +360,10 @@ class Session(Ring):
     def source_lost(self) -> bool:
         """Whether the player's source is away (the lost-controller overlay is up)."""
         return self.hud_state.disconnected
+
+    def sources(self) -> list[Source]:
+        """The players' sources (one here; a seat's each with two players)."""
+        return [self.source]
 
     def _frames(self, step: int, dt: float) -> None:
         if self._t0 is None:
@@ -437,7 +461,9 @@ class Session(Ring):
         self.hud_state.source = SourceSnapshot.of(self.source)
 
     def new_match(self) -> None:
-        """A fresh match (Enter after the last bell; by itself in the attract mode)."""
+        """A fresh match (Enter after the last bell or under SOURCE ENDED; by itself in the
+        attract mode)."""
+        rewind_ended(self.sources())
         self.match = Match()
         self._rounds_seen = 0
         self._over_steps = 0

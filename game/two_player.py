@@ -46,8 +46,10 @@ from game.session import (
     Session,
     SessionConfig,
     _event_key,
+    enter_starts_match,
     load_templates,
     pause_on_home,
+    rewind_ended,
     say_if_ended,
     templates_in_use,
 )
@@ -198,6 +200,9 @@ class TwoPlayerSession(Session):
         """Whether either player's source is away (Esc and Home do not resume the match then)."""
         return any(seat.hud.disconnected for seat in self.seats)
 
+    def sources(self) -> list[Source]:
+        return [seat.source for seat in self.seats]
+
     def _pilot_seat(self, seat: Seat) -> None:
         """The demo's player at this seat: a random move (an attack when within reach, else a
         step in), performed by the virtual player on the keyboard source; the seat's REAL
@@ -218,8 +223,10 @@ class TwoPlayerSession(Session):
         seat.pilot_wait = PILOT_PAUSE_STEPS
 
     def handle_event(self, event: pygame.event.Event) -> None:
+        # Esc, F3, F11 and Enter (a new match after the last bell, or a played-out replay
+        # again) are the one-player keys; every other key is a seat's
         if event.type == pygame.KEYDOWN and event.key not in (pygame.K_ESCAPE, pygame.K_F3, pygame.K_F11) \
-                and not (event.key == pygame.K_RETURN and self.match.over):
+                and not (event.key == pygame.K_RETURN and enter_starts_match(self.match, self.sources())):
             if not self.match.paused:
                 name = pygame.key.name(event.key)
                 for seat in self.seats:  # each keyboard seat answers only its half of the keys
@@ -294,7 +301,9 @@ class TwoPlayerSession(Session):
         self.seats[1].hud.tick()  # player 2's marks age as player 1's (hud_state.tick)
 
     def new_match(self) -> None:
-        """A fresh match (Enter after the last bell; by itself in the demo)."""
+        """A fresh match (Enter after the last bell or under SOURCE ENDED; by itself in the
+        demo); a seat's replay that played out starts again."""
+        rewind_ended(self.sources())
         self.match = Match()
         self._over_steps = 0
         self._to_corners()

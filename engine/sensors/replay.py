@@ -10,6 +10,7 @@ import numpy as np
 from engine.clock import STEP_DT
 from engine.recording import Recording, read_recording
 from engine.sensors.source import (
+    REWIND,
     Clock,
     Sample,
     Source,
@@ -37,6 +38,8 @@ def _stated_rate(text: str | None) -> float | None:
 
 
 class ReplaySource(Source):
+    capabilities = frozenset({REWIND})  # played out, it can play again (the game's Enter)
+
     def __init__(self, rec: Recording, *, url: str = "", clock: Clock, speed: float = 1.0, loop: bool = False):
         if speed <= 0:
             raise SourceError(f"{url}: speed must be positive, not {speed}")
@@ -55,7 +58,12 @@ class ReplaySource(Source):
         # (and `record` wrote that); a stated rate its times contradict is not taken
         stated = _stated_rate(rec.meta.get("rate_hz"))
         self.rate_hz = stated if stated and abs(stated * period - 1.0) < 0.01 else (1.0 / period if period > 0 else None)
-        self._start = clock()
+        self.rewind()
+
+    def rewind(self) -> None:
+        """Play from the first sample again, starting now: the recording read once is kept (the
+        file is not parsed again), only the playback position goes back."""
+        self._start = self.clock()
         self._next = 0  # index of the next sample, counted across loops
         self.state = SourceState.CONNECTED
 

@@ -43,6 +43,7 @@ Clock = Callable[[], float]
 PLAYABLE = "playable"  # press(action) performs a move; busy while it does; profile, auto: a
 #                        virtual player (the attract mode's pilot and the trainer drive it)
 KEYS = "keys"  # press_key(name) -> action or None, keymap {key name: action}: keys drive it
+REWIND = "rewind"  # rewind(): a finite source that ENDED plays again from its start (a replay)
 
 
 @dataclass
@@ -62,7 +63,7 @@ class Source:
     description: str = ""
     stats: dict[str, int] = field(default_factory=dict)
     buttons: int = 0  # buttons held (the Wiimote's core bits, Home 0x0080); 0 where there are none
-    capabilities: ClassVar[frozenset[str]] = frozenset()  # PLAYABLE, KEYS: what else it can do
+    capabilities: ClassVar[frozenset[str]] = frozenset()  # PLAYABLE, KEYS, REWIND: what else it can do
 
     def poll(self) -> list[Sample]:
         raise NotImplementedError

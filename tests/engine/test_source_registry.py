@@ -103,6 +103,30 @@ def test_replay_under_a_virtual_clock_delivers_samples_when_due(tmp_path):
     assert src.label_at(5.06) == "jab" and src.label_at(5.02) == ""
 
 
+def test_a_replay_that_ended_rewinds_to_its_start(tmp_path, monkeypatch):
+    """rewind() (the REWIND capability: the game's Enter under SOURCE ENDED) plays the recording
+    again from its first sample, stamped from now, without reading the file again."""
+    import engine.sensors.replay as replay
+    from engine.sensors.source import REWIND
+
+    path, accel = write_rec(tmp_path)
+    clock = VirtualClock(start_ns=5_000_000_000)
+    src = open_source(f"replay://{path}", clock=clock.seconds)
+    assert REWIND in src.capabilities
+    clock.advance(1_000_000_000)
+    first = src.poll()
+    assert src.state is SourceState.ENDED
+    monkeypatch.setattr(replay, "read_recording", lambda *a: pytest.fail("the file read again"))
+    clock.advance(500_000_000)
+    src.rewind()
+    assert src.state is SourceState.CONNECTED
+    clock.advance(1_000_000_000)
+    again = src.poll()
+    assert [round(s.t - 6.5, 6) for s in again] == [round(s.t - 5.0, 6) for s in first]
+    np.testing.assert_array_equal(np.array([s.accel for s in again]), accel)
+    assert src.state is SourceState.ENDED
+
+
 def test_replay_speed_and_loop(tmp_path):
     path, _ = write_rec(tmp_path)
     clock = VirtualClock()

@@ -80,6 +80,13 @@ def budget():
     return loop.budget
 
 
+def played_out(n: int = 1, **kw) -> HudState:
+    """A HUD under SOURCE ENDED, offering Enter to play the replay again (its longest line)."""
+    st = busy(n, disconnected=True, **kw)
+    st.source = SourceSnapshot(url=P2_URL.replace("keyboard", "replay"), state="ended", rewinds=True)
+    return st
+
+
 SCREENS = {
     "match": lambda: (Hud(), busy(keyboard_banner=True)),
     "demo": lambda: (Hud(), busy(demo=True)),
@@ -90,6 +97,8 @@ SCREENS = {
     "lost": lambda: (Hud(), busy(2, disconnected=True)),
     "two": lambda: (TwoPlayerHud(seat(2)), seat(1, names=("P1", "P2"))),
     "two budget": lambda: (TwoPlayerHud(seat(2)), seat(1, names=("P1", "P2"), show_budget=True)),
+    "ended": lambda: (Hud(), played_out(match=MatchSnapshot(paused=True))),
+    "two ended": lambda: (TwoPlayerHud(played_out(2)), seat(1, names=("P1", "P2"), match=MatchSnapshot(paused=True))),
     "two lost": lambda: (TwoPlayerHud(seat(2, disconnected=True)), seat(1, names=("P1", "P2"), match=MatchSnapshot(paused=True))),
     "two over": lambda: (TwoPlayerHud(seat(2)), seat(1, names=("P1", "P2"), match=MatchSnapshot(phase="over", winner=0, result="KO"))),
 }
@@ -206,3 +215,28 @@ def test_the_budget_overlay_gives_way_to_player_twos_panels(size, scene) -> None
     assert 4 <= shown_rows <= rows  # at 800x450: the busiest stages, their numbers readable
     if size == (1280, 720):  # room for all of it: as before
         assert shown_rows == rows and hud._chart.get_height() == 90
+
+
+@pytest.mark.parametrize("size", [(800, 450), (960, 540), (1920, 1080)])
+def test_the_budget_overlay_gives_way_to_the_shared_key_line(size, scene) -> None:
+    """F3 with two players at 800x450 and 960x540: the overlay's title ran over the shared "Esc
+    pause  F3 budget  F11 fullscreen" line under the round clock. The line's pixels are now the
+    same with F3 on as off; on a large window, where the line is clear of it, the overlay keeps
+    the one-player overlay's place."""
+    pygame.init()
+    frames = {}
+    for shown in (False, True):
+        surf = pygame.Surface(size)
+        Renderer(size).draw(surf, scene)
+        hud, st = TwoPlayerHud(seat(2)), seat(1, names=("P1", "P2"), show_budget=shown)
+        hud.layout = []
+        hud.draw(surf, st, budget())
+        frames[shown] = pygame.surfarray.array3d(surf)
+    (line,) = [rect for text, rect, _ in hud.layout if text.startswith("Esc pause")]
+    assert not hud.panels["budget"].colliderect(line), (line, hud.panels["budget"])
+    region = (slice(line.left, line.right), slice(line.top, line.bottom))
+    assert (frames[True][region] == frames[False][region]).all()
+    one = Hud()
+    one.draw(pygame.Surface(size), busy(show_budget=True), budget())
+    moved = hud.panels["budget"].top != one.panels["budget"].top
+    assert moved == (size != (1920, 1080)), (hud.panels["budget"], one.panels["budget"])

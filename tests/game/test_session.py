@@ -174,6 +174,79 @@ def test_a_replay_that_plays_out_pauses_the_match_and_says_so(tmp_path, capsys) 
     assert "SOURCE ENDED" in said and any(t.startswith("replay://") and t.endswith(": ended") for t in said), said
     assert capsys.readouterr().err.count("the source ended") == 1  # and on the console, once
 
+
+def key(code: int) -> pygame.event.Event:
+    return pygame.event.Event(pygame.KEYDOWN, key=code, mod=0, unicode="", scancode=0)
+
+
+def played_out_replay(tmp_path) -> Session:
+    """A one-player session on a 1 s replay, run until it has played out (SOURCE ENDED)."""
+    from tools.cli import main
+
+    rec = tmp_path / "short.csv"
+    assert main(["synth", "--session", "1", "--seed", "2", "-o", str(rec)]) == 0
+    s = make_session(f"replay://{rec}", display=True)
+    s.loop.run(frames=90)
+    assert s.source.state == SourceState.ENDED and s.match.paused and s.source_lost()
+    return s
+
+
+def test_enter_under_source_ended_plays_the_replay_again_in_a_new_match(tmp_path, capsys) -> None:
+    """A replay that played out paused the match for good: playing it again meant restarting
+    the program. Enter, offered on the SOURCE ENDED overlay, rewinds it and starts a new match."""
+    s = played_out_replay(tmp_path)
+    surf = pygame.display.get_surface()
+    probe = (SIZE[0] // 2, int(SIZE[1] * 0.93))
+    dark = sum(surf.get_at(probe)[:3])  # under the overlay
+    s.view.hud.layout = []
+    s.loop.run(frames=1)
+    said = [text for text, _, panel in s.view.hud.layout if panel == "lost"]
+    assert "SOURCE ENDED" in said and any(t.startswith("Enter: play it again") for t in said), said
+    resets = []
+    reset = s.recognizer.reset
+    s.recognizer.reset = lambda: (resets.append(s.loop.step_index), reset())[-1]
+    s.match.health[0] = 40.0  # this match's state: the new match's is fresh
+    pygame.event.post(key(pygame.K_RETURN))
+    s.loop.run(frames=20)
+    assert s.source.state == SourceState.CONNECTED and not s.source_lost()
+    assert s.match.fighting and s.match.round == 1 and s.match.health == [100.0, 100.0]
+    assert resets  # the recognizer learns the (rewound) recording's gravity afresh
+    assert sum(surf.get_at(probe)[:3]) > 2 * dark + 30  # the overlay is gone
+    s.loop.run(frames=70)  # played out again: paused again, and the console says so again
+    assert s.source.state == SourceState.ENDED and s.match.paused
+    assert capsys.readouterr().err.count("the source ended") == 2
+
+
+def test_d_does_nothing_under_the_lost_source_overlays(tmp_path) -> None:
+    """D (the pause menu's next difficulty) changed the CPU's difficulty under the lost-controller
+    and SOURCE ENDED overlays, where no pause menu shows it; the pause menu's D still works."""
+    s = make_session("keyboard://?seed=4", display=True)
+    start = s.difficulty.name
+    s.loop.run(frames=5)
+    s.source.disconnect()
+    for phase in ("fight", "over"):  # paused under the overlay, and after the last bell
+        s.match.phase = phase
+        s.view.hud.layout = []
+        pygame.event.post(key(pygame.K_d))
+        s.loop.run(frames=3)
+        assert s.source_lost() and s.difficulty.name == start and s.hud_state.difficulty == start
+        assert not any(text.startswith("D: ") for text, _, _ in s.view.hud.layout)  # nothing offers it
+    ended = played_out_replay(tmp_path)
+    pygame.event.post(key(pygame.K_d))
+    ended.loop.run(frames=3)
+    assert ended.difficulty.name == start
+    # the controller back and the match paused by Esc: the menu offers D, and D acts
+    s.match.phase = "fight"
+    s.source.reconnect()
+    s.loop.run(frames=3)
+    pygame.event.post(escape())
+    s.loop.run(frames=3)
+    s.view.hud.layout = []
+    pygame.event.post(key(pygame.K_d))
+    s.loop.run(frames=3)
+    assert s.match.paused and s.difficulty.name != start
+    assert f"D: difficulty {s.difficulty.label}" in [text for text, _, _ in s.view.hud.layout]
+
 def test_rumble_on_the_player_when_hit() -> None:
     s = make_session("keyboard://?seed=6", render=False)
     calls = []

@@ -140,6 +140,34 @@ def test_player_two_unplugged_mid_round_pauses_both_and_resumes(tmp_path) -> Non
     assert s.events_log.total >= p1_events
 
 
+def test_enter_plays_a_played_out_replay_again_with_two_players(tmp_path) -> None:
+    """Player 1's replay played out: the match paused for good under SOURCE ENDED. Enter, which
+    the overlay offers, rewinds it and starts a new match (player 2's half of the keyboard is
+    not pressed by it)."""
+    from tools.cli import main
+
+    rec = tmp_path / "p1.csv"
+    assert main(["synth", "--session", "1", "--seed", "2", "-o", str(rec)]) == 0
+    s = make_session([f"replay://{rec}", "keyboard://?seed=5&keys=right"], display=True)
+    s.loop.run(frames=90)
+    assert s.seats[0].source.state == SourceState.ENDED and s.match.paused
+    s.view.hud.layout = []
+    s.loop.run(frames=1)
+    said = [text for text, _, panel in s.view.hud.layout if panel == "lost"]
+    assert "SOURCE ENDED" in said and any(t.startswith("Enter: play it again") for t in said), said
+    resets = []
+    for seat in s.seats:
+        seat.recognizer.reset = lambda reset=seat.recognizer.reset, i=seat.index: (resets.append(i), reset())[-1]
+    s.match.health[1] = 40.0
+    pygame.event.post(key_event("return"))
+    s.loop.run(frames=20)
+    assert s.seats[0].source.state == SourceState.CONNECTED and not s.source_lost()
+    assert s.match.fighting and s.match.health == [100.0, 100.0]  # a new match
+    assert set(resets) == {0, 1} and s.seats[1].source.pressed == []
+    s.loop.run(frames=70)
+    assert s.seats[0].source.state == SourceState.ENDED and s.match.paused  # played out again
+
+
 def test_either_players_home_button_pauses_both_once_per_press() -> None:
     s = make_session(["keyboard://?seed=4&keys=left", "keyboard://?seed=5&keys=right"], render=False)
     s.loop.run(steps=10)
