@@ -123,5 +123,5 @@ class TwoPlayerHud(Hud):
         w, h = surf.get_size()
         title = result_title(st.match.result, st.match.winner, (f"{st.names[0]} WINS", f"{st.names[1]} WINS"))
         self._banner(surf, title, int(96 * u), (w // 2, h * 0.42))
-        if not st.demo:
+        if not st.demo and not (st.disconnected or self.second.disconnected):  # the lost box says what next
             self.menu_line(surf, "Enter: a new match", int(40 * u), (w // 2, h * 0.42 + 60 * u), TEXT, u)

@@ -168,6 +168,27 @@ def test_enter_plays_a_played_out_replay_again_with_two_players(tmp_path) -> Non
     assert s.seats[0].source.state == SourceState.ENDED and s.match.paused  # played out again
 
 
+def test_the_result_screen_offers_no_menu_under_a_lost_seats_box(tmp_path) -> None:
+    """After the last bell the result screen says "Enter: a new match"; once a seat's source is
+    away its box says what comes next instead, and the menu line is not drawn under it."""
+    from tools.cli import main
+
+    rec = tmp_path / "p1.csv"
+    assert main(["synth", "--session", "1", "--seed", "2", "-o", str(rec)]) == 0
+    s = make_session([f"replay://{rec}", "keyboard://?seed=5&keys=right"], display=True)
+    s.loop.run(frames=10)
+    s.match._finish(0, "KO")  # a knockout now: the result screen
+    s.view.hud.layout = []
+    s.loop.run(frames=1)
+    assert "Enter: a new match" in [text for text, _, _ in s.view.hud.layout]  # the control
+    s.loop.run(frames=90)
+    assert s.seats[0].source.state == SourceState.ENDED
+    s.view.hud.layout = []
+    s.loop.run(frames=1)
+    said = [text for text, _, _ in s.view.hud.layout]
+    assert "SOURCE ENDED" in said and "Enter: a new match" not in said, said
+
+
 def test_either_players_home_button_pauses_both_once_per_press() -> None:
     s = make_session(["keyboard://?seed=4&keys=left", "keyboard://?seed=5&keys=right"], render=False)
     s.loop.run(steps=10)
