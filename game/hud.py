@@ -274,7 +274,8 @@ class Hud(TextLayer):
         if st.keyboard_banner:
             w, _ = surf.get_size()
             msg = "No Wiimote found: playing from the keyboard (keys below)"
-            img = self.text.render(msg, int(24 * u), (20, 20, 20), shadow=False)
+            msg, size = self.text.fit(msg, int(24 * u), w - int(24 * u) - 2)  # a window narrow for its height
+            img = self.text.render(msg, size, (20, 20, 20), shadow=False)
             box = img.get_rect(midtop=(w // 2, int(118 * u))).inflate(int(24 * u), int(10 * u))
             pygame.draw.rect(surf, SWITCH_COLOR, box, border_radius=int(6 * u))
             self.enter_panel("keyboard banner", box)
@@ -338,6 +339,9 @@ class Hud(TextLayer):
         if img.get_width() > w - 40:  # two lines on narrow windows
             half = (len(parts) + 1) // 2
             lines = ["   ".join(parts[:half]), "   ".join(parts[half:])]
+            # a window narrow for its height (text scales with the height: 800x1040) smaller
+            # still, so that the lines fit (their ends ran off both sides)
+            size = self.text.fit(max(lines, key=lambda t: self.text.width(t, size)), size, w - 40)[1]
         self.key_panel = self.key_legend_panel(surf, lines, size, "midbottom", (w // 2, h - int(2 * u)), u)
 
     def key_legend_panel(self, surf: pygame.Surface, lines: list[str], size: int, anchor: str, pos, u: float) -> pygame.Rect:
@@ -388,7 +392,8 @@ class Hud(TextLayer):
         pygame.draw.rect(surf, REJECT_COLOR, box, 3, border_radius=int(10 * u))
         self.enter_panel("lost", box)
         title, then = lost_lines(st.source.state, st.source.rewinds)
-        self.blit(surf, title, int(54 * u), (w // 2, box.top + 22 * u), TEXT, "midtop")
+        line, size = self.text.fit(title, int(54 * u), box.width - int(24 * u))  # a window narrow for its height
+        self.blit(surf, line, size, (w // 2, box.top + 22 * u), TEXT, "midtop")
         # the source on a line of its own, smaller if its URL is long (a two-player seat's
         # keyboard URL ran past both sides of the box), then what happens next
         line, size = self.text.fit(f"{st.source.url}: {st.source.state}", int(24 * u), box.width - int(24 * u))

@@ -127,6 +127,9 @@ class TextLayer:
         return rect
 
     def _banner(self, surf: pygame.Surface, text: str, size: int, center, alpha: int = 150) -> pygame.Rect:
+        # its size follows the window's height: smaller on a window narrow for it (640x720: the
+        # result ran off both sides)
+        text, size = self.text.fit(text, size, surf.get_width() - 40)
         img = self.text.render(text, size, TEXT)
         box = img.get_rect(center=(int(center[0]), int(center[1]))).inflate(40, 16)
         surf.blit(self._translucent(box.size, (0, 0, 0, alpha)), box)

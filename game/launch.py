@@ -138,6 +138,20 @@ def open_player_source(url: str | None, demo: bool, seed: int, clock) -> tuple[o
     return open_source(f"{KEYBOARD_SOURCE}?seed={seed}", clock=clock), True
 
 
+def toggle_fullscreen() -> None:
+    """F11: the window to fullscreen and back, where SDL's video driver can (pygame's own call
+    raised "That operation is not supported" out of the game loop on the others: kmsdrm, a
+    Raspberry Pi's console without a desktop, and the dummy and offscreen drivers); where it
+    cannot, one line on the console and the game goes on in its window."""
+    import pygame
+
+    try:
+        pygame.display.toggle_fullscreen()
+    except pygame.error as exc:
+        print(f"quickjab: F11: no fullscreen with SDL's {pygame.display.get_driver()!r} video driver ({exc})",
+              file=sys.stderr)
+
+
 def save_image(surface, path: str | os.PathLike, what: str = "the screenshot") -> None:
     """`surface` as an image file, its format from the suffix as pygame.image.save picks it.
     Encoded in memory and written by Python: pygame's own writing ignores a failed write (a full
@@ -209,7 +223,7 @@ def run_session(args: argparse.Namespace, caption: str, open_sources: Callable[[
         for line in session.templates_lines():
             print(f"quickjab play: {line}", file=sys.stderr)
         session.hud_state.show_budget = args.budget
-        session.on_toggle_fullscreen = pygame.display.toggle_fullscreen
+        session.on_toggle_fullscreen = toggle_fullscreen
         # one frame drawn before the loop's clock starts: the first draw builds the ring's static
         # layers and the HUD's fonts (26 ms here against 2.6 for a frame, ~120 ms on a core shared
         # five ways), which in the loop's first frame dropped steps on a slow board

@@ -289,7 +289,8 @@ class TrainingScreen:
         pygame.draw.rect(surf, (18, 18, 26), panel)
         u0, u = u, text_scale(u)
         x = panel.left + int(24 * u)
-        self._text(surf, "TRAIN YOUR MOVES", int(40 * u), (x, 20 * u), (242, 240, 232))
+        title, size = self.text.fit("TRAIN YOUR MOVES", int(40 * u), panel.right - x - int(8 * u))  # a window narrow for its height
+        self._text(surf, title, size, (x, 20 * u), (242, 240, 232))
         source, size = self.text.fit(f"source {self.source_url}" + ("   left-handed" if self.left_handed else ""), int(20 * u),
                                      panel.right - x - int(8 * u))
         self._text(surf, source, size, (x, 58 * u), (170, 166, 160))
@@ -332,7 +333,8 @@ class TrainingScreen:
         else:
             title, sub = "GO!", f"trial {tr.trial + 1} of {tr.trials}: {action_label(tr.action)}"
         col = (255, 200, 40) if tr.phase == RECORD else (242, 240, 232)
-        img = self.text.render(title, int(64 * u), col)
+        title, size = self.text.fit(title, int(64 * u), stage.width - int(16 * u))  # a window narrow for its height
+        img = self.text.render(title, size, col)
         self._put(surf, img, img.get_rect(midtop=(stage.centerx, int(24 * u))), title, "stage")
         sub, size = self.text.fit(sub, int(26 * u), stage.width - int(16 * u))  # a long saved-to path
         img2 = self.text.render(sub, size, (220, 216, 210))
