@@ -71,9 +71,12 @@ class TwoPlayerHud(Hud):
         self._centre_two(surf, st, u)
         if st.show_budget and budget is not None:
             self._budget(surf, budget, u)
-        lost = next((s for s in (st, two) if s.disconnected), None)
-        if lost is not None:
-            self._disconnected(surf, lost, u)
+        # the box of a seat whose source is away, before a played-out replay's (whose Enter
+        # does nothing until that seat is back: game.session.enter_starts_match)
+        lost = [s for s in (st, two) if s.disconnected]
+        if lost:
+            waits = [s for s in lost if not (s.source.state == "ended" and s.source.rewinds)]
+            self._disconnected(surf, (waits or lost)[0], u)
 
     def _source_right(self, surf: pygame.Surface, st: HudState, u: float) -> None:
         """Player 2's source, state and battery under the right health bar, right-aligned."""

@@ -79,15 +79,21 @@ def can_play_again(source: Source) -> bool:
 
 def enter_starts_match(match: Match, sources: list[Source]) -> bool:
     """Whether Enter starts a new match now: after the last bell, or under SOURCE ENDED when
-    the source can play again (a replay)."""
-    return match.over or any(map(can_play_again, sources))
+    the source can play again (a replay) and no other source is away: with another seat's
+    controller lost the new match would wait for it, the rewound replay playing out unseen under
+    the pause (and under that seat's box, which does not offer Enter, it reset the match)."""
+    lost = [source for source in sources if source.state in LOST_STATES]
+    return match.over or (bool(lost) and all(map(can_play_again, lost)))
 
 
 def rewind_ended(sources: list[Source]) -> None:
-    """A new match plays the replays that played out again from their start: else it would
-    pause at once under SOURCE ENDED."""
-    for source in filter(can_play_again, sources):
-        source.rewind()
+    """A new match plays the replays again from their start once one has played out (else it
+    would pause at once under SOURCE ENDED): every replay, so that two players' replays start
+    together again (rewinding only the one that ended left the other where it was)."""
+    if any(map(can_play_again, sources)):
+        for source in sources:
+            if REWIND in source.capabilities:
+                source.rewind()
 
 
 def pause_on_home(source, held: int, session) -> int:

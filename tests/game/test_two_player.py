@@ -168,6 +168,61 @@ def test_enter_plays_a_played_out_replay_again_with_two_players(tmp_path) -> Non
     assert s.seats[0].source.state == SourceState.ENDED and s.match.paused  # played out again
 
 
+def test_enter_plays_both_replays_again_from_their_start(tmp_path) -> None:
+    """Two replays of different lengths: Enter under the shorter one's SOURCE ENDED rewound only
+    that one, and the new match went on with the other replay from where it was."""
+    from tools.cli import main
+
+    for name, secs in (("p1.csv", "1"), ("p2.csv", "4")):
+        assert main(["synth", "--session", secs, "--seed", "2", "-o", str(tmp_path / name)]) == 0
+    s = make_session([f"replay://{tmp_path / 'p1.csv'}", f"replay://{tmp_path / 'p2.csv'}"], display=True)
+    s.loop.run(frames=90)
+    assert [seat.source.state for seat in s.seats] == [SourceState.ENDED, SourceState.CONNECTED]
+    p2 = s.seats[1].source
+    delivered = []
+    poll = p2.poll
+    p2.poll = lambda: (lambda got: (delivered.extend(got), got)[1])(poll())
+    pygame.event.post(key_event("return"))
+    s.loop.run(frames=1)
+    assert s.match.fighting and not s.source_lost()
+    first = p2.rec.accel[0]
+    assert delivered and np.array_equal(delivered[0].accel, first)  # player 2's replay from its start too
+    s.loop.run(frames=70)
+    assert p2.state == SourceState.CONNECTED  # 1.2 s into its 4 s: it started again
+
+
+def test_enter_under_a_replays_end_waits_for_the_other_seat(tmp_path) -> None:
+    """Player 1's replay played out while player 2's controller was away: Enter rewound the replay
+    into a new match paused for player 2, where it played out unseen (player 2 back, SOURCE ENDED
+    again); and under player 2's box, which does not offer Enter, Enter reset the match. Now the
+    overlay shows the seat the match waits for, Enter does nothing until it is back, then plays
+    the replay again."""
+    from tools.cli import main
+
+    rec = tmp_path / "p1.csv"
+    assert main(["synth", "--session", "1", "--seed", "2", "-o", str(rec)]) == 0
+    s = make_session([f"replay://{rec}", "keyboard://?seed=5&keys=right"], display=True)
+    s.loop.run(frames=90)
+    s.seats[1].source.disconnect()
+    s.view.hud.layout = []
+    s.loop.run(frames=1)
+    assert [seat.source.state for seat in s.seats] == [SourceState.ENDED, SourceState.DISCONNECTED]
+    said = [text for text, _, panel in s.view.hud.layout if panel == "lost"]
+    assert "CONTROLLER DISCONNECTED" in said and not any(t.startswith("Enter") for t in said), said
+    match = s.match
+    pygame.event.post(key_event("return"))
+    s.loop.run(frames=3)
+    assert s.match is match and s.seats[0].source.state == SourceState.ENDED  # not rewound unseen
+    s.seats[1].source.reconnect()
+    s.view.hud.layout = []
+    s.loop.run(frames=1)
+    said = [text for text, _, panel in s.view.hud.layout if panel == "lost"]
+    assert "SOURCE ENDED" in said and any(t.startswith("Enter: play it again") for t in said), said
+    pygame.event.post(key_event("return"))
+    s.loop.run(frames=20)
+    assert s.match is not match and s.match.fighting and not s.source_lost()
+
+
 def test_the_result_screen_offers_no_menu_under_a_lost_seats_box(tmp_path) -> None:
     """After the last bell the result screen says "Enter: a new match"; once a seat's source is
     away its box says what comes next instead, and the menu line is not drawn under it."""

@@ -186,8 +186,13 @@ class Campaign:
         m, s = self.s.match, self.s
         return Before(m, m.paused, m.over, m.clock_steps, m.count_steps, tuple(m.health), s.blows_log.total,
                       [len(getattr(src, "pressed", [])) for src in self.sources], s.difficulty.name,
-                      s.hud_state.show_budget, s.loop.frame_index, s.source_lost(),
-                      any(map(can_play_again, self.sources)))
+                      s.hud_state.show_budget, s.loop.frame_index, s.source_lost(), self.replayable())
+
+    def replayable(self) -> bool:
+        """Whether Enter plays a replay again: one played out, and every source away is such a
+        replay (with another seat's controller away the new match would wait for it)."""
+        away = [src for src in self.sources if src.state in LOST_STATES]
+        return bool(away) and all(map(can_play_again, away))
 
     def play(self, steps: int) -> None:
         while self.s.loop.step_index < steps:
@@ -252,7 +257,9 @@ class Campaign:
             assert m.paused or m.over, f"a source is lost and the match is not paused: {why}"
             if m is b.match:
                 assert m.clock_steps == b.clock, f"the clock ran while a source was lost: {why}"
-            title = lost_lines(states[lost.index(True)].value)[0]  # the first lost seat's, as drawn
+            # the first seat away's, before a played-out replay's (its Enter waits for that seat)
+            waits = [i for i, src in enumerate(self.sources) if lost[i] and not can_play_again(src)]
+            title = lost_lines(states[(waits or [lost.index(True)])[0]].value)[0]
             assert drawn_as(title, drawn), f"{title!r} not drawn ({sorted(drawn)}): {why}"
             box = s.view.hud.lost_box
             assert tuple(pygame.display.get_surface().get_at((box.left + 6, box.centery)))[:3] == LOST_BOX, why
