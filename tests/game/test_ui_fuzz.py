@@ -365,6 +365,7 @@ def test_a_replay_that_plays_out_under_hostile_input(players, tmp_path, graph_pa
     c = Campaign(s, np.random.default_rng(40 + players), steered=() if players == 1 else (0,))
     c.play(600)
     assert c.counts["lost"] >= 60  # frames under the overlay, each checked
+    assert c.counts["new matches"] >= 1  # Enter under SOURCE ENDED tried (and checked) at least once
 
 
 # -- the training screens (`quickjab train`, its stages driven in-process) -------------------------
