@@ -473,7 +473,7 @@ def test_run_session_gives_the_game_the_f11_that_does_not_raise(monkeypatch) -> 
 
 
 @pytest.mark.parametrize("players", [1, 2])
-@pytest.mark.parametrize("size", [(640, 720), (800, 1040), (1000, 1080)])
+@pytest.mark.parametrize("size", [(640, 720), (640, 1080), (800, 1040), (1000, 1080)])
 def test_texts_stay_inside_a_window_narrow_for_its_height(size, players) -> None:
     """Text scales with the window's height: on a window narrow for it (a portrait window, or
     640x720) the one-player key legend's two lines, the result banner ("CPU WINS ON POINTS") and
@@ -495,6 +495,8 @@ def test_texts_stay_inside_a_window_narrow_for_its_height(size, players) -> None
         outside = [(text, rect) for text, rect, _ in hud.layout if not surf.get_rect().contains(rect)]
         assert not outside, (size, match.phase, lost, outside)
         assert drawn_as(result_or_lost(match, lost), {text for text, _, _ in hud.layout})
+        banner = hud.panels.get("keyboard banner")  # drawn as an image of its own, not in the layout
+        assert banner is None or surf.get_rect().contains(banner), (size, banner)
 
 
 def result_or_lost(match, lost: bool) -> str:
