@@ -301,7 +301,7 @@ class Campaign:
 
 
 # -- the sessions ----------------------------------------------------------------------------------
-def one_player(url: str, seed: int, graph: str) -> Session:
+def one_player(url: str, seed: int, graph: str, low_power: bool = False) -> Session:
     import game.keyboard_source  # noqa: F401 - registers keyboard://
 
     pygame.init()
@@ -309,7 +309,7 @@ def one_player(url: str, seed: int, graph: str) -> Session:
     pygame.display.set_mode(size, pygame.RESIZABLE)
     clock = VirtualClock()
     source = open_source(url, clock=clock.seconds)
-    cfg = SessionConfig(seed=seed, size=size, sound=False, graph=graph, difficulty="adaptive")
+    cfg = SessionConfig(seed=seed, size=size, sound=False, graph=graph, difficulty="adaptive", low_power=low_power)
     s = Session(source, cfg, clock=clock, surface_provider=pygame.display.get_surface)
     s.on_toggle_fullscreen = toggle_fullscreen  # what `quickjab play` sets (game.launch.run_session)
     return s
@@ -340,11 +340,13 @@ def short_replay(tmp_path: Path, seconds: float) -> str:
 
 @pytest.mark.parametrize("seed", SEEDS)
 def test_one_player_survives_hostile_input(seed, graph_path) -> None:  # noqa: F811 - the fixture
-    s = one_player(f"keyboard://?seed={seed}", seed, graph_path)
+    # the second seed in low power (a small board's flat renderer, two steps a frame)
+    s = one_player(f"keyboard://?seed={seed}", seed, graph_path, low_power=seed == SEEDS[-1])
     c = Campaign(s, np.random.default_rng(seed), steered=(0,))
     c.play(STEPS)
     print(seed, c.counts, sorted(c.sizes)[:3], len(c.sizes), "thumbnails with text outside:", sorted(c.small_outside))
     assert c.counts["lost"] and c.counts["paused"] and c.counts["new matches"] and c.counts["resumed"]
+    assert s.loop.step_index >= (2 if s.view.low_power else 1) * (s.loop.frame_index - 1)  # two steps a frame
 
 
 @pytest.mark.parametrize("seed", SEEDS)
