@@ -422,9 +422,11 @@ class Emulator:
     def run(self, seconds: float | None = None) -> EmulatorStats:
         self.seconds = seconds
         self._t0 = time.monotonic()
-        self.on_port(self.port.name)
         boot = 0
         try:
+            # inside the try: a SIGTERM (KeyboardInterrupt) that comes while the port is announced,
+            # as soon as a reader saw the line, left the port open and the --link symlink behind
+            self.on_port(self.port.name)
             while True:
                 self._reason = "end"
                 self._sampler(boot).run(self._control)

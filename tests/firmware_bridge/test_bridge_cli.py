@@ -182,3 +182,22 @@ def test_a_terminated_emulator_removes_its_link(tmp_path):
         if emu.poll() is None:
             emu.kill()
     assert not os.path.lexists(link)
+
+
+def test_an_interrupt_while_the_port_is_announced_still_removes_the_link(tmp_path):
+    # the race the test above lost now and then: SIGTERM (a KeyboardInterrupt here) as soon as a
+    # reader saw the "port:" line, before the emulator's loop had begun, left the link behind
+    from firmware_bridge.emulator import Emulator, EmulatorDef, synthetic_motion
+
+    link = str(tmp_path / "port")
+
+    def announced(path: str) -> None:
+        assert os.path.islink(link)
+        raise KeyboardInterrupt
+
+    emu = Emulator.from_def(synthetic_motion(), EmulatorDef(2), link=link, on_port=announced)
+    try:
+        emu.run(5.0)
+    except KeyboardInterrupt:
+        pass
+    assert not os.path.lexists(link) and emu.port.master < 0
