@@ -46,6 +46,9 @@ class BudgetOverlay:
         w, h = surf.get_size()
         chart_h = int(90 * u)
         t = text_scale(u)  # the text and its rows stop shrinking (game/hud_style.py); the chart does not
+        # u follows the window's height: on a window narrow for it (640x1080) the 440 u panel was
+        # wider than the window, so there it is as wide as the window allows
+        t = min(t, (w - 16) / 440)
         # the stages the loop runs, not the spans inside them (those never run at depth 0)
         names = [s.name for s in budget.stages if s.name not in (WAIT, UNACCOUNTED) and not s.nested] + [UNACCOUNTED]
         # below the clock and the mode line under it (LOW POWER, DEMO), whose text stops shrinking

@@ -240,3 +240,19 @@ def test_the_budget_overlay_gives_way_to_the_shared_key_line(size, scene) -> Non
     one.draw(pygame.Surface(size), busy(show_budget=True), budget())
     moved = hud.panels["budget"].top != one.panels["budget"].top
     assert moved == (size != (1920, 1080)), (hud.panels["budget"], one.panels["budget"])
+
+
+@pytest.mark.parametrize("size", [(640, 1080), (800, 1040), (1280, 720)])
+@pytest.mark.parametrize("screen", ["budget", "two budget"])
+def test_the_budget_overlay_stays_inside_a_window_narrow_for_its_height(size, screen) -> None:
+    # its scale follows the window's height: at 640x1080 the panel (440 u) was wider than the
+    # window, and its left column of text ran off the left edge
+    pygame.init()
+    surf = pygame.Surface(size)
+    hud, st = SCREENS[screen]()
+    hud.layout = []
+    hud.draw(surf, st, budget())
+    window = surf.get_rect()
+    assert window.contains(hud.panels["budget"]), (size, hud.panels["budget"])
+    texts = [(text, rect) for text, rect, panel in hud.layout if panel == "budget"]
+    assert texts and all(window.contains(rect) for _, rect in texts), [t for t in texts if not window.contains(t[1])][:3]
