@@ -193,19 +193,27 @@ def test_the_budget_overlay_clears_the_mode_line_and_the_key_legend(size, scene)
     assert not overlay.colliderect(hud.panels["recognition 1"]), (overlay, hud.panels["recognition 1"])
 
 
-@pytest.mark.parametrize("size", [(640, 360), *SMALL, (960, 540), (1280, 720)])
-def test_the_budget_overlay_gives_way_to_player_twos_panels(size, scene) -> None:
-    """F3 with two players on a small window: the overlay's panel (on the right, like player 2's
-    panels) covered player 2's recognition panel and key legend. Their pixels are now the same
-    with F3 on as off; the chart gives way first, then the least loaded stages' rows."""
+def two_players_with_and_without_f3(size, scene) -> tuple[dict[bool, np.ndarray], TwoPlayerHud]:
+    """A two-player frame's pixels with the F3 overlay off and on, and the HUD that drew the
+    second (its panels and its layout of texts)."""
     pygame.init()
     frames = {}
     for shown in (False, True):
         surf = pygame.Surface(size)
         Renderer(size).draw(surf, scene)
         hud, st = TwoPlayerHud(seat(2)), seat(1, names=("P1", "P2"), show_budget=shown)
+        hud.layout = []
         hud.draw(surf, st, budget())
         frames[shown] = pygame.surfarray.array3d(surf)
+    return frames, hud
+
+
+@pytest.mark.parametrize("size", [(640, 360), *SMALL, (960, 540), (1280, 720)])
+def test_the_budget_overlay_gives_way_to_player_twos_panels(size, scene) -> None:
+    """F3 with two players on a small window: the overlay's panel (on the right, like player 2's
+    panels) covered player 2's recognition panel and key legend. Their pixels are now the same
+    with F3 on as off; the chart gives way first, then the least loaded stages' rows."""
+    frames, hud = two_players_with_and_without_f3(size, scene)
     mine = [hud.panels[name] for name in ("recognition 2", "keys 2")]
     for rect in mine:
         region = (slice(rect.left, rect.right), slice(rect.top, rect.bottom))
@@ -223,15 +231,7 @@ def test_the_budget_overlay_gives_way_to_the_shared_key_line(size, scene) -> Non
     pause  F3 budget  F11 fullscreen" line under the round clock. The line's pixels are now the
     same with F3 on as off; on a large window, where the line is clear of it, the overlay keeps
     the one-player overlay's place."""
-    pygame.init()
-    frames = {}
-    for shown in (False, True):
-        surf = pygame.Surface(size)
-        Renderer(size).draw(surf, scene)
-        hud, st = TwoPlayerHud(seat(2)), seat(1, names=("P1", "P2"), show_budget=shown)
-        hud.layout = []
-        hud.draw(surf, st, budget())
-        frames[shown] = pygame.surfarray.array3d(surf)
+    frames, hud = two_players_with_and_without_f3(size, scene)
     (line,) = [rect for text, rect, _ in hud.layout if text.startswith("Esc pause")]
     assert not hud.panels["budget"].colliderect(line), (line, hud.panels["budget"])
     region = (slice(line.left, line.right), slice(line.top, line.bottom))
