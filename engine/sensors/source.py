@@ -71,6 +71,12 @@ class Source:
     def close(self) -> None:
         self.state = SourceState.DISCONNECTED
 
+    def missing(self) -> str:
+        """A part the source should have and has not now, and what that costs, in a few words
+        (the Wiimote's Nunchuk: "no Nunchuk: ..."); "" when it is whole. The game shows it: the
+        device is connected and streaming, so nothing else on screen would say so."""
+        return ""
+
     def rumble(self, ms: int) -> None:  # noqa: B027 - optional capability; silent where absent
         """Vibrate for `ms` milliseconds where the device can; a no-op elsewhere."""
 
@@ -82,6 +88,15 @@ class Source:
 
     def __exit__(self, *exc: object) -> None:
         self.close()
+
+
+def missing_part(source: Source, sensors: int | None = None) -> str:
+    """What the connected `source` misses (`Source.missing`), or, read as `sensors` sensors,
+    the ones a board that rebooted with fewer no longer sends (their readings hold still); ""."""
+    missing = source.missing()
+    if not missing and sensors and source.state == SourceState.CONNECTED and 0 < source.sensors < sensors:
+        missing = f"{source.sensors} of {sensors} sensors: the other hand holds still"
+    return missing
 
 
 SourceFactory = Callable[[str, Clock], Source]

@@ -62,6 +62,17 @@ class Rumble:
         return False
 
 
+def nunchuk_missing(extension: str) -> str:
+    """`Source.missing` for a remote streaming with this extension: the Nunchuk, when there is
+    none (never plugged in, or its plug slipped out mid-match) or another extension is in its
+    place; the left hand then reads a still 1 g."""
+    if extension == "nunchuk":
+        return ""
+    if extension == "unknown":
+        return "the extension is not a Nunchuk: left-hand moves need one"
+    return "no Nunchuk: plug it in for left-hand moves"
+
+
 class WiimoteSource(Source):
     """`wiimote://` (first found) or `wiimote://<path>`; see the module docstring."""
 
@@ -109,10 +120,6 @@ class WiimoteSource(Source):
         self._try_connect(self.clock())
 
     # ---- public -------------------------------------------------------------------------
-
-    @property
-    def connected(self) -> bool:
-        return self.state is SourceState.CONNECTED
 
     def poll(self) -> list[Sample]:
         if self._closed:
@@ -165,6 +172,9 @@ class WiimoteSource(Source):
             self._send(p.build_rumble(True))
         except DeviceGone:
             pass
+
+    def missing(self) -> str:
+        return nunchuk_missing(self.extension) if self.state is SourceState.CONNECTED else ""
 
     def close(self) -> None:
         """Rumble off, LEDs off, handle closed. Safe to call twice."""

@@ -125,6 +125,17 @@ def test_nunchuk_unplug_and_plug_mid_stream(rec_path):
     assert emu.ext_stage == 2
 
 
+def test_the_source_says_the_nunchuk_is_missing_while_it_is_out(rec_path):
+    # the remote streams on without it (the left hand reads a still 1 g): the game shows this
+    seen = {}
+    actions = {step: (lambda src, step=step: seen.setdefault(step, src.missing())) for step in (30, 70, 140)}
+    src, _, _ = session(f"wiimote-emu://{rec_path}?nunchuk_out_at=0.8&nunchuk_in_at=1.6", 2.6, actions=actions)
+    assert seen[30] == "" and seen[140] == "" and src.missing() == ""  # before, and plugged in again
+    assert seen[70].startswith("no Nunchuk"), seen  # 1.17 s: out
+    absent, _, _ = session(f"wiimote-emu://{rec_path}?nunchuk=0", 1.0)
+    assert absent.missing().startswith("no Nunchuk")
+
+
 def test_nunchuk_absent_from_start(rec_path):
     src, samples, _ = session(f"wiimote-emu://{rec_path}?nunchuk=0", 1.0)
     assert src.extension == "none" and src.state is SourceState.CONNECTED
