@@ -16,7 +16,7 @@ import pygame
 
 from engine.budget import FrameBudget
 from engine.clock import STEP_HZ
-from engine.sensors.source import REWIND, Source
+from engine.sensors.source import REWIND, Source, missing_part
 from game.hud_budget import BudgetOverlay
 
 # the HUD's colours and layout (game/hud_style.py); importable from here as before
@@ -56,12 +56,25 @@ class SourceSnapshot:
     state: str = "connected"
     battery: float | None = None
     rewinds: bool = False  # ended, it can play again from its start (a replay): Enter does it
+    missing: str = ""  # a part it should have and has not (Source.missing: the Nunchuk)
 
     @classmethod
-    def of(cls, source: Source, url: str | None = None) -> SourceSnapshot:
-        """The source now; `url` to show another label (two players: "P1 wiimote://")."""
+    def of(cls, source: Source, url: str | None = None, sensors: int | None = None) -> SourceSnapshot:
+        """The source now; `url` to show another label (two players: "P1 wiimote://"); `sensors`,
+        the count the game reads (a serial board that rebooted with fewer is missing some)."""
         return cls(source.url if url is None else url, source.state.value, source.battery,
-                   REWIND in source.capabilities)
+                   REWIND in source.capabilities, missing_part(source, sensors))
+
+    def line(self) -> str:
+        """The HUD's line for it: URL, state and what is missing, in short ("connected, no
+        Nunchuk": a long URL gives way in its middle, so the end stays)."""
+        return f"{self.url}  {self.state}" + (f", {self.missing.split(':')[0]}" if self.missing else "")
+
+    def colour(self) -> tuple[int, int, int]:
+        """Its dot: green connected and whole, amber (re)connecting or missing a part, red away."""
+        if self.state == "connected":
+            return SWITCH_COLOR if self.missing else OK_COLOR
+        return SWITCH_COLOR if self.state in ("reconnecting", "connecting") else REJECT_COLOR
 
 
 @dataclass
@@ -192,6 +205,7 @@ class Hud(TextLayer):
         self._health(surf, st, u)
         self._clock(surf, st, u)
         self._source(surf, st, u)
+        self._source_banner(surf, st, u)
         self._recognition(surf, st, u)
         self._keys(surf, st, u)
         self._centre(surf, st, u)
@@ -254,12 +268,11 @@ class Hud(TextLayer):
         left, _ = self.health_rects(surf.get_size())
         u0, u = u, text_scale(u)
         y = left.bottom + 32 * u
-        state_col = OK_COLOR if st.source.state == "connected" else (SWITCH_COLOR if st.source.state in ("reconnecting", "connecting") else REJECT_COLOR)
-        pygame.draw.circle(surf, state_col, (int(left.left + 7 * u), int(y + 8 * u)), int(6 * u))
+        pygame.draw.circle(surf, st.source.colour(), (int(left.left + 7 * u), int(y + 8 * u)), int(6 * u))
         # short of the round clock (its battery after it): a long URL gives way in its middle
         clock = self.clock_box(surf.get_size(), u0)  # level with it on small windows
         room = (clock.left if y < clock.bottom else surf.get_width()) - int(left.left + 18 * u) - int((56 if st.source.battery is not None else 8) * u)
-        line, size = self.text.fit(f"{st.source.url}  {st.source.state}", int(22 * u), room)
+        line, size = self.text.fit(st.source.line(), int(22 * u), room)
         r = self.blit(surf, line, size, (left.left + 18 * u, y), DIM)
         if st.templates:
             line, size = self.text.fit(st.templates, int(18 * u), room)
@@ -271,16 +284,15 @@ class Hud(TextLayer):
             pygame.draw.rect(surf, DIM, (body.right, body.top + body.height // 4, int(3 * u), body.height // 2))
             b = max(0.0, min(1.0, st.source.battery))
             pygame.draw.rect(surf, OK_COLOR if b > 0.25 else REJECT_COLOR, (body.left + 3, body.top + 3, int((body.width - 6) * b), body.height - 6))
+
+    def _source_banner(self, surf: pygame.Surface, st: HudState, u: float) -> None:
+        """One player: an amber strip under the clock when the game plays from the keyboard for
+        want of a Wiimote, or when the source misses a part (a Nunchuk that slipped out: the
+        remote streams on, so nothing else on screen would say why left-hand moves do nothing)."""
         if st.keyboard_banner:
-            w, _ = surf.get_size()
-            msg = "No Wiimote found: playing from the keyboard (keys below)"
-            msg, size = self.text.fit(msg, int(24 * u), w - int(24 * u) - 2)  # a window narrow for its height
-            img = self.text.render(msg, size, (20, 20, 20), shadow=False)
-            box = img.get_rect(midtop=(w // 2, int(118 * u))).inflate(int(24 * u), int(10 * u))
-            pygame.draw.rect(surf, SWITCH_COLOR, box, border_radius=int(6 * u))
-            self.enter_panel("keyboard banner", box)
-            self.put(surf, img, img.get_rect(center=box.center), msg)
-            self.enter_panel("screen", None)
+            self.strip(surf, "No Wiimote found: playing from the keyboard (keys below)", "keyboard banner", text_scale(u))
+        elif st.source.missing:
+            self.strip(surf, st.source.missing[0].upper() + st.source.missing[1:], "missing banner", text_scale(u))
 
     def _recognition(self, surf: pygame.Surface, st: HudState, u: float) -> None:
         _, h = surf.get_size()

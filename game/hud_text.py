@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import pygame
 
-from game.hud_style import MIN_TEXT_PX, TEXT, min_text_px
+from game.hud_style import MIN_TEXT_PX, SWITCH_COLOR, TEXT, min_text_px
 
 
 class TextCache:
@@ -125,6 +125,18 @@ class TextLayer:
         rect = self.blit(surf, text, size, midtop, color, "midtop")
         self.enter_panel("screen", None)
         return rect
+
+    def strip(self, surf: pygame.Surface, msg: str, name: str, u: float) -> None:
+        """A line on an amber strip under the round clock, its panel `name` (a notice the
+        player must not miss: no Wiimote found, a Nunchuk missing)."""
+        w = surf.get_width()
+        msg, size = self.text.fit(msg, int(24 * u), w - int(24 * u) - 2)  # a window narrow for its height
+        img = self.text.render(msg, size, (20, 20, 20), shadow=False)
+        box = img.get_rect(midtop=(w // 2, int(118 * u))).inflate(int(24 * u), int(10 * u))
+        pygame.draw.rect(surf, SWITCH_COLOR, box, border_radius=int(6 * u))
+        self.enter_panel(name, box)
+        self.put(surf, img, img.get_rect(center=box.center), msg)
+        self.enter_panel("screen", None)
 
     def _banner(self, surf: pygame.Surface, text: str, size: int, center, alpha: int = 150) -> pygame.Rect:
         # its size follows the window's height: smaller on a window narrow for it (640x720: the

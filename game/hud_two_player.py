@@ -11,7 +11,7 @@ from __future__ import annotations
 import pygame
 
 from engine.budget import FrameBudget
-from game.hud import DIM, OK_COLOR, REJECT_COLOR, SWITCH_COLOR, TEXT, Hud, HudState, result_title
+from game.hud import DIM, OK_COLOR, REJECT_COLOR, TEXT, Hud, HudState, result_title
 from game.hud_style import text_scale
 
 PANEL_W, PANEL_MARGIN = 330, 16  # the recognition panel's width and margin (game.hud, at 720 p)
@@ -83,8 +83,6 @@ class TwoPlayerHud(Hud):
         _, right = self.health_rects(surf.get_size())
         u0, u = u, text_scale(u)
         y = right.bottom + 32 * u
-        state_col = OK_COLOR if st.source.state == "connected" else (
-            SWITCH_COLOR if st.source.state in ("reconnecting", "connecting") else REJECT_COLOR)
         x = right.right
         if st.source.battery is not None:
             body = pygame.Rect(0, int(y + 2 * u), int(34 * u), int(14 * u))
@@ -98,12 +96,12 @@ class TwoPlayerHud(Hud):
         # short of the round clock: a long URL gives way in its middle
         clock = self.clock_box(surf.get_size(), u0)  # level with it (small windows), its dot just clear of it
         room = int(x - 18 * u) - (clock.right if y < clock.bottom else 0)
-        line, size = self.text.fit(f"{st.source.url}  {st.source.state}", int(22 * u), room)
+        line, size = self.text.fit(st.source.line(), int(22 * u), room)
         r = self.blit(surf, line, size, (x, y), DIM, "topright")
         if st.templates:
             line, size = self.text.fit(st.templates, int(18 * u), room)
             self.blit(surf, line, size, (right.right, y + 22 * u), DIM, "topright")
-        pygame.draw.circle(surf, state_col, (int(r.left - 11 * u), int(y + 8 * u)), int(6 * u))
+        pygame.draw.circle(surf, st.source.colour(), (int(r.left - 11 * u), int(y + 8 * u)), int(6 * u))
 
     def _legends(self, surf: pygame.Surface, one: HudState, two: HudState, u: float) -> None:
         """Each keyboard player's keys under their own panel, on the one-player legend's dark

@@ -463,8 +463,8 @@ class Session(Ring):
             self._apply_difficulty()
 
     def _show_sources(self) -> None:
-        """The HUD's snapshot of the source: URL, state, battery."""
-        self.hud_state.source = SourceSnapshot.of(self.source)
+        """The HUD's snapshot of the source: URL, state, battery, a part it misses."""
+        self.hud_state.source = SourceSnapshot.of(self.source, sensors=self.resampler.dim // 3)
 
     def new_match(self) -> None:
         """A fresh match (Enter after the last bell or under SOURCE ENDED; by itself in the

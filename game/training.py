@@ -29,7 +29,7 @@ import numpy as np
 from engine import arguments
 from engine.clock import STEP_HZ
 from engine.errors import InputError, refuse_overwriting
-from engine.sensors.source import PLAYABLE, SourceState
+from engine.sensors.source import PLAYABLE, SourceState, missing_part
 from game.launch import (
     KEYBOARD_SOURCE,
     check_visible_window,
@@ -231,6 +231,7 @@ class TrainingScreen:
         self.history: list[np.ndarray] = []
         self.anim_frame = 0.0
         self.saved_to: str = ""
+        self.missing = ""  # a part the source misses (Source.missing): the trials wait for it
         # tests: a list to collect every text drawn (text, rectangle, panel: "stage", "list", "plot")
         self.layout: list | None = None
         self.panels: dict = {}
@@ -321,7 +322,10 @@ class TrainingScreen:
         from game.hud import action_label
 
         tr = self.trainer
-        if tr.waiting:
+        if tr.waiting and self.missing:
+            short, _, then = self.missing.partition(": ")
+            title, sub = short.upper(), f"{then or 'waiting for it'}: the trial starts again when it is back"
+        elif tr.waiting:
             title, sub = "SOURCE LOST", "waiting for it: the trial starts again when it is back"
         elif tr.done:
             title, sub = "ALL DONE", (f"templates saved to {self.saved_to}" if self.saved_to else "building templates...")
@@ -542,14 +546,18 @@ class _TrainingStages:
         """Whether the source delivers now; a source that ended (a replay played out), or that a
         headless run has waited for too long, stops the walk before anything is saved."""
         state = self.source.state
-        live = state == SourceState.CONNECTED
+        # a trial without the Nunchuk (or with a sensor the board lost) would hold that hand
+        # still in the template: it waits for the part as for a lost source
+        self.screen_view.missing = missing_part(self.source, self.resampler.dim // 3)
+        live = state == SourceState.CONNECTED and not self.screen_view.missing
         self.lost_steps = 0 if live else self.lost_steps + 1
         if self.trainer.done:
             return live
         if state == SourceState.ENDED:
             self.stopped_why = "the source ended"
         elif self.give_up_after is not None and self.lost_steps > self.give_up_after:
-            self.stopped_why = f"the source was lost for {self.lost_steps / HZ:.0f} s"
+            away = self.screen_view.missing.partition(":")[0] or "the source was lost"
+            self.stopped_why = f"{away} for {self.lost_steps / HZ:.0f} s"
         return live
 
     def save(self) -> None:

@@ -297,7 +297,7 @@ class TwoPlayerSession(Session):
     def _show_sources(self) -> None:
         # each seat's source line (its URL is set once, at the seat's making)
         for seat in self.seats:
-            seat.hud.source = SourceSnapshot.of(seat.source, url=seat.hud.source.url)
+            seat.hud.source = SourceSnapshot.of(seat.source, url=seat.hud.source.url, sensors=seat.resampler.dim // 3)
         self.seats[1].hud.tick()  # player 2's marks age as player 1's (hud_state.tick)
 
     def new_match(self) -> None:

@@ -162,6 +162,7 @@ class Scope:
         self._t_open = source.clock()
         self.label_rects: list[tuple[int, int, int, int]] = []  # the g labels drawn last frame (tests)
         self.readouts: dict[int, tuple[float, float, float] | None] = {}  # each hand's readout, g (_readout)
+        self.status_line = ""  # the state line drawn last (tests)
 
     # -- stages ----------------------------------------------------------------------------
     def poll(self, step: int, dt: float) -> None:
@@ -254,7 +255,10 @@ class Scope:
         color = STATE_COLORS.get(state, TEXT)
         measured = self.rate.rate_hz(now)
         nominal = f" (nominal {src.rate_hz:.0f} Hz)" if src.rate_hz else ""
-        line1 = f"{state.value}   {measured:6.1f} samples/s{nominal}   {self.samples} samples   {src.url}"
+        missing = src.missing()  # a Wiimote streaming without its Nunchuk: its traces lie flat
+        line1 = (f"{state.value}{f', {missing}' if missing else ''}   {measured:6.1f} samples/s{nominal}   "
+                 f"{self.samples} samples   {src.url}")
+        self.status_line = line1
         width = self.view.width - 16
         screen.blit(self.font.render(fit_text(self.font, line1, width), True, color), (8, 6))
         parts = []

@@ -21,7 +21,7 @@ SMALL = [(800, 450), (800, 480)]
 MIN_CAP_PX, MIN_LINE_PX = 8, 12  # pygame's default font at 16 px (game.hud_style.MIN_TEXT_PX)
 P2_URL = "P2 keyboard://?profile=experienced&seed=4&keys=right"  # the two-player demo's seat 2
 # the panels a text drawn straight on the screen must keep out of (the overlays cover the rest)
-SOLID = ("clock", "keyboard banner", "recognition", "keys")
+SOLID = ("clock", "keyboard banner", "missing banner", "recognition", "keys")
 
 
 @pytest.fixture(scope="module")

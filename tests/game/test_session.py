@@ -302,6 +302,36 @@ def test_a_replayed_recording_drives_the_player_through_the_wiimote_emulator(tmp
     assert sum(hits.values()) >= 0.6 * len(labels)
 
 
+def test_a_nunchuk_that_slips_out_is_shown_until_it_is_back(tmp_path) -> None:
+    """The remote streams on without its Nunchuk (the left hand reads a still 1 g) and the match
+    goes on: an amber strip under the clock and the source line say what is missing."""
+    from game.hud_style import SWITCH_COLOR
+    from tools.cli import main
+
+    rec = tmp_path / "session.csv"
+    assert main(["synth", "--session", "4", "--seed", "2", "-o", str(rec)]) == 0
+    s = make_session(f"wiimote-emu://{rec}?nunchuk_out_at=1.5&nunchuk_in_at=3", display=True)
+    surf, hud = pygame.display.get_surface(), s.view.hud
+
+    def frame() -> tuple[set[str], pygame.Rect | None]:
+        hud.layout = []
+        s.loop.run(frames=1)
+        return {text for text, _, _ in hud.layout}, hud.panels.get("missing banner")
+
+    s.loop.run(steps=60)
+    said, banner = frame()
+    assert banner is None and not any("Nunchuk" in t for t in said)
+    s.loop.run(steps=60)  # 2 s: out
+    said, banner = frame()
+    assert "No Nunchuk: plug it in for left-hand moves" in said, said
+    assert any(t.endswith("  connected, no Nunchuk") for t in said), said  # the source line
+    assert tuple(surf.get_at((banner.left + 4, banner.centery)))[:3] == SWITCH_COLOR
+    assert s.match.fighting  # it does not pause the match: the right hand boxes on
+    s.loop.run(steps=90)  # 3.5 s: back
+    said, banner = frame()
+    assert banner is None and not any("Nunchuk" in t for t in said)
+
+
 def test_rounds_start_from_the_corners_and_the_attract_mode_starts_over() -> None:
     from game.match import Match
 

@@ -46,3 +46,37 @@ def test_training_from_a_source_that_ends_saves_nothing_over_the_players_set(tmp
     err = capsys.readouterr().err.strip().splitlines()
     assert "ended" in err[-1] and "nothing saved" in err[-1], err
     assert mine.read_bytes() == before
+
+
+def test_training_waits_for_a_missing_nunchuk_and_saves_nothing_without_it(tmp_path, monkeypatch, capsys):
+    """A Wiimote streaming without its Nunchuk: the left hand read a still 1 g, and the trials
+    were saved as the player's left-hand moves. Now the trials wait for it, as for a lost
+    source (the screen says NO NUNCHUK); a headless run gives up after 10 s, nothing saved."""
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "xdg"))
+    from game.userdata import user_templates_path
+
+    rec = tmp_path / "s.csv"
+    assert main(["synth", "--session", "4", "--seed", "2", "-o", str(rec)]) == 0
+    url = f"wiimote-emu://{rec}?nunchuk=0"
+    assert main(["train", "--headless", "--source", url, "--actions", "hook_l", "--size", "320x180"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert "no Nunchuk for 10 s after 0 trials; nothing saved" in err[-1], err
+    assert not user_templates_path().exists()
+
+
+def test_the_training_screen_says_what_part_its_trials_wait_for():
+    import pygame
+
+    from game.actions import load_library
+    from game.training import TrainingScreen
+
+    pygame.init()
+    tr = Trainer(["hook_l"], trials=1)
+    tr.step(REST, live=False)
+    screen = TrainingScreen(load_library(), tr, "wiimote://")
+    screen.missing = "no Nunchuk: plug it in for left-hand moves"
+    screen.layout = []
+    screen.draw(pygame.Surface((960, 540)))
+    said = [text for text, _, _ in screen.layout]
+    assert "NO NUNCHUK" in said and "SOURCE LOST" not in said, said
+    assert "plug it in for left-hand moves: the trial starts again when it is back" in said

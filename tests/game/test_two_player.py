@@ -244,6 +244,37 @@ def test_the_result_screen_offers_no_menu_under_a_lost_seats_box(tmp_path) -> No
     assert "SOURCE ENDED" in said and "Enter: a new match" not in said, said
 
 
+def test_player_twos_missing_nunchuk_is_said_on_their_source_line(tmp_path) -> None:
+    """With two players the middle under the clock is the shared key line: a seat's missing part
+    is said on its own source line, in amber, not in a strip."""
+    from game.hud_style import SWITCH_COLOR, text_scale
+    from tools.cli import main
+
+    rec = tmp_path / "p2.csv"
+    assert main(["synth", "--session", "4", "--seed", "2", "-o", str(rec)]) == 0
+    s = make_session(["keyboard://?seed=4&keys=left", f"wiimote-emu://{rec}?nunchuk_out_at=1&nunchuk_in_at=3"], display=True)
+    s.loop.run(steps=2 * 60)
+    hud = s.view.hud
+    hud.layout = []
+    s.loop.run(frames=1)
+    (line,) = [rect for text, rect, _ in hud.layout if text.endswith("  connected, no Nunchuk")]
+    u = text_scale(hud.text.for_window(SIZE[1]))  # the dot sits 11 u left of the line, 8 u down
+    dot = pygame.display.get_surface().get_at((int(line.left - 11 * u), int(line.top + 8 * u)))
+    assert tuple(dot)[:3] == SWITCH_COLOR and "missing banner" not in hud.panels
+    assert s.seats[0].hud.source.missing == "" and s.match.fighting
+
+
+def test_a_serial_board_back_with_fewer_sensors_is_missing_the_others() -> None:
+    from engine.sensors.source import Source, SourceState
+    from game.hud import SourceSnapshot
+
+    board = Source(url="serial:///dev/ttyACM0", sensors=1, state=SourceState.CONNECTED)
+    assert SourceSnapshot.of(board, sensors=2).missing.startswith("1 of 2 sensors")
+    assert SourceSnapshot.of(board, sensors=1).missing == "" and SourceSnapshot.of(board).missing == ""
+    board.state = SourceState.RECONNECTING  # its sensors are not known again yet
+    assert SourceSnapshot.of(board, sensors=2).missing == ""
+
+
 def test_either_players_home_button_pauses_both_once_per_press() -> None:
     s = make_session(["keyboard://?seed=4&keys=left", "keyboard://?seed=5&keys=right"], render=False)
     s.loop.run(steps=10)

@@ -239,3 +239,20 @@ def test_each_hand_shows_its_readings_in_numbers(tmp_path):
     scope, _ = scope_with_labels("960x600", f"replay://{rec}?loop=1")
     np.testing.assert_allclose(scope.readouts[0], (0.02, 0.91, 0.41), atol=1e-3)
     np.testing.assert_allclose(scope.readouts[1], (-0.5, 0.0, 0.87), atol=1e-3)
+
+
+def test_scope_says_a_wiimote_streams_without_its_nunchuk(tmp_path, monkeypatch):
+    # the left panel's traces lie flat at 1 g: the state line says why
+    from engine.clock import VirtualClock
+    from engine.sensors import open_source
+    from tools.scope import run_scope
+
+    monkeypatch.setenv("SDL_VIDEODRIVER", "dummy")
+    rec = tmp_path / "s.csv"
+    assert main(["synth", "--session", "2", "--seed", "2", "-o", str(rec)]) == 0
+    clock = VirtualClock()
+    scope = run_scope(open_source(f"wiimote-emu://{rec}?nunchuk=0", clock=clock.seconds), clock=clock, frames=60)
+    assert scope.status_line.startswith("connected, no Nunchuk: plug it in for left-hand moves"), scope.status_line
+    clock = VirtualClock()
+    whole = run_scope(open_source(f"wiimote-emu://{rec}", clock=clock.seconds), clock=clock, frames=60)
+    assert whole.status_line.startswith("connected   "), whole.status_line
