@@ -100,11 +100,15 @@ def _poll_into(parts: _RecordingParts, seconds: float | None, poll_s: float, con
     """Poll the source into `parts` until `seconds` pass or it ends; say each state change."""
     source, url = parts.source, parts.url
     start = time.perf_counter()
-    last_state = None
+    last_state, last_missing = None, ""
     while seconds is None or time.perf_counter() - start < seconds:
         if source.state is not last_state:
             print(f"source {url}: {source.state.value}", file=sys.stderr)
             last_state = source.state
+        missing = source.missing()  # a Wiimote without its Nunchuk records a still left hand
+        if missing != last_missing:
+            print(f"source {url}: {missing or 'nothing missing now'}", file=sys.stderr)
+            last_missing = missing
         parts.connected |= source.state is SourceState.CONNECTED
         samples = source.poll()
         parts.connected |= bool(samples)

@@ -44,6 +44,19 @@ def test_record_from_emulated_wiimote(tmp_path):
     assert np.allclose(rec.accel[:, 1], [-0.3, 0.25, 0.9], atol=1 / 200 + 1e-4)
 
 
+def test_record_says_when_the_nunchuk_is_out_and_back(tmp_path):
+    # the left hand's columns lie still at 1 g meanwhile: the console says why
+    t = np.arange(0, 3, 1 / 60)
+    src = tmp_path / "in.csv"
+    write_recording(src, Recording(t, np.tile([0.0, 0.0, 1.0], (len(t), 2, 1))))
+    url = f"wiimote-emu://{src}?nunchuk_out_at=0.3&nunchuk_in_at=0.7"
+    r = quickjab("record", "--source", url, "-o", str(tmp_path / "out.csv"), "--seconds", "1.2")
+    assert r.returncode == 0, r.stderr
+    said = [line for line in r.stderr.splitlines() if line.startswith(f"source {url}: ")]
+    assert [line.split(": ", 1)[1] for line in said][-2:] == ["no Nunchuk: plug it in for left-hand moves",
+                                                              "nothing missing now"], said
+
+
 def test_record_from_absent_wiimote_explains_pairing(tmp_path):
     if list_wiimotes():
         return  # a Wiimote is really attached here: nothing to explain
