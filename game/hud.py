@@ -417,7 +417,8 @@ class Hud(TextLayer):
     def _budget(self, surf: pygame.Surface, budget: FrameBudget, u: float) -> None:
         """The F3 overlay (game/hud_budget.py), clear of the panels drawn this frame under it."""
         below = [rect for name, rect in self.panels.items() if name.startswith(("recognition", "keys"))]
-        self.budget_overlay.draw(self, surf, budget, u, below, [self.key_line] if self.key_line else [])
+        above = [rect for name, rect in self.panels.items() if name.endswith(" banner")]  # the amber strip: it hid its end
+        self.budget_overlay.draw(self, surf, budget, u, below, above + ([self.key_line] if self.key_line else []))
 
     # the overlay's chart and rows, under the names tests read
     @property

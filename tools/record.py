@@ -105,7 +105,9 @@ def _poll_into(parts: _RecordingParts, seconds: float | None, poll_s: float, con
         if source.state is not last_state:
             print(f"source {url}: {source.state.value}", file=sys.stderr)
             last_state = source.state
-        missing = source.missing()  # a Wiimote without its Nunchuk records a still left hand
+        # a Wiimote without its Nunchuk records a still left hand; said while connected only (a
+        # source away misses nothing: "nothing missing now" came with each disconnection)
+        missing = source.missing() if source.state is SourceState.CONNECTED else last_missing
         if missing != last_missing:
             print(f"source {url}: {missing or 'nothing missing now'}", file=sys.stderr)
             last_missing = missing

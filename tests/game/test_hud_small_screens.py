@@ -193,6 +193,23 @@ def test_the_budget_overlay_clears_the_mode_line_and_the_key_legend(size, scene)
     assert not overlay.colliderect(hud.panels["recognition 1"]), (overlay, hud.panels["recognition 1"])
 
 
+@pytest.mark.parametrize("size", [(640, 360), *SMALL, (960, 540), (1280, 720)])
+@pytest.mark.parametrize("strip", ["keyboard banner", "missing banner"])
+def test_the_budget_overlay_clears_the_strip_under_the_clock(size, strip) -> None:
+    """F3 with the amber strip under the clock (no Wiimote; a Nunchuk missing): the overlay's
+    panel covered the strip's end ("...for left-hand moves") up to 1280x720."""
+    pygame.init()
+    st = busy(show_budget=True, demo=True, keyboard_banner=strip == "keyboard banner")
+    if strip == "missing banner":
+        st.source = SourceSnapshot(url="wiimote://", state="connected", battery=0.8,
+                                   missing="no Nunchuk: plug it in for left-hand moves")
+    hud = Hud()
+    hud.draw(pygame.Surface(size), st, budget())
+    overlay = hud.panels["budget"]
+    assert not overlay.colliderect(hud.panels[strip]), (overlay, hud.panels[strip])
+    assert pygame.Rect((0, 0), size).contains(overlay) and not overlay.colliderect(hud.panels["keys 1"])
+
+
 def two_players_with_and_without_f3(size, scene) -> tuple[dict[bool, np.ndarray], TwoPlayerHud]:
     """A two-player frame's pixels with the F3 overlay off and on, and the HUD that drew the
     second (its panels and its layout of texts)."""

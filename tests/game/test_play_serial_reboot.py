@@ -39,3 +39,39 @@ def test_play_survives_a_reboot_to_one_sensor(tmp_path, monkeypatch, capsys, gra
         os.close(master)
         os.close(slave)
     assert rc == 0, capsys.readouterr().err
+
+
+def test_the_hud_says_the_board_came_back_with_one_sensor_fewer(graph_path):  # noqa: F811
+    """The other hand's readings hold still after such a reboot: the source line and the amber
+    strip under the clock say so (Session passes the sensors it reads to the snapshot)."""
+    import pygame
+
+    from engine.clock import VirtualClock
+    from engine.sensors import open_source
+    from game.session import Session, SessionConfig
+
+    master, slave = os.openpty()
+    tty.setraw(slave)
+    try:
+        pygame.init()
+        pygame.display.set_mode((640, 360))
+        clock = VirtualClock()
+        cfg = SessionConfig(seed=0, size=(640, 360), sound=False, render=True, graph=graph_path)
+        s = Session(open_source(f"serial://{os.ttyname(slave)}", clock=clock.seconds), cfg, clock=clock,
+                    surface_provider=pygame.display.get_surface)
+        os.write(master, protocol.encode_hello(0, 0, 1, 200, 4096, 65500, 30, protocol.IMU_MPU6050, 3) + b"".join(
+            protocol.encode_sample(i, 5000 * i, (0, 0, 4096), (0, 4096, 0)) for i in range(1, 40)))
+        s.loop.run(steps=10)
+        assert s.hud_state.source.missing == ""
+        os.write(master, protocol.encode_hello(0, 0, 2, 200, 4096, 65500, 30, protocol.IMU_MPU6050, protocol.FLAG_SENSOR_A)
+                 + b"".join(protocol.encode_sample(i, 5000 * i, (4096, 0, 0)) for i in range(1, 40)))
+        s.loop.run(steps=10)
+        hud = s.view.hud
+        hud.layout = []
+        s.loop.run(frames=1)
+        said = [text for text, _, _ in hud.layout]
+        assert any(t.endswith("  connected, 1 of 2 sensors") for t in said), said
+        assert "1 of 2 sensors: the other hand holds still" in said and "missing banner" in hud.panels
+    finally:
+        os.close(master)
+        os.close(slave)

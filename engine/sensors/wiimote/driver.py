@@ -65,7 +65,7 @@ class Rumble:
 def nunchuk_missing(extension: str) -> str:
     """`Source.missing` for a remote streaming with this extension: the Nunchuk, when there is
     none (never plugged in, or its plug slipped out mid-match) or another extension is in its
-    place; the left hand then reads a still 1 g."""
+    place; the left hand then holds its last reading (1 g if none was ever plugged in)."""
     if extension == "nunchuk":
         return ""
     if extension == "unknown":

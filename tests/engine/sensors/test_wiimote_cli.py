@@ -57,6 +57,19 @@ def test_record_says_when_the_nunchuk_is_out_and_back(tmp_path):
                                                               "nothing missing now"], said
 
 
+def test_record_does_not_say_the_nunchuk_is_back_when_the_remote_goes(tmp_path):
+    # the remote lost with its Nunchuk out: "nothing missing now" came with the disconnection
+    t = np.arange(0, 3, 1 / 60)
+    src = tmp_path / "in.csv"
+    write_recording(src, Recording(t, np.tile([0.0, 0.0, 1.0], (len(t), 2, 1))))
+    url = f"wiimote-emu://{src}?nunchuk=0&unplug_at=0.5&replug_at=1"
+    r = quickjab("record", "--source", url, "-o", str(tmp_path / "out.csv"), "--seconds", "2")
+    assert r.returncode == 0, r.stderr
+    said = [line.split(": ", 1)[1] for line in r.stderr.splitlines() if line.startswith(f"source {url}: ")]
+    assert "disconnected" in said and "connected" in said[said.index("disconnected"):], said
+    assert said.count("no Nunchuk: plug it in for left-hand moves") == 1 and "nothing missing now" not in said, said
+
+
 def test_record_from_absent_wiimote_explains_pairing(tmp_path):
     if list_wiimotes():
         return  # a Wiimote is really attached here: nothing to explain
