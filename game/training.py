@@ -509,6 +509,7 @@ class _TrainingStages:
         self.output, self.left_handed, self.settings = output, left_handed, settings
         self.frame = None
         self.lost_steps = 0  # steps since the source was last connected
+        self.had_all = False  # the source has sent every sensor the trials read (once connected)
         self.give_up_after: int | None = None  # headless: stop when lost this long (no one to wait for it)
         self.stopped_why = ""  # why the walk stopped before its end (the source ended, or never came back)
 
@@ -545,10 +546,12 @@ class _TrainingStages:
     def _source_live(self) -> bool:
         """Whether the source delivers now; a source that ended (a replay played out), or that a
         headless run has waited for too long, stops the walk before anything is saved."""
-        state = self.source.state
+        state, want = self.source.state, self.resampler.dim // 3
         # a trial without the Nunchuk (or with a sensor the board lost) would hold that hand
-        # still in the template: it waits for the part as for a lost source
-        self.screen_view.missing = missing_part(self.source, self.resampler.dim // 3)
+        # still in the template: it waits for the part as for a lost source. Fewer sensors count
+        # only once the source has sent all (a one-hand source trains as it always did)
+        self.had_all |= state == SourceState.CONNECTED and self.source.sensors >= want
+        self.screen_view.missing = missing_part(self.source, want if self.had_all else None)
         live = state == SourceState.CONNECTED and not self.screen_view.missing
         self.lost_steps = 0 if live else self.lost_steps + 1
         if self.trainer.done:
@@ -556,8 +559,9 @@ class _TrainingStages:
         if state == SourceState.ENDED:
             self.stopped_why = "the source ended"
         elif self.give_up_after is not None and self.lost_steps > self.give_up_after:
-            away = self.screen_view.missing.partition(":")[0] or "the source was lost"
-            self.stopped_why = f"{away} for {self.lost_steps / HZ:.0f} s"
+            waited = f"{self.lost_steps / HZ:.0f} s"
+            missing = self.screen_view.missing.partition(":")[0]
+            self.stopped_why = f"{missing} (waited {waited})" if missing else f"the source was lost for {waited}"
         return live
 
     def save(self) -> None:

@@ -60,7 +60,7 @@ def test_training_waits_for_a_missing_nunchuk_and_saves_nothing_without_it(tmp_p
     url = f"wiimote-emu://{rec}?nunchuk=0"
     assert main(["train", "--headless", "--source", url, "--actions", "hook_l", "--size", "320x180"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert "no Nunchuk for 10 s after 0 trials; nothing saved" in err[-1], err
+    assert "no Nunchuk (waited 10 s) after 0 trials; nothing saved" in err[-1], err
     assert not user_templates_path().exists()
 
 
@@ -80,3 +80,36 @@ def test_the_training_screen_says_what_part_its_trials_wait_for():
     said = [text for text, _, _ in screen.layout]
     assert "NO NUNCHUK" in said and "SOURCE LOST" not in said, said
     assert "plug it in for left-hand moves: the trial starts again when it is back" in said
+
+
+def test_a_one_hand_source_trains_as_before(tmp_path, monkeypatch, capsys):
+    """`train` reads two sensors; a one-hand source never sent the second, so it is not a board
+    that lost one (waited for, as a missing Nunchuk is): its trials are recorded as before."""
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "xdg"))
+    from game.userdata import user_templates_path
+
+    rec = tmp_path / "one.csv"
+    rec.write_text("t,rx,ry,rz\n" + "".join(f"{i / 60:.5f},0,{0.5 * (i % 90 > 60):.1f},1\n" for i in range(600)))
+    assert main(["train", "--headless", "--source", f"replay://{rec}?loop=1", "--actions", "straight_r",
+                 "--size", "320x180"]) == 0, capsys.readouterr().err
+    assert user_templates_path().exists()
+
+
+def test_a_board_that_comes_back_with_a_sensor_fewer_is_waited_for():
+    from engine.clock import VirtualClock
+    from engine.frames import FrameResampler
+    from engine.loop import FixedStepLoop
+    from engine.sensors.source import Source, SourceState
+    from game.actions import load_library
+    from game.training import TrainingScreen, _TrainingStages
+
+    board = Source(url="serial:///dev/ttyACM0", sensors=2, state=SourceState.CONNECTED)
+    trainer = Trainer(["hook_l"], trials=1)
+    screen = TrainingScreen(load_library(), trainer, board.url)
+    stages = _TrainingStages(FixedStepLoop(VirtualClock()), board, False, False, trainer, screen,
+                             FrameResampler(sensors=2), 0.0, None, False, {})
+    assert stages._source_live() and screen.missing == ""
+    board.sensors = 1  # rebooted with one IMU fewer: its readings would hold still in the trials
+    assert not stages._source_live() and screen.missing.startswith("1 of 2 sensors")
+    board.sensors = 2
+    assert stages._source_live()
