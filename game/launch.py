@@ -152,6 +152,21 @@ def toggle_fullscreen() -> None:
               file=sys.stderr)
 
 
+SLOW_SHARE = 0.1  # frames whose work passed their period: more than this share, the machine is slow
+SLOW_AFTER_FRAMES = 300  # a run this long at least (5 s at 60 Hz): the first frames' loading is not the machine
+
+
+def slow_machine_hint(budget, low_power: bool) -> str:
+    """One line for a run whose frames often took longer than their period (a small board
+    rendering the full game), pointing at what to change; "" for a run that kept up."""
+    if budget.frames < SLOW_AFTER_FRAMES or budget.frame_overruns <= SLOW_SHARE * budget.frames:
+        return ""
+    share = f"{100 * budget.frame_overruns / budget.frames:.0f} % of the frames took longer than {budget.frame_period_ms:.1f} ms"
+    if low_power:
+        return f"{share} even in low power: a smaller window (--size 640x360) draws less"
+    return f"{share}: this machine may play better with --low-power (a 30 Hz render, half-size flat shading)"
+
+
 def save_image(surface, path: str | os.PathLike, what: str = "the screenshot") -> None:
     """`surface` as an image file, its format from the suffix as pygame.image.save picks it.
     Encoded in memory and written by Python: pygame's own writing ignores a failed write (a full
@@ -230,6 +245,9 @@ def run_session(args: argparse.Namespace, caption: str, open_sources: Callable[[
         session.render(0.0)
         try:
             session.loop.run(frames=frames)
+            hint = "" if args.virtual_clock or args.headless else slow_machine_hint(session.loop.budget, args.low_power)
+            if hint:
+                print(f"quickjab play: {hint}", file=sys.stderr)
         finally:
             if args.screenshot:
                 save_screenshot(args.screenshot)

@@ -226,3 +226,26 @@ def test_play_draws_its_first_frame_before_the_loop_starts(tmp_path, monkeypatch
     monkeypatch.setattr(Renderer, "_build_static", build_static)
     assert main(["play", "--demo", "--headless", "--frames", "5", "--graph", graph_path, "--no-sound"]) == 0
     assert built_while and built_while[0] is False
+
+
+def _budget_with(overruns: int, frames: int, period_ms: float = 1000 / 60):
+    """A run of `frames` frames, the first `overruns` of them working 1.2 periods, the rest 0.3."""
+    from engine.budget import FrameBudget
+
+    budget = FrameBudget()
+    budget.frame_period_ms = period_ms
+    for i in range(frames):
+        start = i * 100_000_000
+        budget.begin_frame(start)
+        budget.end_frame(start + int((1.2 if i < overruns else 0.3) * period_ms * 1e6), steps=1, dropped=0, wait_ns=0)
+    return budget
+
+
+def test_a_run_whose_frames_often_overran_points_at_low_power() -> None:
+    from game.launch import slow_machine_hint
+
+    assert slow_machine_hint(_budget_with(100, 600), low_power=False).startswith(
+        "17 % of the frames took longer than 16.7 ms: this machine may play better with --low-power")
+    assert "even in low power: a smaller window" in slow_machine_hint(_budget_with(100, 600, 1000 / 30), low_power=True)
+    assert slow_machine_hint(_budget_with(30, 600), low_power=False) == ""  # 5 %: a hiccup, not the machine
+    assert slow_machine_hint(_budget_with(100, 200), low_power=False) == ""  # too short a run to tell
