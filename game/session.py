@@ -59,8 +59,8 @@ LOW_POWER_RENDER_BUDGET_MS = 4.0
 HOME_BUTTON = 0x0080  # Wiimote core buttons: Home
 RUMBLE_MS = 120
 # the states in which a source delivers nothing: the match pauses under the lost-source overlay.
-# One that ended (a replay played out) never comes back: the match stays paused (before, it went
-# on as if the player stood still)
+# One that ended (a replay played out) does not come back by itself: the match stays paused
+# (before, it went on as if the player stood still) until Enter plays a replay again (REWIND)
 LOST_STATES = (SourceState.DISCONNECTED, SourceState.RECONNECTING, SourceState.CONNECTING, SourceState.ENDED)
 
 

@@ -22,7 +22,7 @@ hold whatever was pressed:
 - every text drawn (the HUD's layout) is inside the window, at every size from 640x360 up
   (the docs' smallest window that is still a screen, not a thumbnail; smaller ones, and windows
   under 640 wide however tall, where the 16 px floor cannot fit the key legend, render without
-  error), except the F3 overlay's on a window narrower than its panel (a tall window: 640x1080);
+  error), the F3 overlay's too on a window narrow for its height (640x1080);
 - training: the walk holds under SOURCE LOST while the source is away, and a trial cut by the
   loss starts again from "get ready"; Esc ends it; its texts stay inside the window.
 """
