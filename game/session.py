@@ -79,11 +79,12 @@ def can_play_again(source: Source) -> bool:
 
 def enter_starts_match(match: Match, sources: list[Source]) -> bool:
     """Whether Enter starts a new match now: after the last bell, or under SOURCE ENDED when
-    the source can play again (a replay) and no other source is away: with another seat's
-    controller lost the new match would wait for it, the rewound replay playing out unseen under
-    the pause (and under that seat's box, which does not offer Enter, it reset the match)."""
+    the source can play again (a replay), and in both only when no source that cannot play again
+    is away: the new match would wait for it, a rewound replay playing out unseen under the pause
+    (and under that seat's box, which does not offer Enter, it reset the match; after the last
+    bell too, where the box hides "Enter: a new match")."""
     lost = [source for source in sources if source.state in LOST_STATES]
-    return match.over or (bool(lost) and all(map(can_play_again, lost)))
+    return (match.over or bool(lost)) and all(map(can_play_again, lost))
 
 
 def rewind_ended(sources: list[Source]) -> None:
