@@ -10,10 +10,13 @@ import argparse
 import os
 import sys
 from collections.abc import Callable
-from typing import TypeVar
+from typing import TYPE_CHECKING, TypeVar
 
 from engine import arguments
 from engine.errors import InputError, refuse_overwriting
+
+if TYPE_CHECKING:
+    from engine.budget import FrameBudget
 
 T = TypeVar("T")
 DEFAULT_SOURCE = "wiimote://"
@@ -156,7 +159,7 @@ SLOW_SHARE = 0.1  # frames whose work passed their period: more than this share,
 SLOW_AFTER_FRAMES = 300  # a run this long at least (5 s at 60 Hz): the first frames' loading is not the machine
 
 
-def slow_machine_hint(budget, low_power: bool) -> str:
+def slow_machine_hint(budget: FrameBudget, low_power: bool) -> str:
     """One line for a run whose frames often took longer than their period (a small board
     rendering the full game), pointing at what to change; "" for a run that kept up."""
     if budget.frames < SLOW_AFTER_FRAMES or budget.frame_overruns <= SLOW_SHARE * budget.frames:
@@ -165,6 +168,14 @@ def slow_machine_hint(budget, low_power: bool) -> str:
     if low_power:
         return f"{share} even in low power: a smaller window (--size 640x360) draws less"
     return f"{share}: this machine may play better with --low-power (a 30 Hz render, half-size flat shading)"
+
+
+def say_if_slow(args: argparse.Namespace, budget: FrameBudget) -> None:
+    """`play`'s last line for a run whose frames often overran (slow_machine_hint); none under
+    the virtual clock or --headless, whose frames do not keep the machine's pace."""
+    hint = "" if args.virtual_clock or args.headless else slow_machine_hint(budget, args.low_power)
+    if hint:
+        print(f"quickjab play: {hint}", file=sys.stderr)
 
 
 def save_image(surface, path: str | os.PathLike, what: str = "the screenshot") -> None:
@@ -245,9 +256,7 @@ def run_session(args: argparse.Namespace, caption: str, open_sources: Callable[[
         session.render(0.0)
         try:
             session.loop.run(frames=frames)
-            hint = "" if args.virtual_clock or args.headless else slow_machine_hint(session.loop.budget, args.low_power)
-            if hint:
-                print(f"quickjab play: {hint}", file=sys.stderr)
+            say_if_slow(args, session.loop.budget)
         finally:
             if args.screenshot:
                 save_screenshot(args.screenshot)

@@ -59,8 +59,8 @@ LOW_POWER_RENDER_BUDGET_MS = 4.0
 HOME_BUTTON = 0x0080  # Wiimote core buttons: Home
 RUMBLE_MS = 120
 # the states in which a source delivers nothing: the match pauses under the lost-source overlay.
-# One that ended (a replay played out) never comes back: the match stays paused (before, it went
-# on as if the player stood still)
+# One that ended (a replay played out) does not come back by itself: the match stays paused
+# (before, it went on as if the player stood still) until Enter plays a replay again (REWIND)
 LOST_STATES = (SourceState.DISCONNECTED, SourceState.RECONNECTING, SourceState.CONNECTING, SourceState.ENDED)
 
 
@@ -79,11 +79,12 @@ def can_play_again(source: Source) -> bool:
 
 def enter_starts_match(match: Match, sources: list[Source]) -> bool:
     """Whether Enter starts a new match now: after the last bell, or under SOURCE ENDED when
-    the source can play again (a replay) and no other source is away: with another seat's
-    controller lost the new match would wait for it, the rewound replay playing out unseen under
-    the pause (and under that seat's box, which does not offer Enter, it reset the match)."""
+    the source can play again (a replay), and in both only when no source that cannot play again
+    is away: the new match would wait for it, a rewound replay playing out unseen under the pause
+    (and under that seat's box, which does not offer Enter, it reset the match; after the last
+    bell too, where the box hides "Enter: a new match")."""
     lost = [source for source in sources if source.state in LOST_STATES]
-    return match.over or (bool(lost) and all(map(can_play_again, lost)))
+    return (match.over or bool(lost)) and all(map(can_play_again, lost))
 
 
 def rewind_ended(sources: list[Source]) -> None:

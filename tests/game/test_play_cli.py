@@ -249,3 +249,19 @@ def test_a_run_whose_frames_often_overran_points_at_low_power() -> None:
     assert "even in low power: a smaller window" in slow_machine_hint(_budget_with(100, 600, 1000 / 30), low_power=True)
     assert slow_machine_hint(_budget_with(30, 600), low_power=False) == ""  # 5 %: a hiccup, not the machine
     assert slow_machine_hint(_budget_with(100, 200), low_power=False) == ""  # too short a run to tell
+
+
+def test_the_slow_machine_line_is_said_only_where_frames_keep_the_machines_pace(capsys) -> None:
+    # under --headless or the virtual clock the frames run as fast as they can: their overruns
+    # say nothing of the machine
+    import argparse
+
+    from game.launch import say_if_slow
+
+    slow = _budget_with(100, 600)
+    for headless, virtual, said in ((False, False, True), (True, False, False), (False, True, False)):
+        say_if_slow(argparse.Namespace(headless=headless, virtual_clock=virtual, low_power=False), slow)
+        err = capsys.readouterr().err
+        assert ("quickjab play: 17 % of the frames" in err) == said, (headless, virtual, err)
+    say_if_slow(argparse.Namespace(headless=False, virtual_clock=False, low_power=False), _budget_with(0, 600))
+    assert capsys.readouterr().err == ""

@@ -223,6 +223,33 @@ def test_enter_under_a_replays_end_waits_for_the_other_seat(tmp_path) -> None:
     assert s.match is not match and s.match.fighting and not s.source_lost()
 
 
+def test_enter_after_the_last_bell_waits_for_a_seat_that_is_away(tmp_path) -> None:
+    """The match over, player 1's replay played out and player 2's controller away: Enter (which
+    player 2's box does not offer) rewound the replay into a new match paused for player 2, where
+    it played out unseen (player 2 back: SOURCE ENDED again). Now Enter waits for player 2, then
+    plays the replay again."""
+    from tools.cli import main
+
+    rec = tmp_path / "p1.csv"
+    assert main(["synth", "--session", "1", "--seed", "2", "-o", str(rec)]) == 0
+    s = make_session([f"replay://{rec}", "keyboard://?seed=5&keys=right"], display=True)
+    s.loop.run(frames=10)
+    s.match._finish(0, "KO")  # the last bell
+    s.loop.run(frames=90)
+    s.seats[1].source.disconnect()
+    s.loop.run(frames=1)
+    assert s.match.over and [seat.source.state for seat in s.seats] == [SourceState.ENDED, SourceState.DISCONNECTED]
+    match = s.match
+    pygame.event.post(key_event("return"))
+    s.loop.run(frames=3)
+    assert s.match is match and s.seats[0].source.state == SourceState.ENDED  # not rewound unseen
+    s.seats[1].source.reconnect()
+    s.loop.run(frames=1)
+    pygame.event.post(key_event("return"))
+    s.loop.run(frames=20)
+    assert s.match is not match and s.match.fighting and not s.source_lost()
+
+
 def test_the_result_screen_offers_no_menu_under_a_lost_seats_box(tmp_path) -> None:
     """After the last bell the result screen says "Enter: a new match"; once a seat's source is
     away its box says what comes next instead, and the menu line is not drawn under it."""

@@ -17,12 +17,13 @@ hold whatever was pressed:
   the pixels; Esc and Home do not resume the match under it; a source back clears it;
 - a source back resumes the match only if the loss paused it (a match paused by the player
   before the loss stays paused);
-- a match that is over starts again only on Return (one player and two), D changes the CPU's
-  difficulty only paused or after the last bell, F3 toggles the budget overlay;
+- a match that is over, or a replay that played out, starts again only on Return, and only with
+  no controller away (one player and two); D changes the CPU's difficulty only paused or after
+  the last bell, F3 toggles the budget overlay;
 - every text drawn (the HUD's layout) is inside the window, at every size from 640x360 up
   (the docs' smallest window that is still a screen, not a thumbnail; smaller ones, and windows
   under 640 wide however tall, where the 16 px floor cannot fit the key legend, render without
-  error), except the F3 overlay's on a window narrower than its panel (a tall window: 640x1080);
+  error), the F3 overlay's too on a window narrow for its height (640x1080);
 - training: the walk holds under SOURCE LOST while the source is away, and a trial cut by the
   loss starts again from "get ready"; Esc ends it; its texts stay inside the window.
 """
@@ -155,7 +156,7 @@ class Before:
     show_budget: bool
     frame: int
     lost_shown: bool  # the lost-source overlay is up (D does nothing under it)
-    replayable: bool  # a source played out and can play again (Enter starts a new match)
+    enter_starts: bool  # Enter starts a new match (the last bell, a replay played out; none away)
 
 
 class Campaign:
@@ -186,13 +187,13 @@ class Campaign:
         m, s = self.s.match, self.s
         return Before(m, m.paused, m.over, m.clock_steps, m.count_steps, tuple(m.health), s.blows_log.total,
                       [len(getattr(src, "pressed", [])) for src in self.sources], s.difficulty.name,
-                      s.hud_state.show_budget, s.loop.frame_index, s.source_lost(), self.replayable())
+                      s.hud_state.show_budget, s.loop.frame_index, s.source_lost(), self.enter_starts())
 
-    def replayable(self) -> bool:
-        """Whether Enter plays a replay again: one played out, and every source away is such a
-        replay (with another seat's controller away the new match would wait for it)."""
+    def enter_starts(self) -> bool:
+        """Whether Enter starts a new match: after the last bell or with a replay played out, and
+        every source away such a replay (with a controller away the new match would wait for it)."""
         away = [src for src in self.sources if src.state in LOST_STATES]
-        return bool(away) and all(map(can_play_again, away))
+        return (self.s.match.over or bool(away)) and all(map(can_play_again, away))
 
     def play(self, steps: int) -> None:
         while self.s.loop.step_index < steps:
@@ -277,7 +278,7 @@ class Campaign:
         s, m = self.s, self.s.match
         if b.over:
             self.counts["over"] += 1
-        if (b.over or b.replayable) and move.key == "return":
+        if b.enter_starts and move.key == "return":
             self.counts["new matches"] += 1
             assert m is not b.match and m.round == 1 and not m.over, f"Return after the last bell or a replay's end: {why}"
         else:
