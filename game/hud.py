@@ -16,7 +16,7 @@ import pygame
 
 from engine.budget import FrameBudget
 from engine.clock import STEP_HZ
-from engine.sensors.source import REWIND, Source, missing_part
+from engine.sensors.source import REWIND, Source, missing_in_short, missing_part
 from game.hud_budget import BudgetOverlay
 
 # the HUD's colours and layout (game/hud_style.py); importable from here as before
@@ -55,7 +55,7 @@ class SourceSnapshot:
     url: str = ""
     state: str = "connected"
     battery: float | None = None
-    rewinds: bool = False  # ended, it can play again from its start (a replay): Enter does it
+    rewinds: bool = False  # it can play again from its start once it ended (REWIND: a replay)
     missing: str = ""  # a part it should have and has not (Source.missing: the Nunchuk)
 
     @classmethod
@@ -68,7 +68,11 @@ class SourceSnapshot:
     def line(self) -> str:
         """The HUD's line for it: URL, state and what is missing, in short ("connected, no
         Nunchuk": a long URL gives way in its middle, so the end stays)."""
-        return f"{self.url}  {self.state}" + (f", {self.missing.split(':')[0]}" if self.missing else "")
+        return f"{self.url}  {self.state}" + (f", {missing_in_short(self.missing)[0]}" if self.missing else "")
+
+    def plays_again(self) -> bool:
+        """It ended and can play again (game.session.can_play_again, as the HUD sees it)."""
+        return self.state == "ended" and self.rewinds
 
     def colour(self) -> tuple[int, int, int]:
         """Its dot: green connected and whole, amber (re)connecting or missing a part, red away."""

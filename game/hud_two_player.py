@@ -75,7 +75,7 @@ class TwoPlayerHud(Hud):
         # does nothing until that seat is back: game.session.enter_starts_match)
         lost = [s for s in (st, two) if s.disconnected]
         if lost:
-            waits = [s for s in lost if not (s.source.state == "ended" and s.source.rewinds)]
+            waits = [s for s in lost if not s.source.plays_again()]
             self._disconnected(surf, (waits or lost)[0], u)
 
     def _source_right(self, surf: pygame.Surface, st: HudState, u: float) -> None:

@@ -29,7 +29,7 @@ import numpy as np
 from engine import arguments
 from engine.clock import STEP_HZ
 from engine.errors import InputError, refuse_overwriting
-from engine.sensors.source import PLAYABLE, SourceState, missing_part
+from engine.sensors.source import PLAYABLE, SourceState, missing_in_short, missing_part
 from game.launch import (
     KEYBOARD_SOURCE,
     check_visible_window,
@@ -323,7 +323,7 @@ class TrainingScreen:
 
         tr = self.trainer
         if tr.waiting and self.missing:
-            short, _, then = self.missing.partition(": ")
+            short, then = missing_in_short(self.missing)
             title, sub = short.upper(), f"{then or 'waiting for it'}: the trial starts again when it is back"
         elif tr.waiting:
             title, sub = "SOURCE LOST", "waiting for it: the trial starts again when it is back"
@@ -560,7 +560,7 @@ class _TrainingStages:
             self.stopped_why = "the source ended"
         elif self.give_up_after is not None and self.lost_steps > self.give_up_after:
             waited = f"{self.lost_steps / HZ:.0f} s"
-            missing = self.screen_view.missing.partition(":")[0]
+            missing = missing_in_short(self.screen_view.missing)[0]
             self.stopped_why = f"{missing} (waited {waited})" if missing else f"the source was lost for {waited}"
         return live
 

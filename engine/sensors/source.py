@@ -99,6 +99,13 @@ def missing_part(source: Source, sensors: int | None = None) -> str:
     return missing
 
 
+def missing_in_short(missing: str) -> tuple[str, str]:
+    """A `missing` text's two halves: what is missing ("no Nunchuk", for a source line or a
+    title) and what that costs or what to do ("plug it in for left-hand moves"; may be "")."""
+    short, _, then = missing.partition(": ")
+    return short, then
+
+
 SourceFactory = Callable[[str, Clock], Source]
 
 _factories: dict[str, SourceFactory] = {}
