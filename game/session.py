@@ -67,8 +67,8 @@ LOST_STATES = (SourceState.DISCONNECTED, SourceState.RECONNECTING, SourceState.C
 def say_if_ended(source: Source, was_lost: bool) -> None:
     """The console's line when a source has just ended: a headless run shows no overlay."""
     if source.state == SourceState.ENDED and not was_lost:
-        print(f"quickjab play: {source.url}: the source ended (nothing more to play); the match is paused",
-              file=sys.stderr)
+        then = "Enter in the window plays it again" if REWIND in source.capabilities else "nothing more to play"
+        print(f"quickjab play: {source.url}: the source ended ({then}); the match is paused", file=sys.stderr)
 
 
 def can_play_again(source: Source) -> bool:
