@@ -51,6 +51,7 @@ READY_STEPS = 60  # "get ready": the hands held still
 LEAD_IN = 30  # frames of the ready phase kept at the start of a trial (the rest before)
 RECORD_STEPS = 96  # the recording window after GO
 LOST_GIVE_UP_STEPS = 10 * HZ  # headless: a source lost this long is not coming back
+SELF_CHECK_GOOD = 0.9  # under this share of the new trials recognized, the player is told which moves to redo
 
 SHOW, READY, RECORD, DONE = "show", "ready", "record", "done"
 # the live signal: one colour per hand (as the contact sheet: right red, left blue), x y z in
@@ -161,7 +162,7 @@ class Trainer:
 
         # keep="usable", looking for look-alikes among the moves kept from `base` too; the player
         # is told what was dropped
-        kept = usable_trials(self.recorded, others=_moves(base, left_handed))
+        kept = self.kept = usable_trials(self.recorded, others=_moves(base, left_handed))
         self.dropped = {a: (len(ts) - len(kept[a]), len(ts)) for a, ts in self.recorded.items() if len(kept[a]) < len(ts)}
         templates = Templates.from_trials(kept)
         trained = set(self.recorded)
@@ -190,6 +191,23 @@ def _moves(base, left_handed: bool) -> dict[str, list[np.ndarray]]:
         for action, signal in zip(base.actions, base.signals, strict=True):
             out.setdefault(action, []).append(signal)
     return out
+
+
+def say_self_check(trainer: Trainer, templates) -> str:
+    """How well the moves trained now tell each other apart, on the console: each kept trial
+    through the game's recognizer without its own template (engine/recognition/self_check.py),
+    and what to do when some are taken for others. Returns the figure in short, for the screen."""
+    from engine.recognition.self_check import leave_one_out, said
+
+    new = sum(len(ts) for ts in trainer.kept.values())  # merge_templates puts them last
+    check = leave_one_out(templates, len(templates) - new, trainer.kept, templates.recognizer)
+    for line in said(check):
+        print(f"quickjab train: {line}", file=sys.stderr)
+    confused = sorted({a for a, _ in check.taken_for} | {t for _, t in check.taken_for if t})
+    if check.trials and check.right < SELF_CHECK_GOOD * check.trials:
+        print(f"quickjab train: throw these more differently, or train them again: quickjab train --actions "
+              f"{','.join(confused)}", file=sys.stderr)
+    return f"{check.right} of {check.trials} trials recognized without their own template" if check.trials else ""
 
 
 def merge_templates(base, new, left_handed: bool = False):
@@ -232,6 +250,7 @@ class TrainingScreen:
         self.anim_frame = 0.0
         self.saved_to: str = ""
         self.missing = ""  # a part the source misses (Source.missing): the trials wait for it
+        self.self_check = ""  # how well the new moves told each other apart (say_self_check)
         # tests: a list to collect every text drawn (text, rectangle, panel: "stage", "list", "plot")
         self.layout: list | None = None
         self.panels: dict = {}
@@ -329,6 +348,7 @@ class TrainingScreen:
             title, sub = "SOURCE LOST", "waiting for it: the trial starts again when it is back"
         elif tr.done:
             title, sub = "ALL DONE", (f"templates saved to {self.saved_to}" if self.saved_to else "building templates...")
+            sub += f"; {self.self_check}" if self.self_check else ""
         elif tr.phase == SHOW:
             title, sub = action_label(tr.action).upper(), "watch the move, then throw it as you will in a fight"
         elif tr.phase == READY:
@@ -579,6 +599,7 @@ class _TrainingStages:
             print(f"quickjab train: {action}: dropped {n} of {of} trials (cut off, unlike the others, or like another move)",
                   file=sys.stderr)
         print(f"quickjab train: saved {len(templates)} templates to {output}", file=sys.stderr)
+        self.screen_view.self_check = say_self_check(trainer, templates)
 
     def render(self, alpha: float) -> None:
         import pygame

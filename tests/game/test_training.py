@@ -113,3 +113,43 @@ def test_a_board_that_comes_back_with_a_sensor_fewer_is_waited_for():
     assert not stages._source_live() and screen.missing.startswith("1 of 2 sensors")
     board.sensors = 2
     assert stages._source_live()
+
+
+def test_train_says_how_well_the_new_moves_tell_each_other_apart(tmp_path, monkeypatch, capsys):
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "xdg"))
+    assert main(["train", "--headless", "--demo", "--actions", "straight_r,hook_r", "--size", "320x180"]) == 0
+    err = capsys.readouterr().err.splitlines()
+    (line,) = [x for x in err if "each new trial against the rest" in x]
+    right, of = (int(w) for w in line.split(": ")[-1].split()[::2][:2])  # "N of M recognized"
+    assert of == 10 and right >= 9, err  # the virtual player's moves, told apart
+
+
+def test_moves_taken_for_each_other_are_named_for_training_again(capsys):
+    from types import SimpleNamespace
+
+    from engine.recognition import Templates
+    from game.training import say_self_check
+    from tests.engine.recognition.test_self_check import trials_of
+
+    trials = trials_of(["straight_r", "hook_r"])
+    trials["hook_r"] = [t + 0.01 for t in trials["straight_r"]]  # thrown as the straights
+    say_self_check(SimpleNamespace(kept=trials), Templates.from_trials(trials))
+    err = capsys.readouterr().err.splitlines()
+    assert err[-1] == "quickjab train: throw these more differently, or train them again: quickjab train --actions hook_r,straight_r", err
+
+
+def test_all_done_shows_how_many_trials_were_recognized():
+    import pygame
+
+    from game.actions import load_library
+    from game.training import DONE, TrainingScreen
+
+    pygame.init()
+    tr = Trainer(["hook_l"], trials=1)
+    tr.phase = DONE
+    screen = TrainingScreen(load_library(), tr, "keyboard://")
+    screen.saved_to, screen.self_check = "mine.npz", "9 of 10 trials recognized without their own template"
+    screen.layout = []
+    screen.draw(pygame.Surface((1280, 720)))
+    said = [text for text, _, _ in screen.layout]
+    assert "templates saved to mine.npz; 9 of 10 trials recognized without their own template" in said, said
