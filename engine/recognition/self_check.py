@@ -34,14 +34,19 @@ class SelfCheck:
 
 
 def final_action(events: Sequence) -> str | None:
-    """The last action a replayed motion was decided as (a start or a switch), None when
-    nothing was decided or the start was called off."""
+    """The last action the trial's first decided motion was decided as (its start, then its
+    switches, up to its end: a later motion is the hand's return), None when nothing was decided
+    or the start was called off (as `quickjab evaluate` scores a trial)."""
     final = None
     for ev in events:
-        if ev.event in ("start", "switch"):
+        if ev.event == "start":
+            if final is not None:
+                break  # a second motion
             final = ev.action
-        elif ev.event == "reject" and ev.called_off:
-            final = None
+        elif final is not None and ev.event == "switch":
+            final = ev.action
+        elif final is not None and ev.event in ("end", "reject"):
+            return None if ev.event == "reject" else final
     return final
 
 

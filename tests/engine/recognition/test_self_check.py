@@ -54,3 +54,14 @@ def test_without_leaves_one_template_out_and_keeps_the_rest_as_they_are():
     assert less.actions == ["straight_r", "straight_r", "hook_r", "hook_r", "hook_r"]
     assert np.array_equal(less.thresholds, np.delete(templates.thresholds, 1))
     assert less.signals[1] is templates.signals[2] and less.rest_noise == templates.rest_noise
+
+
+def test_a_trial_is_scored_by_its_first_decided_motion():
+    from engine.recognition.events import RecognizerEvent as Ev
+    from engine.recognition.self_check import final_action
+
+    first = [Ev("start", "block", 41), Ev("switch", "uppercut_r", 63), Ev("end", "uppercut_r", 76)]
+    assert final_action(first + [Ev("start", "block", 86), Ev("end", "block", 112)]) == "uppercut_r"  # then the return
+    assert final_action([Ev("start", "hook_r", 40), Ev("reject", "hook_r", 45, called_off=True)]) is None
+    assert final_action([Ev("reject", None, 30), Ev("start", "jab", 50)]) == "jab"
+    assert final_action([]) is None
