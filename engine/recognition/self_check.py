@@ -4,8 +4,10 @@ saves them: each new trial replayed through the game's recognizer with every tem
 learns it at once, not in a match.
 
 The held-out trial's template is left out; the other templates keep the rejection thresholds
-measured with it among their action's trials (a little looser than a set built without it: one
-build instead of one per trial, which on a small board would take minutes)."""
+measured with it among their action's trials (a little looser than a set built without it).
+Rebuilding the held-out action's templates for each trial costs about half as much again and, on
+the virtual player's sets (13 moves, experienced and novice, 3 or 5 trials: 369 trials), changed
+no trial's answer: its mistakes are moves taken for others, not rejections."""
 
 from __future__ import annotations
 

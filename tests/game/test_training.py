@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import numpy as np
 
 from game.training import LEAD_IN, READY_STEPS, RECORD, RECORD_STEPS, SHOW_STEPS, Trainer
@@ -152,4 +154,72 @@ def test_all_done_shows_how_many_trials_were_recognized():
     screen.layout = []
     screen.draw(pygame.Surface((1280, 720)))
     said = [text for text, _, _ in screen.layout]
-    assert "templates saved to mine.npz; 9 of 10 trials recognized without their own template" in said, said
+    assert "9 of 10 trials recognized without their own template; templates saved to mine.npz" in said, said
+
+
+def _recorded(actions, n=5, seed=0, spoil=()):
+    from game.actions import load_library
+    from game.virtual_player import synthesize_action
+
+    lib, rng = load_library(), np.random.default_rng(seed)
+    out = {a: [synthesize_action(lib[a], "experienced", rng, rest_before=LEAD_IN, rest_after=30).reshape(-1, 6)
+               for _ in range(n)] for a in actions}
+    for a in out:
+        for i in spoil:  # cut off: dropped by usable_trials
+            out[a][i] = out[a][i][:LEAD_IN + 10]
+    return out
+
+
+def test_the_kept_trials_line_up_with_their_templates_whatever_the_base(capsys):
+    """Every base `train` merges into (the defaults, a player's set of the other handedness
+    mirrored, one of another sensor count), trials dropped: the new templates are the last ones,
+    one per kept trial in order, so the self check holds each one out and never stops."""
+    from pathlib import Path
+
+    from engine.recognition.templates import trim_rest
+    from game.training import base_templates, say_self_check
+
+    defaults = base_templates(Path("/nonexistent/templates.npz"))
+    lefty = Trainer(["straight_r", "hook_l"])
+    lefty.recorded = _recorded(lefty.actions, n=3, seed=1)
+    one_sensor = Trainer(["hook_r"])
+    one_sensor.recorded = {a: [t[:, :3] for t in ts] for a, ts in _recorded(["hook_r"], n=2, seed=2).items()}
+    for base, left_handed in [(defaults, False), (defaults, True), (lefty.templates(True, base=defaults), False),
+                              (one_sensor.templates(False, base=None), False)]:
+        tr = Trainer(["straight_r", "hook_r"])
+        tr.recorded = _recorded(tr.actions, spoil=(1, 3))
+        templates = tr.templates(left_handed, base=base)
+        assert tr.dropped == {"straight_r": (2, 5), "hook_r": (2, 5)}
+        flat = [(a, t) for a, ts in tr.kept.items() for t in ts]
+        assert templates.actions[-len(flat):] == [a for a, _ in flat]
+        assert all(np.array_equal(trim_rest(t)[0], s) for (_, t), s in zip(flat, templates.signals[-len(flat):], strict=True))
+        assert say_self_check(tr, templates) == "6 of 6 trials recognized without their own template"
+    assert "no self check" not in capsys.readouterr().err
+
+
+def test_the_self_check_runs_with_the_settings_play_would_use(tmp_path, monkeypatch, capsys):
+    from engine.recognition import Templates, self_check
+    from game.training import say_self_check
+
+    seen = []
+    monkeypatch.setattr(self_check, "leave_one_out", lambda t, first, trials, settings: seen.append(settings) or self_check.SelfCheck())
+    monkeypatch.setenv("XDG_CONFIG_HOME", str(tmp_path))
+    trials = _recorded(["straight_r"], n=2)
+    templates = Templates.from_trials(trials)
+    templates.recognizer = {"main": 4, "noise_g": 0.5}
+    (tmp_path / "quickjab").mkdir()
+    (tmp_path / "quickjab" / "config.toml").write_text("[recognizer]\nnoise_g = 0.2\n")
+    say_self_check(SimpleNamespace(kept=trials), templates)
+    (tmp_path / "quickjab" / "config.toml").write_text("not toml [")
+    say_self_check(SimpleNamespace(kept=trials), templates)
+    assert seen == [{"main": 4, "noise_g": 0.2}, {"main": 4, "noise_g": 0.5}]  # the file's over the saved; a bad file: the saved
+
+
+def test_a_self_check_that_cannot_run_does_not_fail_the_saved_training(capsys):
+    from engine.recognition import Templates
+    from game.training import say_self_check
+
+    trials = _recorded(["straight_r", "hook_r"], n=2)
+    templates = Templates.from_trials(trials)
+    assert say_self_check(SimpleNamespace(kept={"hook_r": trials["hook_r"]}), templates.mirrored()) == ""
+    assert "quickjab train: no self check (template 2 is " in capsys.readouterr().err
