@@ -193,30 +193,65 @@ def _moves(base, left_handed: bool) -> dict[str, list[np.ndarray]]:
     return out
 
 
-def say_self_check(trainer: Trainer, templates) -> str:
-    """How well the moves trained now tell each other apart, on the console: each kept trial
-    through the game's recognizer without its own template (engine/recognition/self_check.py),
-    and what to do when some are taken for others. Returns the figure in short, for the screen."""
-    from engine.recognition.self_check import leave_one_out, said
-    from game.user_config import read_config
+class SelfCheckRun:
+    """How well the moves trained now tell each other apart: each kept trial through the game's
+    recognizer without its own template (engine/recognition/self_check.py), a trial a `step()`
+    so that the training window keeps answering (the whole check blocked it 1-5 s); `finish()`
+    does the rest at once. Then the console says the figure and the moves taken for others, and
+    `line` is the figure in short, for the screen."""
 
-    try:  # the settings `play` runs with: the config file's [recognizer] table over the saved ones
-        settings = {**templates.recognizer, **read_config().get("recognizer", {})}
-    except InputError:  # a bad file: `play` says so; the check goes on with the saved settings
-        settings = dict(templates.recognizer)
-    new = sum(len(ts) for ts in trainer.kept.values())  # merge_templates puts them last
-    try:
-        check = leave_one_out(templates, len(templates) - new, trainer.kept, settings)
-    except ValueError as exc:  # the templates are saved already: a check that cannot run is no failure
-        print(f"quickjab train: no self check ({exc})", file=sys.stderr)
-        return ""
-    for line in said(check):
-        print(f"quickjab train: {line}", file=sys.stderr)
-    confused = sorted({a for a, _ in check.taken_for} | {t for _, t in check.taken_for if t})
-    if check.trials and check.right < SELF_CHECK_GOOD * check.trials:
-        print(f"quickjab train: throw these more differently, or train them again: quickjab train --actions "
-              f"{','.join(confused)}", file=sys.stderr)
-    return f"{check.right} of {check.trials} trials recognized without their own template" if check.trials else ""
+    def __init__(self, trainer: Trainer, templates) -> None:
+        from engine.recognition.self_check import SelfCheck, leave_one_out_steps
+        from game.user_config import read_config
+
+        try:  # the settings `play` runs with: the config file's [recognizer] table over the saved ones
+            settings = {**templates.recognizer, **read_config().get("recognizer", {})}
+        except InputError:  # a bad file: `play` says so; the check goes on with the saved settings
+            settings = dict(templates.recognizer)
+        new = sum(len(ts) for ts in trainer.kept.values())  # merge_templates puts them last
+        self.steps = leave_one_out_steps(templates, len(templates) - new, trainer.kept, settings)
+        self.check, self.total, self.done_trials, self.line = SelfCheck(), new, 0, ""
+        self.done = False
+
+    def step(self) -> None:
+        """One held-out trial; the last says what was found."""
+        if self.done:
+            return
+        try:
+            self.check = next(self.steps)
+            self.done_trials += 1
+            self.line = f"checking your moves against each other: {self.done_trials} of {self.total}"
+        except StopIteration:
+            self._say()
+        except (InputError, ValueError) as exc:  # saved already: a check that cannot run is no failure
+            self._say(f"no self check ({exc})")
+
+    def finish(self) -> str:
+        while not self.done:
+            self.step()
+        return self.line
+
+    def _say(self, failed: str = "") -> None:
+        from engine.recognition.self_check import said
+
+        self.done, check = True, self.check
+        self.line = ""
+        if failed:
+            print(f"quickjab train: {failed}", file=sys.stderr)
+            return
+        for line in said(check):
+            print(f"quickjab train: {line}", file=sys.stderr)
+        confused = sorted({a for a, _ in check.taken_for} | {t for _, t in check.taken_for if t})
+        if check.trials and check.right < SELF_CHECK_GOOD * check.trials:
+            print(f"quickjab train: throw these more differently, or train them again: quickjab train --actions "
+                  f"{','.join(confused)}", file=sys.stderr)
+        if check.trials:
+            self.line = f"{check.right} of {check.trials} trials recognized without their own template"
+
+
+def say_self_check(trainer: Trainer, templates) -> str:
+    """The whole check at once (SelfCheckRun); the figure in short."""
+    return SelfCheckRun(trainer, templates).finish()
 
 
 def merge_templates(base, new, left_handed: bool = False):
@@ -540,6 +575,7 @@ class _TrainingStages:
         self.frame = None
         self.lost_steps = 0  # steps since the source was last connected
         self.had_all = False  # the source has sent every sensor the trials read (once connected)
+        self.checking: SelfCheckRun | None = None  # the saved moves checked against each other
         self.give_up_after: int | None = None  # headless: stop when lost this long (no one to wait for it)
         self.stopped_why = ""  # why the walk stopped before its end (the source ended, or never came back)
 
@@ -572,6 +608,14 @@ class _TrainingStages:
             self.perform()
         if trainer.done and not was_done:
             self.save()
+        elif self.checking is not None and not self.checking.done:  # a held-out trial a step
+            self.checking.step()
+            self.screen_view.self_check = self.checking.line
+
+    def walk_over(self) -> bool:
+        """Every trial recorded, the moves saved and checked (a headless run stops here, so its
+        screenshot shows the figure)."""
+        return self.trainer.done and self.checking is not None and self.checking.done
 
     def _source_live(self) -> bool:
         """Whether the source delivers now; a source that ended (a replay played out), or that a
@@ -609,7 +653,7 @@ class _TrainingStages:
             print(f"quickjab train: {action}: dropped {n} of {of} trials (cut off, unlike the others, or like another move)",
                   file=sys.stderr)
         print(f"quickjab train: saved {len(templates)} templates to {output}", file=sys.stderr)
-        self.screen_view.self_check = say_self_check(trainer, templates)
+        self.checking = SelfCheckRun(trainer, templates)  # over the next steps (train)
 
     def render(self, alpha: float) -> None:
         import pygame
@@ -660,7 +704,7 @@ def run(args: argparse.Namespace) -> int:
     loop.add_stage("train", stages.train, 1.0)
     loop.set_render(stages.render, 8.0)
     try:
-        loop.run(frames=args.frames, until=lambda: trainer.done and args.frames is None and args.headless)
+        loop.run(frames=args.frames, until=lambda: stages.walk_over() and args.frames is None and args.headless)
     finally:
         try:
             if args.screenshot:
@@ -672,6 +716,8 @@ def run(args: argparse.Namespace) -> int:
     if stages.stopped_why:
         n = sum(len(v) for v in trainer.recorded.values())
         raise InputError(f"{source.url}: {stages.stopped_why} after {n} trial{'' if n == 1 else 's'}; nothing saved")
+    if stages.checking is not None:
+        stages.checking.finish()  # closed before the check was through: the rest at once
     if not trainer.done:
         print(f"quickjab train: stopped after {sum(len(v) for v in trainer.recorded.values())} trials; nothing saved", file=sys.stderr)
     return 0

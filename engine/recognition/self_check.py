@@ -12,7 +12,7 @@ no trial's answer: its mistakes are moves taken for others, not rejections."""
 from __future__ import annotations
 
 from collections import Counter
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -67,6 +67,16 @@ def leave_one_out(templates: Templates, first: int, trials: Mapping[str, Sequenc
     one template per trial from index `first` of `templates`, as `Templates.from_trials` with the
     "trials" method makes them) through a recognizer of `settings` built without its template."""
     out = SelfCheck()
+    for out in leave_one_out_steps(templates, first, trials, settings):  # noqa: B007 - the last is the whole
+        pass
+    return out
+
+
+def leave_one_out_steps(templates: Templates, first: int, trials: Mapping[str, Sequence[np.ndarray]],
+                        settings: Mapping[str, object] | None = None) -> Iterator[SelfCheck]:
+    """`leave_one_out` a trial at a time: the check so far after each (a game loop spreads the
+    work over its steps, a trial a step, and its window keeps answering)."""
+    out = SelfCheck()
     k = first
     for action, items in trials.items():
         for trial in items:
@@ -82,7 +92,7 @@ def leave_one_out(templates: Templates, first: int, trials: Mapping[str, Sequenc
                 else:
                     out.taken_for[(action, taken)] += 1
             k += 1
-    return out
+            yield out
 
 
 def said(check: SelfCheck) -> list[str]:

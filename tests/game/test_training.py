@@ -202,7 +202,7 @@ def test_the_self_check_runs_with_the_settings_play_would_use(tmp_path, monkeypa
     from game.training import say_self_check
 
     seen = []
-    monkeypatch.setattr(self_check, "leave_one_out", lambda t, first, trials, settings: seen.append(settings) or self_check.SelfCheck())
+    monkeypatch.setattr(self_check, "leave_one_out_steps", lambda t, first, trials, settings: iter(seen.append(settings) or ()))
     monkeypatch.setenv("XDG_CONFIG_HOME", str(tmp_path))
     trials = _recorded(["straight_r"], n=2)
     templates = Templates.from_trials(trials)
@@ -223,3 +223,19 @@ def test_a_self_check_that_cannot_run_does_not_fail_the_saved_training(capsys):
     templates = Templates.from_trials(trials)
     assert say_self_check(SimpleNamespace(kept={"hook_r": trials["hook_r"]}), templates.mirrored()) == ""
     assert "quickjab train: no self check (template 2 is " in capsys.readouterr().err
+
+
+def test_the_self_check_takes_a_trial_a_step_so_the_window_keeps_answering(capsys):
+    from engine.recognition import Templates
+    from game.training import SelfCheckRun
+
+    trials = _recorded(["straight_r", "hook_r"], n=3)
+    run = SelfCheckRun(SimpleNamespace(kept=trials), Templates.from_trials(trials))
+    lines = []
+    while not run.done:
+        run.step()
+        lines.append(run.line)
+    assert lines[:6] == [f"checking your moves against each other: {k} of 6" for k in range(1, 7)]
+    assert len(lines) == 7 and lines[-1].endswith("of 6 trials recognized without their own template")
+    assert "each new trial against the rest" in capsys.readouterr().err  # said once, at the end
+    assert run.finish() == lines[-1]
