@@ -44,28 +44,27 @@ def test_record_from_emulated_wiimote(tmp_path):
     assert np.allclose(rec.accel[:, 1], [-0.3, 0.25, 0.9], atol=1 / 200 + 1e-4)
 
 
-def test_record_says_when_the_nunchuk_is_out_and_back(tmp_path):
-    # the left hand's columns lie still at 1 g meanwhile: the console says why
+def record_still_hands(tmp_path, params: str, seconds: str) -> list[str]:
+    """`quickjab record` from the emulated remote replaying still hands with `params`; what it
+    said about its source on the console, in order."""
     t = np.arange(0, 3, 1 / 60)
     src = tmp_path / "in.csv"
     write_recording(src, Recording(t, np.tile([0.0, 0.0, 1.0], (len(t), 2, 1))))
-    url = f"wiimote-emu://{src}?nunchuk_out_at=0.3&nunchuk_in_at=0.7"
-    r = quickjab("record", "--source", url, "-o", str(tmp_path / "out.csv"), "--seconds", "1.2")
+    url = f"wiimote-emu://{src}?{params}"
+    r = quickjab("record", "--source", url, "-o", str(tmp_path / "out.csv"), "--seconds", seconds)
     assert r.returncode == 0, r.stderr
-    said = [line for line in r.stderr.splitlines() if line.startswith(f"source {url}: ")]
-    assert [line.split(": ", 1)[1] for line in said][-2:] == ["no Nunchuk: plug it in for left-hand moves",
-                                                              "nothing missing now"], said
+    return [line.split(": ", 1)[1] for line in r.stderr.splitlines() if line.startswith(f"source {url}: ")]
+
+
+def test_record_says_when_the_nunchuk_is_out_and_back(tmp_path):
+    # the left hand's columns lie still meanwhile: the console says why
+    said = record_still_hands(tmp_path, "nunchuk_out_at=0.3&nunchuk_in_at=0.7", "1.2")
+    assert said[-2:] == ["no Nunchuk: plug it in for left-hand moves", "nothing missing now"], said
 
 
 def test_record_does_not_say_the_nunchuk_is_back_when_the_remote_goes(tmp_path):
     # the remote lost with its Nunchuk out: "nothing missing now" came with the disconnection
-    t = np.arange(0, 3, 1 / 60)
-    src = tmp_path / "in.csv"
-    write_recording(src, Recording(t, np.tile([0.0, 0.0, 1.0], (len(t), 2, 1))))
-    url = f"wiimote-emu://{src}?nunchuk=0&unplug_at=0.5&replug_at=1"
-    r = quickjab("record", "--source", url, "-o", str(tmp_path / "out.csv"), "--seconds", "2")
-    assert r.returncode == 0, r.stderr
-    said = [line.split(": ", 1)[1] for line in r.stderr.splitlines() if line.startswith(f"source {url}: ")]
+    said = record_still_hands(tmp_path, "nunchuk=0&unplug_at=0.5&replug_at=1", "2")
     assert "disconnected" in said and "connected" in said[said.index("disconnected"):], said
     assert said.count("no Nunchuk: plug it in for left-hand moves") == 1 and "nothing missing now" not in said, said
 
