@@ -249,11 +249,6 @@ class SelfCheckRun:
             self.line = f"{check.right} of {check.trials} trials recognized without their own template"
 
 
-def say_self_check(trainer: Trainer, templates) -> str:
-    """The whole check at once (SelfCheckRun); the figure in short."""
-    return SelfCheckRun(trainer, templates).finish()
-
-
 def merge_templates(base, new, left_handed: bool = False):
     """`base`'s templates for the actions `new` does not have, then all of `new`'s. A base of
     the other handedness is mirrored first (`_oriented`)."""
@@ -294,7 +289,7 @@ class TrainingScreen:
         self.anim_frame = 0.0
         self.saved_to: str = ""
         self.missing = ""  # a part the source misses (Source.missing): the trials wait for it
-        self.self_check = ""  # how well the new moves told each other apart (say_self_check)
+        self.self_check = ""  # how well the new moves told each other apart (SelfCheckRun)
         # tests: a list to collect every text drawn (text, rectangle, panel: "stage", "list", "plot")
         self.layout: list | None = None
         self.panels: dict = {}

@@ -130,12 +130,12 @@ def test_moves_taken_for_each_other_are_named_for_training_again(capsys):
     from types import SimpleNamespace
 
     from engine.recognition import Templates
-    from game.training import say_self_check
+    from game.training import SelfCheckRun
     from tests.engine.recognition.test_self_check import trials_of
 
     trials = trials_of(["straight_r", "hook_r"])
     trials["hook_r"] = [t + 0.01 for t in trials["straight_r"]]  # thrown as the straights
-    say_self_check(SimpleNamespace(kept=trials), Templates.from_trials(trials))
+    SelfCheckRun(SimpleNamespace(kept=trials), Templates.from_trials(trials)).finish()
     err = capsys.readouterr().err.splitlines()
     assert err[-1] == "quickjab train: throw these more differently, or train them again: quickjab train --actions hook_r,straight_r", err
 
@@ -177,7 +177,7 @@ def test_the_kept_trials_line_up_with_their_templates_whatever_the_base(capsys):
     from pathlib import Path
 
     from engine.recognition.templates import trim_rest
-    from game.training import base_templates, say_self_check
+    from game.training import SelfCheckRun, base_templates
 
     defaults = base_templates(Path("/nonexistent/templates.npz"))
     lefty = Trainer(["straight_r", "hook_l"])
@@ -193,13 +193,13 @@ def test_the_kept_trials_line_up_with_their_templates_whatever_the_base(capsys):
         flat = [(a, t) for a, ts in tr.kept.items() for t in ts]
         assert templates.actions[-len(flat):] == [a for a, _ in flat]
         assert all(np.array_equal(trim_rest(t)[0], s) for (_, t), s in zip(flat, templates.signals[-len(flat):], strict=True))
-        assert say_self_check(tr, templates) == "6 of 6 trials recognized without their own template"
+        assert SelfCheckRun(tr, templates).finish() == "6 of 6 trials recognized without their own template"
     assert "no self check" not in capsys.readouterr().err
 
 
 def test_the_self_check_runs_with_the_settings_play_would_use(tmp_path, monkeypatch, capsys):
     from engine.recognition import Templates, self_check
-    from game.training import say_self_check
+    from game.training import SelfCheckRun
 
     seen = []
     monkeypatch.setattr(self_check, "leave_one_out_steps", lambda t, first, trials, settings: iter(seen.append(settings) or ()))
@@ -209,19 +209,19 @@ def test_the_self_check_runs_with_the_settings_play_would_use(tmp_path, monkeypa
     templates.recognizer = {"main": 4, "noise_g": 0.5}
     (tmp_path / "quickjab").mkdir()
     (tmp_path / "quickjab" / "config.toml").write_text("[recognizer]\nnoise_g = 0.2\n")
-    say_self_check(SimpleNamespace(kept=trials), templates)
+    SelfCheckRun(SimpleNamespace(kept=trials), templates).finish()
     (tmp_path / "quickjab" / "config.toml").write_text("not toml [")
-    say_self_check(SimpleNamespace(kept=trials), templates)
+    SelfCheckRun(SimpleNamespace(kept=trials), templates).finish()
     assert seen == [{"main": 4, "noise_g": 0.2}, {"main": 4, "noise_g": 0.5}]  # the file's over the saved; a bad file: the saved
 
 
 def test_a_self_check_that_cannot_run_does_not_fail_the_saved_training(capsys):
     from engine.recognition import Templates
-    from game.training import say_self_check
+    from game.training import SelfCheckRun
 
     trials = _recorded(["straight_r", "hook_r"], n=2)
     templates = Templates.from_trials(trials)
-    assert say_self_check(SimpleNamespace(kept={"hook_r": trials["hook_r"]}), templates.mirrored()) == ""
+    assert SelfCheckRun(SimpleNamespace(kept={"hook_r": trials["hook_r"]}), templates.mirrored()).finish() == ""
     assert "quickjab train: no self check (template 2 is " in capsys.readouterr().err
 
 

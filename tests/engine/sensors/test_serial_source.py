@@ -30,6 +30,17 @@ def samples(n, start_seq=1, t0=0):
                     for i in range(n))
 
 
+def poll_until(src, n: int) -> list:
+    """Poll `src` every 10 ms until `n` samples came (or half a second passed); the samples."""
+    got = []
+    for _ in range(50):
+        got += src.poll()
+        if len(got) >= n:
+            break
+        time.sleep(0.01)
+    return got
+
+
 def test_loop_url_gives_samples_in_g():
     src = open_source("serial://loop://")
     assert isinstance(src, SerialSource) and src.state is SourceState.CONNECTED
@@ -102,12 +113,7 @@ def test_pty_real_serial_and_hangup():
         assert src.state is SourceState.CONNECTED
         assert os.read(master, 16) == protocol.HELLO_REQUEST  # asked for a HELLO on open
         os.write(master, b"\x00garbage" + HELLO2 + samples(50))
-        got = []
-        for _ in range(50):
-            got += src.poll()
-            if len(got) == 50:
-                break
-            time.sleep(0.01)
+        got = poll_until(src, 50)
         assert len(got) == 50 and src.stats["lost"] == 0
         os.close(master)
         os.close(slave)
@@ -205,12 +211,7 @@ def test_an_imu_mounted_another_way_reads_on_the_games_axes():
     try:
         assert os.read(master, 16) == protocol.HELLO_REQUEST
         os.write(master, HELLO2 + samples(5))
-        got = []
-        for _ in range(50):
-            got += src.poll()
-            if len(got) == 5:
-                break
-            time.sleep(0.01)
+        got = poll_until(src, 5)
         assert len(got) == 5
         # the IMU read (0, 0, 1) and (0.5, -1, 0): on the game's axes (-y, z, x)
         np.testing.assert_allclose(got[0].accel, [[0, 1, 0], [1, 0, 0.5]])
