@@ -425,7 +425,8 @@ class TrainingScreen:
             pygame.draw.lines(surf, TRACE_COLOURS[d // 3][d % 3], False, np.stack([xs, ys], axis=1).tolist(), 2)
         # the legend in each hand's colour: its three axes are shades of it (x light, z dark)
         x = rect.left + 6
-        for hand, name in enumerate(("right hand x y z", "left hand x y z")):  # a Wiimote and Nunchuk, or IMUs
+        hands = ("right hand x y z", "left hand x y z")[: max(1, data.shape[1] // 3)]  # a one-hand source: one
+        for hand, name in enumerate(hands):  # a Wiimote and Nunchuk, or IMUs
             img = self.text.render(name, legend_px, TRACE_COLOURS[hand][1])
             self._put(surf, img, img.get_rect(topleft=(x, rect.top + 4)), name, "plot")
             x += img.get_width() + legend_px
@@ -570,6 +571,7 @@ class _TrainingStages:
         self.frame = None
         self.lost_steps = 0  # steps since the source was last connected
         self.had_all = False  # the source has sent every sensor the trials read (once connected)
+        self.sized = False  # the trials' width set from the source's sensors (at its first connection)
         self.checking: SelfCheckRun | None = None  # the saved moves checked against each other
         self.give_up_after: int | None = None  # headless: stop when lost this long (no one to wait for it)
         self.stopped_why = ""  # why the walk stopped before its end (the source ended, or never came back)
@@ -587,8 +589,24 @@ class _TrainingStages:
                 self.loop.stop()
             elif event.type == pygame.KEYDOWN and self.trainer.phase in (READY, RECORD):
                 self.perform()
-        self.resampler.push(self.source.poll())
+        samples = self.source.poll()
+        self._size_to_source()
+        self.resampler.push(samples)
         self.frame = self.resampler.frame_at(self.t0 + step * dt)
+
+    def _size_to_source(self) -> None:
+        """The trials take the width of the source as it first connects. A one-hand source (one
+        IMU on the bridge, a one-hand replay) was read as two sensors, the second held still, and
+        `play` refused the saved set with that source; now it trains one-hand moves `play` takes.
+        A source that later sends fewer sensors than that is waited for (`_source_live`)."""
+        source = self.source
+        if self.sized or source.state != SourceState.CONNECTED or source.sensors < 1:
+            return
+        self.sized = True
+        if 3 * source.sensors != self.resampler.dim:
+            from engine.frames import FrameResampler
+
+            self.resampler = FrameResampler(sensors=source.sensors)
 
     def train(self, step: int, dt: float) -> None:
         trainer = self.trainer

@@ -84,17 +84,42 @@ def test_the_training_screen_says_what_part_its_trials_wait_for():
     assert "plug it in for left-hand moves: the trial starts again when it is back" in said
 
 
-def test_a_one_hand_source_trains_as_before(tmp_path, monkeypatch, capsys):
-    """`train` reads two sensors; a one-hand source never sent the second, so it is not a board
-    that lost one (waited for, as a missing Nunchuk is): its trials are recorded as before."""
+def test_a_one_hand_source_trains_one_hand_moves_that_play_takes(tmp_path, monkeypatch, capsys):
+    """A one-hand source never sent a second sensor, so it is not a board that lost one (waited
+    for, as a missing Nunchuk is). Its trials are one sensor wide: they were recorded two wide,
+    the second hand held still, and `play` with the same source refused the saved set."""
     monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "xdg"))
+    from engine.recognition import Templates
     from game.userdata import user_templates_path
 
     rec = tmp_path / "one.csv"
     rec.write_text("t,rx,ry,rz\n" + "".join(f"{i / 60:.5f},0,{0.5 * (i % 90 > 60):.1f},1\n" for i in range(600)))
     assert main(["train", "--headless", "--source", f"replay://{rec}?loop=1", "--actions", "straight_r",
                  "--size", "320x180"]) == 0, capsys.readouterr().err
-    assert user_templates_path().exists()
+    saved = Templates.load(user_templates_path())
+    assert saved.dim == 3 and saved.action_names == ["straight_r"]
+    assert "only the moves trained now are kept" in capsys.readouterr().err  # the defaults read two
+    assert main(["play", "--headless", "--source", f"replay://{rec}", "--frames", "60", "--size", "320x180"]) == 0, \
+        capsys.readouterr().err
+
+
+def test_the_plot_names_only_the_hands_the_source_sends():
+    import pygame
+
+    from game.actions import load_library
+    from game.training import TrainingScreen
+
+    pygame.init()
+    said = {}
+    for frame in (REST[:3], REST):
+        screen = TrainingScreen(load_library(), Trainer(["straight_r"], trials=1), "replay://one.csv")
+        for _ in range(3):
+            screen.push_frame(frame)
+        screen.layout = []
+        screen.draw(pygame.Surface((960, 540)))
+        said[len(frame)] = {text for text, _, panel in screen.layout if panel == "plot"}
+    assert said[3] == {"right hand x y z"}
+    assert said[6] == {"right hand x y z", "left hand x y z"}
 
 
 def test_a_board_that_comes_back_with_a_sensor_fewer_is_waited_for():
