@@ -278,7 +278,8 @@ class Session(Ring):
         self.templates = load_templates(cfg.templates, cfg.left_handed)
         if source.sensors * 3 != self.templates.dim:
             raise InputError(f"{source.url}: the source has {source.sensors} sensor(s), the templates need "
-                             f"{self.templates.dim // 3} (a Wiimote + Nunchuk, or two IMUs)")
+                             f"{self.templates.dim // 3} (a Wiimote + Nunchuk, or two IMUs); train moves for this source: "
+                             f"quickjab train --source {source.url}")
         self.recognizer = DualBufferRecognizer.from_config(self.templates, layered(self.templates.recognizer, cfg.recognizer))
         self.resampler = FrameResampler(sensors=self.templates.dim // 3)
         # recognizer events and blows (step, attacker, target, blocked, damage), in order: the

@@ -154,7 +154,8 @@ class TwoPlayerSession(Session):
         t = load_templates(tmpl, cfg.left_handed and i == 0)
         if source.sensors * 3 != t.dim:
             raise InputError(f"{source.url}: the source has {source.sensors} sensor(s), player {i + 1}'s "
-                             f"templates need {t.dim // 3} (a Wiimote + Nunchuk, or two IMUs)")
+                             f"templates need {t.dim // 3} (a Wiimote + Nunchuk, or two IMUs); train moves for this source: "
+                             f"quickjab train --source {source.url} --profile NAME, then --profile{'2' if i else ''} NAME")
         rec = build_recognizer(t, cfg.recognizer)
         hud = HudState(source=SourceSnapshot(url=f"{NAMES[i]} {source.url}"), demo=cfg.demo,
                        main_size=int(rec.main) if rec.main != "auto" else 6, supp_size=rec.supplementary,

@@ -94,13 +94,15 @@ def test_a_one_hand_source_trains_one_hand_moves_that_play_takes(tmp_path, monke
 
     rec = tmp_path / "one.csv"
     rec.write_text("t,rx,ry,rz\n" + "".join(f"{i / 60:.5f},0,{0.5 * (i % 90 > 60):.1f},1\n" for i in range(600)))
+    play = ["play", "--headless", "--source", f"replay://{rec}", "--frames", "60", "--size", "320x180"]
+    assert main(play) == 2  # the default moves read two sensors
+    assert capsys.readouterr().err.strip().endswith(f"train moves for this source: quickjab train --source replay://{rec}")
     assert main(["train", "--headless", "--source", f"replay://{rec}?loop=1", "--actions", "straight_r",
                  "--size", "320x180"]) == 0, capsys.readouterr().err
     saved = Templates.load(user_templates_path())
     assert saved.dim == 3 and saved.action_names == ["straight_r"]
     assert "only the moves trained now are kept" in capsys.readouterr().err  # the defaults read two
-    assert main(["play", "--headless", "--source", f"replay://{rec}", "--frames", "60", "--size", "320x180"]) == 0, \
-        capsys.readouterr().err
+    assert main(play) == 0, capsys.readouterr().err
 
 
 def test_the_plot_names_only_the_hands_the_source_sends():

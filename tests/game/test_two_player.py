@@ -408,6 +408,18 @@ def test_two_player_bad_input_is_one_line_and_exit_2(capsys) -> None:
     assert "keys must be one of" in capsys.readouterr().err
 
 
+def test_a_one_hand_source_for_two_hand_moves_says_how_to_train_for_it(tmp_path, capsys) -> None:
+    from tools.cli import main
+
+    one = tmp_path / "one.csv"
+    one.write_text("t,rx,ry,rz\n" + "".join(f"{i / 60:.5f},0,0,1\n" for i in range(60)))
+    assert main(["play", "--players", "2", "--headless", "--frames", "1", "--source", "keyboard://",
+                 "--source2", f"replay://{one}"]) == 2
+    (err,) = capsys.readouterr().err.strip().splitlines()
+    assert "the source has 1 sensor(s), player 2's templates need 2" in err
+    assert err.endswith(f"quickjab train --source replay://{one} --profile NAME, then --profile2 NAME")
+
+
 def test_the_side_on_camera_keeps_player_one_on_the_left_from_every_side() -> None:
     from game.camera import SIDE_ON_HEADINGS, side_on_camera, side_on_heading
 
