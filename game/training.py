@@ -44,6 +44,8 @@ from game.launch import (
 if TYPE_CHECKING:  # pygame loads only when the screen opens (the CLI imports this module)
     import pygame
 
+    from engine.sample import Sample
+
 HZ = STEP_HZ
 TRIALS = 5
 SHOW_STEPS = 90  # the animation alone before the first trial of an action
@@ -571,7 +573,7 @@ class _TrainingStages:
         self.frame = None
         self.lost_steps = 0  # steps since the source was last connected
         self.had_all = False  # the source has sent every sensor the trials read (once connected)
-        self.sized = False  # the trials' width set from the source's sensors (at its first connection)
+        self.sized = False  # the trials' width set from the source's first sample
         self.checking: SelfCheckRun | None = None  # the saved moves checked against each other
         self.give_up_after: int | None = None  # headless: stop when lost this long (no one to wait for it)
         self.stopped_why = ""  # why the walk stopped before its end (the source ended, or never came back)
@@ -590,23 +592,24 @@ class _TrainingStages:
             elif event.type == pygame.KEYDOWN and self.trainer.phase in (READY, RECORD):
                 self.perform()
         samples = self.source.poll()
-        self._size_to_source()
+        if samples and not self.sized:
+            self._size_to(samples[0])
         self.resampler.push(samples)
         self.frame = self.resampler.frame_at(self.t0 + step * dt)
 
-    def _size_to_source(self) -> None:
-        """The trials take the width of the source as it first connects. A one-hand source (one
+    def _size_to(self, first: Sample) -> None:
+        """The trials take the width of the first sample the source sends. A one-hand source (one
         IMU on the bridge, a one-hand replay) was read as two sensors, the second held still, and
         `play` refused the saved set with that source; now it trains one-hand moves `play` takes.
-        A source that later sends fewer sensors than that is waited for (`_source_live`)."""
-        source = self.source
-        if self.sized or source.state != SourceState.CONNECTED or source.sensors < 1:
-            return
+        (A serial board's sensor count is only a guess until its HELLO, and its samples wait for
+        the HELLO.) A source that later sends fewer sensors than that is waited for
+        (`_source_live`)."""
         self.sized = True
-        if 3 * source.sensors != self.resampler.dim:
+        sensors = np.size(first.accel) // 3
+        if sensors >= 1 and 3 * sensors != self.resampler.dim:
             from engine.frames import FrameResampler
 
-            self.resampler = FrameResampler(sensors=source.sensors)
+            self.resampler = FrameResampler(sensors=sensors)
 
     def train(self, step: int, dt: float) -> None:
         trainer = self.trainer

@@ -105,6 +105,41 @@ def test_a_one_hand_source_trains_one_hand_moves_that_play_takes(tmp_path, monke
     assert main(play) == 0, capsys.readouterr().err
 
 
+def test_the_trials_take_the_width_of_the_first_samples_not_a_boards_guess():
+    """A serial board is connected once its port opens, its sensor count a guess (2) until its
+    HELLO; its samples wait for the HELLO, so the first of them says how many sensors it has."""
+    import pygame
+
+    from engine.clock import VirtualClock
+    from engine.frames import FrameResampler
+    from engine.loop import FixedStepLoop
+    from engine.sample import Sample
+    from engine.sensors.source import Source, SourceState
+    from game.actions import load_library
+    from game.training import TrainingScreen, _TrainingStages
+
+    class OneImuBoard(Source):
+        def __init__(self):
+            super().__init__(url="serial:///dev/ttyACM0", sensors=2, state=SourceState.CONNECTED)
+            self.batches = [[], [Sample(0.0, np.array([[0.0, 0.0, 1.0]]))], [Sample(0.01, np.array([[0.0, 1.0, 0.0]]))]]
+
+        def poll(self):
+            if self.batches and self.batches[0] and self.sensors == 2:
+                self.sensors = 1  # the HELLO came with the samples
+            return self.batches.pop(0) if self.batches else []
+
+    pygame.init()
+    board, trainer = OneImuBoard(), Trainer(["straight_r"], trials=1)
+    stages = _TrainingStages(FixedStepLoop(VirtualClock()), board, False, False, trainer,
+                             TrainingScreen(load_library(), trainer, board.url), FrameResampler(sensors=2), 0.0, None,
+                             False, {})
+    stages.input(0, 1 / 60)
+    assert stages.frame is None and stages.resampler.dim == 6  # nothing sent yet: nothing decided
+    stages.input(1, 1 / 60)
+    stages.input(2, 1 / 60)
+    assert stages.resampler.dim == 3 and stages.frame.tolist() == [0.0, 1.0, 0.0]
+
+
 def test_the_plot_names_only_the_hands_the_source_sends():
     import pygame
 
