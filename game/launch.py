@@ -145,14 +145,20 @@ def toggle_fullscreen() -> None:
     """F11: the window to fullscreen and back, where SDL's video driver can (pygame's own call
     raised "That operation is not supported" out of the game loop on the others: kmsdrm, a
     Raspberry Pi's console without a desktop, and the dummy and offscreen drivers); where it
-    cannot, one line on the console and the game goes on in its window."""
+    cannot, one line on the console (once for each driver: not one a press) and the game goes on
+    in its window."""
     import pygame
 
     try:
         pygame.display.toggle_fullscreen()
     except pygame.error as exc:
-        print(f"quickjab: F11: no fullscreen with SDL's {pygame.display.get_driver()!r} video driver ({exc})",
-              file=sys.stderr)
+        driver = pygame.display.get_driver()
+        if driver not in NO_FULLSCREEN_SAID:
+            NO_FULLSCREEN_SAID.add(driver)
+            print(f"quickjab: F11: no fullscreen with SDL's {driver!r} video driver ({exc})", file=sys.stderr)
+
+
+NO_FULLSCREEN_SAID: set[str] = set()  # the video drivers F11 has been said not to work with
 
 
 SLOW_SHARE = 0.1  # frames whose work passed their period: more than this share, the machine is slow
