@@ -276,7 +276,8 @@ class Hud(TextLayer):
         # short of the round clock (its battery after it): a long URL gives way in its middle
         clock = self.clock_box(surf.get_size(), u0)  # level with it on small windows
         room = (clock.left if y < clock.bottom else surf.get_width()) - int(left.left + 18 * u) - int((56 if st.source.battery is not None else 8) * u)
-        line, size = self.text.fit(st.source.line(), int(22 * u), room)
+        line = st.source.line()  # a long URL gives way, not the state after it
+        line, size = self.text.fit(line, int(22 * u), room, tail=len(line) - len(st.source.url))
         r = self.blit(surf, line, size, (left.left + 18 * u, y), DIM)
         if st.templates:
             line, size = self.text.fit(st.templates, int(18 * u), room)

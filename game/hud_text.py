@@ -50,12 +50,13 @@ class TextCache:
         """The width `render(text, size)` has (its shadow's 2 px included), without rendering it."""
         return self.font(max(self.floor, int(size))).size(text)[0] + 2
 
-    def fit(self, text: str, size: int, width: int, smallest: int = 0) -> tuple[str, int]:
+    def fit(self, text: str, size: int, width: int, smallest: int = 0, tail: int = 0) -> tuple[str, int]:
         """`text` at `size`, or smaller down to `smallest`, so it is at most `width` pixels wide
-        (with its shadow); still too wide, its middle gives way to "...". Returns (text, size).
+        (with its shadow); still too wide, its middle gives way to "...", sparing its last `tail`
+        characters while that fits (a source line's state after its URL). Returns (text, size).
         Measured, not rendered (the candidates used to fill the render cache: 30 surfaces for one
         long URL, made again after each clear), and the answer kept for the next frame."""
-        key = (text, size, width, smallest, self.floor)
+        key = (text, size, width, smallest, self.floor, tail)
         done = self._fits.get(key)
         if done is not None:
             return done
@@ -63,10 +64,13 @@ class TextCache:
         while size > smallest and self.width(text, size) > width:
             size -= 1
         if self.width(text, size) > width:
-            keep = len(text)
-            while keep > 2 and self.width(f"{text[:keep // 2]}...{text[len(text) - keep // 2:]}", size) > width:
+            head, end = (text[: len(text) - tail], text[len(text) - tail:]) if 0 < tail < len(text) else (text, "")
+            if end and self.width(f"{head[:1]}...{end}", size) > width:
+                head, end = text, ""  # not even the spared end fits: the whole line gives way
+            keep = len(head)
+            while keep > 2 and self.width(f"{head[:keep // 2]}...{head[len(head) - keep // 2:]}{end}", size) > width:
                 keep -= 2
-            text = f"{text[:keep // 2]}...{text[len(text) - keep // 2:]}"
+            text = f"{head[:keep // 2]}...{head[len(head) - keep // 2:]}{end}"
         if len(self._fits) > 64:  # window resizes leave old widths behind
             self._fits.clear()
         done = self._fits[key] = (text, max(self.floor, size))

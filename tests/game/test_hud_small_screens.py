@@ -273,3 +273,21 @@ def test_the_budget_overlay_stays_inside_a_window_narrow_for_its_height(size, sc
     assert window.contains(hud.panels["budget"]), (size, hud.panels["budget"])
     texts = [(text, rect) for text, rect, panel in hud.layout if panel == "budget"]
     assert texts and all(window.contains(rect) for _, rect in texts), [t for t in texts if not window.contains(t[1])][:3]
+
+
+@pytest.mark.parametrize("players", [1, 2])
+def test_a_long_urls_source_line_keeps_its_state_whole(players) -> None:
+    """At 800x450 a long URL's source line gave way in its middle, into its state ("...onnected,
+    no Nunchuk"): the URL gives way now, the state after it stays whole."""
+    pygame.init()
+    url = "wiimote://00:1F:32:AB:CD:EF?profile=a-rather-long-profile-name&seed=12345"
+    missing = "no Nunchuk: plug it in for left-hand moves"
+    if players == 1:
+        hud, st = Hud(), busy()
+    else:
+        hud, st = TwoPlayerHud(seat(2)), seat(1, names=("P1", "P2"))
+    st.source = SourceSnapshot(url=url, state="connected", battery=0.8, missing=missing)
+    hud.layout = []
+    hud.draw(pygame.Surface((800, 450)), st, budget())
+    (line,) = [text for text, _, _ in hud.layout if text.startswith("wiimote:")]
+    assert "..." in line and line.endswith("  connected, no Nunchuk"), line

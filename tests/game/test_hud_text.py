@@ -22,3 +22,18 @@ def test_fit_renders_nothing_into_the_cache_and_its_line_fits() -> None:
     assert cache.width(line, size) == cache.render(line, size).get_width()
     # a line that fits is kept whole, at its size
     assert cache.fit("keyboard://  connected", 19, 300) == ("keyboard://  connected", 19)
+
+
+def test_a_source_lines_state_stays_whole_while_its_url_gives_way() -> None:
+    """At 800x450 a long URL's line gave way in its middle, into its state ("...onnected, no
+    Nunchuk"); the HUD spares the state after the URL while it fits."""
+    pygame.init()
+    cache = TextCache()
+    cache.for_window(450)
+    state = "  connected, no Nunchuk"
+    line, size = cache.fit(LONG[: -len("  connected")] + state, 19, 300, tail=len(state))
+    assert "..." in line and line.endswith(state) and line.startswith("wiimote://"), line
+    assert cache.width(line, size) <= 300
+    # room for no more than the state: the whole line gives way as before
+    line, size = cache.fit("wiimote://x" + state, 19, cache.width(state, 19) // 2, tail=len(state))
+    assert "..." in line and not line.endswith(state) and line.startswith("w")
