@@ -70,6 +70,11 @@ class SourceSnapshot:
         Nunchuk": a long URL gives way in its middle, so the end stays)."""
         return f"{self.url}  {self.state}" + (f", {missing_in_short(self.missing)[0]}" if self.missing else "")
 
+    def line_tail(self) -> int:
+        """How many of `line()`'s last characters are its state: they stay whole while a long
+        URL gives way (TextCache.fit's `tail`)."""
+        return len(self.line()) - len(self.url)
+
     def plays_again(self) -> bool:
         """It ended and can play again (game.session.can_play_again, as the HUD sees it)."""
         return self.state == "ended" and self.rewinds
@@ -276,8 +281,7 @@ class Hud(TextLayer):
         # short of the round clock (its battery after it): a long URL gives way in its middle
         clock = self.clock_box(surf.get_size(), u0)  # level with it on small windows
         room = (clock.left if y < clock.bottom else surf.get_width()) - int(left.left + 18 * u) - int((56 if st.source.battery is not None else 8) * u)
-        line = st.source.line()  # a long URL gives way, not the state after it
-        line, size = self.text.fit(line, int(22 * u), room, tail=len(line) - len(st.source.url))
+        line, size = self.text.fit(st.source.line(), int(22 * u), room, tail=st.source.line_tail())
         r = self.blit(surf, line, size, (left.left + 18 * u, y), DIM)
         if st.templates:
             line, size = self.text.fit(st.templates, int(18 * u), room)

@@ -96,8 +96,7 @@ class TwoPlayerHud(Hud):
         # short of the round clock: a long URL gives way in its middle
         clock = self.clock_box(surf.get_size(), u0)  # level with it (small windows), its dot just clear of it
         room = int(x - 18 * u) - (clock.right if y < clock.bottom else 0)
-        line = st.source.line()  # a long URL gives way, not the state after it
-        line, size = self.text.fit(line, int(22 * u), room, tail=len(line) - len(st.source.url))
+        line, size = self.text.fit(st.source.line(), int(22 * u), room, tail=st.source.line_tail())
         r = self.blit(surf, line, size, (x, y), DIM, "topright")
         if st.templates:
             line, size = self.text.fit(st.templates, int(18 * u), room)
