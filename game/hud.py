@@ -213,8 +213,7 @@ class Hud(TextLayer):
         self.panel = "screen"
         self._health(surf, st, u)
         self._clock(surf, st, u)
-        self._source(surf, st, u)
-        self._source_banner(surf, st, u)
+        self._source_banner(surf, st, u, self._source(surf, st, u))
         self._recognition(surf, st, u)
         self._keys(surf, st, u)
         self._centre(surf, st, u)
@@ -273,7 +272,7 @@ class Hud(TextLayer):
         box.midtop = (size[0] // 2, int(12 * t))
         return box
 
-    def _source(self, surf: pygame.Surface, st: HudState, u: float) -> None:
+    def _source(self, surf: pygame.Surface, st: HudState, u: float) -> list[pygame.Rect]:
         left, _ = self.health_rects(surf.get_size())
         u0, u = u, text_scale(u)
         y = left.bottom + 32 * u
@@ -282,10 +281,10 @@ class Hud(TextLayer):
         clock = self.clock_box(surf.get_size(), u0)  # level with it on small windows
         room = (clock.left if y < clock.bottom else surf.get_width()) - int(left.left + 18 * u) - int((56 if st.source.battery is not None else 8) * u)
         line, size = self.text.fit(st.source.line(), int(22 * u), room, tail=st.source.line_tail())
-        r = self.blit(surf, line, size, (left.left + 18 * u, y), DIM)
+        lines = [r := self.blit(surf, line, size, (left.left + 18 * u, y), DIM)]
         if st.templates:
             line, size = self.text.fit(st.templates, int(18 * u), room)
-            self.blit(surf, line, size, (left.left + 18 * u, y + 22 * u), DIM)
+            lines.append(self.blit(surf, line, size, (left.left + 18 * u, y + 22 * u), DIM))
         if st.source.battery is not None:
             bx, by = r.right + 12 * u, y + 2 * u
             body = pygame.Rect(int(bx), int(by), int(34 * u), int(14 * u))
@@ -293,15 +292,15 @@ class Hud(TextLayer):
             pygame.draw.rect(surf, DIM, (body.right, body.top + body.height // 4, int(3 * u), body.height // 2))
             b = max(0.0, min(1.0, st.source.battery))
             pygame.draw.rect(surf, OK_COLOR if b > 0.25 else REJECT_COLOR, (body.left + 3, body.top + 3, int((body.width - 6) * b), body.height - 6))
+        return lines
 
-    def _source_banner(self, surf: pygame.Surface, st: HudState, u: float) -> None:
-        """One player: an amber strip under the clock when the game plays from the keyboard for
-        want of a Wiimote, or when the source misses a part (a Nunchuk that slipped out: the
-        remote streams on, so nothing else on screen would say why left-hand moves do nothing)."""
+    def _source_banner(self, surf: pygame.Surface, st: HudState, u: float, lines: list[pygame.Rect]) -> None:
+        """One player: an amber strip under the clock (clear of the source `lines`) when the game plays from the keyboard
+        for want of a Wiimote, or when the source misses a part (a Nunchuk that slipped out: nothing else says why)."""
         if st.keyboard_banner:
-            self.strip(surf, "No Wiimote found: playing from the keyboard (keys below)", "keyboard banner", text_scale(u))
+            self.strip(surf, "No Wiimote found: playing from the keyboard (keys below)", "keyboard banner", text_scale(u), lines)
         elif st.source.missing:
-            self.strip(surf, st.source.missing[0].upper() + st.source.missing[1:], "missing banner", text_scale(u))
+            self.strip(surf, st.source.missing[0].upper() + st.source.missing[1:], "missing banner", text_scale(u), lines)
 
     def _recognition(self, surf: pygame.Surface, st: HudState, u: float) -> None:
         _, h = surf.get_size()

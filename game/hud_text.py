@@ -4,6 +4,8 @@ notes, when a test asks, every text drawn, where, and in which panel."""
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import pygame
 
 from game.hud_style import MIN_TEXT_PX, SWITCH_COLOR, TEXT, min_text_px
@@ -130,13 +132,16 @@ class TextLayer:
         self.enter_panel("screen", None)
         return rect
 
-    def strip(self, surf: pygame.Surface, msg: str, name: str, u: float) -> None:
+    def strip(self, surf: pygame.Surface, msg: str, name: str, u: float, clear: Sequence[pygame.Rect] = ()) -> None:
         """A line on an amber strip under the round clock, its panel `name` (a notice the
-        player must not miss: no Wiimote found, a Nunchuk missing)."""
+        player must not miss: no Wiimote found, a Nunchuk missing); under `clear` (the source's
+        lines) where it would cover them (windows narrow for their height: 640x720, 800x600)."""
         w = surf.get_width()
         msg, size = self.text.fit(msg, int(24 * u), w - int(24 * u) - 2)  # a window narrow for its height
         img = self.text.render(msg, size, (20, 20, 20), shadow=False)
         box = img.get_rect(midtop=(w // 2, int(118 * u))).inflate(int(24 * u), int(10 * u))
+        if covered := [r.bottom for r in clear if box.colliderect(r)]:
+            box.top = max(covered) + int(4 * u)
         pygame.draw.rect(surf, SWITCH_COLOR, box, border_radius=int(6 * u))
         self.enter_panel(name, box)
         self.put(surf, img, img.get_rect(center=box.center), msg)

@@ -5,6 +5,8 @@ dummy driver: the fonts and rectangles the game really draws)."""
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pygame
 import pytest
@@ -291,3 +293,28 @@ def test_a_long_urls_source_line_keeps_its_state_whole(players) -> None:
     hud.draw(pygame.Surface((800, 450)), st, budget())
     (line,) = [text for text, _, _ in hud.layout if text.startswith("wiimote:")]
     assert "..." in line and line.endswith("  connected, no Nunchuk"), line
+
+
+@pytest.mark.parametrize("size", [(640, 720), (800, 600), (800, 1040), (640, 1080), (1280, 720), (1920, 1080)])
+@pytest.mark.parametrize("strip", ["keyboard banner", "missing banner"])
+def test_the_amber_strip_covers_no_text(size, strip) -> None:
+    """On windows narrow for their height the strip under the clock covered the templates line
+    ("templates: yours (13 moves)"): it goes under the source's lines there, and stays where it
+    was on the others."""
+    pygame.init()
+    st = busy(keyboard_banner=strip == "keyboard banner")
+    if strip == "missing banner":
+        st.source = SourceSnapshot(url="wiimote://", state="connected", battery=0.8,
+                                   missing="no Nunchuk: plug it in for left-hand moves")
+    hud = Hud()
+    hud.layout = []
+    hud.draw(pygame.Surface(size), st, budget())
+    box = hud.panels[strip]
+    assert [text for text, rect, panel in hud.layout if panel != strip and rect.colliderect(box)] == []
+    assert pygame.Rect((0, 0), size).contains(box)
+    st.templates = ""
+    st.source = dataclasses.replace(st.source, url="k://")
+    bare = Hud()
+    bare.draw(pygame.Surface(size), st, budget())  # nothing under the clock to clear: where the strip goes
+    if size[0] / size[1] >= 16 / 9:
+        assert box == bare.panels[strip]
