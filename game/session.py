@@ -276,7 +276,7 @@ class Session(Ring):
         from engine.recognition.config import layered
 
         self.templates = load_templates(cfg.templates, cfg.left_handed)
-        if source.sensors * 3 != self.templates.dim:
+        if source.sensors_known and source.sensors * 3 != self.templates.dim:  # else its HELLO will say (missing_part)
             raise InputError(f"{source.url}: the source has {source.sensors} sensor(s), the templates need "
                              f"{self.templates.dim // 3} (a Wiimote + Nunchuk, or two IMUs); train moves for this source: "
                              f"quickjab train --source {source.url}")

@@ -152,7 +152,7 @@ class TwoPlayerSession(Session):
         player 2 plays right-handed), recognizer, resampler, HUD panel, pilot."""
         cfg = self.config
         t = load_templates(tmpl, cfg.left_handed and i == 0)
-        if source.sensors * 3 != t.dim:
+        if source.sensors_known and source.sensors * 3 != t.dim:
             raise InputError(f"{source.url}: the source has {source.sensors} sensor(s), player {i + 1}'s "
                              f"templates need {t.dim // 3} (a Wiimote + Nunchuk, or two IMUs); train moves for this source: "
                              f"quickjab train --source {source.url} --profile NAME, then --profile{'2' if i else ''} NAME")

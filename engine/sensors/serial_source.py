@@ -179,7 +179,7 @@ class SerialSource(Source):
         self._stalled = False
         self._next_hello_request = 0.0
         self._hello_on_port = False  # a HELLO came since the port was (re)opened
-        self._sensors_announced = False  # a HELLO named sensors: `sensors` is no longer a guess
+        self.sensors_known = False  # until a HELLO names its sensors, `sensors` is a guess
         self._polled = False
         self._open()
 
@@ -310,10 +310,10 @@ class SerialSource(Source):
         if hello.sensors:
             # a change from the sensors announced before; `sensors` is only a guess (2) until the
             # first HELLO that names some (a boot's HELLOs before its IMUs are found name none)
-            if self._sensors_announced and hello.sensors != self.sensors:
+            if self.sensors_known and hello.sensors != self.sensors:
                 self.count("sensor_changes")
             self.sensors = hello.sensors
-            self._sensors_announced = True
+            self.sensors_known = True
         self.hello = hello
         self._hello_on_port = True
         self.rate_hz = float(hello.rate_hz)

@@ -56,6 +56,7 @@ class Source:
 
     url: str = ""
     sensors: int = 2
+    sensors_known: bool = True  # False while `sensors` is a guess (a serial board before its first HELLO)
     clock: Clock = time.perf_counter
     state: SourceState = SourceState.CONNECTING
     battery: float | None = None  # 0..1 where the device reports it

@@ -7,6 +7,7 @@ import os
 import sys
 import threading
 import tty
+from collections.abc import Callable
 from pathlib import Path
 
 from firmware_bridge import protocol
@@ -75,3 +76,58 @@ def test_the_hud_says_the_board_came_back_with_one_sensor_fewer(graph_path):  # 
     finally:
         os.close(master)
         os.close(slave)
+
+
+def one_hand_templates(path: Path) -> Path:
+    import numpy as np
+
+    from engine.recognition import Templates
+
+    rng = np.random.default_rng(0)
+    trial = np.tile([0.0, 0.0, 1.0], (60, 1))
+    trial[20:40, 0] += 2.0 * np.sin(np.linspace(0, np.pi, 20))
+    path.parent.mkdir(parents=True, exist_ok=True)
+    Templates.from_trials({"straight_r": [trial + rng.normal(0, 0.01, trial.shape) for _ in range(3)]}).save(path)
+    return path
+
+
+def play_with_a_one_imu_board(args: Callable[[str], list[str]]) -> int:
+    """`quickjab` with `args(url)`, url a serial:// port with a one-IMU board on it."""
+    master, slave = os.openpty()
+    tty.setraw(slave)
+
+    def board():
+        os.read(master, 1)  # the host opened the port and asked for a HELLO
+        os.write(master, protocol.encode_hello(0, 0, 1, 200, 4096, 65500, 30, protocol.IMU_MPU6050, protocol.FLAG_SENSOR_A)
+                 + b"".join(protocol.encode_sample(i, 5000 * i, (0, 0, 4096)) for i in range(1, 40)))
+
+    th = threading.Thread(target=board, daemon=True)
+    th.start()
+    try:
+        return main(args(f"serial://{os.ttyname(slave)}"))
+    finally:
+        th.join(5)
+        os.close(master)
+        os.close(slave)
+
+
+def test_play_takes_a_one_imu_board_with_one_hand_templates(tmp_path, monkeypatch, capsys, graph_path):  # noqa: F811
+    """A serial board's sensor count is a guess (2) until its HELLO, and `play` checked the guess
+    against the templates at its start: a one-IMU board with the one-hand moves `train` made from
+    it was refused ("the source has 2 sensor(s), the templates need 1")."""
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "xdg"))
+    one_hand = one_hand_templates(tmp_path / "one.npz")
+    rc = play_with_a_one_imu_board(lambda url: ["play", "--headless", "--frames", "40", "--graph", graph_path,
+                                                "--no-sound", "--templates", str(one_hand), "--source", url])
+    assert rc == 0, capsys.readouterr().err
+
+
+def test_player_two_on_a_one_imu_board_plays_their_one_hand_moves(tmp_path, monkeypatch, capsys, graph_path):  # noqa: F811
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "xdg"))
+    from game.userdata import profile_templates_path
+
+    one_hand_templates(profile_templates_path("ana"))
+    rc = play_with_a_one_imu_board(lambda url: ["play", "--players", "2", "--headless", "--frames", "40", "--graph",
+                                                graph_path, "--no-sound", "--source", "keyboard://", "--profile2", "ana",
+                                                "--source2", url])
+    assert rc == 0, capsys.readouterr().err
