@@ -266,3 +266,23 @@ def test_events_are_written_in_time_order():
     for a, b in pairs:
         if a["ph"] == b["ph"] == "X" and a["ts"] == b["ts"] and a["name"] != "frame":
             assert a["args"]["depth"] <= b["args"]["depth"], (a, b)
+
+
+def test_a_span_outside_the_loops_stages_is_not_in_the_trace():
+    """`play` draws one frame before the loop starts (game/launch.py: `session.render(0.0)`); a
+    span in that draw, or in an `until` callback, was booked to frame 0 with times before it (a
+    negative ts) or between frames: an X event inside no frame event, and inside no stage."""
+    loop = FixedStepLoop(clock=VirtualClock(), auto_freeze_gc=False)
+
+    def render(alpha: float) -> None:
+        with loop.span("render.hud"):
+            sum(range(200))
+
+    loop.add_stage("sense", lambda step, dt: None, budget_ms=1.0)
+    loop.set_render(render, budget_ms=8.0)
+    render(0.0)  # the draw before the loop
+    loop.run(frames=5, until=lambda: render(0.0) or False)
+    doc = chrome_trace(loop.budget)
+    check_chrome_trace(doc)
+    hud = [e for e in doc["traceEvents"] if e["ph"] == "X" and e["name"] == "render.hud"]
+    assert len(hud) == 5 and all(e["ts"] >= 0 for e in hud)
