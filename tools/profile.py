@@ -157,7 +157,7 @@ def format_table(s: dict) -> str:
         f"{_whole_run(s, s['dropped_steps'], 'run_dropped_steps')}; "
         f"step budget {b:.1f} ms, frame period {s['frame_period_ms']:.1f} ms",
         "",
-        f"{'stage':<22}{'n':>7}{'p50 ms':>9}{'p95 ms':>9}{'p99 ms':>9}{'max ms':>9}{'p99/budget':>11}{'budget':>8}{'overruns':>9}",
+        f"{'stage':<22}{'n':>7}{'p50 ms':>9}{'p95 ms':>9}{'p99 ms':>9}{'max ms':>9}{f'p99/{b:.1f}ms':>11}{'budget':>8}{'overruns':>9}",
     ]
     order = sorted(s["stages"], key=lambda k: (k in (WAIT, UNACCOUNTED), k == WAIT, k.startswith("render"), s["stages"][k]["nested"]))
     for name in order:

@@ -259,3 +259,13 @@ def test_a_trace_of_the_last_frames_gives_the_whole_runs_dropped_steps_and_overr
     out = capsys.readouterr().out
     assert f"0 dropped steps ({loop.dropped_steps} in the whole run)" in out.splitlines()[0]
     assert f"0 frames over 16.7 ms ({loop.budget.frame_overruns} in the whole run)" in out
+
+
+def test_the_share_column_says_what_it_is_a_share_of(traced, capsys):
+    """The column of p99 as a share of the 16.7 ms step budget was headed `p99/budget`, beside
+    the `budget` column of the stage's own budget, and the F3 overlay's `p99 / budget` is the p99
+    against that stage budget: input's p99 of 0.50 ms over its 0.30 read "3.0%"."""
+    _, path = traced
+    assert main(["profile", str(path)]) == 0
+    header = next(line for line in capsys.readouterr().out.splitlines() if line.startswith("stage"))
+    assert "p99/16.7ms" in header and "p99/budget" not in header
