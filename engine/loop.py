@@ -149,8 +149,12 @@ class FixedStepLoop:
         allowed = min(due, self.max_steps)
         run = allowed if limit is None else min(allowed, limit)
         self._acc -= (due - (allowed - run)) * NS_PER_S
-        # what could not run, plus whatever the clamp cut off, is dropped, never carried
-        dropped = (due - allowed) + ((raw - clamped) * self.hz) // NS_PER_S
+        # what could not run, plus the whole steps the clamp cut off, is dropped, never carried;
+        # the cut-off's fraction of a step is owed like any other (it was lost: run + dropped fell
+        # short of the time passed by up to a step per hitch)
+        cut = (raw - clamped) * self.hz
+        dropped = (due - allowed) + cut // NS_PER_S
+        self._acc += cut % NS_PER_S
         self.dropped_steps += dropped
         self._in_stages = True
         try:
