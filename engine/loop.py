@@ -71,6 +71,7 @@ class FixedStepLoop:
         self._deadline_k = 0
         self._depth = 0
         self._span_step = 0  # the step of the stage running now: what its spans are booked to
+        self._in_stages = False  # a stage or the render is running: spans are timed
 
     # -- set-up ---------------------------------------------------------------------------
     def add_stage(self, name: str, fn: StageFn, budget_ms: float) -> None:
@@ -104,7 +105,12 @@ class FixedStepLoop:
 
     @contextmanager
     def span(self, name: str) -> Iterator[None]:
-        """Time a part of a stage; it nests inside the stage (or span) around it in the trace."""
+        """Time a part of a stage; it nests inside the stage (or span) around it in the trace.
+        Outside the loop's stages (a draw before `run`, an `until` callback) it times nothing: the
+        trace has no stage, nor frame, to put it in."""
+        if not self._in_stages:
+            yield
+            return
         start = time.perf_counter_ns()
         self._depth += 1
         try:
@@ -143,24 +149,32 @@ class FixedStepLoop:
         allowed = min(due, self.max_steps)
         run = allowed if limit is None else min(allowed, limit)
         self._acc -= (due - (allowed - run)) * NS_PER_S
-        # what could not run, plus whatever the clamp cut off, is dropped, never carried
-        dropped = (due - allowed) + ((raw - clamped) * self.hz) // NS_PER_S
+        # what could not run, plus the whole steps the clamp cut off, is dropped, never carried;
+        # the cut-off's fraction of a step is owed like any other (it was lost: run + dropped fell
+        # short of the time passed by up to a step per hitch)
+        cut = (raw - clamped) * self.hz
+        dropped = (due - allowed) + cut // NS_PER_S
+        self._acc += cut % NS_PER_S
         self.dropped_steps += dropped
-        for _ in range(run):
-            step, dt = self.step_index, self.dt
-            self._span_step = step
-            for sid, fn in self._stages:
+        self._in_stages = True
+        try:
+            for _ in range(run):
+                step, dt = self.step_index, self.dt
+                self._span_step = step
+                for sid, fn in self._stages:
+                    t0 = perf()
+                    fn(step, dt)
+                    budget.add_span(sid, step, t0, perf() - t0)
+                self.step_index += 1
+            self.alpha = min(self._acc, NS_PER_S) / NS_PER_S
+            if self._render is not None:
+                sid, fn = self._render
+                self._span_step = self.step_index - 1
                 t0 = perf()
-                fn(step, dt)
-                budget.add_span(sid, step, t0, perf() - t0)
-            self.step_index += 1
-        self.alpha = min(self._acc, NS_PER_S) / NS_PER_S
-        if self._render is not None:
-            sid, fn = self._render
-            self._span_step = self.step_index - 1
-            t0 = perf()
-            fn(self.alpha)
-            budget.add_span(sid, self.step_index - 1, t0, perf() - t0)  # the last step it drew
+                fn(self.alpha)
+                budget.add_span(sid, self.step_index - 1, t0, perf() - t0)  # the last step it drew
+        finally:
+            self._in_stages = False
         wait_start = perf()
         self._wait_next_deadline()
         end = perf()

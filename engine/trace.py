@@ -91,7 +91,11 @@ def _frame_events(budget: FrameBudget, frames: np.ndarray, spans: np.ndarray) ->
             },
         }
         events.append(frame_event)
-        for r in spans[bounds[j]: bounds[j + 1]]:
+        rows = spans[bounds[j]: bounds[j + 1]]
+        # in time order, the outer of two that start together first: a span is recorded when it
+        # ends, so the ring holds it before the stage around it (ts went back on the thread)
+        rows = rows[np.lexsort((budget.s_depth[rows], budget.s_start[rows]))]
+        for r in rows:
             stage = int(budget.s_stage[r])
             if stage == unaccounted_id:
                 frame_event["args"]["unaccounted_us"] = _us(int(budget.s_dur[r]))

@@ -242,6 +242,10 @@ def realtime(args: argparse.Namespace, size: tuple[int, int], low_power: bool) -
     else:
         s = build_session(seed=args.seed, low_power=low_power, size=size, templates=args.templates,
                           graph=args.graph, clock=RealClock())
+    # the draw `play` makes before its loop (game/launch.py): the first draw builds the ring's
+    # static layers and the HUD's fonts, which in the loop's first frame overran its period
+    # and, on a slow board, dropped steps that play does not drop
+    s.render(0.0)
     t0 = time.perf_counter()
     s.loop.run(steps=int(args.realtime_seconds * 60))
     b = s.loop.budget

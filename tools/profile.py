@@ -70,7 +70,7 @@ def profile_summary(trace: dict) -> dict:
         }
     return {
         "frames": len(frames),
-        "frames_total": _frames_total(other, len(frames)),
+        **_run_totals(other, len(frames)),
         "steps": int(sum(steps)),
         "dropped_steps": dropped,
         "frame_budget_ms": budget_ms,
@@ -91,6 +91,29 @@ def _frames_total(other: dict, held: int) -> int:
     if isinstance(total, int) and not isinstance(total, bool) and 0 <= total <= 10**12:
         return max(total, held)
     return held
+
+
+def _run_totals(other: dict, held: int) -> dict:
+    """The whole run's frames, dropped steps and frames over period (otherData), which the F3
+    overlay shows: more than the `held` frames' when the loop's ring kept only the last ones."""
+    return {"frames_total": _frames_total(other, held), "run_dropped_steps": _run_count(other, "dropped_steps"),
+            "run_frame_overruns": _run_count(other, "frame_overruns")}
+
+
+def _run_count(other: dict, key: str) -> int | None:
+    """otherData's count `key` for the whole run, or None when missing or not a count."""
+    n = other.get(key)
+    if isinstance(n, int) and not isinstance(n, bool) and 0 <= n <= 10**12:
+        return n
+    return None
+
+
+def _whole_run(s: dict, held: int, key: str) -> str:
+    """" (N in the whole run)" when the trace holds only the last frames and the run's count differs."""
+    n = s.get(key)
+    if s.get("frames_total", s["frames"]) <= s["frames"] or n is None or n == held:
+        return ""
+    return f" ({n} in the whole run)"
 
 
 def _by_time(xs: list[dict], frames: list[dict]) -> tuple[list[int], set[int]]:
@@ -130,10 +153,11 @@ def format_table(s: dict) -> str:
     total = s.get("frames_total", s["frames"])
     held = f" (the last of {total} run)" if total > s["frames"] else ""
     lines = [
-        f"{s['frames']} frames{held}, {s['steps']} steps, {s['dropped_steps']} dropped steps; "
+        f"{s['frames']} frames{held}, {s['steps']} steps, {s['dropped_steps']} dropped steps"
+        f"{_whole_run(s, s['dropped_steps'], 'run_dropped_steps')}; "
         f"step budget {b:.1f} ms, frame period {s['frame_period_ms']:.1f} ms",
         "",
-        f"{'stage':<22}{'n':>7}{'p50 ms':>9}{'p95 ms':>9}{'p99 ms':>9}{'max ms':>9}{'p99/budget':>11}{'budget':>8}{'overruns':>9}",
+        f"{'stage':<22}{'n':>7}{'p50 ms':>9}{'p95 ms':>9}{'p99 ms':>9}{'max ms':>9}{f'p99/{b:.1f}ms':>11}{'budget':>8}{'overruns':>9}",
     ]
     order = sorted(s["stages"], key=lambda k: (k in (WAIT, UNACCOUNTED), k == WAIT, k.startswith("render"), s["stages"][k]["nested"]))
     for name in order:
@@ -149,7 +173,7 @@ def format_table(s: dict) -> str:
     lines += [
         "",
         f"frame work (wall minus wait): p50 {w['p50']:.3f}  p95 {w['p95']:.3f}  p99 {w['p99']:.3f}  max {w['max']:.3f} ms; "
-        f"{s['frame_overruns']} frames over {s['frame_period_ms']:.1f} ms",
+        f"{s['frame_overruns']} frames over {s['frame_period_ms']:.1f} ms{_whole_run(s, s['frame_overruns'], 'run_frame_overruns')}",
         "steps per frame: " + ", ".join(f"{k}: {v}" for k, v in s["steps_per_frame"].items()),
     ]
     return "\n".join(lines)

@@ -251,3 +251,16 @@ def test_run_steps_is_exact_even_when_a_frame_owes_catch_up_steps():
     loop.run(steps=10)
     assert loop.step_index == 10 and seen == list(range(10))
     assert loop.dropped_steps == 0 and 0.0 <= loop.alpha <= 1.0
+
+
+@pytest.mark.parametrize("stall_ms", [260, 1010, 5_008.4])
+def test_a_stall_past_the_clamp_accounts_for_every_step_too(stall_ms):
+    """A hitch longer than the 250 ms clamp: the whole steps the clamp cut off were dropped but
+    the fraction of a step beyond them was neither run, dropped nor carried (a 260 ms hitch, 15.6
+    steps: 5 run, 10 dropped, 0.6 gone), so run + dropped no longer added up to the time passed."""
+    clock, loop, _ = stalling_loop(stall_ms, at_step=3)
+    for _ in range(8):
+        loop.run_frame()
+    assert loop.dropped_steps > 0
+    total = loop.step_index + loop.dropped_steps + loop.alpha
+    assert total == pytest.approx(clock.now_ns() / STEP_NS, abs=1e-6)

@@ -253,3 +253,36 @@ def test_a_dropped_steps_counter_that_is_a_count_is_read(tmp_path):
     path = tmp_path / "counter.json"
     path.write_text('{"traceEvents": [' + _FRAME + '}, ' + _COUNTER + ', "ts": 100, "args": {"dropped": 7}}]}')
     assert read_chrome_trace(path)["traceEvents"][1]["args"] == {"dropped": 7}
+
+
+def test_events_are_written_in_time_order():
+    """A span is recorded when it ends, so the ring holds it before the stage (or span) around
+    it: the trace listed sense.decode.crc, then sense.decode, then sense, ts going back on the
+    thread. Readers that stream events in file order want them in time order, the outer first."""
+    doc = chrome_trace(traced_loop(frames=12).budget)
+    timed = [e for e in doc["traceEvents"] if e["ph"] in ("X", "C")]
+    pairs = list(zip(timed, timed[1:], strict=False))
+    assert all(a["ts"] <= b["ts"] for a, b in pairs), [(a["name"], a["ts"], b["name"], b["ts"]) for a, b in pairs if a["ts"] > b["ts"]][:3]
+    for a, b in pairs:
+        if a["ph"] == b["ph"] == "X" and a["ts"] == b["ts"] and a["name"] != "frame":
+            assert a["args"]["depth"] <= b["args"]["depth"], (a, b)
+
+
+def test_a_span_outside_the_loops_stages_is_not_in_the_trace():
+    """`play` draws one frame before the loop starts (game/launch.py: `session.render(0.0)`); a
+    span in that draw, or in an `until` callback, was booked to frame 0 with times before it (a
+    negative ts) or between frames: an X event inside no frame event, and inside no stage."""
+    loop = FixedStepLoop(clock=VirtualClock(), auto_freeze_gc=False)
+
+    def render(alpha: float) -> None:
+        with loop.span("render.hud"):
+            sum(range(200))
+
+    loop.add_stage("sense", lambda step, dt: None, budget_ms=1.0)
+    loop.set_render(render, budget_ms=8.0)
+    render(0.0)  # the draw before the loop
+    loop.run(frames=5, until=lambda: render(0.0) or False)
+    doc = chrome_trace(loop.budget)
+    check_chrome_trace(doc)
+    hud = [e for e in doc["traceEvents"] if e["ph"] == "X" and e["name"] == "render.hud"]
+    assert len(hud) == 5 and all(e["ts"] >= 0 for e in hud)

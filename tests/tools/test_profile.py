@@ -232,3 +232,40 @@ def test_a_stage_as_long_as_its_frame_is_read_inside_it_whatever_the_order(tmp_p
         s = profile_summary(read_chrome_trace(path))
         assert (s["frames"], s["steps"], s["steps_per_frame"]) == (3, 3, {"1": 3})
         assert not s["stages"]["sim"]["nested"]
+
+
+def test_a_trace_of_the_last_frames_gives_the_whole_runs_dropped_steps_and_overruns_too(tmp_path, capsys):
+    """After a stall early in a long run the F3 overlay said "dropped 7" and `profile` of the
+    trace written at the end "0 dropped steps", the stall's frame having left the ring; the run's
+    totals are in otherData and now beside the held frames' figures."""
+    from engine.budget import FrameBudget
+
+    clock = VirtualClock()
+    loop = FixedStepLoop(clock=clock, auto_freeze_gc=False, budget=FrameBudget(capacity_frames=10))
+
+    def physics(step: int, dt: float) -> None:
+        if step == 3:
+            clock.stall(200_000_000)
+            time.sleep(0.02)  # over the frame's period too
+
+    loop.add_stage("physics", physics, budget_ms=1.0)
+    loop.run(frames=25)
+    path = tmp_path / "ring.json"
+    write_chrome_trace(loop.budget, path)
+    s = profile_summary(read_chrome_trace(path))
+    assert (s["dropped_steps"], s["run_dropped_steps"]) == (0, loop.dropped_steps) and loop.dropped_steps > 0
+    assert (s["frame_overruns"], s["run_frame_overruns"]) == (0, loop.budget.frame_overruns) and loop.budget.frame_overruns > 0
+    assert main(["profile", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert f"0 dropped steps ({loop.dropped_steps} in the whole run)" in out.splitlines()[0]
+    assert f"0 frames over 16.7 ms ({loop.budget.frame_overruns} in the whole run)" in out
+
+
+def test_the_share_column_says_what_it_is_a_share_of(traced, capsys):
+    """The column of p99 as a share of the 16.7 ms step budget was headed `p99/budget`, beside
+    the `budget` column of the stage's own budget, and the F3 overlay's `p99 / budget` is the p99
+    against that stage budget: input's p99 of 0.50 ms over its 0.30 read "3.0%"."""
+    _, path = traced
+    assert main(["profile", str(path)]) == 0
+    header = next(line for line in capsys.readouterr().out.splitlines() if line.startswith("stage"))
+    assert "p99/16.7ms" in header and "p99/budget" not in header
