@@ -155,6 +155,15 @@ def find_board(vid: int | None = None, pid: int | None = None) -> str | None:
     return None
 
 
+def describe(port_name: str | None, hello: protocol.Hello, axes: AxisMap | None) -> str:
+    """The source's description after `hello`. Made from every HELLO, not only a new boot's: a
+    boot's first HELLO may come before its IMUs are found (x0, kind unknown), and a later one of
+    the same boot may change rate_hz; `record` writes it into its file."""
+    kind = {1: "MPU-6050", 2: "LSM6DS3", 3: "simulated"}.get(hello.imu_kind, "IMU")
+    turned = f", axes {axes}" if axes is not None else ""
+    return f"serial bridge {port_name} ({kind} x{hello.sensors}, {hello.rate_hz} Hz{turned})"
+
+
 class SerialSource(Source):
     """Samples of shape (sensors, 3) in g from a protocol v1 device."""
 
@@ -323,9 +332,7 @@ class SerialSource(Source):
                 # t_us wraps within two sample periods: its wraps cannot be told apart, so the
                 # sample times are wrong (PROTOCOL.md, HELLO); the HELLO is valid and taken
                 self.count("narrow_clock")
-            kind = {1: "MPU-6050", 2: "LSM6DS3", 3: "simulated"}.get(hello.imu_kind, "IMU")
-            turned = f", axes {self.axes}" if self.axes is not None else ""
-            self.description = f"serial bridge {self.port_name} ({kind} x{hello.sensors}, {hello.rate_hz} Hz{turned})"
+        self.description = describe(self.port_name, hello, self.axes)  # every HELLO: see describe
         return True
 
     def _samples(self, frames: list[protocol.Frame], now: float) -> list[Sample]:

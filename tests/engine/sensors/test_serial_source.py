@@ -469,3 +469,16 @@ def test_auto_with_a_pid_but_no_vid_is_an_error_not_ignored():
     """`serial://auto?pid=0005` used to look for the known boards, silently ignoring the pid."""
     with pytest.raises(SourceError, match="pid"):
         open_source("serial://auto?pid=0005")
+
+
+def test_description_follows_a_boots_later_hello():
+    """A boot's first HELLO may come before its IMUs are found (flags 0, kind unknown); the
+    description `record` writes into its file must name what the later HELLO of the same boot
+    announces, not "IMU x0"."""
+    src = open_source("serial://loop://")
+    src.port.write(protocol.encode_hello(0, 0, 5, 200, 4096, 65500, 30, protocol.IMU_UNKNOWN, 0)
+                   + protocol.encode_hello(1, 10, 5, 100, 4096, 65500, 30, protocol.IMU_MPU6050, 3)
+                   + protocol.encode_sample(2, 20, (0, 0, 4096), (0, 0, 4096)))
+    assert len(src.poll()) == 1
+    assert "MPU-6050 x2, 100 Hz" in src.description, src.description
+
