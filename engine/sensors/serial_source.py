@@ -38,7 +38,7 @@ import serial
 from serial.tools import list_ports
 
 from engine.sensors.axes import AxisMap, parse_axes
-from engine.sensors.serial_accel import SampleAccel
+from engine.sensors.serial_accel import SampleAccel, sample_width
 from engine.sensors.source import (
     Clock,
     Sample,
@@ -164,6 +164,14 @@ def describe(port_name: str | None, hello: protocol.Hello, axes: AxisMap | None)
     return f"serial bridge {port_name} ({kind} x{hello.sensors}, {hello.rate_hz} Hz{turned})"
 
 
+def missing_sensor_a(hello: protocol.Hello | None) -> str:
+    """`Source.missing` for a board whose HELLO announces sensor B (the left hand, PROTOCOL.md)
+    alone: its samples keep two rows, the right hand's holding still."""
+    if hello is not None and hello.flags & protocol.FLAGS_SENSORS == protocol.FLAG_SENSOR_B:
+        return "no right-hand sensor (sensor A): the right hand holds still"
+    return ""
+
+
 class SerialSource(Source):
     """Samples of shape (sensors, 3) in g from a protocol v1 device."""
 
@@ -266,6 +274,9 @@ class SerialSource(Source):
                 pass
         self.port = None
 
+    def missing(self) -> str:
+        return missing_sensor_a(self.hello) if self.state is SourceState.CONNECTED else ""
+
     def close(self) -> None:
         self._drop_port()
         self.state = SourceState.DISCONNECTED
@@ -319,9 +330,9 @@ class SerialSource(Source):
         if hello.sensors:
             # a change from the sensors announced before; `sensors` is only a guess (2) until the
             # first HELLO that names some (a boot's HELLOs before its IMUs are found name none)
-            if self._sensors_announced and hello.sensors != self.sensors:
+            if self._sensors_announced and sample_width(hello.flags) != self.sensors:
                 self.count("sensor_changes")
-            self.sensors = hello.sensors
+            self.sensors = sample_width(hello.flags)  # B alone is still the left hand's row
             self._sensors_announced = True
         self.hello = hello
         self._hello_on_port = True
