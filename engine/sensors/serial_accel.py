@@ -15,6 +15,15 @@ from firmware_bridge import protocol
 INT16_MAX_ABS = 32768  # the largest |count| an int16 holds (-32768)
 
 
+def sample_width(flags: int) -> int:
+    """Rows of the samples for a HELLO announcing these sensors: one per sensor, except that
+    sensor B (the left hand, PROTOCOL.md) alone still takes the second row, the first (the right
+    hand) holding still."""
+    if flags & protocol.FLAGS_SENSORS == protocol.FLAG_SENSOR_B:
+        return 2
+    return protocol.sensor_count(flags)
+
+
 class SampleAccel:
     """Converts SAMPLE frames with the scales and layout of the device's HELLO; counts each
     frame missing an announced sensor through `count("sensor_missing")`, and each carrying one
@@ -65,24 +74,20 @@ class SampleAccel:
         raw = np.frombuffer(f.payload, dtype="<i2").reshape(-1, per)[:, :3] / hello.accel_lsb_per_g
         want = hello.flags & protocol.FLAGS_SENSORS
         have = f.flags & protocol.FLAGS_SENSORS
-        if have == want:  # (a HELLO that announced no sensor: the source drops its SAMPLEs)
-            out = raw
+        if have == want and raw.shape[0] == sensors:
+            out = raw  # (a HELLO that announced no sensor: the source drops its SAMPLEs)
         else:
             if want & ~have:
                 self.count("sensor_missing")
             if have & ~want:  # not on the board, says its HELLO: nowhere to put it
                 self.count("sensor_unannounced")
             out = self._last(sensors).copy()
-            slots = [s for s in (protocol.FLAG_SENSOR_A, protocol.FLAG_SENSOR_B) if want & s]
+            # raw holds the present sensors in order A then B; A is row 0, B the last row
             k = 0
-            for i, s in enumerate(slots):
+            for s, row in ((protocol.FLAG_SENSOR_A, 0), (protocol.FLAG_SENSOR_B, sensors - 1)):
                 if have & s:
-                    out[i] = raw[k]
+                    if want & s:
+                        out[row] = raw[k]
                     k += 1
-        if out.shape[0] != sensors:
-            base = self._last(sensors).copy()
-            k = min(out.shape[0], sensors)
-            base[:k] = out[:k]
-            out = base
         self.last_row = out
         return out

@@ -38,7 +38,7 @@ import serial
 from serial.tools import list_ports
 
 from engine.sensors.axes import AxisMap, parse_axes
-from engine.sensors.serial_accel import SampleAccel
+from engine.sensors.serial_accel import SampleAccel, sample_width
 from engine.sensors.source import (
     Clock,
     Sample,
@@ -155,6 +155,23 @@ def find_board(vid: int | None = None, pid: int | None = None) -> str | None:
     return None
 
 
+def describe(port_name: str | None, hello: protocol.Hello, axes: AxisMap | None) -> str:
+    """The source's description after `hello`. Made from every HELLO, not only a new boot's: a
+    boot's first HELLO may come before its IMUs are found (x0, kind unknown), and a later one of
+    the same boot may change rate_hz; `record` writes it into its file."""
+    kind = {1: "MPU-6050", 2: "LSM6DS3", 3: "simulated"}.get(hello.imu_kind, "IMU")
+    turned = f", axes {axes}" if axes is not None else ""
+    return f"serial bridge {port_name} ({kind} x{hello.sensors}, {hello.rate_hz} Hz{turned})"
+
+
+def missing_sensor_a(hello: protocol.Hello | None) -> str:
+    """`Source.missing` for a board whose HELLO announces sensor B (the left hand, PROTOCOL.md)
+    alone: its samples keep two rows, the right hand's holding still."""
+    if hello is not None and hello.flags & protocol.FLAGS_SENSORS == protocol.FLAG_SENSOR_B:
+        return "no right-hand sensor (sensor A): the right hand holds still"
+    return ""
+
+
 class SerialSource(Source):
     """Samples of shape (sensors, 3) in g from a protocol v1 device."""
 
@@ -257,6 +274,9 @@ class SerialSource(Source):
                 pass
         self.port = None
 
+    def missing(self) -> str:
+        return missing_sensor_a(self.hello) if self.state is SourceState.CONNECTED else ""
+
     def close(self) -> None:
         self._drop_port()
         self.state = SourceState.DISCONNECTED
@@ -310,9 +330,9 @@ class SerialSource(Source):
         if hello.sensors:
             # a change from the sensors announced before; `sensors` is only a guess (2) until the
             # first HELLO that names some (a boot's HELLOs before its IMUs are found name none)
-            if self.sensors_known and hello.sensors != self.sensors:
+            if self.sensors_known and sample_width(hello.flags) != self.sensors:
                 self.count("sensor_changes")
-            self.sensors = hello.sensors
+            self.sensors = sample_width(hello.flags)  # B alone is still the left hand's row
             self.sensors_known = True
         self.hello = hello
         self._hello_on_port = True
@@ -323,9 +343,7 @@ class SerialSource(Source):
                 # t_us wraps within two sample periods: its wraps cannot be told apart, so the
                 # sample times are wrong (PROTOCOL.md, HELLO); the HELLO is valid and taken
                 self.count("narrow_clock")
-            kind = {1: "MPU-6050", 2: "LSM6DS3", 3: "simulated"}.get(hello.imu_kind, "IMU")
-            turned = f", axes {self.axes}" if self.axes is not None else ""
-            self.description = f"serial bridge {self.port_name} ({kind} x{hello.sensors}, {hello.rate_hz} Hz{turned})"
+        self.description = describe(self.port_name, hello, self.axes)  # every HELLO: see describe
         return True
 
     def _samples(self, frames: list[protocol.Frame], now: float) -> list[Sample]:

@@ -626,7 +626,8 @@ def test_a_hello_that_announced_no_sensor_drops_the_samples_it_has_no_place_for(
     src.port.write(hello(seq=2, flags=protocol.FLAG_SENSOR_B, t_us=10_000)
                    + protocol.encode_sample(3, 15_000, None, (0, 0, -4096)))
     got = src.poll()
-    assert len(got) == 1 and got[0].accel.tolist() == [[0.0, 0.0, -1.0]]
+    # sensor B is the left hand (PROTOCOL.md): its row is the second, the right hand's holds still
+    assert len(got) == 1 and got[0].accel.tolist() == [[0.0, 0.0, 0.0], [0.0, 0.0, -1.0]]
 
 
 def test_mapped_times_are_never_later_than_the_poll():

@@ -469,3 +469,32 @@ def test_auto_with_a_pid_but_no_vid_is_an_error_not_ignored():
     """`serial://auto?pid=0005` used to look for the known boards, silently ignoring the pid."""
     with pytest.raises(SourceError, match="pid"):
         open_source("serial://auto?pid=0005")
+
+
+def test_description_follows_a_boots_later_hello():
+    """A boot's first HELLO may come before its IMUs are found (flags 0, kind unknown); the
+    description `record` writes into its file must name what the later HELLO of the same boot
+    announces, not "IMU x0"."""
+    src = open_source("serial://loop://")
+    src.port.write(protocol.encode_hello(0, 0, 5, 200, 4096, 65500, 30, protocol.IMU_UNKNOWN, 0)
+                   + protocol.encode_hello(1, 10, 5, 100, 4096, 65500, 30, protocol.IMU_MPU6050, 3)
+                   + protocol.encode_sample(2, 20, (0, 0, 4096), (0, 0, 4096)))
+    assert len(src.poll()) == 1
+    assert "MPU-6050 x2, 100 Hz" in src.description, src.description
+
+
+def test_a_board_with_only_sensor_b_streams_the_left_hand():
+    """PROTOCOL.md: sensor B is the left hand (lx,ly,lz). A board whose HELLO announces B alone
+    (its sensor A not found at boot) must not have B's readings taken for the right hand, nor an
+    unannounced A's readings taken for B's."""
+    src = open_source("serial://loop://")
+    hello_b = protocol.encode_hello(0, 0, 9, 200, 4096, 65500, 30, protocol.IMU_MPU6050, protocol.FLAG_SENSOR_B)
+    src.port.write(hello_b + protocol.encode_sample(1, 5000, None, (0, 2048, 4096))
+                   + protocol.encode_sample(2, 10000, (4096, 0, 0), (0, 4096, 0)))  # A: unannounced
+    got = src.poll()
+    assert src.sensors == 2 and len(got) == 2
+    np.testing.assert_allclose(got[0].accel[1], [0, 0.5, 1])  # the left hand's row
+    np.testing.assert_allclose(got[1].accel[1], [0, 1, 0])  # B's values, not A's
+    np.testing.assert_allclose(got[1].accel[0], got[0].accel[0])  # the right hand holds still
+    assert src.stats["sensor_unannounced"] == 1
+    assert "right" in src.missing()
