@@ -28,8 +28,10 @@ def i2c():
 
 
 def find_imus(bus):
-    """[sensor A, sensor B]: two MPU-6050 at 0x68/0x69, or LSM6DS3 at 0x6A/0x6B; the lower
-    address is A (right hand). Missing ones are None."""
+    """[sensor A, sensor B]: two MPU-6050 at 0x68/0x69, or LSM6DS3 at 0x6A/0x6B; the first two
+    found in address order, the lower A (right hand). A lone IMU is A whatever its address (a
+    one-IMU board is a right hand), so a two-IMU board whose A fails at boot streams B as A: its
+    HELLO then announces one sensor. Missing ones are None."""
     found = bus.scan()
     imus = []
     for addr in (0x68, 0x69, 0x6A, 0x6B):
