@@ -249,8 +249,7 @@ class SerialSource(Source):
         self._ask_hello()
 
     def _ask_hello(self) -> None:
-        """Ask the device for a HELLO now (protocol.HELLO_REQUEST) instead of waiting up to a
-        second for the next one: pyserial flushed any earlier HELLO when the port opened."""
+        """Ask for a HELLO now (protocol.HELLO_REQUEST), not in up to a second: pyserial flushed any earlier one."""
         now = self.clock()
         if self.port is None or now < self._next_hello_request:
             return
@@ -367,6 +366,7 @@ class SerialSource(Source):
             dev = self.devclock.unwrap(f.t_us)
             if dev is None:  # device clock went back without a HELLO: start the mapping over
                 self.count("time_jumps")
+                self._ask_hello()  # a reboot whose HELLO was lost after a seq past 32767: no jump
                 # the same as above: what came before the jump keeps the clock it came with
                 # (a single frame with a wild t_us ahead is then mapped no later than `now`)
                 out += self._flush(times, sample_frames, latest, now)

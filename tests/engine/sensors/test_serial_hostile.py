@@ -547,12 +547,13 @@ def test_a_text_that_is_not_utf8_is_kept_with_replacement_characters():
     assert list(src.messages) == ["sensor \ufffd\ufffd B"] and src.stats["malformed"] == 0
 
 
-def _requests_after(data: bytes) -> bytes:
-    """What the host writes to a pty board once it has taken a boot's HELLO and 100 samples and
-    0.3 s have passed (the request at open drained), then read `data` and polled."""
+def _requests_after(data: bytes, first_seq: int = 0) -> bytes:
+    """What the host writes to a pty board once it has taken a boot's HELLO (at `first_seq`) and
+    100 samples and 0.3 s have passed (the request at open drained), then read `data` and polled."""
     master, slave, src = _pty_source()
     try:
-        os.write(master, hello(boot=1) + samples(100))
+        os.write(master, hello(boot=1, seq=first_seq, t_us=5000 * first_seq) + samples(100, start_seq=first_seq + 1,
+                                                                                     t0=5000 * (first_seq + 1)))
         for _ in range(100):
             if len(src.poll()) or src.stats.get("frames_ok", 0) >= 101:
                 break
@@ -584,6 +585,14 @@ def test_a_reboot_whose_hello_was_lost_asks_for_the_new_boots_hello():
     assert _requests_after(samples(20, t0=50)) == protocol.HELLO_REQUEST
     # a board streaming on, no replay and no jump: nothing asked
     assert _requests_after(samples(20, start_seq=101, t0=5000 * 101)) == b""
+
+
+def test_a_reboot_after_seq_32767_whose_hello_was_lost_asks_for_it_too():
+    # The old boot's seq was past half the counter: the new boot's 1, 2, ... read as a forward gap
+    # (thousands lost), not a jump, and its samples were converted with the old boot's scales
+    # for up to a second. Its device clock went back: that asks for the HELLO as a jump does.
+    assert _requests_after(samples(20, start_seq=1, t0=50), first_seq=50_000) == protocol.HELLO_REQUEST
+    assert _requests_after(samples(20, start_seq=50_101, t0=5000 * 50_101), first_seq=50_000) == b""
 
 
 def test_after_a_headless_reboot_the_old_boots_bytes_are_replays_until_its_hello():
