@@ -42,7 +42,7 @@ HELLO_FMT = "<HIHIBB"  # accel_lsb_per_g, gyro_mlsb_per_dps, rate_hz, boot_id, t
 HELLO_SIZE = 14
 MAX_TEXT = 200
 MAX_BODY = HEADER_SIZE + MAX_TEXT + CRC_SIZE  # 212: the largest valid body
-MAX_ENCODED = MAX_BODY + 2  # COBS adds one byte per 254, plus the first code byte
+MAX_ENCODED = MAX_BODY + 2  # COBS adds a code byte per 254 bytes (one here: 213 at most), plus a byte of slack
 
 # Host to device: this one byte asks for a HELLO now (a host that just opened the port need not
 # wait for the next one-a-second HELLO). Devices ignore any other byte.
