@@ -109,7 +109,7 @@ def _run_count(other: dict, key: str) -> int | None:
 
 
 def _whole_run(s: dict, held: int, key: str) -> str:
-    """" (N in the whole run)" when the trace holds only the last frames and the run's count differs."""
+    """The text " (N in the whole run)" when the trace holds only the last frames and the run's count differs."""
     n = s.get(key)
     if s.get("frames_total", s["frames"]) <= s["frames"] or n is None or n == held:
         return ""
