@@ -639,8 +639,9 @@ class _TrainingStages:
         state, want = self.source.state, self.resampler.dim // 3
         # a trial without the Nunchuk (or with a sensor the board lost) would hold that hand
         # still in the template: it waits for the part as for a lost source. Fewer sensors count
-        # only once the source has sent all (a one-hand source trains as it always did)
-        self.had_all |= state == SourceState.CONNECTED and self.source.sensors >= want
+        # only once the source has sent all (a one-hand source trains as it always did), as its
+        # count says once known: a serial board's guess (2) before its HELLO is not that
+        self.had_all |= state == SourceState.CONNECTED and self.source.sensors_known and self.source.sensors >= want
         self.screen_view.missing = missing_part(self.source, want if self.had_all else None)
         live = state == SourceState.CONNECTED and not self.screen_view.missing
         self.lost_steps = 0 if live else self.lost_steps + 1

@@ -140,6 +140,43 @@ def test_the_trials_take_the_width_of_the_first_samples_not_a_boards_guess():
     assert stages.resampler.dim == 3 and stages.frame.tolist() == [0.0, 1.0, 0.0]
 
 
+def test_a_boards_guessed_count_is_not_what_its_trials_wait_for():
+    """A serial board's HELLO may come a poll before its first samples. Its guessed count (2),
+    read before the HELLO, counted as the board having sent both sensors: at the HELLO (one IMU)
+    the trials waited for "1 of 2 sensors: the other hand holds still" until the samples came."""
+    import pygame
+
+    from engine.clock import VirtualClock
+    from engine.frames import FrameResampler
+    from engine.loop import FixedStepLoop
+    from engine.sample import Sample
+    from engine.sensors.source import Source, SourceState
+    from game.actions import load_library
+    from game.training import TrainingScreen, _TrainingStages
+
+    class OneImuBoard(Source):
+        def __init__(self):
+            super().__init__(url="serial:///dev/ttyACM0", sensors=2, sensors_known=False, state=SourceState.CONNECTED)
+            self.polls = 0
+
+        def poll(self):
+            self.polls += 1
+            if self.polls == 2:  # the HELLO, alone in its poll
+                self.sensors, self.sensors_known = 1, True
+            return [Sample(self.polls / 100, np.array([[0.0, 0.0, 1.0]]))] if self.polls >= 3 else []
+
+    pygame.init()
+    board, trainer = OneImuBoard(), Trainer(["straight_r"], trials=1)
+    screen = TrainingScreen(load_library(), trainer, board.url)
+    stages = _TrainingStages(FixedStepLoop(VirtualClock()), board, False, False, trainer, screen,
+                             FrameResampler(sensors=2), 0.0, None, False, {})
+    for step in range(4):
+        stages.input(step, 1 / 60)
+        stages.train(step, 1 / 60)
+        assert screen.missing == "" and not trainer.waiting, (step, screen.missing)
+    assert stages.resampler.dim == 3
+
+
 def test_the_plot_names_only_the_hands_the_source_sends():
     import pygame
 
