@@ -644,7 +644,9 @@ class _TrainingStages:
         self.had_all |= state == SourceState.CONNECTED and self.source.sensors_known and self.source.sensors >= want
         self.screen_view.missing = missing_part(self.source, want if self.had_all else None)
         live = state == SourceState.CONNECTED and not self.screen_view.missing
-        self.lost_steps = 0 if live else self.lost_steps + 1
+        # connected with no sample yet (a serial board's port opened, its HELLO not come) is
+        # waited for as a lost source: its trials cannot start
+        self.lost_steps = 0 if live and self.sized else self.lost_steps + 1
         if self.trainer.done:
             return live
         if state == SourceState.ENDED:
@@ -652,7 +654,8 @@ class _TrainingStages:
         elif self.give_up_after is not None and self.lost_steps > self.give_up_after:
             waited = f"{self.lost_steps / HZ:.0f} s"
             missing = missing_in_short(self.screen_view.missing)[0]
-            self.stopped_why = f"{missing} (waited {waited})" if missing else f"the source was lost for {waited}"
+            silent = live and f"no sample came in {waited}"
+            self.stopped_why = f"{missing} (waited {waited})" if missing else silent or f"the source was lost for {waited}"
         return live
 
     def save(self) -> None:

@@ -177,6 +177,36 @@ def test_a_boards_guessed_count_is_not_what_its_trials_wait_for():
     assert stages.resampler.dim == 3
 
 
+def test_a_headless_run_gives_up_on_a_source_connected_that_sends_nothing():
+    """A serial board is connected once its port opens; one that never sends a sample (no HELLO,
+    or a HELLO naming no IMU) held `train --headless` in its walk for ever: the trials never
+    start, and only a lost source was given up on."""
+    import pygame
+
+    from engine.clock import VirtualClock
+    from engine.frames import FrameResampler
+    from engine.loop import FixedStepLoop
+    from engine.sensors.source import Source, SourceState
+    from game.actions import load_library
+    from game.training import TrainingScreen, _TrainingStages
+
+    class SilentBoard(Source):
+        def poll(self):
+            return []
+
+    pygame.init()
+    board = SilentBoard(url="serial:///dev/ttyACM0", sensors_known=False, state=SourceState.CONNECTED)
+    trainer = Trainer(["straight_r"], trials=1)
+    stages = _TrainingStages(FixedStepLoop(VirtualClock()), board, False, False, trainer,
+                             TrainingScreen(load_library(), trainer, board.url), FrameResampler(sensors=2), 0.0, None,
+                             False, {})
+    stages.give_up_after = 60
+    for step in range(62):
+        stages.input(step, 1 / 60)
+        stages.train(step, 1 / 60)
+    assert stages.stopped_why == "no sample came in 1 s", stages.stopped_why
+
+
 def test_the_plot_names_only_the_hands_the_source_sends():
     import pygame
 
