@@ -19,6 +19,7 @@ own motions as recorded, marked left-handed so `play` does not mirror them again
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -478,6 +479,17 @@ def base_templates(output: Path):
     return Templates.load(SHIPPED_TEMPLATES) if SHIPPED_TEMPLATES.exists() else synthesized_templates()
 
 
+def _keep_aside(output: Path, sensors: int) -> Path | None:
+    """The player's own set at `output`, for `sensors` sensors, moved to a file beside it named
+    for that count before a set of another width replaces it (nothing of it could be merged:
+    a one-hand source's training would lose the moves trained with two). None: no file."""
+    if not output.exists():
+        return None  # the default set: nothing of the player's is lost
+    aside = output.with_name(f"{output.stem}-{sensors}-sensors{output.suffix}")
+    os.replace(output, aside)
+    return aside
+
+
 def reset_templates(output: Path | None) -> int:
     """`train --reset`: remove the player's templates; `play` uses the default set again."""
     from game.userdata import user_templates_path
@@ -664,8 +676,11 @@ class _TrainingStages:
         base = base_templates(output)
         templates = trainer.templates(self.left_handed, base=base, recognizer=self.settings)
         if base is not None and base.dim != templates.dim:
+            aside = _keep_aside(output, base.dim // 3)
             print(f"quickjab train: the moves you had were for {base.dim // 3} sensor(s), these trials have "
-                  f"{templates.dim // 3}: only the moves trained now are kept", file=sys.stderr)
+                  f"{templates.dim // 3}: only the moves trained now are kept"
+                  + (f"; yours for {base.dim // 3} sensor(s) are kept in {aside} (play --templates {aside})" if aside else ""),
+                  file=sys.stderr)
         output.parent.mkdir(parents=True, exist_ok=True)
         templates.save(output)
         self.screen_view.saved_to = str(output)

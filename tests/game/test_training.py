@@ -105,6 +105,29 @@ def test_a_one_hand_source_trains_one_hand_moves_that_play_takes(tmp_path, monke
     assert main(play) == 0, capsys.readouterr().err
 
 
+def test_a_players_own_moves_for_another_sensor_count_are_kept_aside_not_lost(tmp_path, monkeypatch, capsys):
+    """Training one move from a one-hand source over the player's own two-sensor set saved the
+    one move alone: the thirteen moves trained with the Wiimote were gone (merge_templates keeps
+    nothing of another sensor layout). The old file is kept aside, and `train` says where."""
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "xdg"))
+    from engine.recognition import Templates
+    from game.userdata import user_templates_path
+
+    assert main(["train", "--headless", "--demo", "--actions", "straight_r", "--size", "320x180"]) == 0
+    theirs = Templates.load(user_templates_path())
+    assert theirs.dim == 6
+    rec = tmp_path / "one.csv"
+    rec.write_text("t,rx,ry,rz\n" + "".join(f"{i / 60:.5f},0,{0.5 * (i % 90 > 60):.1f},1\n" for i in range(600)))
+    capsys.readouterr()
+    assert main(["train", "--headless", "--source", f"replay://{rec}?loop=1", "--actions", "hook_r",
+                 "--size", "320x180"]) == 0, capsys.readouterr().err
+    assert Templates.load(user_templates_path()).dim == 3
+    aside = user_templates_path().with_name(f"{user_templates_path().stem}-2-sensors{user_templates_path().suffix}")
+    kept = Templates.load(aside)
+    assert kept.dim == 6 and kept.action_names == theirs.action_names
+    assert f"yours for 2 sensor(s) are kept in {aside} (play --templates {aside})" in capsys.readouterr().err
+
+
 def test_the_trials_take_the_width_of_the_first_samples_not_a_boards_guess():
     """A serial board is connected once its port opens, its sensor count a guess (2) until its
     HELLO; its samples wait for the HELLO, so the first of them says how many sensors it has."""
