@@ -19,6 +19,7 @@ own motions as recorded, marked left-handed so `play` does not mirror them again
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -478,6 +479,17 @@ def base_templates(output: Path):
     return Templates.load(SHIPPED_TEMPLATES) if SHIPPED_TEMPLATES.exists() else synthesized_templates()
 
 
+def _keep_aside(output: Path, sensors: int) -> Path | None:
+    """The player's own set at `output`, for `sensors` sensors, moved to a file beside it named
+    for that count before a set of another width replaces it (nothing of it could be merged:
+    a one-hand source's training would lose the moves trained with two). None: no file."""
+    if not output.exists():
+        return None  # the default set: nothing of the player's is lost
+    aside = output.with_name(f"{output.stem}-{sensors}-sensors{output.suffix}")
+    os.replace(output, aside)
+    return aside
+
+
 def reset_templates(output: Path | None) -> int:
     """`train --reset`: remove the player's templates; `play` uses the default set again."""
     from game.userdata import user_templates_path
@@ -639,11 +651,14 @@ class _TrainingStages:
         state, want = self.source.state, self.resampler.dim // 3
         # a trial without the Nunchuk (or with a sensor the board lost) would hold that hand
         # still in the template: it waits for the part as for a lost source. Fewer sensors count
-        # only once the source has sent all (a one-hand source trains as it always did)
-        self.had_all |= state == SourceState.CONNECTED and self.source.sensors >= want
+        # only once the source has sent all (a one-hand source trains as it always did), as its
+        # count says once known: a serial board's guess (2) before its HELLO is not that
+        self.had_all |= state == SourceState.CONNECTED and self.source.sensors_known and self.source.sensors >= want
         self.screen_view.missing = missing_part(self.source, want if self.had_all else None)
         live = state == SourceState.CONNECTED and not self.screen_view.missing
-        self.lost_steps = 0 if live else self.lost_steps + 1
+        # connected with no sample yet (a serial board's port opened, its HELLO not come) is
+        # waited for as a lost source: its trials cannot start
+        self.lost_steps = 0 if live and self.sized else self.lost_steps + 1
         if self.trainer.done:
             return live
         if state == SourceState.ENDED:
@@ -651,7 +666,8 @@ class _TrainingStages:
         elif self.give_up_after is not None and self.lost_steps > self.give_up_after:
             waited = f"{self.lost_steps / HZ:.0f} s"
             missing = missing_in_short(self.screen_view.missing)[0]
-            self.stopped_why = f"{missing} (waited {waited})" if missing else f"the source was lost for {waited}"
+            silent = live and f"no sample came in {waited}"
+            self.stopped_why = f"{missing} (waited {waited})" if missing else silent or f"the source was lost for {waited}"
         return live
 
     def save(self) -> None:
@@ -660,8 +676,11 @@ class _TrainingStages:
         base = base_templates(output)
         templates = trainer.templates(self.left_handed, base=base, recognizer=self.settings)
         if base is not None and base.dim != templates.dim:
+            aside = _keep_aside(output, base.dim // 3)
             print(f"quickjab train: the moves you had were for {base.dim // 3} sensor(s), these trials have "
-                  f"{templates.dim // 3}: only the moves trained now are kept", file=sys.stderr)
+                  f"{templates.dim // 3}: only the moves trained now are kept"
+                  + (f"; yours for {base.dim // 3} sensor(s) are kept in {aside} (play --templates {aside})" if aside else ""),
+                  file=sys.stderr)
         output.parent.mkdir(parents=True, exist_ok=True)
         templates.save(output)
         self.screen_view.saved_to = str(output)

@@ -105,6 +105,29 @@ def test_a_one_hand_source_trains_one_hand_moves_that_play_takes(tmp_path, monke
     assert main(play) == 0, capsys.readouterr().err
 
 
+def test_a_players_own_moves_for_another_sensor_count_are_kept_aside_not_lost(tmp_path, monkeypatch, capsys):
+    """Training one move from a one-hand source over the player's own two-sensor set saved the
+    one move alone: the thirteen moves trained with the Wiimote were gone (merge_templates keeps
+    nothing of another sensor layout). The old file is kept aside, and `train` says where."""
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "xdg"))
+    from engine.recognition import Templates
+    from game.userdata import user_templates_path
+
+    assert main(["train", "--headless", "--demo", "--actions", "straight_r", "--size", "320x180"]) == 0
+    theirs = Templates.load(user_templates_path())
+    assert theirs.dim == 6
+    rec = tmp_path / "one.csv"
+    rec.write_text("t,rx,ry,rz\n" + "".join(f"{i / 60:.5f},0,{0.5 * (i % 90 > 60):.1f},1\n" for i in range(600)))
+    capsys.readouterr()
+    assert main(["train", "--headless", "--source", f"replay://{rec}?loop=1", "--actions", "hook_r",
+                 "--size", "320x180"]) == 0, capsys.readouterr().err
+    assert Templates.load(user_templates_path()).dim == 3
+    aside = user_templates_path().with_name(f"{user_templates_path().stem}-2-sensors{user_templates_path().suffix}")
+    kept = Templates.load(aside)
+    assert kept.dim == 6 and kept.action_names == theirs.action_names
+    assert f"yours for 2 sensor(s) are kept in {aside} (play --templates {aside})" in capsys.readouterr().err
+
+
 def test_the_trials_take_the_width_of_the_first_samples_not_a_boards_guess():
     """A serial board is connected once its port opens, its sensor count a guess (2) until its
     HELLO; its samples wait for the HELLO, so the first of them says how many sensors it has."""
@@ -138,6 +161,73 @@ def test_the_trials_take_the_width_of_the_first_samples_not_a_boards_guess():
     stages.input(1, 1 / 60)
     stages.input(2, 1 / 60)
     assert stages.resampler.dim == 3 and stages.frame.tolist() == [0.0, 1.0, 0.0]
+
+
+def test_a_boards_guessed_count_is_not_what_its_trials_wait_for():
+    """A serial board's HELLO may come a poll before its first samples. Its guessed count (2),
+    read before the HELLO, counted as the board having sent both sensors: at the HELLO (one IMU)
+    the trials waited for "1 of 2 sensors: the other hand holds still" until the samples came."""
+    import pygame
+
+    from engine.clock import VirtualClock
+    from engine.frames import FrameResampler
+    from engine.loop import FixedStepLoop
+    from engine.sample import Sample
+    from engine.sensors.source import Source, SourceState
+    from game.actions import load_library
+    from game.training import TrainingScreen, _TrainingStages
+
+    class OneImuBoard(Source):
+        def __init__(self):
+            super().__init__(url="serial:///dev/ttyACM0", sensors=2, sensors_known=False, state=SourceState.CONNECTED)
+            self.polls = 0
+
+        def poll(self):
+            self.polls += 1
+            if self.polls == 2:  # the HELLO, alone in its poll
+                self.sensors, self.sensors_known = 1, True
+            return [Sample(self.polls / 100, np.array([[0.0, 0.0, 1.0]]))] if self.polls >= 3 else []
+
+    pygame.init()
+    board, trainer = OneImuBoard(), Trainer(["straight_r"], trials=1)
+    screen = TrainingScreen(load_library(), trainer, board.url)
+    stages = _TrainingStages(FixedStepLoop(VirtualClock()), board, False, False, trainer, screen,
+                             FrameResampler(sensors=2), 0.0, None, False, {})
+    for step in range(4):
+        stages.input(step, 1 / 60)
+        stages.train(step, 1 / 60)
+        assert screen.missing == "" and not trainer.waiting, (step, screen.missing)
+    assert stages.resampler.dim == 3
+
+
+def test_a_headless_run_gives_up_on_a_source_connected_that_sends_nothing():
+    """A serial board is connected once its port opens; one that never sends a sample (no HELLO,
+    or a HELLO naming no IMU) held `train --headless` in its walk for ever: the trials never
+    start, and only a lost source was given up on."""
+    import pygame
+
+    from engine.clock import VirtualClock
+    from engine.frames import FrameResampler
+    from engine.loop import FixedStepLoop
+    from engine.sensors.source import Source, SourceState
+    from game.actions import load_library
+    from game.training import TrainingScreen, _TrainingStages
+
+    class SilentBoard(Source):
+        def poll(self):
+            return []
+
+    pygame.init()
+    board = SilentBoard(url="serial:///dev/ttyACM0", sensors_known=False, state=SourceState.CONNECTED)
+    trainer = Trainer(["straight_r"], trials=1)
+    stages = _TrainingStages(FixedStepLoop(VirtualClock()), board, False, False, trainer,
+                             TrainingScreen(load_library(), trainer, board.url), FrameResampler(sensors=2), 0.0, None,
+                             False, {})
+    stages.give_up_after = 60
+    for step in range(62):
+        stages.input(step, 1 / 60)
+        stages.train(step, 1 / 60)
+    assert stages.stopped_why == "no sample came in 1 s", stages.stopped_why
 
 
 def test_the_plot_names_only_the_hands_the_source_sends():
