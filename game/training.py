@@ -54,6 +54,7 @@ READY_STEPS = 60  # "get ready": the hands held still
 LEAD_IN = 30  # frames of the ready phase kept at the start of a trial (the rest before)
 RECORD_STEPS = 96  # the recording window after GO
 LOST_GIVE_UP_STEPS = 10 * HZ  # headless: a source lost this long is not coming back
+NO_SAMPLE_YET = "no sample yet: connected, but nothing comes in"  # the trials wait for the first
 SELF_CHECK_GOOD = 0.9  # under this share of the new trials recognized, the player is told which moves to redo
 
 SHOW, READY, RECORD, DONE = "show", "ready", "record", "done"
@@ -94,6 +95,7 @@ class Trainer:
     go: bool = False  # True on the step GO is given (the keyboard source performs then)
     dropped: dict[str, tuple[int, int]] = field(default_factory=dict)  # action -> (trials dropped, recorded)
     waiting: bool = False  # the source is away: the walk holds, the trial under way starts again
+    named: bool = False  # --actions named these moves (a one-hand source then trains every one)
 
     @property
     def action(self) -> str:
@@ -622,6 +624,13 @@ class _TrainingStages:
             from engine.frames import FrameResampler
 
             self.resampler = FrameResampler(sensors=sensors)
+        left = [a for a in self.trainer.actions if a.endswith("_l")]
+        if sensors == 1 and left and not self.trainer.named and not self.trainer.recorded:
+            # the one sensor is the right hand (docs/sources.md): trials of the left hand's moves
+            # would be flat, saved as templates and then named by the self check as moves to redo
+            self.trainer.actions = [a for a in self.trainer.actions if a not in left]
+            print(f"quickjab train: one sensor, the right hand: the left hand's moves are left out ({', '.join(left)}); "
+                  "--actions trains them anyway", file=sys.stderr)
 
     def train(self, step: int, dt: float) -> None:
         trainer = self.trainer
@@ -654,11 +663,14 @@ class _TrainingStages:
         # only once the source has sent all (a one-hand source trains as it always did), as its
         # count says once known: a serial board's guess (2) before its HELLO is not that
         self.had_all |= state == SourceState.CONNECTED and self.source.sensors_known and self.source.sensors >= want
-        self.screen_view.missing = missing_part(self.source, want if self.had_all else None)
-        live = state == SourceState.CONNECTED and not self.screen_view.missing
-        # connected with no sample yet (a serial board's port opened, its HELLO not come) is
-        # waited for as a lost source: its trials cannot start
-        self.lost_steps = 0 if live and self.sized else self.lost_steps + 1
+        missing = missing_part(self.source, want if self.had_all else None)
+        if not missing and state == SourceState.CONNECTED and not self.sized:
+            # connected with no sample yet (a serial board's port opened, its HELLO not come):
+            # waited for as a missing part, said on the screen (the trials went round empty)
+            missing = NO_SAMPLE_YET
+        self.screen_view.missing = missing
+        live = state == SourceState.CONNECTED and not missing
+        self.lost_steps = 0 if live else self.lost_steps + 1
         if self.trainer.done:
             return live
         if state == SourceState.ENDED:
@@ -666,8 +678,7 @@ class _TrainingStages:
         elif self.give_up_after is not None and self.lost_steps > self.give_up_after:
             waited = f"{self.lost_steps / HZ:.0f} s"
             missing = missing_in_short(self.screen_view.missing)[0]
-            silent = live and f"no sample came in {waited}"
-            self.stopped_why = f"{missing} (waited {waited})" if missing else silent or f"the source was lost for {waited}"
+            self.stopped_why = f"{missing} (waited {waited})" if missing else f"the source was lost for {waited}"
         return live
 
     def save(self) -> None:
@@ -725,7 +736,7 @@ def run(args: argparse.Namespace) -> int:
     clock, (source, playable, auto) = open_on_run_clock("train", args.headless, lambda c: _open_source(args, c),
                                                         lambda opened: [opened[0]])
     lib = load_library()
-    trainer = Trainer(actions)
+    trainer = Trainer(actions, named=bool(args.actions))
     _open_window(args, size, source)
     screen_view = TrainingScreen(lib, trainer, source.url, args.left_handed)
     resampler = FrameResampler(sensors=2)
