@@ -73,6 +73,20 @@ def test_a_bad_argument_is_one_line_and_exit_2(capsys, argv):
     assert err.count("\n") == 1 and err.startswith("quickjab") and "usage" not in err, err
 
 
+@pytest.mark.parametrize("argv, prog", [
+    (["play", "--low-pwer"], "quickjab play"),
+    (["bench", "loop", "--no-such-option"], "quickjab bench loop"),
+    (["graph", "info", "--graph"], "quickjab graph info"),
+])
+def test_an_unknown_option_is_named_by_the_command_given_it(capsys, argv, prog):
+    """The review: `quickjab play --low-pwer` said `quickjab: unrecognized arguments ... (see
+    quickjab --help)`, whose help lists the commands, not play's options."""
+    with pytest.raises(SystemExit) as exit_:
+        main(argv)
+    assert exit_.value.code == 2
+    assert capsys.readouterr().err == f"{prog}: unrecognized arguments: {argv[-1]} (see {prog} --help)\n"
+
+
 @pytest.mark.parametrize("value", ["0", "0.5", "1"])
 def test_graph_build_takes_every_opponent_max_its_help_names(value):
     """docs/interaction_graph.md: 1 = pure min-max, 0 = a random opponent (its expectation),
