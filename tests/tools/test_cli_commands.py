@@ -59,6 +59,20 @@ def test_help_on_every_subcommand(capsys):
         assert out.startswith("usage: quickjab") and (not path or path[-1] in out), path
 
 
+def test_bench_help_gives_every_target_its_whole_summary():
+    """`quickjab bench --help` showed each target's first docstring line: three ended
+    mid-sentence ("recognition ... all templates in one", "startup ... (load")."""
+    from tools.bench import TARGETS
+
+    def subparsers(parser: argparse.ArgumentParser) -> argparse._SubParsersAction:
+        return next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+
+    targets = subparsers(subparsers(build_parser("bench")).choices["bench"])
+    helps = {choice.dest: choice.help for choice in targets._choices_actions}
+    assert set(helps) == set(TARGETS)
+    assert all(text.endswith(".") for text in helps.values()), helps
+
+
 @pytest.mark.parametrize("argv", [
     ["play", "--seed", "-1"],
     ["evaluate", "--folds", "1", "x.csv"],
