@@ -493,8 +493,10 @@ def _chosen_actions(args: argparse.Namespace) -> list[str]:
     from game.actions import ACTION_NAMES
 
     actions = list(ACTION_NAMES)
-    if args.actions:
+    if args.actions is not None:
         actions = [a.strip() for a in args.actions.split(",") if a.strip()]
+        if not actions:  # `--actions ,` ended in an IndexError traceback, `--actions ""` trained all 13
+            raise InputError(f"--actions {args.actions!r}: names no action; known: {', '.join(ACTION_NAMES)}")
         unknown = [a for a in actions if a not in ACTION_NAMES]
         if unknown:
             raise InputError(f"--actions: unknown {', '.join(unknown)}; known: {', '.join(ACTION_NAMES)}")
