@@ -71,7 +71,11 @@ def _mains(text: str) -> list[int | str]:
 
 def _users(text: str) -> str:
     """uWave users as `1-6` or `1,3`: checked here, expanded by _mains when the command runs."""
-    if "auto" in _mains(text):
+    try:
+        users = _mains(text)
+    except argparse.ArgumentTypeError:  # its words are the main buffer's ("... or 'auto'")
+        users = ["auto"]
+    if "auto" in users:
         raise argparse.ArgumentTypeError(f"expected user numbers such as 1-6 or 1,3, not {text!r}")
     return text
 

@@ -164,6 +164,16 @@ def test_bad_arguments_name_themselves(tmp_path, args, words):
     assert len(r.stderr.strip().splitlines()) == 1 and words in r.stderr
 
 
+@pytest.mark.parametrize("users", ["x", ",", "auto", "0"])
+def test_evaluate_users_are_refused_in_their_own_words(capsys, users):
+    """`--users x` was refused as a main buffer: "expected a positive int or 'auto'"; users take no 'auto'."""
+    with pytest.raises(SystemExit) as exit_:
+        main(["evaluate", "--uwave", "u", "--users", users])
+    assert exit_.value.code == 2
+    assert capsys.readouterr().err == (f"quickjab evaluate: argument --users: expected user numbers such as 1-6 or 1,3, "
+                                       f"not {users!r} (see quickjab evaluate --help)\n")
+
+
 def test_unwritable_output_is_one_line(tmp_path, shared_data):
     src = shared_data / "punchbuddy" / "right-hook-50-matt-combo-lh-4.csv"
     r = quickjab("record", "--source", f"replay://{src}?speed=100", "-o", str(tmp_path / "no" / "dir" / "x.csv"))
