@@ -78,6 +78,7 @@ def test_bench_help_gives_every_target_its_whole_summary():
     ["evaluate", "--folds", "1", "x.csv"],
     ["bench", "loop", "--no-such-option"],
     ["templates", "build"],
+    ["bench", "graph", "--seed", "-1", "--graph", str(REPO / "game" / "assets" / "graph.npz")],  # was a numpy traceback
 ])
 def test_a_bad_argument_is_one_line_and_exit_2(capsys, argv):
     with pytest.raises(SystemExit) as exit_:
