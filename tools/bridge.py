@@ -60,7 +60,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     f.add_argument("--corrupted", type=int, default=100_000, help="corrupted frames (default 100000)")
     f.add_argument("--frames", type=int, default=20_000, help="frames per loss experiment")
     f.add_argument("--events", type=int, default=1000, help="faults per loss experiment")
-    f.add_argument("--seed", type=int, default=0)
+    f.add_argument("--seed", type=int, default=0, help="seed of the random bytes and faults (default 0)")
     f.add_argument("--json", action="store_true", help="print JSON")
     f.set_defaults(func=run_faults)
 

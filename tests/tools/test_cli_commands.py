@@ -59,6 +59,23 @@ def test_help_on_every_subcommand(capsys):
         assert out.startswith("usage: quickjab") and (not path or path[-1] in out), path
 
 
+def test_every_command_and_option_says_what_it_is(capsys):
+    """The review: `recognize --help` had no description and no word on REC.csv or --templates;
+    templates build, bvh info/cut/export, actions list/sheet/author and a few --seed neither."""
+    def missing(parser: argparse.ArgumentParser, path: tuple[str, ...]) -> list[str]:
+        out = []
+        for action in parser._actions:
+            if isinstance(action, argparse._SubParsersAction):
+                for name, sub in action.choices.items():
+                    out += [] if sub.description else [" ".join(path + (name,)) + ": no description"]
+                    out += missing(sub, path + (name,))
+            elif not isinstance(action, argparse._HelpAction) and not action.help:
+                out.append(" ".join(path) + f" {'/'.join(action.option_strings) or action.dest}: no help")
+        return out
+
+    assert missing(build_parser(), ()) == []
+
+
 def test_bench_help_gives_every_target_its_whole_summary():
     """`quickjab bench --help` showed each target's first docstring line: three ended
     mid-sentence ("recognition ... all templates in one", "startup ... (load")."""
