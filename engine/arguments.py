@@ -12,6 +12,7 @@ import math
 import os
 from collections.abc import Callable
 from pathlib import Path
+from typing import NoReturn
 
 SEED_MAX = 2**63 - 1  # numpy's generators take any non-negative int; this keeps it a C long
 SIZE_MIN = (160, 120)
@@ -120,3 +121,32 @@ def plot_file(text: str) -> str:
 
 
 plot_file.__name__ = "plot file"
+
+
+class OneLineErrorParser(argparse.ArgumentParser):
+    """A bad argument is one line on stderr and exit 2, like every other input error (issue 16);
+    argparse's usage block is for `--help`. Subcommands' parsers are of this class too
+    (add_subparsers makes its parsers of the parent's class). `quickjab` and `python -m game`
+    both parse with it."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f"{self.prog}: {message} (see {self.prog} --help)\n")
+
+    def parse_args(self, args=None, namespace=None):  # argparse's signature
+        """As argparse's, but an unknown option is named by the (sub)command that was given it:
+        `quickjab play: unrecognized arguments: --low-pwer (see quickjab play --help)`, whose
+        --help lists the options, not `quickjab: ...` pointing at the list of commands."""
+        parsed, extras = self.parse_known_args(args, namespace)
+        if extras:
+            self.chosen(parsed).error("unrecognized arguments: " + " ".join(extras))
+        return parsed
+
+    def chosen(self, parsed: argparse.Namespace) -> argparse.ArgumentParser:
+        """The innermost subcommand's parser that `parsed` names (this parser without one)."""
+        parser: argparse.ArgumentParser = self
+        while True:
+            subs = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
+            name = getattr(parsed, subs[0].dest, None) if subs else None
+            if name not in (subs[0].choices if subs else {}):
+                return parser
+            parser = subs[0].choices[name]

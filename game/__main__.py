@@ -2,15 +2,15 @@
 `quickjab train`. The whole `quickjab` command lives in tools/cli.py (`python -m tools.cli`):
 game never imports tools, so it cannot offer the tools' commands here."""
 
-import argparse
 import sys
 
+from engine.arguments import OneLineErrorParser
 from game import play, training
 from game.command import run_command
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(
+    parser = OneLineErrorParser(
         prog="python -m game", description="QuickJab's game: play or train (every other command: quickjab)."
     )
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")

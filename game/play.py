@@ -77,6 +77,10 @@ def run(args: argparse.Namespace) -> int:
         from game.two_player import run_match
 
         return run_match(args)
+    player2 = [opt for opt, value in (("--source2", getattr(args, "source2", None)),
+                                      ("--profile2", getattr(args, "profile2", None))) if value is not None]
+    if player2:  # as two players' note on the CPU's options: said, not silently dropped
+        print(f"quickjab play: {' and '.join(player2)} ignored without --players 2: they are player 2's", file=sys.stderr)
     from game.user_config import recognizer_settings
 
     settings = recognizer_settings(getattr(args, "recognizer", None) or ())  # a bad file or value: before any window

@@ -461,7 +461,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--headless", action="store_true", help="no window: SDL dummy driver, virtual clock (a live serial:// or wiimote:// device: the real clock)")
     p.add_argument("--frames", type=arguments.positive_int, default=None, help="stop after N rendered frames")
     p.add_argument("--screenshot", type=arguments.output_file, metavar="PNG", help="save the last frame to this PNG")
-    p.add_argument("--seed", type=arguments.seed, default=0)
+    p.add_argument("--seed", type=arguments.seed, default=0, help="seed of the virtual player's moves (default 0)")
     p.add_argument("--size", default="1280x720", help="window size WxH (default 1280x720)")
     p.add_argument("--recognizer", action="append", default=[], metavar="NAME=VALUE",
                    help="a recognizer setting to save with your templates, e.g. noise_g=0.5 (repeatable; "
@@ -510,8 +510,10 @@ def _chosen_actions(args: argparse.Namespace) -> list[str]:
     from game.actions import ACTION_NAMES
 
     actions = list(ACTION_NAMES)
-    if args.actions:
+    if args.actions is not None:
         actions = [a.strip() for a in args.actions.split(",") if a.strip()]
+        if not actions:  # `--actions ,` ended in an IndexError traceback, `--actions ""` trained all 13
+            raise InputError(f"--actions {args.actions!r}: names no action; known: {', '.join(ACTION_NAMES)}")
         unknown = [a for a in actions if a not in ACTION_NAMES]
         if unknown:
             raise InputError(f"--actions: unknown {', '.join(unknown)}; known: {', '.join(ACTION_NAMES)}")

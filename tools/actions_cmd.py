@@ -17,16 +17,20 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("actions", help="list, draw or re-author the action library", description=__doc__,
                        formatter_class=argparse.RawDescriptionHelpFormatter)  # fmt: skip
     cmds = p.add_subparsers(dest="actions_command", metavar="SUBCOMMAND", required=True)
-    ls = cmds.add_parser("list", help="every action with its kind, duration and windows")
+    ls = cmds.add_parser("list", help="every action with its kind, duration and windows",
+                         description="Every action with its kind, duration, attack windows, reach and damage.")
     ls.add_argument("--dir", default=None, help="action folder (default: the shipped library)")
     ls.set_defaults(func=run_list)
-    sheet = cmds.add_parser("sheet", help="draw a contact sheet PNG of every action's key frames")
-    sheet.add_argument("-o", "--output", default="docs/img/actions.png")
+    sheet = cmds.add_parser("sheet", help="draw a contact sheet PNG of every action's key frames",
+                            description="Draw a contact sheet PNG of every action's key frames (pygame).")
+    sheet.add_argument("-o", "--output", default="docs/img/actions.png",
+                       help="PNG to write (default docs/img/actions.png, from where the command runs)")
     sheet.add_argument("--dir", default=None, help="action folder (default: the shipped library)")
     sheet.add_argument("--add", action="append", default=[], metavar="JSON_OR_DIR",
                        help="also draw these actions (e.g. cut with `quickjab bvh cut`; a file or a folder of *.json; repeatable)")
     sheet.set_defaults(func=run_sheet)
-    author = cmds.add_parser("author", help="regenerate the action JSON files")
+    author = cmds.add_parser("author", help="regenerate the action JSON files",
+                             description="Regenerate the action JSON files from tools/author_actions.py.")
     author.add_argument("-o", "--output", default=None, help="folder (default: game/assets/actions)")
     author.set_defaults(func=run_author)
 

@@ -28,6 +28,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     targets = p.add_subparsers(dest="target", metavar="TARGET", required=True)
     for name, module in TARGETS.items():
         mod = importlib.import_module(module)
-        tp = targets.add_parser(name, help=(mod.__doc__ or "").strip().splitlines()[0], description=mod.__doc__)
+        tp = targets.add_parser(name, help=summary(mod.__doc__), description=mod.__doc__)
         mod.add_arguments(tp)
         tp.set_defaults(func=mod.run)
+
+
+def summary(doc: str | None) -> str:
+    """A target's line in `bench --help`: its docstring's first paragraph, whole (its first line
+    alone cut three of them mid-sentence: "..., all templates in one")."""
+    return " ".join((doc or "").strip().split("\n\n")[0].split())

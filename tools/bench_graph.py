@@ -15,12 +15,14 @@ from pathlib import Path
 
 import numpy as np
 
+from engine import arguments
+
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--graph", default=None,
                    help="time loading/looking up this file instead of building one")
     p.add_argument("--states", type=int, default=60000, help="states of the graph to build")
-    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--seed", type=arguments.seed, default=0, help="seed of the build and the look-ups (default 0)")
     p.add_argument("--lookups", type=int, default=20000, help="situations to look up")
     p.add_argument("--loads", type=int, default=5, help="load repetitions (median reported)")
     p.add_argument("--json", action="store_true", help="print JSON instead of a table")

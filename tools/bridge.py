@@ -11,6 +11,7 @@ import sys
 import time
 from dataclasses import asdict
 
+from engine.arguments import output_file
 from engine.errors import InputError
 
 
@@ -31,7 +32,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     e.add_argument("--seconds", type=float, default=None, help="stop after this long (default: Ctrl-C)")
     e.add_argument("--rate", type=int, default=200, help="sample rate in Hz (default 200)")
     e.add_argument("--sensors", type=int, choices=(1, 2), default=None, help="sensors (default: the recording's, or 2)")
-    e.add_argument("--link", default=None, help="keep a symlink to the current pty here (stable across replugs)")
+    e.add_argument("--link", type=output_file, default=None,
+                   help="keep a symlink to the current pty here (stable across replugs)")
     e.add_argument("--ticks-start", type=int, default=None,
                    help="device microsecond counter at boot (e.g. 1073000000 to see the 30-bit wrap soon); "
                    "default: the host's monotonic clock")
@@ -58,7 +60,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     f.add_argument("--corrupted", type=int, default=100_000, help="corrupted frames (default 100000)")
     f.add_argument("--frames", type=int, default=20_000, help="frames per loss experiment")
     f.add_argument("--events", type=int, default=1000, help="faults per loss experiment")
-    f.add_argument("--seed", type=int, default=0)
+    f.add_argument("--seed", type=int, default=0, help="seed of the random bytes and faults (default 0)")
     f.add_argument("--json", action="store_true", help="print JSON")
     f.set_defaults(func=run_faults)
 

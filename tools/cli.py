@@ -11,9 +11,9 @@ from __future__ import annotations
 import argparse
 import importlib
 import sys
-from typing import NoReturn
 
 from engine import __version__
+from engine.arguments import OneLineErrorParser
 
 # command -> (module whose register() adds it, the one line `--help` shows), in `--help` order.
 # A module may add several commands (tools.recognition_commands: templates, recognize, evaluate).
@@ -38,15 +38,6 @@ COMMANDS: dict[str, tuple[str, str]] = {
 
 # Modules that add subcommands, in the order `--help` lists them.
 COMMAND_MODULES = list(dict.fromkeys(module for module, _ in COMMANDS.values()))
-
-
-class OneLineErrorParser(argparse.ArgumentParser):
-    """A bad argument is one line on stderr and exit 2, like every other input error (issue 16);
-    argparse's usage block is for `--help`. Subcommands' parsers are of this class too
-    (add_subparsers makes its parsers of the parent's class)."""
-
-    def error(self, message: str) -> NoReturn:
-        self.exit(2, f"{self.prog}: {message} (see {self.prog} --help)\n")
 
 
 def _base_parser() -> tuple[argparse.ArgumentParser, argparse._SubParsersAction]:

@@ -60,7 +60,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     d.add_argument("--player", choices=["graph", "random", "greedy"], default="graph",
                    help="who plays boxer 0 (a baseline other than the graph, for comparison)")
     d.add_argument("--seconds", type=arguments.float_range(0.0, 3600.0, lo_open=True), default=60.0, help="bout length (ends earlier by knockout)")
-    d.add_argument("--seed", type=arguments.seed, default=1)
+    d.add_argument("--seed", type=arguments.seed, default=1, help="seed of the bouts (default 1)")
     d.add_argument("--json", action="store_true", help="machine-readable output")
     d.set_defaults(func=cmd_duel)
 

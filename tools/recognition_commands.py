@@ -71,7 +71,11 @@ def _mains(text: str) -> list[int | str]:
 
 def _users(text: str) -> str:
     """uWave users as `1-6` or `1,3`: checked here, expanded by _mains when the command runs."""
-    if "auto" in _mains(text):
+    try:
+        users = _mains(text)
+    except argparse.ArgumentTypeError:  # its words are the main buffer's ("... or 'auto'")
+        users = ["auto"]
+    if "auto" in users:
         raise argparse.ArgumentTypeError(f"expected user numbers such as 1-6 or 1,3, not {text!r}")
     return text
 
@@ -129,8 +133,11 @@ def _rec_kwargs(args: argparse.Namespace, saved: dict | None = None) -> dict:
 def register(sub: argparse._SubParsersAction) -> None:
     t = sub.add_parser("templates", help="build recognition templates from trials", description=__doc__)
     tsub = t.add_subparsers(dest="templates_command", metavar="ACTION", required=True)
-    b = tsub.add_parser("build", help="build templates.npz from TRIALS_DIR/<action>/*.csv")
-    b.add_argument("trials_dir", metavar="TRIALS_DIR")
+    b = tsub.add_parser("build", help="build templates.npz from TRIALS_DIR/<action>/*.csv",
+                        description="Build recognition templates from trial recordings, one folder of CSVs per "
+                        "action (TRIALS_DIR/<action>/*.csv, as `quickjab synth --trials` writes them); "
+                        "`play --templates`, `recognize` and `evaluate --templates` read the file.")
+    b.add_argument("trials_dir", metavar="TRIALS_DIR", help="a folder with one folder of trial CSVs per action (TRIALS_DIR/<action>/*.csv)")
     b.add_argument("-o", "--output", default="templates.npz", help="output .npz (default templates.npz)")
     b.add_argument("--method", choices=METHODS, default=None, help="trials (default), average (Eq. 1) or dba")
     b.add_argument("--feature", choices=FEATURES, default=None, help="what DTW compares (default log)")
@@ -143,9 +150,13 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="a recognizer setting to save with the templates, e.g. noise_g=0.5 (repeatable)")
     b.set_defaults(func=cmd_build)
 
-    r = sub.add_parser("recognize", help="replay a recording through the recognizer; events as JSON lines")
-    r.add_argument("recording", metavar="REC.csv")
-    r.add_argument("--templates", required=True, metavar="T.npz")
+    r = sub.add_parser("recognize", help="replay a recording through the recognizer; events as JSON lines",
+                       description="Replay a recording through the recognizer, deciding as `play` does (the "
+                       "templates' saved settings, your config file's [recognizer] table, then these options), "
+                       "and print its events as JSON lines: start, switch, end, reject (docs/formats.md).")
+    r.add_argument("recording", metavar="REC.csv", help="the recording to replay (docs/formats.md; any sample rate)")
+    r.add_argument("--templates", required=True, metavar="T.npz",
+                   help="recognition templates: `templates build` or `train -o` wrote them, or game/assets/templates.npz")
     r.add_argument("-o", "--output", default=None, help="write the JSON lines here instead of stdout")
     r.add_argument("--main", type=_main_arg, default=None, help="main buffer in frames or 'auto' (default 6)")
     _recognizer_args(r)
@@ -169,7 +180,7 @@ def _register_evaluate(sub: argparse._SubParsersAction) -> None:
         ),
     )
     e.add_argument("inputs", nargs="*", metavar="INPUT", help="trial dirs (<root>/<action>/*.csv) or labelled recording CSVs")
-    e.add_argument("--templates", default=None, metavar="T.npz")
+    e.add_argument("--templates", default=None, metavar="T.npz", help="the templates to test the INPUTs with")
     e.add_argument("--train", default=None, metavar="TRIALS_DIR", help="build templates from these trials")
     _data_set_args(e)
     e.add_argument("--keep", type=_keep, default=None,

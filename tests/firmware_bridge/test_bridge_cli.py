@@ -9,6 +9,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 from engine.recording import Recording, read_recording, write_recording
 from tools.cli import main
@@ -150,6 +151,17 @@ def test_bad_numbers_are_one_line_and_exit_2(capsys):
         err = capsys.readouterr().err.strip().splitlines()
         assert len(err) == 1 and argv[1] in err[0], (argv, err)
         assert time.perf_counter() - start < 5  # no hang
+
+
+def test_a_link_in_a_missing_folder_is_one_line_before_the_port_opens(tmp_path, capsys):
+    """The review: `--link /no/such/dir/l` ended in `[Errno 2] No such file or directory:
+    '/dev/pts/0' -> '/no/such/dir/l.12435.tmp'`, after the port was announced."""
+    link = tmp_path / "missing" / "qj-bridge"
+    with pytest.raises(SystemExit) as exit_:
+        main(["bridge", "emulate", "--seconds", "1", "--link", str(link)])
+    assert exit_.value.code == 2
+    assert capsys.readouterr().err == (f"quickjab bridge emulate: argument --link: {link}: no directory {link.parent}"
+                                       " (see quickjab bridge emulate --help)\n")
 
 
 def test_boot_id_is_random_per_boot_unless_seeded():

@@ -34,6 +34,14 @@ def test_python_m_game_reports_bad_input_in_one_line():
     ]
 
 
+@pytest.mark.parametrize("args", [("play", "--low-pwer"), ("play", "--difficulty", "x"), ("train", "--seed", "-1")])
+def test_python_m_game_reports_a_bad_argument_in_one_line(args):
+    """As quickjab's parser: one line naming the command, exit 2 (argparse's usage block before)."""
+    r = run(*args)
+    assert r.returncode == 2 and r.stderr.count("\n") == 1 and "usage" not in r.stderr, r.stderr
+    assert r.stderr.startswith(f"python -m game {args[0]}: ") and r.stderr.endswith(f"(see python -m game {args[0]} --help)\n")
+
+
 def test_one_owner_runs_a_command_for_both_command_lines(capsys, monkeypatch):
     """game.command.run_command is the error handling of `quickjab` and `python -m game`."""
     import argparse

@@ -440,3 +440,14 @@ def test_the_self_check_takes_a_trial_a_step_so_the_window_keeps_answering(capsy
     assert len(lines) == 7 and lines[-1].endswith("of 6 trials recognized without their own template")
     assert "each new trial against the rest" in capsys.readouterr().err  # said once, at the end
     assert run.finish() == lines[-1]
+
+
+def test_actions_naming_no_action_is_one_line_and_exit_2(tmp_path, capsys):
+    """The review: `train --actions ,` ended in an IndexError traceback from the screen, and
+    `--actions ""` trained all 13 moves."""
+    for value in (",", "", " , "):
+        assert main(["train", "--headless", "--demo", "--actions", value, "--size", "320x180",
+                     "-o", str(tmp_path / "t.npz")]) == 2, value
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and err[0].startswith(f"quickjab train: --actions {value!r}: names no action; known: straight_l"), err
+    assert not (tmp_path / "t.npz").exists()

@@ -202,6 +202,16 @@ def test_the_one_player_legend_shows_the_keys_the_source_answers() -> None:
     assert one_player_session(url="keyboard://?seed=1").hud_state.keys == key_help(KEYMAP)
 
 
+def test_player_two_options_in_a_one_player_match_are_noted(capsys) -> None:
+    """The review: `play --source2 URL --profile2 NAME` without `--players 2` dropped both unsaid."""
+    assert main(["play", "--demo", "--headless", "--frames", "1", "--size", "320x180",
+                 "--source2", "keyboard://", "--profile2", "ben"]) == 0
+    notes = [line for line in capsys.readouterr().err.splitlines() if "ignored" in line]
+    assert notes == ["quickjab play: --source2 and --profile2 ignored without --players 2: they are player 2's"]
+    assert main(["play", "--demo", "--headless", "--frames", "1", "--size", "320x180"]) == 0
+    assert "ignored" not in capsys.readouterr().err  # not given: nothing to say
+
+
 def test_two_player_options_for_the_cpu_are_noted_and_one_keyboard_half_twice_is_an_error(capsys) -> None:
     assert main(["play", "--players", "2", "--demo", "--headless", "--frames", "1", "--size", "320x180",
                  "--difficulty", "hard", "--graph", "no-such.npz"]) == 0

@@ -59,11 +59,43 @@ def test_help_on_every_subcommand(capsys):
         assert out.startswith("usage: quickjab") and (not path or path[-1] in out), path
 
 
+def test_every_command_and_option_says_what_it_is(capsys):
+    """The review: `recognize --help` had no description and no word on REC.csv or --templates;
+    templates build, bvh info/cut/export, actions list/sheet/author and a few --seed neither."""
+    def missing(parser: argparse.ArgumentParser, path: tuple[str, ...]) -> list[str]:
+        out = []
+        for action in parser._actions:
+            if isinstance(action, argparse._SubParsersAction):
+                for name, sub in action.choices.items():
+                    out += [] if sub.description else [" ".join(path + (name,)) + ": no description"]
+                    out += missing(sub, path + (name,))
+            elif not isinstance(action, argparse._HelpAction) and not action.help:
+                out.append(" ".join(path) + f" {'/'.join(action.option_strings) or action.dest}: no help")
+        return out
+
+    assert missing(build_parser(), ()) == []
+
+
+def test_bench_help_gives_every_target_its_whole_summary():
+    """`quickjab bench --help` showed each target's first docstring line: three ended
+    mid-sentence ("recognition ... all templates in one", "startup ... (load")."""
+    from tools.bench import TARGETS
+
+    def subparsers(parser: argparse.ArgumentParser) -> argparse._SubParsersAction:
+        return next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+
+    targets = subparsers(subparsers(build_parser("bench")).choices["bench"])
+    helps = {choice.dest: choice.help for choice in targets._choices_actions}
+    assert set(helps) == set(TARGETS)
+    assert all(text.endswith(".") for text in helps.values()), helps
+
+
 @pytest.mark.parametrize("argv", [
     ["play", "--seed", "-1"],
     ["evaluate", "--folds", "1", "x.csv"],
     ["bench", "loop", "--no-such-option"],
     ["templates", "build"],
+    ["bench", "graph", "--seed", "-1", "--graph", str(REPO / "game" / "assets" / "graph.npz")],  # was a numpy traceback
 ])
 def test_a_bad_argument_is_one_line_and_exit_2(capsys, argv):
     with pytest.raises(SystemExit) as exit_:
@@ -71,6 +103,20 @@ def test_a_bad_argument_is_one_line_and_exit_2(capsys, argv):
     assert exit_.value.code == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and err.startswith("quickjab") and "usage" not in err, err
+
+
+@pytest.mark.parametrize("argv, prog", [
+    (["play", "--low-pwer"], "quickjab play"),
+    (["bench", "loop", "--no-such-option"], "quickjab bench loop"),
+    (["graph", "info", "--graph"], "quickjab graph info"),
+])
+def test_an_unknown_option_is_named_by_the_command_given_it(capsys, argv, prog):
+    """The review: `quickjab play --low-pwer` said `quickjab: unrecognized arguments ... (see
+    quickjab --help)`, whose help lists the commands, not play's options."""
+    with pytest.raises(SystemExit) as exit_:
+        main(argv)
+    assert exit_.value.code == 2
+    assert capsys.readouterr().err == f"{prog}: unrecognized arguments: {argv[-1]} (see {prog} --help)\n"
 
 
 @pytest.mark.parametrize("value", ["0", "0.5", "1"])
@@ -134,6 +180,16 @@ def test_bad_arguments_name_themselves(tmp_path, args, words):
     r = quickjab(*args, cwd=tmp_path)
     assert r.returncode == 2 and "Traceback" not in r.stderr
     assert len(r.stderr.strip().splitlines()) == 1 and words in r.stderr
+
+
+@pytest.mark.parametrize("users", ["x", ",", "auto", "0"])
+def test_evaluate_users_are_refused_in_their_own_words(capsys, users):
+    """`--users x` was refused as a main buffer: "expected a positive int or 'auto'"; users take no 'auto'."""
+    with pytest.raises(SystemExit) as exit_:
+        main(["evaluate", "--uwave", "u", "--users", users])
+    assert exit_.value.code == 2
+    assert capsys.readouterr().err == (f"quickjab evaluate: argument --users: expected user numbers such as 1-6 or 1,3, "
+                                       f"not {users!r} (see quickjab evaluate --help)\n")
 
 
 def test_unwritable_output_is_one_line(tmp_path, shared_data):
