@@ -22,7 +22,6 @@ T = TypeVar("T")
 DEFAULT_SOURCE = "wiimote://"
 KEYBOARD_SOURCE = "keyboard://"
 DEMO_SOURCE = "keyboard://?profile=experienced"
-KEYBOARD_BANNER = "No Wiimote found: playing from the keyboard"
 HEADLESS_FRAMES = 600  # `--headless` without `--frames` stops after 10 s of play, never runs on unseen
 INVISIBLE_DRIVERS = ("offscreen", "dummy")  # SDL video drivers that open no window
 
@@ -35,6 +34,10 @@ def parse_size(text: str) -> tuple[int, int]:
     return w, h
 
 
+# what a headless run of each command needs to be of use: `train` runs until its walk is over
+HEADLESS_HINT = {"play": " --frames 600", "scope": " --frames 600", "train": ""}
+
+
 def check_visible_window(command: str) -> None:
     """A window was asked for but SDL fell back to a driver that shows nothing (no display: a
     server, an SSH session): say so and stop, rather than run unseen forever. Choosing such a
@@ -44,8 +47,8 @@ def check_visible_window(command: str) -> None:
     driver = pygame.display.get_driver()
     if driver in INVISIBLE_DRIVERS and os.environ.get("SDL_VIDEODRIVER", "").lower() != driver:
         raise InputError(f"no display: SDL opened its {driver!r} video driver, so no window would show; "
-                         f"run it where a display is (DISPLAY / WAYLAND_DISPLAY), or use `quickjab {command} --headless --frames N` "
-                         f"(in a clone: .venv/bin/quickjab {command} --headless --frames 600)")
+                         f"run it where a display is (DISPLAY / WAYLAND_DISPLAY), or use `quickjab {command} --headless{HEADLESS_HINT[command]}` "
+                         f"(in a clone: .venv/bin/quickjab {command} --headless{HEADLESS_HINT[command]})")
 
 
 def headless_frames(frames: int | None, headless: bool, command: str) -> int | None:
@@ -119,26 +122,28 @@ def init_pygame(sound: bool) -> None:
             pass
 
 
-def open_player_source(url: str | None, demo: bool, seed: int, clock) -> tuple[object, bool]:
-    """The source to play with and whether the keyboard fallback was taken."""
+def open_player_source(url: str | None, demo: bool, seed: int, clock) -> tuple[object, str]:
+    """The source to play with, and why the keyboard was taken instead of a Wiimote ("" when
+    it was not): the caller says it in one line with what that means for its command."""
     import game.keyboard_source  # noqa: F401 - registers keyboard://
     from engine.sensors import SourceError, SourceState, open_source
 
     if demo:
-        return open_source(f"{DEMO_SOURCE}&seed={seed}", clock=clock), False
+        return open_source(f"{DEMO_SOURCE}&seed={seed}", clock=clock), ""
     if url is not None:
         if url.startswith("keyboard://") and "seed=" not in url:
             url += ("&" if "?" in url else "?") + f"seed={seed}"
-        return open_source(url, clock=clock), False
+        return open_source(url, clock=clock), ""
     try:
         source = open_source(DEFAULT_SOURCE, clock=clock)
     except SourceError as exc:
-        print(f"quickjab: {str(exc).split(';')[0]}; using the keyboard", file=sys.stderr)
+        why = str(exc).split(";")[0]  # the pairing help after it is `quickjab devices`'s
     else:
         if source.state is not SourceState.DISCONNECTED:
-            return source, False
+            return source, ""
         source.close()
-    return open_source(f"{KEYBOARD_SOURCE}?seed={seed}", clock=clock), True
+        why = f"{DEFAULT_SOURCE}: no Wiimote connected"
+    return open_source(f"{KEYBOARD_SOURCE}?seed={seed}", clock=clock), why
 
 
 def toggle_fullscreen() -> None:

@@ -23,7 +23,6 @@ from engine import arguments
 from game.launch import (
     DEFAULT_SOURCE,
     HEADLESS_FRAMES,
-    KEYBOARD_BANNER,
     KEYBOARD_SOURCE,
     open_player_source,
     run_session,
@@ -91,20 +90,20 @@ def run(args: argparse.Namespace) -> int:
         if note:
             print(f"quickjab play: {note}", file=sys.stderr)
 
-    fallback = False
+    fallback = ""  # why the keyboard stands in for a Wiimote
 
     def sources(clock) -> list:
         nonlocal fallback
         source, fallback = open_player_source(args.source, args.demo, args.seed, clock.seconds)
         if fallback:
-            print(f"quickjab play: {KEYBOARD_BANNER}", file=sys.stderr)
+            print(f"quickjab play: {fallback}: playing from the keyboard", file=sys.stderr)
         return [source]
 
     def session(sources: list, clock, size: tuple[int, int], surface_provider):
         from game.session import Session, SessionConfig
 
         config = SessionConfig(seed=args.seed, size=size, low_power=args.low_power, demo=args.demo,
-                               keyboard_banner=fallback, templates=args.templates, graph=args.graph,
+                               keyboard_banner=bool(fallback), templates=args.templates, graph=args.graph,
                                sound=wants_sound(args),
                                left_handed=args.left_handed, difficulty=args.difficulty or "normal",
                                recognizer=settings)

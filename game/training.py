@@ -530,7 +530,7 @@ def _open_source(args: argparse.Namespace, clock):
     if args.demo:
         print("quickjab train: demo: the virtual player performs every move by itself", file=sys.stderr)
     elif fallback:
-        print("quickjab train: No Wiimote found: training from the keyboard (press a key to perform)", file=sys.stderr)
+        print(f"quickjab train: {fallback}: training from the keyboard (press a key to perform)", file=sys.stderr)
     playable = PLAYABLE in source.capabilities  # a virtual player performs the moves
     auto = args.demo or (playable and bool(source.auto))
     if playable:

@@ -76,7 +76,7 @@ def run(args: argparse.Namespace) -> int:
         print(f"  {w['model']:<14} {w['path']:<20} {w['serial']:<18} {w['url']}{extra}")
     if not wiimotes:
         print(f"  none found{': ' + wproblem if wproblem else ''}")
-        print(f"  ({PAIRING_HELP})")
+        print(f"  ({PAIRING_HELP.replace(' `quickjab devices` lists what is seen;', '')})")  # this is that list
     print("Serial ports:")
     for s in ports:
         print(f"  {s['path']:<20} {s['description']:<30} {s['url']}")

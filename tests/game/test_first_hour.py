@@ -143,6 +143,8 @@ def test_no_display_is_a_clear_error_not_an_invisible_window(command):
     assert r.returncode == 2, r.stderr
     assert "no display" in r.stderr and "--headless" in r.stderr
     assert "Traceback" not in r.stderr
+    # train's headless run goes on until its walk is over: --frames 600 stopped it in its first move
+    assert ("--frames 600" in r.stderr) == (command != "train"), r.stderr
 
 
 def test_training_traces_are_one_colour_per_hand():

@@ -23,12 +23,15 @@ def no_wiimote(url, clock):
     raise SourceError("no Wiimote found")
 
 
-def test_play_without_a_wiimote_falls_back_to_the_keyboard_with_a_banner(tmp_path, monkeypatch, graph_path):  # noqa: F811
+def test_play_without_a_wiimote_falls_back_to_the_keyboard_with_a_banner(tmp_path, monkeypatch, graph_path, capsys):  # noqa: F811
     monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "xdg"))
     monkeypatch.setitem(source_mod._factories, "wiimote", no_wiimote)
     shot, trace = tmp_path / "play.png", tmp_path / "trace.json"
     assert main(["play", "--headless", "--frames", "30", "--graph", graph_path, "--no-sound",
                  "--screenshot", str(shot), "--trace", str(trace)]) == 0
+    # one console line says why and what now (two said it: the source's reason, then the game's)
+    said = [line for line in capsys.readouterr().err.splitlines() if "keyboard" in line]
+    assert said == ["quickjab play: no Wiimote found: playing from the keyboard"], said
     img = pygame.surfarray.array3d(pygame.image.load(str(shot))).astype(int)  # (w, h, 3)
     assert img.shape[:2] == (1280, 720)
     top_centre = img[400:880, 100:160]

@@ -83,6 +83,8 @@ def test_devices_lists_both_kinds():
     r = quickjab("devices")
     assert r.returncode == 0, r.stderr
     assert "Wiimotes:" in r.stdout and "Serial ports:" in r.stdout
+    if "none found" in r.stdout:  # the pairing hint, without pointing at this very command
+        assert "pair one first" in r.stdout and "quickjab devices" not in r.stdout
     j = json.loads(quickjab("devices", "--json").stdout)
     assert set(j) >= {"wiimotes", "serial_ports"}
     for w in j["wiimotes"]:
