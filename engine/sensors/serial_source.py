@@ -5,7 +5,8 @@ URLs:
 - `serial://auto`: the first port whose USB VID:PID is a known board (Pico, ESP32 bridges);
   `serial://auto?vid=2e8a&pid=0005` names the pair.
 - `serial://<pyserial URL>`: anything after `serial://` that itself contains `://` is handed to
-  `serial.serial_for_url` unchanged, e.g. `serial://loop://` for tests.
+  `serial.serial_for_url`, e.g. `serial://loop://` for tests, less our own `baud`, `retry`,
+  `window` and `axes` (`serial://socket://bridge.local:7000?axes=-x,y,z`).
 
 Polling never waits: each poll drains `in_waiting` (the Linux tty buffer holds only 4095 bytes,
 so a slow reader loses data), decodes frames, and maps device time to host time. A lost port
@@ -424,15 +425,24 @@ class SerialSource(Source):
 
 
 def parse_serial_url(url: str) -> tuple[str | None, dict[str, str]]:
-    """(target, params): target is a path, a pyserial URL, or None for `auto`."""
+    """(target, params): target is a path, a pyserial URL, or None for `auto`. A pyserial URL
+    keeps its own query but gives up ours (`serial://socket://host:7000?axes=-x,y,z`: a board on
+    the network with its IMU turned; pyserial refused `axes` with a bare KeyError)."""
     rest = url.split("://", 1)[1] if "://" in url else ""
     if "://" in rest:
-        return rest, {}
+        base, _, query = rest.partition("?")
+        pieces = [p for p in query.split("&") if p]
+        ours = [p for p in pieces if p.partition("=")[0] in PYSERIAL_URL_OURS]
+        theirs = "&".join(p for p in pieces if p not in ours)
+        return base + (f"?{theirs}" if theirs else ""), dict(parse_qsl("&".join(ours), keep_blank_values=True))
     path, _, query = rest.partition("?")
     params = dict(parse_qsl(query, keep_blank_values=True))  # `axes=` is an error, not the default
     if not path:
         raise SourceError(f"{url}: no port (expected serial:///dev/ttyACM0, serial://auto or serial://loop://)")
     return (None if path == "auto" else path), params
+
+
+PYSERIAL_URL_OURS = ("baud", "retry", "window", "axes")  # the parameters no pyserial URL handler has
 
 
 def open_serial(url: str, clock: Clock) -> SerialSource:

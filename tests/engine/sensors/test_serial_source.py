@@ -231,7 +231,8 @@ def test_an_imu_mounted_another_way_reads_on_the_games_axes():
 
 
 @pytest.mark.parametrize("url", ["serial://", "serial:///dev/x?speed=3", "serial:///dev/x?baud=fast",
-                                 "serial:///dev/x?retry=0", "serial://loop://?retry=1", "serial://nosuch://x",
+                                 "serial:///dev/x?retry=0", "serial://loop://?retry=0", "serial://loop://?logging=loud",
+                                 "serial://nosuch://x",
                                  # nan passed `<= 0`: a retry of nan never reopened a lost port, and a
                                  # window of nan or inf never let the clock's minimum go (nor its deque)
                                  "serial:///dev/x?retry=nan", "serial:///dev/x?retry=inf", "serial:///dev/x?window=nan",
@@ -498,3 +499,20 @@ def test_a_board_with_only_sensor_b_streams_the_left_hand():
     np.testing.assert_allclose(got[1].accel[0], got[0].accel[0])  # the right hand holds still
     assert src.stats["sensor_unannounced"] == 1
     assert "right" in src.missing()
+
+
+def test_a_pyserial_url_takes_our_axes_and_keeps_its_own_query():
+    """`serial://socket://bridge:7000?axes=-x,y,z` (a board on the network, its IMU turned): the
+    whole query went to pyserial, which refused `axes` with a bare KeyError('debug|info|...')."""
+    from engine.sensors.serial_source import parse_serial_url
+    from firmware_bridge import protocol
+
+    assert parse_serial_url("serial://loop://?logging=debug&axes=-x,y,z") == ("loop://?logging=debug", {"axes": "-x,y,z"})
+    src = open_source("serial://loop://?axes=-x,y,z&retry=1")
+    try:
+        src.port.write(protocol.encode_hello(0, 0, 1, 200, 4096, 65500, 30, protocol.IMU_MPU6050, protocol.FLAG_SENSOR_A)
+                       + protocol.encode_sample(1, 5000, (4096, 0, 0)))
+        (got,) = src.poll()
+        assert got.accel.tolist() == [[-1.0, 0.0, 0.0]] and str(src.axes) == "-x,y,z"
+    finally:
+        src.close()
