@@ -138,9 +138,11 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def _parse_actions(text: str | None) -> list[str] | None:
-    if not text:
+    if text is None:
         return None
     names = [t.strip() for t in text.split(",") if t.strip()]
+    if not names:  # `--actions ,` or `--actions ""` synthesized all 13, as if not given
+        raise InputError(f"--actions {text!r}: names no action; actions: {', '.join(ACTION_NAMES)}")
     bad = [n for n in names if n not in ACTION_NAMES]
     if bad:
         raise InputError(f"unknown action(s) {', '.join(bad)}; actions: {', '.join(ACTION_NAMES)}")

@@ -75,6 +75,9 @@ def test_synth_session_is_labelled_with_rests(tmp_path):
 def test_synth_bad_input_is_one_line(capsys, tmp_path):
     assert main(["synth", "--trials", "1", "-o", str(tmp_path), "--actions", "haymaker"]) == 2
     assert "haymaker" in capsys.readouterr().err
+    for empty in (",", ""):  # synthesized all 13, as if --actions had not been given
+        assert main(["synth", "--trials", "1", "-o", str(tmp_path / "e"), "--actions", empty]) == 2
+        assert "names no action" in capsys.readouterr().err and not (tmp_path / "e").exists()
 
 
 def test_experienced_trials_are_told_apart_by_dtw():
