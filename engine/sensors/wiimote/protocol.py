@@ -83,7 +83,10 @@ EXT_ID = 0xA400FA
 EXT_INIT1 = 0xA400F0  # write 0x55 ...
 EXT_INIT2 = 0xA400FB  # ... then 0x00: extension initialised without encryption
 NUNCHUK_ID_SUFFIX = bytes([0xA4, 0x20, 0x00, 0x00])  # bytes 2..5 of the 6-byte ID
-BATTERY_FULL = 0xC8  # status battery byte of fresh cells (Dolphin: MAX_BATTERY_LEVEL)
+# Status battery byte of fresh cells: wiiuse's WM_MAX_BATTERY_CODE. Others differ: Linux
+# (hid-wiimote-core.c) reports byte * 100 / 255; Dolphin (WiimoteReport.h) fits the Home
+# menu's bars, charge = byte * 2.46 / 255 - 0.013 (full near 0x69).
+BATTERY_FULL = 0xC8
 
 
 @dataclass(frozen=True)
