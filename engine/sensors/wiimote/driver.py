@@ -277,6 +277,8 @@ class WiimoteSource(Source):
             return None
         if rep.padded:
             self.count("padded")
+        if rep.truncated:
+            self.count("truncated")
         if rep.buttons is not None:
             self.buttons = rep.buttons
         if rep.report_id == p.IN_STATUS:

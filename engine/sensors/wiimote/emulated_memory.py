@@ -15,9 +15,10 @@ EXT_SLAVE = 0x52  # the extension's i2c address (0xA4 >> 1)
 CHUNK_GAP_S = 0.005  # between successive 0x21 replies of one read
 
 
-def _scrambled(data: bytes) -> bytes:
-    """What an uninitialised Nunchuk's registers read as."""
-    return bytes(((b ^ 0x17) + 0x17) & 0xFF for b in data)
+def _zero_key_encrypted(data: bytes) -> bytes:
+    """What an uninitialised Nunchuk's registers read as: encrypted with the all-zero key, the
+    inverse of WiiBrew's decryption (x ^ 0x17) + 0x17 (its ID 00 00 reads FE FE)."""
+    return bytes(((b - 0x17) & 0xFF) ^ 0x17 for b in data)
 
 
 class EmulatedMemory:
@@ -56,8 +57,8 @@ class EmulatedMemory:
         if not plugged:
             return bytes(21)
         data = bytes(self.ext_regs[0:21])
-        if self.ext_stage < 2:  # not initialised: what comes out is scrambled
-            data = _scrambled(data)
+        if self.ext_stage < 2:  # not initialised: what comes out is encrypted
+            data = _zero_key_encrypted(data)
         return data
 
     def write(self, data: bytes, plugged: bool) -> int | None:
@@ -137,9 +138,8 @@ class EmulatedMemory:
             source = bytes(self.eeprom)
         elif space in (1, 2) and data[2] >> 1 == EXT_SLAVE and plugged:
             source = bytes(self.ext_regs)
-            if self.ext_stage < 2:
-                source = _scrambled(source)
-                source = source[:0xFA] + bytes(self.ext_regs[0xFA:])  # the ID reads plain
+            if self.ext_stage < 2:  # the ID too: Dolphin's real-remote code cannot identify
+                source = _zero_key_encrypted(source)  # an uninitialised extension
         else:
             reply(p.ERR_NACK if space in (1, 2) else p.ERR_INVALID_SPACE, address, b"", t)
             return replies

@@ -10,7 +10,8 @@ real output reports the way Dolphin's WiimoteEmu and WiiBrew describe a real rem
   LEDs/mode/IR/speaker ack only when byte 1 bit 1 asks; rumble (bit 0) rides on every report.
 - 0x12 with a valid mode starts data reports; continuous ones come every 10 ms (+ jitter).
 - a Nunchuk plug/unplug sends an unsolicited 0x20 and stops data reports until 0x12 comes.
-- the Nunchuk's data are scrambled until it is initialised (0x55 -> F0, then 0x00 -> FB).
+- the Nunchuk's registers (data, calibration, ID) read encrypted with the all-zero key until
+  it is initialised (0x55 -> F0, then 0x00 -> FB).
 - the host's buffer holds 64 reports (Linux hidraw): when nobody reads, newer ones are lost.
 
 `EmulatedBus` is the `hid`/`hidraw` module stand-in (`enumerate`, `device`) the driver's

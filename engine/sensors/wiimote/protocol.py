@@ -42,6 +42,9 @@ IN_READ_REPLY = 0x21
 IN_ACK = 0x22
 MODE_CORE_ACCEL_EXT16 = 0x35  # buttons + accelerometer + 16 extension bytes
 
+# An off-brand remote ("NEW 2in1") cuts its 0x21 replies short; Dolphin (WiimoteController.cpp,
+# ReportHandler::AddHandler) zero-fills them: one is read if its address came (6 bytes).
+READ_REPLY_MIN_LENGTH = 6
 # Length of each input report including the ID byte (hid-wiimote-core.c handler table).
 INPUT_REPORT_LENGTHS = {
     0x20: 7, 0x21: 22, 0x22: 5,
@@ -80,7 +83,10 @@ EXT_ID = 0xA400FA
 EXT_INIT1 = 0xA400F0  # write 0x55 ...
 EXT_INIT2 = 0xA400FB  # ... then 0x00: extension initialised without encryption
 NUNCHUK_ID_SUFFIX = bytes([0xA4, 0x20, 0x00, 0x00])  # bytes 2..5 of the 6-byte ID
-BATTERY_FULL = 0xC8  # status battery byte of fresh cells (Dolphin: MAX_BATTERY_LEVEL)
+# Status battery byte of fresh cells: wiiuse's WM_MAX_BATTERY_CODE. Others differ: Linux
+# (hid-wiimote-core.c) reports byte * 100 / 255; Dolphin (WiimoteReport.h) fits the Home
+# menu's bars, charge = byte * 2.46 / 255 - 0.013 (full near 0x69).
+BATTERY_FULL = 0xC8
 
 
 @dataclass(frozen=True)
@@ -102,6 +108,7 @@ class Report:
     payload: bytes | None = None  # 0x21: the `size` data bytes
     acked_report: int | None = None  # 0x22: the output report acknowledged
     padded: bool = False  # more bytes arrived than the report ID defines
+    truncated: bool = False  # 0x21 cut short (off-brand remotes): the missing data read as zeros
 
 
 def _as_bytes(data: object) -> bytes | None:
@@ -133,9 +140,10 @@ def decode_report(data: bytes) -> Report:
         return Report(report_id=-1, valid=False)
     rid = raw[0]
     length = INPUT_REPORT_LENGTHS.get(rid)
-    if length is None or len(raw) < length:
+    truncated = rid == IN_READ_REPLY and READ_REPLY_MIN_LENGTH <= len(raw) < length
+    if length is None or (len(raw) < length and not truncated):
         return Report(report_id=rid, valid=False)
-    r = raw[:length]
+    r = raw[:length].ljust(length, b"\0")
     padded = len(raw) > length
     if rid == IN_STATUS:
         flags = r[3]
@@ -149,6 +157,7 @@ def decode_report(data: bytes) -> Report:
         return Report(
             report_id=rid, valid=True, buttons=_core_buttons(r[1], r[2]), error=r[3] & 0x0F,
             size=size, address=r[4] << 8 | r[5], payload=bytes(r[6 : 6 + size]), padded=padded,
+            truncated=truncated,
         )  # fmt: skip
     if rid == IN_ACK:
         return Report(

@@ -112,3 +112,45 @@ def test_driver_recovers_lost_output_reports():
         got += src.poll()
     assert src.state is SourceState.CONNECTED and src.extension == "none" and len(got) > 50
     assert src.stats["probes"] >= 1  # the silence was noticed and the mode asked for again
+
+
+def test_driver_sets_up_a_remote_that_shortens_its_read_replies():
+    # An off-brand remote ("NEW 2in1", Dolphin WiimoteController.cpp) sends 0x21 replies cut
+    # to their data (here the 10-byte EEPROM block and the 6-byte ID): the set-up must still
+    # read the calibrations and the Nunchuk's ID.
+    vc = VirtualClock()
+    emu = EmulatedWiimote(REC, vc.seconds)
+    take = emu.take
+
+    def shortened(now):
+        data = take(now)
+        if data and data[0] == p.IN_READ_REPLY and not data[3] & 0x0F:
+            data = data[: 6 + (data[3] >> 4) + 1]
+        return data
+
+    emu.take = shortened
+    src = WiimoteSource(clock=vc.seconds, backend=EmulatedBus([emu]))
+    for _ in range(60):
+        vc.advance(16_666_667)
+        src.poll()
+    assert src.state is SourceState.CONNECTED and src.extension == "nunchuk"
+    assert src.wiimote_calibration == emu.wiimote_cal and src.nunchuk_calibration == emu.nunchuk_cal
+    assert src.stats["truncated"] >= 2 and not src.stats.get("malformed")
+
+
+def test_uninitialised_nunchuk_reads_as_encrypted_with_the_zero_key():
+    # WiiBrew (Wiimote/Extension Controllers; the older WiiLi page): with the all-zero key a
+    # byte decrypts as (x ^ 0x17) + 0x17, so the extension sends (p - 0x17) ^ 0x17; the
+    # Nunchuk's ID 00 00 at 0xA400FE reads FE FE encrypted. Dolphin's real-remote code
+    # (WiimoteController.cpp) finds an uninitialised extension's ID unrecognisable.
+    def decrypt(data):
+        return bytes(((b ^ 0x17) + 0x17) & 0xFF for b in data)
+
+    vc, emu = remote()
+    emu.handle_output(p.build_report_mode())
+    raw = [r for r in drain(vc, emu) if r.report_id == 0x35][-1].extension
+    assert decrypt(raw[:6]) == p.encode_nunchuk((0x80, 0x7F), emu.sent[-1].left)
+    emu.handle_output(p.build_read(p.EXT_ID, 6))
+    ident = [r for r in drain(vc, emu) if r.report_id == 0x21][-1]
+    assert ident.error == 0 and ident.payload == bytes.fromhex("fefe9a1efefe")
+    assert decrypt(ident.payload) == bytes.fromhex("0000a4200000") and not p.is_nunchuk_id(ident.payload)

@@ -73,7 +73,7 @@ def test_mode_35_extension_and_padding():
 
 
 def test_invalid_inputs_never_raise():
-    for data in (b"", [], None, [300], "xyz", bytes([0x99, 1, 2]), bytes([0x20]), bytes([0x21] * 21), object()):
+    for data in (b"", [], None, [300], "xyz", bytes([0x99, 1, 2]), bytes([0x20]), bytes([0x21] * 5), object()):
         r = decode_report(data)  # type: ignore[arg-type]
         assert r.valid is False
     assert decode_report([0x30, 0x00, 0x01]).valid  # hidapi gives lists of ints
@@ -165,3 +165,24 @@ def test_calibration_to_g():
     cal = p.Calibration((500, 510, 520), (600, 610, 620))
     assert np.allclose(cal.to_g((600, 510, 420)), [1.0, 0.0, -1.0])
     assert np.allclose(cal.from_g([1.0, 0.0, -1.0]), [600, 510, 420])
+
+
+def test_shortened_read_reply_from_an_off_brand_remote():
+    # Dolphin (InputCommon/ControllerInterface/Wiimote/WiimoteController.cpp, ReportHandler::
+    # AddHandler): 'Off-brand "NEW 2in1" Wii Remote likes to shorten read data replies'; it
+    # zero-fills them. The 10-byte calibration read at 0x16 answered with 6 + 10 bytes:
+    block = bytes([0x80, 0x80, 0x80, 0x00, 0x9A, 0x9A, 0x9A, 0x00, 0x00])
+    block += bytes([(0x55 + sum(block)) & 0xFF])
+    r = decode_report(bytes([0x21, 0x00, 0x00, 0x90, 0x00, 0x16]) + block)
+    assert r.valid and r.size == 10 and r.error == 0 and r.address == 0x0016
+    assert r.payload == block and r.truncated and not r.padded
+    assert parse_calibration(r.payload).one_g == (616, 616, 616)
+    # cut inside the data: what came, zero-filled (the checksum then decides)
+    r = decode_report(bytes([0x21, 0, 0, 0x90, 0x00, 0x16]) + block[:4])
+    assert r.valid and r.payload == block[:4] + bytes(6) and r.truncated
+    # an error reply cut after its address still says which read failed
+    r = decode_report(bytes([0x21, 0, 0, 0xF7, 0x00, 0xFA]))
+    assert r.valid and r.error == 7 and r.address == 0x00FA
+    # without the address it cannot be matched to a read: still malformed
+    assert not decode_report(bytes([0x21, 0, 0, 0x90, 0x00])).valid
+    assert not decode_report(bytes([0x21, 0, 0, 0x90, 0x00, 0x16]) + block).padded
