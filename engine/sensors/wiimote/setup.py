@@ -8,7 +8,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 from engine.sensors.wiimote import protocol as p
-from engine.sensors.wiimote.scripts import DeviceGone, Script, ScriptRunner
+from engine.sensors.wiimote.scripts import DeviceGone, Script, ScriptRunner, SetupFailed
 
 if TYPE_CHECKING:
     from engine.sensors.wiimote.driver import WiimoteSource
@@ -85,11 +85,18 @@ class RemoteSetup:
 
     def _init_extension(self) -> Script:
         src, run = self.src, self.runner
-        # Without encryption ("the new way"): 0x55 to A400F0, then 0x00 to A400FB.
-        err = yield from run.write_register(p.EXT_INIT1, b"\x55")
-        if not err:
-            err = yield from run.write_register(p.EXT_INIT2, b"\x00")
-        ident = None if err else (yield from run.read_memory(p.EXT_ID, 6))
+        try:
+            # Without encryption ("the new way"): 0x55 to A400F0, then 0x00 to A400FB.
+            err = yield from run.write_register(p.EXT_INIT1, b"\x55")
+            if not err:
+                err = yield from run.write_register(p.EXT_INIT2, b"\x00")
+            ident = None if err else (yield from run.read_memory(p.EXT_ID, 6))
+        except SetupFailed:
+            # An extension that never answers (a loose plug): the remote streams on without it and
+            # it is tried again (EXT_RETRY_S), as Linux's hid-wiimote goes on and Dolphin retries;
+            # the whole remote was dropped and reconnected over and over
+            src.count("extension_timeouts")
+            ident = None
         if ident is None or ident == b"\xff" * 6:  # all 0xFF: half inserted (Linux: none)
             src.count("extension_init_errors")
             self._drop_extension()  # unplugged again meanwhile, or it would not answer
@@ -100,7 +107,11 @@ class RemoteSetup:
             src.extension = "unknown"
             src._say(f"ext-{ident.hex()}", f"extension {ident.hex(' ')} is not a Nunchuk; ignoring it")
             return
-        block = yield from run.read_memory(p.EXT_CALIBRATION, 16)
+        try:
+            block = yield from run.read_memory(p.EXT_CALIBRATION, 16)
+        except SetupFailed:  # as above: the Nunchuk is there, its calibration typical
+            src.count("extension_timeouts")
+            block = None
         cal = p.parse_nunchuk_calibration(block) if block else None
         if cal is None:
             cal = p.NUNCHUK_TYPICAL

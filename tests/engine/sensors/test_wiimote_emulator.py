@@ -154,3 +154,27 @@ def test_uninitialised_nunchuk_reads_as_encrypted_with_the_zero_key():
     ident = [r for r in drain(vc, emu) if r.report_id == 0x21][-1]
     assert ident.error == 0 and ident.payload == bytes.fromhex("fefe9a1efefe")
     assert decrypt(ident.payload) == bytes.fromhex("0000a4200000") and not p.is_nunchuk_id(ident.payload)
+
+
+def test_a_nunchuk_that_never_answers_leaves_the_remote_streaming_and_is_tried_again():
+    # A loose plug: the status says an extension is in, but its set-up writes get no ack. Three
+    # unanswered tries dropped the whole remote, which reconnected and failed again, over and
+    # over; Linux's hid-wiimote goes on without the extension and Dolphin retries it.
+    vc = VirtualClock()
+    emu = EmulatedWiimote(REC, vc.seconds)
+    write = emu.memory.write
+    emu.memory.write = lambda data, plugged: None if emu.deaf and data[2] >> 1 == 0x52 else write(data, plugged)
+    emu.deaf = True
+    src = WiimoteSource(clock=vc.seconds, backend=EmulatedBus([emu]))
+    got = []
+    for _ in range(180):  # 3 s
+        vc.advance(16_666_667)
+        got += src.poll()
+    assert src.state is SourceState.CONNECTED and not src.stats.get("disconnects") and not src.stats.get("setup_failures")
+    assert src.extension == "none" and src.missing().startswith("no Nunchuk") and len(got) > 100
+    assert src.stats["extension_timeouts"] >= 1
+    emu.deaf = False  # the plug seated: the next try (every 4 s) sets it up
+    for _ in range(360):
+        vc.advance(16_666_667)
+        src.poll()
+    assert src.extension == "nunchuk" and src.missing() == "" and not src.stats.get("disconnects")
