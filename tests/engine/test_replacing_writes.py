@@ -66,3 +66,19 @@ def test_a_graph_saved_over_another_is_whole_or_not_at_all(tmp_path):
     with small_files(), pytest.raises(OSError):
         table.save(path)
     assert path.read_bytes() == b"the cache the player had"
+
+
+def test_the_new_file_is_synced_before_it_replaces_the_old(tmp_path, monkeypatch):
+    """A rename without a sync first may reach the disk before the data: after a power cut the
+    player's file could be empty instead of the old one or the new."""
+    import os
+
+    from engine import npz_files
+
+    calls = []
+    real_fsync, real_replace = os.fsync, os.replace
+    monkeypatch.setattr(npz_files.os, "fsync", lambda fd: (calls.append("fsync"), real_fsync(fd))[1])
+    monkeypatch.setattr(npz_files.os, "replace", lambda a, b: (calls.append("replace"), real_replace(a, b))[1])
+    npz_files.write_replacing(tmp_path / "t.npz", lambda f: f.write(b"data"))
+    assert calls == ["fsync", "replace"]
+    assert (tmp_path / "t.npz").read_bytes() == b"data"
