@@ -24,7 +24,9 @@ RATE_PROBE_S = 0.5  # without an announced rate, the rate is measured over the f
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("record", help="record a source to a CSV file", description=__doc__)
     p.add_argument("--source", required=True, help="source URL: wiimote://, serial:///dev/ttyACM0, replay://f.csv, ...")
-    p.add_argument("-o", "--output", required=True, help="CSV file to write")
+    # its folder checked now: a missing or read-only one was said only once the source had
+    # connected and sent samples (after pairing a Wiimote, the player ready to move)
+    p.add_argument("-o", "--output", required=True, type=arguments.output_file, metavar="CSV", help="CSV file to write")
     p.add_argument("--seconds", type=arguments.positive_float, default=None, help="stop after this many seconds (default: Ctrl-C)")
     p.add_argument("--label", default="", help="label every row with this action name (for trials)")
     p.add_argument("--connect-timeout", type=arguments.positive_float, default=CONNECT_TIMEOUT_S, metavar="S",

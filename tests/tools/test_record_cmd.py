@@ -103,3 +103,17 @@ def test_sigterm_ends_a_recording_as_ctrl_c_does(tmp_path):
     assert "Traceback" not in err
     rows = len(read_recording(out))
     assert f"wrote {rows} samples to {out}" in err
+
+
+def test_an_output_folder_that_cannot_take_the_file_is_said_before_recording(tmp_path, capsys):
+    """-o in a missing folder was found out only once the source had connected and sent samples:
+    a Wiimote paired and the player ready, then 'cannot write'. Now before the source is opened."""
+    import pytest
+
+    t0 = time.perf_counter()
+    with pytest.raises(SystemExit) as exc:
+        main(["record", "--source", "demo://", "-o", str(tmp_path / "missing" / "out.csv"), "--seconds", "2"])
+    assert exc.value.code == 2
+    err = capsys.readouterr().err
+    assert "no directory" in err and "source demo://" not in err
+    assert time.perf_counter() - t0 < 1.5
