@@ -105,8 +105,8 @@ def read_json(array: np.ndarray) -> object:
 
 def write_replacing(path: str | os.PathLike, write: Callable[[object], None]) -> None:
     """Call `write(f)` with a binary file that becomes `path` only once it is whole: written
-    beside it and renamed over it, so a full disk or a Ctrl-C halfway leaves the previous file
-    as it was and no part of the new one. A `path` that exists and is not a regular file (a
+    beside it, synced and renamed over it, so a full disk or a Ctrl-C halfway leaves the previous
+    file as it was and no part of the new one. A `path` that exists and is not a regular file (a
     device such as /dev/full, a pipe) is written in place; a link keeps pointing where it did."""
     import stat
     import tempfile
@@ -124,6 +124,9 @@ def write_replacing(path: str | os.PathLike, write: Callable[[object], None]) ->
     try:
         with os.fdopen(fd, "wb") as f:
             write(f)
+            f.flush()
+            os.fsync(f.fileno())  # on disk before the rename: a machine that crashes just after
+            # it could otherwise show the new name with no data (an empty file where the old one was)
         umask = os.umask(0)
         os.umask(umask)
         os.chmod(tmp, stat.S_IMODE(mode) if mode is not None else 0o666 & ~umask)

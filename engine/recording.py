@@ -20,6 +20,7 @@ import numpy as np
 
 from engine.clock import STEP_HZ
 from engine.errors import InputError, not_a_regular_file
+from engine.npz_files import write_replacing
 from engine.sample import Sample
 
 HAND_COLUMNS = (("rx", "ry", "rz"), ("lx", "ly", "lz"))
@@ -285,12 +286,18 @@ def _file_head(sensors: int, meta: dict[str, str]) -> str:
 
 
 def write_recording(path: str | os.PathLike, rec: Recording) -> None:
-    """Write a whole recording (docs/formats.md layout, label column always present)."""
+    """Write a whole recording (docs/formats.md layout, label column always present), beside
+    `path` and renamed over it once whole: a full disk or a kill halfway through left a
+    truncated file (or a cut last row) where the player's recording had been."""
     buf = io.StringIO()
     buf.write(_file_head(rec.sensors, rec.meta))
     for t, a, lab in zip(rec.t, rec.accel, rec.labels, strict=True):
         buf.write(_format_row(float(t), a, lab))
-    Path(path).write_text(buf.getvalue(), encoding="utf-8", errors=UNENCODABLE)
+    data = buf.getvalue().encode("utf-8", UNENCODABLE)
+    try:
+        write_replacing(path, lambda f: f.write(data))
+    except OSError as exc:  # a full disk: ENOSPC names no file, a read-only folder the temporary one
+        raise RecordingError(path, None, f"cannot write: {exc.strerror or exc}") from None
 
 
 class RecordingWriter:

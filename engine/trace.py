@@ -22,6 +22,7 @@ import numpy as np
 
 from engine.budget import UNACCOUNTED, FrameBudget
 from engine.errors import InputError
+from engine.npz_files import write_replacing
 
 PID, TID = 1, 1
 
@@ -129,7 +130,8 @@ def _span_event(budget: FrameBudget, r: int, name: str, limit_ns: float, origin:
 
 def write_chrome_trace(budget: FrameBudget, path: str | os.PathLike) -> None:
     try:
-        Path(path).write_text(json.dumps(chrome_trace(budget)), encoding="utf-8")
+        data = json.dumps(chrome_trace(budget)).encode("utf-8")
+        write_replacing(path, lambda f: f.write(data))  # whole, or the previous trace as it was
     except OSError as exc:  # a full disk's ENOSPC names no file
         raise TraceError(f"{path}: cannot write the trace ({exc.strerror or exc})") from None
 

@@ -18,6 +18,7 @@ from pathlib import Path
 
 from engine import arguments
 from engine.errors import InputError, refuse_overwriting
+from engine.npz_files import write_replacing
 from game.actions import KINDS, load_library
 from game.bvh import (
     cut_action,
@@ -80,7 +81,8 @@ def run_cut(args: argparse.Namespace) -> int:
     action = cut_action(motion, args.start, args.end, args.name, args.kind, guard)
     Path(args.output).parent.mkdir(parents=True, exist_ok=True)
     try:
-        Path(args.output).write_text(json.dumps(action.to_json(), indent=1) + "\n", encoding="utf-8")
+        data = (json.dumps(action.to_json(), indent=1) + "\n").encode("utf-8")
+        write_replacing(args.output, lambda f: f.write(data))  # whole, or the file it replaces as it was
     except OSError as exc:  # a full disk: ENOSPC names no file
         raise InputError(f"{args.output}: cannot write ({exc.strerror or exc})") from None
     print(f"wrote {args.name} ({action.frames} frames) to {args.output}; "

@@ -4,6 +4,8 @@ to the recording CSV of docs/formats.md, flushed at least every 0.25 s."""
 from __future__ import annotations
 
 import argparse
+import contextlib
+import signal
 import sys
 import time
 from pathlib import Path
@@ -22,7 +24,9 @@ RATE_PROBE_S = 0.5  # without an announced rate, the rate is measured over the f
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("record", help="record a source to a CSV file", description=__doc__)
     p.add_argument("--source", required=True, help="source URL: wiimote://, serial:///dev/ttyACM0, replay://f.csv, ...")
-    p.add_argument("-o", "--output", required=True, help="CSV file to write")
+    # its folder checked now: a missing or read-only one was said only once the source had
+    # connected and sent samples (after pairing a Wiimote, the player ready to move)
+    p.add_argument("-o", "--output", required=True, type=arguments.output_file, metavar="CSV", help="CSV file to write")
     p.add_argument("--seconds", type=arguments.positive_float, default=None, help="stop after this many seconds (default: Ctrl-C)")
     p.add_argument("--label", default="", help="label every row with this action name (for trials)")
     p.add_argument("--connect-timeout", type=arguments.positive_float, default=CONNECT_TIMEOUT_S, metavar="S",
@@ -196,5 +200,26 @@ def run(args: argparse.Namespace) -> int:
     if not args.connect_timeout > 0:
         raise InputError(f"--connect-timeout {args.connect_timeout}: must be positive")
     refuse_overwriting({"-o": args.output}, [url_file(args.source)])
-    record(args.source, args.output, args.seconds, args.label, connect_timeout=args.connect_timeout)
+    with stop_signals_end_recording():
+        record(args.source, args.output, args.seconds, args.label, connect_timeout=args.connect_timeout)
     return 0
+
+
+@contextlib.contextmanager
+def stop_signals_end_recording():
+    """SIGTERM (`kill`, a service manager, `timeout`) and SIGHUP (the terminal closed) end a
+    recording as Ctrl-C does: the samples held for the rate are written, the file is synced and
+    closed, and the summary says what was written. Their default ended the process on the spot,
+    with neither (and exit status 143, as if the recording had failed)."""
+    def stop(signum, frame) -> None:
+        raise KeyboardInterrupt
+
+    previous = {}
+    for sig in (signal.SIGTERM, signal.SIGHUP):
+        with contextlib.suppress(ValueError):  # not the main thread: the default stays
+            previous[sig] = signal.signal(sig, stop)
+    try:
+        yield
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)

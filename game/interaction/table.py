@@ -45,7 +45,7 @@ from pathlib import Path
 import numpy as np
 
 from engine.errors import InputError
-from engine.npz_files import read_json, read_npz
+from engine.npz_files import read_json, read_npz, write_replacing
 
 from .bout import BoutRules, Rewards
 from .state import StateGrid
@@ -241,8 +241,11 @@ class GraphTable:
     def save(self, path: str | Path) -> None:
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
-        with open(path, "wb") as fh:   # a file object: savez would otherwise append ".npz"
-            np.savez_compressed(fh, **self.to_arrays())
+        arrays = self.to_arrays()
+        # a file object: savez would otherwise append ".npz"; written beside and renamed over,
+        # as templates are: a kill mid-write left a truncated graph-small.npz, the cache `play`
+        # then refused every time (it is built only when missing)
+        write_replacing(path, lambda fh: np.savez_compressed(fh, **arrays))
 
     def to_arrays(self) -> dict[str, np.ndarray]:
         """The version-3 arrays of the file (see the module docstring)."""

@@ -78,3 +78,42 @@ def test_a_full_disk_leaves_a_recording_that_reads_to_its_last_whole_row(tmp_pat
     assert 0 < len(data) <= limit and data.endswith(b"\n")
     rec = read_recording(out)  # raised RecordingError: a partial last row
     assert len(rec) > 100 and rec.sensors == 2
+
+
+def test_sigterm_ends_a_recording_as_ctrl_c_does(tmp_path):
+    """`kill`, a service manager or `timeout` stop a recording with SIGTERM: it ended the process
+    on the spot (status -15), without the summary, the final sync or the samples still held for
+    the rate. Now it is Ctrl-C's clean end: exit 0, 'wrote N samples', and N rows in the file."""
+    import signal
+
+    out = tmp_path / "out.csv"
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "tools.cli", "record", "--source", "demo://?rate=200", "-o", str(out)],
+        cwd=REPO, env={**os.environ, "PYTHONPATH": str(REPO)}, stderr=subprocess.PIPE, text=True,
+    )
+    try:
+        deadline = time.monotonic() + 30
+        while not (out.exists() and out.read_bytes().count(b"\n") > 20) and time.monotonic() < deadline:
+            time.sleep(0.05)
+        proc.send_signal(signal.SIGTERM)
+        err = proc.communicate(timeout=30)[1]
+    finally:
+        proc.kill()
+    assert proc.returncode == 0, err
+    assert "Traceback" not in err
+    rows = len(read_recording(out))
+    assert f"wrote {rows} samples to {out}" in err
+
+
+def test_an_output_folder_that_cannot_take_the_file_is_said_before_recording(tmp_path, capsys):
+    """-o in a missing folder was found out only once the source had connected and sent samples:
+    a Wiimote paired and the player ready, then 'cannot write'. Now before the source is opened."""
+    import pytest
+
+    t0 = time.perf_counter()
+    with pytest.raises(SystemExit) as exc:
+        main(["record", "--source", "demo://", "-o", str(tmp_path / "missing" / "out.csv"), "--seconds", "2"])
+    assert exc.value.code == 2
+    err = capsys.readouterr().err
+    assert "no directory" in err and "source demo://" not in err
+    assert time.perf_counter() - t0 < 1.5

@@ -1,0 +1,84 @@
+"""Writers that replace a file the player had write the new one beside it and rename it over:
+a write that fails halfway (a full disk; here a file size limit, EFBIG) or a kill mid-write
+leaves the previous file as it was, never a truncated one in its place."""
+
+from __future__ import annotations
+
+import contextlib
+import resource
+
+import numpy as np
+import pytest
+
+from engine.recording import Recording, RecordingError, read_recording, write_recording
+
+LIMIT = 4096  # bytes a write may reach: every new file below is larger
+
+
+@contextlib.contextmanager
+def small_files():
+    """Writes past LIMIT bytes fail with EFBIG (Python ignores SIGXFSZ)."""
+    soft, hard = resource.getrlimit(resource.RLIMIT_FSIZE)
+    resource.setrlimit(resource.RLIMIT_FSIZE, (LIMIT, hard))
+    try:
+        yield
+    finally:
+        resource.setrlimit(resource.RLIMIT_FSIZE, (soft, hard))
+
+
+def _recording(n: int, seed: int) -> Recording:
+    rng = np.random.default_rng(seed)
+    return Recording(np.arange(n) / 60.0, rng.normal(0, 0.3, (n, 2, 3)), meta={"seed": str(seed)})
+
+
+def test_a_recording_written_over_another_is_whole_or_not_at_all(tmp_path):
+    path = tmp_path / "rec.csv"
+    write_recording(path, _recording(50, 1))  # under the limit
+    before = path.read_bytes()
+    with small_files(), pytest.raises(RecordingError) as err:
+        write_recording(path, _recording(2000, 2))
+    assert str(path) in str(err.value) and "cannot write" in str(err.value)
+    assert path.read_bytes() == before  # was cut at LIMIT bytes, the old recording gone
+    assert len(read_recording(path)) == 50
+    assert [p.name for p in tmp_path.iterdir()] == ["rec.csv"]  # no part file left
+
+
+def test_a_trace_written_over_another_is_whole_or_not_at_all(tmp_path):
+    from engine.trace import TraceError, write_chrome_trace
+    from tests.engine.test_trace import traced_loop
+
+    path = tmp_path / "trace.json"
+    path.write_text('{"traceEvents": []}')
+    with small_files(), pytest.raises(TraceError):
+        write_chrome_trace(traced_loop(frames=40).budget, path)
+    assert path.read_text() == '{"traceEvents": []}'
+
+
+def test_a_graph_saved_over_another_is_whole_or_not_at_all(tmp_path):
+    from game.interaction import DEFAULT_GRAPH
+    from game.interaction.table import GraphTable
+
+    if not DEFAULT_GRAPH.exists():
+        pytest.skip("no shipped graph to save")
+    path = tmp_path / "graph-small.npz"
+    path.write_bytes(b"the cache the player had")
+    table = GraphTable.load(DEFAULT_GRAPH)
+    with small_files(), pytest.raises(OSError):
+        table.save(path)
+    assert path.read_bytes() == b"the cache the player had"
+
+
+def test_the_new_file_is_synced_before_it_replaces_the_old(tmp_path, monkeypatch):
+    """A rename without a sync first may reach the disk before the data: after a power cut the
+    player's file could be empty instead of the old one or the new."""
+    import os
+
+    from engine import npz_files
+
+    calls = []
+    real_fsync, real_replace = os.fsync, os.replace
+    monkeypatch.setattr(npz_files.os, "fsync", lambda fd: (calls.append("fsync"), real_fsync(fd))[1])
+    monkeypatch.setattr(npz_files.os, "replace", lambda a, b: (calls.append("replace"), real_replace(a, b))[1])
+    npz_files.write_replacing(tmp_path / "t.npz", lambda f: f.write(b"data"))
+    assert calls == ["fsync", "replace"]
+    assert (tmp_path / "t.npz").read_bytes() == b"data"
