@@ -215,7 +215,7 @@ def stop_signals_end_recording():
         raise KeyboardInterrupt
 
     previous = {}
-    for sig in (signal.SIGTERM, signal.SIGHUP):
+    for sig in filter(None, (signal.SIGTERM, getattr(signal, "SIGHUP", None))):  # Windows has no SIGHUP
         with contextlib.suppress(ValueError):  # not the main thread: the default stays
             previous[sig] = signal.signal(sig, stop)
     try:
