@@ -488,6 +488,10 @@ def _keep_aside(output: Path, sensors: int) -> Path | None:
     if not output.exists():
         return None  # the default set: nothing of the player's is lost
     aside = output.with_name(f"{output.stem}-{sensors}-sensors{output.suffix}")
+    n = 1
+    while aside.exists():  # one moved aside before (2 -> 1 -> 2 -> 1 sensors): keep both
+        n += 1
+        aside = output.with_name(f"{output.stem}-{sensors}-sensors-{n}{output.suffix}")
     os.replace(output, aside)
     return aside
 

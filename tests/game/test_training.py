@@ -136,6 +136,20 @@ def test_a_players_own_moves_for_another_sensor_count_are_kept_aside_not_lost(tm
     assert f"yours for 2 sensor(s) are kept in {aside} (play --templates {aside})" in capsys.readouterr().err
 
 
+def test_a_second_set_kept_aside_does_not_replace_the_first(tmp_path):
+    """2 -> 1 -> 2 -> 1 sensors: the second move aside renamed over the first kept set."""
+    from game.training import _keep_aside
+
+    output = tmp_path / "templates.npz"
+    asides = []
+    for text in ("first two-sensor set", "second two-sensor set"):
+        output.write_text(text)
+        asides.append(_keep_aside(output, 2))
+    assert [a.name for a in asides] == ["templates-2-sensors.npz", "templates-2-sensors-2.npz"]
+    assert [a.read_text() for a in asides] == ["first two-sensor set", "second two-sensor set"]
+    assert not output.exists() and _keep_aside(output, 2) is None
+
+
 def test_the_trials_take_the_width_of_the_first_samples_not_a_boards_guess():
     """A serial board is connected once its port opens, its sensor count a guess (2) until its
     HELLO; its samples wait for the HELLO, so the first of them says how many sensors it has."""
