@@ -428,3 +428,16 @@ def test_a_profiles_trained_set_is_said_as_the_players_own_with_its_moves(tmp_pa
     other = tmp_path / "built.npz"
     synthesized_templates(trials=1).save(other)  # `--templates FILE` of another origin: its name
     assert templates_in_use(other) == "templates built.npz"
+
+
+def test_a_new_match_mid_round_does_not_count_the_cpus_lead_as_the_players_blows() -> None:
+    """Enter under SOURCE ENDED starts a new match mid-round: the fresh match's lead (0) after
+    the CPU's lead in the abandoned round read to the player's form as blows the player landed
+    (PlayerForm.observe: a fall of the lead), so the CPU pressed a player who had landed nothing."""
+    s = make_session("keyboard://?seed=4", render=False)
+    s.match.round_damage[1] = 30.0  # the CPU leads the round by 30; the player landed nothing
+    s.loop.run(steps=2)
+    assert s.difficulty.form.landed == 0.0
+    s.new_match()
+    s.loop.run(steps=2)
+    assert s.difficulty.form.landed == 0.0
