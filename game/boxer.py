@@ -44,7 +44,7 @@ class Boxer:
         self.stiffness = np.full(len(self.reference), STIFFNESS_HZ)
         self.stiffness[_ARM] = ARM_STIFFNESS_HZ
         self._spent: set[str] = set()
-        self._swing = (self.controller.action, self.controller.frame)
+        self._swing = self.controller.swing
 
     @property
     def root(self) -> tuple[float, float, float]:
@@ -81,11 +81,11 @@ class Boxer:
 
     # ---- hits -------------------------------------------------------------------------------
     def _track_swing(self) -> None:
-        pc = self.controller
-        last_action, last_frame = self._swing
-        if pc.action != last_action or pc.frame < last_frame:
-            self._spent.clear()  # a new clip: both hands may land again
-        self._swing = (pc.action, pc.frame)
+        # a new clip (PlayerController.play) lets both hands land again; a switch does not (the
+        # same motion relabelled: it cleared the spent hand and landed the same swing again)
+        if self.controller.swing != self._swing:
+            self._spent.clear()
+        self._swing = self.controller.swing
 
     def hand_spent(self, hand: str) -> bool:
         return hand in self._spent

@@ -66,6 +66,12 @@ class PlayerForm:
         if change < 0.0:
             self.landed -= change
 
+    def abandon_round(self) -> None:
+        """A round left unfinished (a new match started in it): nothing of it counts, and the
+        next lead is read from 0 (the new match's), not as a fall from the old round's."""
+        self.landed = 0.0
+        self._lead = 0.0
+
     def new_round(self) -> None:
         """A round ended: its damage joins the average; the next round counts from 0."""
         self.per_round += FORM_WEIGHT * (self.landed - self.per_round)

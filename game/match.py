@@ -14,6 +14,7 @@ scripted match is reproducible and its state hashes. Rules, kept simple and dete
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import NamedTuple
 
@@ -132,8 +133,10 @@ class Match:
             self.paused = not self.paused
 
     def hit(self, target: int, damage: float) -> bool:
-        """Boxer `target` takes `damage`. Returns True when the blow counted."""
-        if not self.fighting or damage <= 0:
+        """Boxer `target` takes `damage`. Returns True when the blow counted (not a NaN or
+        infinite one: NaN knocked the boxer down, max(0, health - nan) being 0, and left NaN in
+        the round's damage)."""
+        if not self.fighting or not math.isfinite(damage) or damage <= 0:
             return False
         attacker = 1 - target
         self.health[target] = max(0.0, self.health[target] - damage)

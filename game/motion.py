@@ -42,6 +42,7 @@ class PlayerController:
         self._blend_step = 0
         self._finished = False
         self._from_event = False
+        self.swing = 0  # counts the clips played; a switch keeps it (the same motion, relabelled)
 
     # ------------------------------------------------------------------ control
     @property
@@ -71,6 +72,7 @@ class PlayerController:
             self._offset = None
         self.action, self.frame, self._fresh = name, from_frame, True
         self._from_event = False
+        self.swing += 1
 
     def on_event(self, event: dict) -> None:
         """Apply one recognizer event (docs/formats.md keys)."""
@@ -80,7 +82,10 @@ class PlayerController:
             if name not in self.lib:
                 self.ignored_events += 1
                 return
+            swing = self.swing
             self.play(name, event.get("from_frame", 0) if kind == "switch" else 0)
+            if kind == "switch":  # the motion under way, better named: a hand it landed stays spent
+                self.swing = swing
             self._from_event = True
         elif kind == "reject":
             young = self.phase < REJECT_ABORT_FRACTION

@@ -472,6 +472,7 @@ class Session(Ring):
         """A fresh match (Enter after the last bell or under SOURCE ENDED; by itself in the
         attract mode)."""
         rewind_ended(self.sources())
+        self.difficulty.form.abandon_round()  # mid-round (Enter under SOURCE ENDED): not the player's blows
         self.match = Match()
         self._rounds_seen = 0
         self._over_steps = 0

@@ -130,3 +130,24 @@ def test_switching_at_n_p_is_smoother_on_the_simulated_body(a_name, b_name):
         speed = np.linalg.norm(np.diff(np.array(xs), axis=0), axis=-1) * 60.0
         peaks[from_frame] = speed[n_p - 1 :].max()
     assert peaks[n_p] < peaks[0]
+
+
+def test_a_switch_during_a_landed_punch_does_not_land_it_again():
+    """A switch is the recognizer's better label for the motion under way, not a new punch: with
+    the fist still on the head, each switch (straight_r <-> hook_r, both in their attack window
+    at from_frame 10) cleared the spent hand and landed the same swing again, a blow a step; a
+    new start still lands."""
+    w, a, b = ring(0.85)
+    run(w, a, b, 20)
+    a.controller.on_event({"event": "start", "action": "straight_r"})
+    hits = []
+    while not hits and a.controller.action == "straight_r":
+        hits += run(w, a, b, 1)
+    assert len(hits) == 1
+    for i in range(10):
+        a.controller.on_event({"event": "switch", "action": ("hook_r", "straight_r")[i % 2], "from_frame": 10})
+        hits += run(w, a, b, 1)
+    assert len(hits) == 1
+    run(w, a, b, 60)
+    a.controller.on_event({"event": "start", "action": "straight_r"})
+    assert len(run(w, a, b, 40)) == 1

@@ -90,3 +90,14 @@ def test_state_is_reproducible() -> None:
         return m.state()
 
     assert play() == play()
+
+
+def test_a_blow_of_no_finite_damage_does_not_count() -> None:
+    # a NaN blow (a hit dict from outside the game, Session.apply_hit) knocked the boxer down
+    # (max(0, health - nan) is 0) and left NaN in the round's damage, so the scorecards compared
+    # NaN; an infinite one knocked down whatever the health. Neither counts now.
+    for damage in (float("nan"), float("inf"), -float("inf")):
+        m = Match()
+        assert not m.hit(1, damage)
+        assert m.phase == FIGHT and m.down is None and m.health == [100.0, 100.0]
+        assert m.round_damage == [0.0, 0.0] and m.hits == [0, 0]

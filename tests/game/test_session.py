@@ -428,3 +428,38 @@ def test_a_profiles_trained_set_is_said_as_the_players_own_with_its_moves(tmp_pa
     other = tmp_path / "built.npz"
     synthesized_templates(trials=1).save(other)  # `--templates FILE` of another origin: its name
     assert templates_in_use(other) == "templates built.npz"
+
+
+def test_a_new_match_mid_round_does_not_count_the_cpus_lead_as_the_players_blows() -> None:
+    """Enter under SOURCE ENDED starts a new match mid-round: the fresh match's lead (0) after
+    the CPU's lead in the abandoned round read to the player's form as blows the player landed
+    (PlayerForm.observe: a fall of the lead), so the CPU pressed a player who had landed nothing."""
+    s = make_session("keyboard://?seed=4", render=False)
+    s.match.round_damage[1] = 30.0  # the CPU leads the round by 30; the player landed nothing
+    s.loop.run(steps=2)
+    assert s.difficulty.form.landed == 0.0
+    s.new_match()
+    s.loop.run(steps=2)
+    assert s.difficulty.form.landed == 0.0
+
+
+def test_the_cpu_does_not_decide_a_new_round_on_the_last_one() -> None:
+    """The CPU's reaction delay (easy: 10 steps) kept the situations it saw before the round
+    ended: after the bell put both boxers in their corners it decided its first moves on where
+    they stood when the last round ended (here within a hook's reach, 0.3 m closer than now)."""
+    s = make_session("keyboard://?seed=4", render=False)
+    for _ in range(3):  # normal -> hard -> adaptive -> easy
+        s.cycle_difficulty()
+    assert s.difficulty.name == "easy" and s.difficulty.current.reaction_steps == 10
+    seen = []
+    choose = s.opponent_ai.choose
+    s.opponent_ai.choose = lambda situation: (seen.append((s.match.round, situation.distance)), choose(situation))[-1]
+    s.loop.run(steps=2)
+    s.match.clock_steps = 30  # the round ends in half a second, the boxers close together
+    for _ in range(30):
+        s.player.place(0.0, s.opponent.root[1] - 0.8, 0.0)
+        s.loop.run(steps=1)
+    s.loop.run(steps=3 * 60 + 20)  # the break, the bell, the corners
+    assert s.match.round == 2
+    first = [d for r, d in seen if r == 2]
+    assert first and all(d > 1.0 for d in first[:10]), first[:10]
