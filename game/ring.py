@@ -3,9 +3,8 @@ game/two_player.py: two people): two boxers in the physics world at their marks,
 hits and match stages (game/stages.py), the referee's blows, the knockdown hold, the corners
 between rounds, the view and the state hash. The session around it brings the input, the
 recognition and the opponent: it sets `config`, `match`, `hud_state`, `sounds`, `view`,
-`events_log`, `blows_log`, `loop` and `opponent_ai` (the CPU, None with two players), and
-says what a blow's rumble, a decided round (`_rounds_over`), the source line
-(`_show_sources`) and a new match mean in its mode."""
+`events_log`, `blows_log` and `loop`, and says what a blow's rumble, a decided round
+(`_rounds_over`), the source line (`_show_sources`) and a new match mean in its mode."""
 
 from __future__ import annotations
 
@@ -128,8 +127,6 @@ class Ring:
             boxer.controller.play("guard", blend=False)
             boxer.controller.output = self.lib["guard"].posture(0)
             boxer.place(0.0, z, yaw)
-        if self.opponent_ai is not None:  # the CPU's reaction delay decided on where they stood before
-            self.opponent_ai.forget()
         self.prev_joints = [b.joint_positions().copy() for b in self.boxers]
         self.curr_joints = [j.copy() for j in self.prev_joints]
 

@@ -115,12 +115,6 @@ class OpponentController:
         """Record this step's situation (the delayed decisions read it later)."""
         self._seen.append(situation)
 
-    def forget(self) -> None:
-        """Drop the situations seen so far and a wait under way (the boxers were put back in
-        their corners: a reaction delay would decide on where they stood before)."""
-        self._seen.clear()
-        self._wait = 0
-
     def choose(self, situation: Situation) -> str:
         """The policy's action for a situation: the best one, or by `1 - best_share` chance another."""
         best = self.graph.best_action(situation)

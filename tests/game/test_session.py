@@ -441,25 +441,3 @@ def test_a_new_match_mid_round_does_not_count_the_cpus_lead_as_the_players_blows
     s.new_match()
     s.loop.run(steps=2)
     assert s.difficulty.form.landed == 0.0
-
-
-def test_the_cpu_does_not_decide_a_new_round_on_the_last_one() -> None:
-    """The CPU's reaction delay (easy: 10 steps) kept the situations it saw before the round
-    ended: after the bell put both boxers in their corners it decided its first moves on where
-    they stood when the last round ended (here within a hook's reach, 0.3 m closer than now)."""
-    s = make_session("keyboard://?seed=4", render=False)
-    for _ in range(3):  # normal -> hard -> adaptive -> easy
-        s.cycle_difficulty()
-    assert s.difficulty.name == "easy" and s.difficulty.current.reaction_steps == 10
-    seen = []
-    choose = s.opponent_ai.choose
-    s.opponent_ai.choose = lambda situation: (seen.append((s.match.round, situation.distance)), choose(situation))[-1]
-    s.loop.run(steps=2)
-    s.match.clock_steps = 30  # the round ends in half a second, the boxers close together
-    for _ in range(30):
-        s.player.place(0.0, s.opponent.root[1] - 0.8, 0.0)
-        s.loop.run(steps=1)
-    s.loop.run(steps=3 * 60 + 20)  # the break, the bell, the corners
-    assert s.match.round == 2
-    first = [d for r, d in seen if r == 2]
-    assert first and all(d > 1.0 for d in first[:10]), first[:10]
