@@ -62,7 +62,7 @@ def find_serial_ports() -> tuple[list[dict[str, str]], str]:
 
 
 def run(args: argparse.Namespace) -> int:
-    from engine.sensors.wiimote import PAIRING_HELP
+    from engine.sensors.wiimote import PAIRING_STEPS, WAIT_HINT
 
     wiimotes, wproblem = find_wiimotes()
     ports, sproblem = find_serial_ports()
@@ -76,7 +76,7 @@ def run(args: argparse.Namespace) -> int:
         print(f"  {w['model']:<14} {w['path']:<20} {w['serial']:<18} {w['url']}{extra}")
     if not wiimotes:
         print(f"  none found{': ' + wproblem if wproblem else ''}")
-        print(f"  ({PAIRING_HELP.replace(' `quickjab devices` lists what is seen;', '')})")  # this is that list
+        print(f"  ({PAIRING_STEPS} {WAIT_HINT})")  # PAIRING_HELP less its pointer to this very list
     print("Serial ports:")
     for s in ports:
         print(f"  {s['path']:<20} {s['description']:<30} {s['url']}")

@@ -72,13 +72,14 @@ def __getattr__(name: str) -> object:
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
-PAIRING_HELP = (
+PAIRING_STEPS = (
     "pair one first: press the red SYNC button under the battery cover (or hold 1+2), then on "
     "Linux `bluetoothctl` -> scan on, pair/trust/connect <its address> (no PIN), and allow "
     "access to /dev/hidraw* with the udev rule in docs/wiimote.md; Windows/macOS and known-bad "
-    "setups are in docs/wiimote.md. `quickjab devices` lists what is seen; "
-    "wiimote://?wait=1 waits for one instead of failing"
+    "setups are in docs/wiimote.md."
 )
+WAIT_HINT = "wiimote://?wait=1 waits for one instead of failing"
+PAIRING_HELP = f"{PAIRING_STEPS} `quickjab devices` lists what is seen; {WAIT_HINT}"
 
 
 class WiimoteNotFound(SourceError):
@@ -126,6 +127,8 @@ __all__ = [
     "Calibration",
     "Nunchuk",
     "PAIRING_HELP",
+    "PAIRING_STEPS",
+    "WAIT_HINT",
     "Report",
     "WiimoteNotFound",
     "WiimoteSource",
