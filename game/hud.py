@@ -16,7 +16,7 @@ import pygame
 
 from engine.budget import FrameBudget
 from engine.clock import STEP_HZ
-from engine.sensors.source import REWIND, Source, missing_in_short, missing_part
+from engine.sensors.source import REWIND, Source, SourceState, missing_in_short, missing_part
 from game.hud_budget import BudgetOverlay
 
 # the HUD's colours and layout (game/hud_style.py); importable from here as before
@@ -61,9 +61,13 @@ class SourceSnapshot:
     @classmethod
     def of(cls, source: Source, url: str | None = None, sensors: int | None = None) -> SourceSnapshot:
         """The source now; `url` to show another label (two players: "P1 wiimote://"); `sensors`,
-        the count the game reads (a serial board that rebooted with fewer is missing some)."""
+        the count the game reads (a serial board that rebooted with fewer is missing some; one
+        with more than the moves read is said too: its other hand does nothing, unsaid before)."""
+        missing = missing_part(source, sensors)
+        if not missing and sensors and source.state == SourceState.CONNECTED and source.sensors_known and source.sensors > sensors:
+            missing = f"{source.sensors} sensors, your moves read {sensors}: the other hand does nothing (train them again)"
         return cls(source.url if url is None else url, source.state.value, source.battery,
-                   REWIND in source.capabilities, missing_part(source, sensors))
+                   REWIND in source.capabilities, missing)
 
     def line(self) -> str:
         """The HUD's line for it: URL, state and what is missing, in short ("connected, no

@@ -302,6 +302,21 @@ def test_a_serial_board_back_with_fewer_sensors_is_missing_the_others() -> None:
     assert SourceSnapshot.of(board, sensors=2).missing == ""
 
 
+def test_a_board_with_more_sensors_than_the_moves_read_is_said() -> None:
+    """One-hand moves with a two-IMU board: the left hand did nothing, and nothing said why."""
+    from engine.sensors.source import Source, SourceState
+    from game.hud import SourceSnapshot
+
+    board = Source(url="serial:///dev/ttyACM0", sensors=2, state=SourceState.CONNECTED)
+    snap = SourceSnapshot.of(board, sensors=1)
+    assert snap.missing.startswith("2 sensors, your moves read 1: the other hand does nothing")
+    assert snap.line().endswith("connected, 2 sensors, your moves read 1") and snap.colour() != SourceSnapshot().colour()
+    board.sensors_known = False  # a serial board before its HELLO: 2 is a guess
+    assert SourceSnapshot.of(board, sensors=1).missing == ""
+    board.sensors_known, board.state = True, SourceState.RECONNECTING
+    assert SourceSnapshot.of(board, sensors=1).missing == ""
+
+
 def test_either_players_home_button_pauses_both_once_per_press() -> None:
     s = make_session(["keyboard://?seed=4&keys=left", "keyboard://?seed=5&keys=right"], render=False)
     s.loop.run(steps=10)
