@@ -496,16 +496,25 @@ def _keep_aside(output: Path, sensors: int) -> Path | None:
     return aside
 
 
-def reset_templates(output: Path | None) -> int:
-    """`train --reset`: remove the player's templates; `play` uses the default set again."""
-    from game.userdata import user_templates_path
+def reset_templates(path: Path, named: bool = False) -> int:
+    """`train --reset`: remove the player's templates; `play` uses the default set again. The
+    data directory's file (the default set, a profile's) is removed even when it no longer loads
+    (what --reset is for); a file named with -o (`named`) only if it is a template set: a typo
+    (`-o notes.txt`) must not delete a document or a recording."""
+    from engine.recognition import Templates
 
-    path = output or user_templates_path()
-    if path.exists():
-        path.unlink()
-        print(f"quickjab train: removed {path}; play uses the default templates again", file=sys.stderr)
-    else:
+    if path.is_dir():
+        raise InputError(f"{path}: a directory; --reset removes a templates file, not removed")
+    if not os.path.lexists(path):
         print(f"quickjab train: no trained templates at {path}; play already uses the default set", file=sys.stderr)
+        return 0
+    if named:
+        try:
+            Templates.load(path)
+        except InputError as exc:
+            raise InputError(f"{exc}; not removed (-o names a template set)") from None
+    path.unlink()
+    print(f"quickjab train: removed {path}; play uses the default templates again", file=sys.stderr)
     return 0
 
 
@@ -725,7 +734,8 @@ def run(args: argparse.Namespace) -> int:
         from game.userdata import profile_templates_path
 
         # --profile NAME resets NAME's set (profile_templates_path(None) is the default player's)
-        return reset_templates(Path(args.output) if args.output else profile_templates_path(args.profile))
+        return reset_templates(Path(args.output) if args.output else profile_templates_path(args.profile),
+                               named=bool(args.output))
     actions = _chosen_actions(args)
     from game.userdata import profile_templates_path, user_templates_path
 

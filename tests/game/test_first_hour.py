@@ -239,3 +239,42 @@ def test_training_over_a_set_for_other_sensors_says_the_old_moves_go(tmp_path, m
     assert train("--actions", "straight_r") == 0
     assert Templates.load(path).action_names == ["straight_r"]
     assert "were for 1 sensor(s), these trials have 2: only the moves trained now are kept" in capsys.readouterr().err
+
+
+def test_train_reset_with_o_removes_only_a_template_file(tmp_path, monkeypatch, capsys):
+    """`train --reset -o README.md` deleted the README: a file named with -o is removed only
+    if it is a template set (a typo must not delete a recording or a document); a directory
+    is one line, exit 2."""
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "xdg"))
+    from game.session import synthesized_templates
+
+    notes = tmp_path / "notes.txt"
+    notes.write_text("the player's notes")
+    assert main(["train", "--reset", "-o", str(notes)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and str(notes) in err[0] and "not removed" in err[0], err
+    assert notes.read_text() == "the player's notes"
+    assert main(["train", "--reset", "-o", str(tmp_path)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "directory" in err[0] and tmp_path.is_dir(), err
+    mine = tmp_path / "mine.npz"
+    synthesized_templates(trials=1).save(mine)
+    assert main(["train", "--reset", "-o", str(mine)]) == 0
+    assert not mine.exists()
+
+
+def test_train_reset_removes_a_broken_set_in_the_data_directory(tmp_path, monkeypatch, capsys):
+    """The player's own file is removed even when it no longer loads (what --reset is for),
+    and a directory in its place is one line naming it, exit 2."""
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "xdg"))
+    from game.userdata import profile_templates_path, user_templates_path
+
+    path = user_templates_path()
+    path.parent.mkdir(parents=True)
+    path.write_bytes(b"PK\x03\x04 truncated")
+    assert main(["train", "--reset"]) == 0 and not path.exists()
+    capsys.readouterr()
+    profile_templates_path("ana").mkdir(parents=True)
+    assert main(["train", "--reset", "--profile", "ana"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and str(profile_templates_path("ana")) in err[0] and "directory" in err[0], err
