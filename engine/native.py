@@ -73,8 +73,9 @@ def cache_dir() -> Path:
     ~/.cache/quickjab."""
     if os.environ.get(CACHE_ENV):
         return Path(os.environ[CACHE_ENV])
-    base = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
-    return Path(base) / "quickjab"
+    from engine.xdg import base_dir
+
+    return base_dir("XDG_CACHE_HOME", ".cache") / "quickjab"  # a relative one is ignored (the XDG spec)
 
 
 def fallback_dir() -> Path:

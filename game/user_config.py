@@ -20,6 +20,7 @@ from pathlib import Path
 
 from engine.errors import InputError, not_a_regular_file
 from engine.recognition.config import check_settings, parse_assignments
+from engine.xdg import base_dir
 
 CONFIG_NAME = "config.toml"
 TABLES = ("recognizer",)
@@ -27,8 +28,7 @@ MAX_CONFIG_BYTES = 1 << 20  # a settings file is a few lines; never read a huge 
 
 
 def config_path() -> Path:
-    base = os.environ.get("XDG_CONFIG_HOME") or str(Path.home() / ".config")
-    return Path(base) / "quickjab" / CONFIG_NAME
+    return base_dir("XDG_CONFIG_HOME", ".config") / "quickjab" / CONFIG_NAME  # a relative one is ignored
 
 
 def read_config(path: str | os.PathLike | None = None) -> dict[str, dict[str, object]]:
