@@ -173,7 +173,7 @@ class Trainer:
         trained = set(self.recorded)
         if base is not None:
             if base.meta.get("source") == "quickjab train":
-                trained |= set(filter(None, base.meta.get("trained", "").split(",")))
+                trained |= _trained_moves(base, left_handed)
             templates = merge_templates(base, templates, left_handed)
         templates.meta["trained"] = ",".join(sorted(trained))  # the actions that are the player's own
         templates.meta["source"] = "quickjab train"
@@ -186,6 +186,15 @@ def _oriented(base, left_handed: bool):
     """`base` as the player holds the sensors: a set of the other handedness mirrored (the file
     holds the player's own motions)."""
     return base.mirrored() if (base.meta.get("left_handed") == "1") != left_handed else base
+
+
+def _trained_moves(base, left_handed: bool) -> set[str]:
+    """The moves of `base` the player trained, named as `_oriented` has them: a set of the other
+    handedness is mirrored, and its straight_r is then the player's straight_l."""
+    from engine.recognition.templates import mirrored_name
+
+    names = set(filter(None, base.meta.get("trained", "").split(",")))
+    return {mirrored_name(a) for a in names} if (base.meta.get("left_handed") == "1") != left_handed else names
 
 
 def _moves(base, left_handed: bool) -> dict[str, list[np.ndarray]]:
@@ -734,8 +743,7 @@ def run(args: argparse.Namespace) -> int:
         from game.userdata import profile_templates_path
 
         # --profile NAME resets NAME's set (profile_templates_path(None) is the default player's)
-        return reset_templates(Path(args.output) if args.output else profile_templates_path(args.profile),
-                               named=bool(args.output))
+        return reset_templates(Path(args.output or profile_templates_path(args.profile)), named=bool(args.output))
     actions = _chosen_actions(args)
     from game.userdata import profile_templates_path, user_templates_path
 

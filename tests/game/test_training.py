@@ -465,3 +465,24 @@ def test_actions_naming_no_action_is_one_line_and_exit_2(tmp_path, capsys):
         err = capsys.readouterr().err.strip().splitlines()
         assert len(err) == 1 and err[0].startswith(f"quickjab train: --actions {value!r}: names no action; known: straight_l"), err
     assert not (tmp_path / "t.npz").exists()
+
+
+def test_the_moves_a_player_trained_keep_their_names_when_the_set_is_mirrored():
+    """A set trained left-handed (straight_r, hook_l), then one move trained without
+    --left-handed: the set is mirrored to the player's hands, so the moves they trained are now
+    straight_l and hook_r; the file's `trained` list still said straight_r and hook_l (a move
+    never trained counted as theirs: "4 of 13 moves" for 3)."""
+    from pathlib import Path
+
+    from game.training import base_templates
+
+    defaults = base_templates(Path("/nonexistent/templates.npz"))
+    lefty = Trainer(["straight_r", "hook_l"])
+    lefty.recorded = _recorded(lefty.actions, n=3, seed=1)
+    theirs = lefty.templates(True, base=defaults)
+    assert theirs.meta["trained"] == "hook_l,straight_r"
+    tr = Trainer(["straight_l"])
+    tr.recorded = _recorded(tr.actions, n=3, seed=2)
+    templates = tr.templates(False, base=theirs)
+    assert templates.meta["trained"] == "hook_r,straight_l" and templates.meta["left_handed"] == "0"
+    assert tr.templates(True, base=theirs).meta["trained"] == "hook_l,straight_l,straight_r"
