@@ -560,6 +560,18 @@ def _open_source(args: argparse.Namespace, clock):
     return source, playable, auto
 
 
+def _output(args: argparse.Namespace) -> Path:
+    """The templates file train saves (--reset removes): -o, else --profile's set, else the
+    default player's. --profile with -o is said ignored, not silently dropped."""
+    from game.userdata import profile_templates_path
+
+    if args.output:
+        if getattr(args, "profile", None) is not None:
+            print("quickjab train: --profile ignored with -o: -o names the templates file", file=sys.stderr)
+        return Path(args.output)
+    return profile_templates_path(getattr(args, "profile", None))  # None: the default player's
+
+
 def _check_files(args: argparse.Namespace, output: Path) -> None:
     """Before the session, not when its trials are done (minutes of a player's moves lost): the
     templates file can be written, and read if it is there (the set the new moves join); no
@@ -739,16 +751,10 @@ def run(args: argparse.Namespace) -> int:
 
     settings = parse_assignments(getattr(args, "recognizer", None) or ())
 
-    if args.reset:
-        from game.userdata import profile_templates_path
-
-        # --profile NAME resets NAME's set (profile_templates_path(None) is the default player's)
-        return reset_templates(Path(args.output or profile_templates_path(args.profile)), named=bool(args.output))
+    if args.reset:  # --profile NAME resets NAME's set
+        return reset_templates(_output(args), named=bool(args.output))
     actions = _chosen_actions(args)
-    from game.userdata import profile_templates_path, user_templates_path
-
-    output = Path(args.output) if args.output else (
-        profile_templates_path(args.profile) if getattr(args, "profile", None) else user_templates_path())
+    output = _output(args)
     _check_files(args, output)
     if args.headless:
         headless_env()

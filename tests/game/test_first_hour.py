@@ -278,3 +278,19 @@ def test_train_reset_removes_a_broken_set_in_the_data_directory(tmp_path, monkey
     assert main(["train", "--reset", "--profile", "ana"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and str(profile_templates_path("ana")) in err[0] and "directory" in err[0], err
+
+
+def test_a_profile_with_templates_or_o_is_said_ignored(tmp_path, monkeypatch, capsys, graph_path):  # noqa: F811
+    """`play --profile ana --templates X` played X and `train --profile ana -o X` saved to X
+    without a word about ana (a typo in either went unseen): said, as --profile2 without
+    --players 2 is."""
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "xdg"))
+    from game.session import synthesized_templates
+
+    mine = tmp_path / "mine.npz"
+    synthesized_templates(trials=1).save(mine)
+    assert main(["play", "--headless", "--frames", "1", "--graph", graph_path, "--no-sound", "--source", "keyboard://",
+                 "--size", "320x180", "--templates", str(mine), "--profile", "ana"]) == 0
+    assert "--profile ignored with --templates" in capsys.readouterr().err
+    assert main(["train", "--reset", "--profile", "ana", "-o", str(tmp_path / "other.npz")]) == 0
+    assert "--profile ignored with -o" in capsys.readouterr().err
