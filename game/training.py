@@ -505,6 +505,25 @@ def _keep_aside(output: Path, sensors: int) -> Path | None:
     return aside
 
 
+def _kept_elsewhere(templates, output: Path, exc: Exception) -> tuple[Path, str]:
+    """A session's moves whose file cannot be written when its trials are done (the folder
+    removed or made read-only meanwhile, a full disk): saved in the temporary directory, not
+    lost; (that file, the line train ends with). A failure there too is the first error."""
+    import tempfile
+
+    name = ""
+    try:
+        fd, name = tempfile.mkstemp(prefix="quickjab-templates-", suffix=".npz")
+        os.close(fd)
+        templates.save(name)
+    except (OSError, InputError):
+        if name:
+            Path(name).unlink(missing_ok=True)
+        raise exc from None
+    why = exc if isinstance(exc, InputError) else f"{output}: cannot save the templates ({exc.strerror or exc})"
+    return Path(name), f"{why}; your moves are saved in {name} instead (play --templates {name}, or move it there)"
+
+
 def reset_templates(path: Path, named: bool = False) -> int:
     """`train --reset`: remove the player's templates; `play` uses the default set again. The
     data directory's file (the default set, a profile's) is removed even when it no longer loads
@@ -627,6 +646,7 @@ class _TrainingStages:
         self.checking: SelfCheckRun | None = None  # the saved moves checked against each other
         self.give_up_after: int | None = None  # headless: stop when lost this long (no one to wait for it)
         self.stopped_why = ""  # why the walk stopped before its end (the source ended, or never came back)
+        self.unsaved = ""  # the output could not be written: where the moves are instead (exit 2)
 
     def perform(self) -> None:
         # the virtual player behind the keyboard has no handedness: it performs the move itself
@@ -728,8 +748,11 @@ class _TrainingStages:
                   f"{templates.dim // 3}: only the moves trained now are kept"
                   + (f"; yours for {base.dim // 3} sensor(s) are kept in {aside} (play --templates {aside})" if aside else ""),
                   file=sys.stderr)
-        output.parent.mkdir(parents=True, exist_ok=True)
-        templates.save(output)
+        try:
+            output.parent.mkdir(parents=True, exist_ok=True)
+            templates.save(output)
+        except (OSError, InputError) as exc:  # writable at the start (_check_files), not now
+            output, self.unsaved = _kept_elsewhere(templates, output, exc)
         self.screen_view.saved_to = str(output)
         for action, (n, of) in trainer.dropped.items():
             print(f"quickjab train: {action}: dropped {n} of {of} trials (cut off, unlike the others, or like another move)",
@@ -794,6 +817,8 @@ def run(args: argparse.Namespace) -> int:
         raise InputError(f"{source.url}: {stages.stopped_why} after {n} trial{'' if n == 1 else 's'}; nothing saved")
     if stages.checking is not None:
         stages.checking.finish()  # closed before the check was through: the rest at once
+    if stages.unsaved:
+        raise InputError(stages.unsaved)
     if not trainer.done:
         print(f"quickjab train: stopped after {sum(len(v) for v in trainer.recorded.values())} trials; nothing saved", file=sys.stderr)
     return 0

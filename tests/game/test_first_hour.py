@@ -294,3 +294,25 @@ def test_a_profile_with_templates_or_o_is_said_ignored(tmp_path, monkeypatch, ca
     assert "--profile ignored with --templates" in capsys.readouterr().err
     assert main(["train", "--reset", "--profile", "ana", "-o", str(tmp_path / "other.npz")]) == 0
     assert "--profile ignored with -o" in capsys.readouterr().err
+
+
+def test_moves_whose_file_cannot_be_written_at_the_end_are_kept_elsewhere(tmp_path, monkeypatch, capsys):
+    """The folder writable when train started, not when its trials were done (made read-only,
+    removed, a full disk): the minutes of trials ended in "[Errno 2] No such file or directory"
+    and were lost. They are saved in the temporary directory instead, said, exit 2."""
+    import tempfile
+
+    import game.training
+    from engine.recognition import Templates
+
+    blocked = tmp_path / "not-a-dir"
+    blocked.write_text("")
+    monkeypatch.setenv("XDG_DATA_HOME", str(blocked))  # its quickjab/ folder cannot be made
+    monkeypatch.setattr(game.training, "_check_files", lambda args, output: None)  # as if it could at the start
+    (tmp_path / "tmp").mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path / "tmp"))
+    assert train("--actions", "block") == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    kept = list((tmp_path / "tmp").glob("quickjab-templates-*.npz"))
+    assert len(kept) == 1 and "block" in Templates.load(kept[0]).meta["trained"]
+    assert str(blocked / "quickjab" / "templates.npz") in err[-1] and f"--templates {kept[0]}" in err[-1], err
