@@ -316,3 +316,21 @@ def test_moves_whose_file_cannot_be_written_at_the_end_are_kept_elsewhere(tmp_pa
     kept = list((tmp_path / "tmp").glob("quickjab-templates-*.npz"))
     assert len(kept) == 1 and "block" in Templates.load(kept[0]).meta["trained"]
     assert str(blocked / "quickjab" / "templates.npz") in err[-1] and f"--templates {kept[0]}" in err[-1], err
+
+
+def test_a_broken_cached_graph_is_built_again(tmp_path, monkeypatch, capsys):
+    """Without the shipped graph, `play` builds one into graph-small.npz once; a broken cached
+    file (a copy cut short, a disk error) was an error on every start, never rebuilt: it is a
+    cache, built again."""
+    import game.interaction
+    from game.session import load_graph
+    from game.userdata import data_dir
+
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "xdg"))
+    monkeypatch.setattr(game.interaction, "DEFAULT_GRAPH", tmp_path / "no-graph.npz")
+    cached = data_dir() / "graph-small.npz"
+    cached.parent.mkdir(parents=True)
+    cached.write_bytes(b"PK\x03\x04 cut short")
+    assert load_graph() is not None
+    assert "building it again" in capsys.readouterr().err
+    assert load_graph() is not None and "building" not in capsys.readouterr().err
