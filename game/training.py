@@ -606,7 +606,12 @@ def _check_files(args: argparse.Namespace, output: Path) -> None:
     if output.is_dir():
         raise InputError(f"{output}: a directory; the templates are saved to a file (-o FILE.npz)")
     if output.exists():
-        Templates.load(output)  # not a template file: said now
+        theirs = Templates.load(output)  # not a template file: said now
+        was_left = theirs.meta.get("left_handed") == "1"
+        if theirs.meta.get("source") == "quickjab train" and was_left != bool(args.left_handed):
+            print(f"quickjab train: your set at {output} was trained {'left' if was_left else 'right'}-handed; it is "
+                  f"saved mirrored for the {'right' if was_left else 'left'} hand"
+                  + (" (--left-handed keeps it left-handed)" if was_left else ""), file=sys.stderr)
         return
     folder = next(p for p in output.absolute().parents if p.exists())  # the rest is created on saving
     if not folder.is_dir():

@@ -486,3 +486,20 @@ def test_the_moves_a_player_trained_keep_their_names_when_the_set_is_mirrored():
     templates = tr.templates(False, base=theirs)
     assert templates.meta["trained"] == "hook_r,straight_l" and templates.meta["left_handed"] == "0"
     assert tr.templates(True, base=theirs).meta["trained"] == "hook_l,straight_l,straight_r"
+
+
+def test_training_without_the_handedness_of_the_players_set_says_it_is_mirrored(tmp_path, capsys):
+    """A set trained with --left-handed, `train --actions block` without it: the whole set was
+    mirrored to the right hand without a word (the player had forgotten the flag)."""
+    from game.session import synthesized_templates
+    from game.training import _check_files
+
+    out = tmp_path / "mine.npz"
+    t = synthesized_templates(trials=1)
+    t.meta.update({"source": "quickjab train", "left_handed": "1"})
+    t.save(out)
+    _check_files(SimpleNamespace(source=None, screenshot=None, left_handed=True), out)
+    assert "mirror" not in capsys.readouterr().err
+    _check_files(SimpleNamespace(source=None, screenshot=None, left_handed=False), out)
+    err = capsys.readouterr().err
+    assert str(out) in err and "trained left-handed" in err and "--left-handed" in err
