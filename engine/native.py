@@ -37,6 +37,7 @@ FLAGS = ["-O3", "-march=native", "-shared", "-fPIC", "-std=c99", "-ffp-contract=
 # the retry when the compiler rejects -march=native (some ARM gccs, older clangs)
 PORTABLE_FLAGS = [f for f in FLAGS if not f.startswith("-march")]
 STALE_TMP_SECONDS = 300.0  # a build takes seconds; a temporary dir older than this was left by a killed one
+BUILD_PREFIX = ".quickjab-build-"  # a build's temporary dir: the cache dir may be shared (~/.cache, /tmp)
 
 _status: dict[str, str] = {}  # stem -> "native: ..." or "numpy: ..." (this process's loads)
 
@@ -72,8 +73,9 @@ def cache_dir() -> Path:
     ~/.cache/quickjab."""
     if os.environ.get(CACHE_ENV):
         return Path(os.environ[CACHE_ENV])
-    base = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
-    return Path(base) / "quickjab"
+    from engine.xdg import base_dir
+
+    return base_dir("XDG_CACHE_HOME", ".cache") / "quickjab"  # a relative one is ignored (the XDG spec)
 
 
 def fallback_dir() -> Path:
@@ -193,7 +195,7 @@ def _build(target: Path, source: str, flags: list[str], cc: str) -> str | None:
     import tempfile
 
     try:
-        with tempfile.TemporaryDirectory(dir=target.parent) as tmp:
+        with tempfile.TemporaryDirectory(dir=target.parent, prefix=BUILD_PREFIX) as tmp:
             src, out = Path(tmp) / "kernel.c", Path(tmp) / target.name
             src.write_text(source)
             r = subprocess.run([cc, *flags, "-o", str(out), str(src), "-lm"], capture_output=True, timeout=60)
@@ -206,6 +208,18 @@ def _build(target: Path, source: str, flags: list[str], cc: str) -> str | None:
         return f"{cc} took over 60 s"
     except (OSError, subprocess.SubprocessError) as e:
         return f"{cc}: {e}"
+
+
+def _build_leftover(p: Path) -> bool:
+    """A temporary dir a killed build left: named so, or (before BUILD_PREFIX) a "tmp..." dir
+    holding only a kernel source and libraries. $QUICKJAB_CACHE_DIR may be ~/.cache or /tmp,
+    where other programs' "tmp..." dirs are not ours to delete."""
+    if not p.is_dir() or p.is_symlink():
+        return False
+    if p.name.startswith(BUILD_PREFIX):
+        return True
+    names = [c.name for c in p.iterdir()] if p.name.startswith("tmp") else []
+    return "kernel.c" in names and all(n == "kernel.c" or n.endswith(".so") for n in names)
 
 
 def _prune(directory: Path, stem: str, keep: Path, markers: set[str]) -> None:
@@ -225,7 +239,7 @@ def _prune(directory: Path, stem: str, keep: Path, markers: set[str]) -> None:
         try:
             if pattern.fullmatch(p.name) and p != keep and p.name not in markers:
                 p.unlink()
-            elif p.name.startswith("tmp") and p.is_dir() and now - p.stat().st_mtime > STALE_TMP_SECONDS:
+            elif _build_leftover(p) and now - p.stat().st_mtime > STALE_TMP_SECONDS:
                 shutil.rmtree(p, ignore_errors=True)
         except OSError:
             pass

@@ -80,6 +80,8 @@ def run(args: argparse.Namespace) -> int:
                                       ("--profile2", getattr(args, "profile2", None))) if value is not None]
     if player2:  # as two players' note on the CPU's options: said, not silently dropped
         print(f"quickjab play: {' and '.join(player2)} ignored without --players 2: they are player 2's", file=sys.stderr)
+    if getattr(args, "profile", None) is not None and args.templates is not None:
+        print("quickjab play: --profile ignored with --templates: --templates names the set", file=sys.stderr)
     from game.user_config import recognizer_settings
 
     settings = recognizer_settings(getattr(args, "recognizer", None) or ())  # a bad file or value: before any window

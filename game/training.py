@@ -173,7 +173,7 @@ class Trainer:
         trained = set(self.recorded)
         if base is not None:
             if base.meta.get("source") == "quickjab train":
-                trained |= set(filter(None, base.meta.get("trained", "").split(",")))
+                trained |= _trained_moves(base, left_handed)
             templates = merge_templates(base, templates, left_handed)
         templates.meta["trained"] = ",".join(sorted(trained))  # the actions that are the player's own
         templates.meta["source"] = "quickjab train"
@@ -186,6 +186,15 @@ def _oriented(base, left_handed: bool):
     """`base` as the player holds the sensors: a set of the other handedness mirrored (the file
     holds the player's own motions)."""
     return base.mirrored() if (base.meta.get("left_handed") == "1") != left_handed else base
+
+
+def _trained_moves(base, left_handed: bool) -> set[str]:
+    """The moves of `base` the player trained, named as `_oriented` has them: a set of the other
+    handedness is mirrored, and its straight_r is then the player's straight_l."""
+    from engine.recognition.templates import mirrored_name
+
+    names = set(filter(None, base.meta.get("trained", "").split(",")))
+    return {mirrored_name(a) for a in names} if (base.meta.get("left_handed") == "1") != left_handed else names
 
 
 def _moves(base, left_handed: bool) -> dict[str, list[np.ndarray]]:
@@ -496,16 +505,44 @@ def _keep_aside(output: Path, sensors: int) -> Path | None:
     return aside
 
 
-def reset_templates(output: Path | None) -> int:
-    """`train --reset`: remove the player's templates; `play` uses the default set again."""
-    from game.userdata import user_templates_path
+def _kept_elsewhere(templates, output: Path, exc: Exception) -> tuple[Path, str]:
+    """A session's moves whose file cannot be written when its trials are done (the folder
+    removed or made read-only meanwhile, a full disk): saved in the temporary directory, not
+    lost; (that file, the line train ends with). A failure there too is the first error."""
+    import tempfile
 
-    path = output or user_templates_path()
-    if path.exists():
-        path.unlink()
-        print(f"quickjab train: removed {path}; play uses the default templates again", file=sys.stderr)
-    else:
+    name = ""
+    try:
+        fd, name = tempfile.mkstemp(prefix="quickjab-templates-", suffix=".npz")
+        os.close(fd)
+        templates.save(name)
+    except (OSError, InputError):
+        if name:
+            Path(name).unlink(missing_ok=True)
+        raise exc from None
+    why = exc if isinstance(exc, InputError) else f"{output}: cannot save the templates ({exc.strerror or exc})"
+    return Path(name), f"{why}; your moves are saved in {name} instead (play --templates {name}, or move it there)"
+
+
+def reset_templates(path: Path, named: bool = False) -> int:
+    """`train --reset`: remove the player's templates; `play` uses the default set again. The
+    data directory's file (the default set, a profile's) is removed even when it no longer loads
+    (what --reset is for); a file named with -o (`named`) only if it is a template set: a typo
+    (`-o notes.txt`) must not delete a document or a recording."""
+    from engine.recognition import Templates
+
+    if path.is_dir():
+        raise InputError(f"{path}: a directory; --reset removes a templates file, not removed")
+    if not os.path.lexists(path):
         print(f"quickjab train: no trained templates at {path}; play already uses the default set", file=sys.stderr)
+        return 0
+    if named:
+        try:
+            Templates.load(path)
+        except InputError as exc:
+            raise InputError(f"{exc}; not removed (-o names a template set)") from None
+    path.unlink()
+    print(f"quickjab train: removed {path}; play uses the default templates again", file=sys.stderr)
     return 0
 
 
@@ -542,6 +579,18 @@ def _open_source(args: argparse.Namespace, clock):
     return source, playable, auto
 
 
+def _output(args: argparse.Namespace) -> Path:
+    """The templates file train saves (--reset removes): -o, else --profile's set, else the
+    default player's. --profile with -o is said ignored, not silently dropped."""
+    from game.userdata import profile_templates_path
+
+    if args.output:
+        if getattr(args, "profile", None) is not None:
+            print("quickjab train: --profile ignored with -o: -o names the templates file", file=sys.stderr)
+        return Path(args.output)
+    return profile_templates_path(getattr(args, "profile", None))  # None: the default player's
+
+
 def _check_files(args: argparse.Namespace, output: Path) -> None:
     """Before the session, not when its trials are done (minutes of a player's moves lost): the
     templates file can be written, and read if it is there (the set the new moves join); no
@@ -557,7 +606,12 @@ def _check_files(args: argparse.Namespace, output: Path) -> None:
     if output.is_dir():
         raise InputError(f"{output}: a directory; the templates are saved to a file (-o FILE.npz)")
     if output.exists():
-        Templates.load(output)  # not a template file: said now
+        theirs = Templates.load(output)  # not a template file: said now
+        was_left = theirs.meta.get("left_handed") == "1"
+        if theirs.meta.get("source") == "quickjab train" and was_left != bool(args.left_handed):
+            print(f"quickjab train: your set at {output} was trained {'left' if was_left else 'right'}-handed; it is "
+                  f"saved mirrored for the {'right' if was_left else 'left'} hand"
+                  + (" (--left-handed keeps it left-handed)" if was_left else ""), file=sys.stderr)
         return
     folder = next(p for p in output.absolute().parents if p.exists())  # the rest is created on saving
     if not folder.is_dir():
@@ -597,6 +651,7 @@ class _TrainingStages:
         self.checking: SelfCheckRun | None = None  # the saved moves checked against each other
         self.give_up_after: int | None = None  # headless: stop when lost this long (no one to wait for it)
         self.stopped_why = ""  # why the walk stopped before its end (the source ended, or never came back)
+        self.unsaved = ""  # the output could not be written: where the moves are instead (exit 2)
 
     def perform(self) -> None:
         # the virtual player behind the keyboard has no handedness: it performs the move itself
@@ -698,8 +753,11 @@ class _TrainingStages:
                   f"{templates.dim // 3}: only the moves trained now are kept"
                   + (f"; yours for {base.dim // 3} sensor(s) are kept in {aside} (play --templates {aside})" if aside else ""),
                   file=sys.stderr)
-        output.parent.mkdir(parents=True, exist_ok=True)
-        templates.save(output)
+        try:
+            output.parent.mkdir(parents=True, exist_ok=True)
+            templates.save(output)
+        except (OSError, InputError) as exc:  # writable at the start (_check_files), not now
+            output, self.unsaved = _kept_elsewhere(templates, output, exc)
         self.screen_view.saved_to = str(output)
         for action, (n, of) in trainer.dropped.items():
             print(f"quickjab train: {action}: dropped {n} of {of} trials (cut off, unlike the others, or like another move)",
@@ -721,16 +779,10 @@ def run(args: argparse.Namespace) -> int:
 
     settings = parse_assignments(getattr(args, "recognizer", None) or ())
 
-    if args.reset:
-        from game.userdata import profile_templates_path
-
-        # --profile NAME resets NAME's set (profile_templates_path(None) is the default player's)
-        return reset_templates(Path(args.output) if args.output else profile_templates_path(args.profile))
+    if args.reset:  # --profile NAME resets NAME's set
+        return reset_templates(_output(args), named=bool(args.output))
     actions = _chosen_actions(args)
-    from game.userdata import profile_templates_path, user_templates_path
-
-    output = Path(args.output) if args.output else (
-        profile_templates_path(args.profile) if getattr(args, "profile", None) else user_templates_path())
+    output = _output(args)
     _check_files(args, output)
     if args.headless:
         headless_env()
@@ -770,6 +822,8 @@ def run(args: argparse.Namespace) -> int:
         raise InputError(f"{source.url}: {stages.stopped_why} after {n} trial{'' if n == 1 else 's'}; nothing saved")
     if stages.checking is not None:
         stages.checking.finish()  # closed before the check was through: the rest at once
+    if stages.unsaved:
+        raise InputError(stages.unsaved)
     if not trainer.done:
         print(f"quickjab train: stopped after {sum(len(v) for v in trainer.recorded.values())} trials; nothing saved", file=sys.stderr)
     return 0

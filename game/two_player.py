@@ -444,6 +444,9 @@ def run_match(args) -> int:
         if note:
             notes.append(note)
     urls, url_notes = source_urls(args.source, args.source2, args.demo, args.seed)
+    profiles = [opt for opt, value in (("--profile", args.profile), ("--profile2", args.profile2)) if value is not None]
+    if profiles and args.templates is not None:
+        notes.append(f"{' and '.join(profiles)} ignored with --templates: both players use that set")
     cpu_options = [opt for opt, value in (("--difficulty", args.difficulty), ("--graph", args.graph)) if value is not None]
     if cpu_options:
         notes.append(f"{' and '.join(cpu_options)} ignored with --players 2: they set the CPU, and two people box")

@@ -20,6 +20,7 @@ from pathlib import Path
 
 from engine.errors import InputError, not_a_regular_file
 from engine.recognition.config import check_settings, parse_assignments
+from engine.xdg import base_dir
 
 CONFIG_NAME = "config.toml"
 TABLES = ("recognizer",)
@@ -27,8 +28,7 @@ MAX_CONFIG_BYTES = 1 << 20  # a settings file is a few lines; never read a huge 
 
 
 def config_path() -> Path:
-    base = os.environ.get("XDG_CONFIG_HOME") or str(Path.home() / ".config")
-    return Path(base) / "quickjab" / CONFIG_NAME
+    return base_dir("XDG_CONFIG_HOME", ".config") / "quickjab" / CONFIG_NAME  # a relative one is ignored
 
 
 def read_config(path: str | os.PathLike | None = None) -> dict[str, dict[str, object]]:
@@ -47,6 +47,8 @@ def read_config(path: str | os.PathLike | None = None) -> dict[str, dict[str, ob
         with open(path, "rb") as f:
             data = tomllib.load(f)
     except tomllib.TOMLDecodeError as exc:
+        if _starts_with_bom(path):  # tomllib: "Invalid statement (at line 1, column 1)", nothing to see there
+            raise InputError(f"{path}: not a valid TOML file (it starts with a byte-order mark: save it as UTF-8 without BOM)") from None
         raise InputError(f"{path}: not a valid TOML file ({exc})") from None
     except UnicodeDecodeError:
         raise InputError(f"{path}: not a valid TOML file (not UTF-8 text)") from None
@@ -64,6 +66,15 @@ def read_config(path: str | os.PathLike | None = None) -> dict[str, dict[str, ob
     if not isinstance(table, dict):
         raise InputError(f"{path}: 'recognizer' must be a table ([recognizer] then name = value lines)")
     return {"recognizer": check_settings(table, f"{path} [recognizer]")}
+
+
+def _starts_with_bom(path: Path) -> bool:
+    """Notepad's "UTF-8 with BOM"; TOML has no byte-order mark."""
+    try:
+        with open(path, "rb") as f:
+            return f.read(3) == b"\xef\xbb\xbf"
+    except OSError:
+        return False
 
 
 def _toml_reader(path: Path):

@@ -2,16 +2,16 @@
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
+
+from engine.xdg import base_dir
 
 TEMPLATES_NAME = "templates.npz"
 SHIPPED_TEMPLATES = Path(__file__).resolve().parent / "assets" / "templates.npz"
 
 
 def data_dir() -> Path:
-    base = os.environ.get("XDG_DATA_HOME") or str(Path.home() / ".local" / "share")
-    return Path(base) / "quickjab"
+    return base_dir("XDG_DATA_HOME", ".local", "share") / "quickjab"  # a relative one is ignored (the XDG spec)
 
 
 def user_templates_path() -> Path:

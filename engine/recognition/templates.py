@@ -78,6 +78,15 @@ class TemplateFileError(InputError):
         super().__init__(f"{self.path}: {message}")
 
 
+def mirrored_name(action: str) -> str:
+    """An action's name in the mirror image (Templates.mirrored): _l and _r swapped."""
+    if action.endswith("_l"):
+        return action[:-2] + "_r"
+    if action.endswith("_r"):
+        return action[:-2] + "_l"
+    return action
+
+
 def rest_gravity(trial: np.ndarray, frames: int = REST_FRAMES) -> np.ndarray:
     """(D,) the per-sensor gravity estimate: the mean of the trial's first frames."""
     return np.asarray(trial[: max(1, min(frames, len(trial)))], dtype=np.float64).mean(axis=0)
@@ -537,15 +546,8 @@ class Templates:
                 y = y[:, ::-1]
             return y.reshape(x.shape)
 
-        def rename(a: str) -> str:
-            if a.endswith("_l"):
-                return a[:-2] + "_r"
-            if a.endswith("_r"):
-                return a[:-2] + "_l"
-            return a
-
         return Templates(
-            [rename(a) for a in self.actions],
+            [mirrored_name(a) for a in self.actions],
             [flip(s) for s in self.signals],
             flip(self.gravity),
             self.onsets.copy(),

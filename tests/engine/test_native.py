@@ -154,6 +154,27 @@ def test_a_build_prunes_older_builds_and_stale_temp_dirs(cache):
     assert other_stem.exists() and fresh.exists() and native.library_path("k", SRC).exists()
 
 
+@needs_cc
+def test_a_build_leaves_the_other_temp_dirs_of_a_shared_cache_dir(cache):
+    """QUICKJAB_CACHE_DIR=~/.cache (or /tmp): a build deleted every directory there whose name
+    starts with "tmp" and is over 5 minutes old, another program's and all it held. Only its
+    own leftovers go: its named build dirs, and the old unnamed ones holding nothing but a
+    kernel source and libraries."""
+    cache.mkdir()
+    theirs, ours, named = cache / "tmpimportant", cache / "tmpold", cache / f"{native.BUILD_PREFIX}k-x"
+    for d in (theirs, ours, named):
+        d.mkdir()
+        (d / "kernel.c").write_text("")
+    (theirs / "precious.txt").write_text("not ours")
+    (ours / "k-0123456789abcdef.so").write_bytes(b"")
+    past = time.time() - 2 * native.STALE_TMP_SECONDS
+    for d in (theirs, ours, named):
+        os.utime(d, (past, past))
+    native.load_library("k", SRC, ("twice",))
+    assert (theirs / "precious.txt").read_text() == "not ours"
+    assert not ours.exists() and not named.exists()
+
+
 def test_disabled_says_so(cache, monkeypatch):
     monkeypatch.setenv(native.NO_NATIVE_ENV, "1")
     assert native.load_library("k", SRC, ("twice",)) is None

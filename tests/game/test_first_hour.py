@@ -239,3 +239,98 @@ def test_training_over_a_set_for_other_sensors_says_the_old_moves_go(tmp_path, m
     assert train("--actions", "straight_r") == 0
     assert Templates.load(path).action_names == ["straight_r"]
     assert "were for 1 sensor(s), these trials have 2: only the moves trained now are kept" in capsys.readouterr().err
+
+
+def test_train_reset_with_o_removes_only_a_template_file(tmp_path, monkeypatch, capsys):
+    """`train --reset -o README.md` deleted the README: a file named with -o is removed only
+    if it is a template set (a typo must not delete a recording or a document); a directory
+    is one line, exit 2."""
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "xdg"))
+    from game.session import synthesized_templates
+
+    notes = tmp_path / "notes.txt"
+    notes.write_text("the player's notes")
+    assert main(["train", "--reset", "-o", str(notes)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and str(notes) in err[0] and "not removed" in err[0], err
+    assert notes.read_text() == "the player's notes"
+    assert main(["train", "--reset", "-o", str(tmp_path)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "directory" in err[0] and tmp_path.is_dir(), err
+    mine = tmp_path / "mine.npz"
+    synthesized_templates(trials=1).save(mine)
+    assert main(["train", "--reset", "-o", str(mine)]) == 0
+    assert not mine.exists()
+
+
+def test_train_reset_removes_a_broken_set_in_the_data_directory(tmp_path, monkeypatch, capsys):
+    """The player's own file is removed even when it no longer loads (what --reset is for),
+    and a directory in its place is one line naming it, exit 2."""
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "xdg"))
+    from game.userdata import profile_templates_path, user_templates_path
+
+    path = user_templates_path()
+    path.parent.mkdir(parents=True)
+    path.write_bytes(b"PK\x03\x04 truncated")
+    assert main(["train", "--reset"]) == 0 and not path.exists()
+    capsys.readouterr()
+    profile_templates_path("ana").mkdir(parents=True)
+    assert main(["train", "--reset", "--profile", "ana"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and str(profile_templates_path("ana")) in err[0] and "directory" in err[0], err
+
+
+def test_a_profile_with_templates_or_o_is_said_ignored(tmp_path, monkeypatch, capsys, graph_path):  # noqa: F811
+    """`play --profile ana --templates X` played X and `train --profile ana -o X` saved to X
+    without a word about ana (a typo in either went unseen): said, as --profile2 without
+    --players 2 is."""
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "xdg"))
+    from game.session import synthesized_templates
+
+    mine = tmp_path / "mine.npz"
+    synthesized_templates(trials=1).save(mine)
+    assert main(["play", "--headless", "--frames", "1", "--graph", graph_path, "--no-sound", "--source", "keyboard://",
+                 "--size", "320x180", "--templates", str(mine), "--profile", "ana"]) == 0
+    assert "--profile ignored with --templates" in capsys.readouterr().err
+    assert main(["train", "--reset", "--profile", "ana", "-o", str(tmp_path / "other.npz")]) == 0
+    assert "--profile ignored with -o" in capsys.readouterr().err
+
+
+def test_moves_whose_file_cannot_be_written_at_the_end_are_kept_elsewhere(tmp_path, monkeypatch, capsys):
+    """The folder writable when train started, not when its trials were done (made read-only,
+    removed, a full disk): the minutes of trials ended in "[Errno 2] No such file or directory"
+    and were lost. They are saved in the temporary directory instead, said, exit 2."""
+    import tempfile
+
+    import game.training
+    from engine.recognition import Templates
+
+    blocked = tmp_path / "not-a-dir"
+    blocked.write_text("")
+    monkeypatch.setenv("XDG_DATA_HOME", str(blocked))  # its quickjab/ folder cannot be made
+    monkeypatch.setattr(game.training, "_check_files", lambda args, output: None)  # as if it could at the start
+    (tmp_path / "tmp").mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path / "tmp"))
+    assert train("--actions", "block") == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    kept = list((tmp_path / "tmp").glob("quickjab-templates-*.npz"))
+    assert len(kept) == 1 and "block" in Templates.load(kept[0]).meta["trained"]
+    assert str(blocked / "quickjab" / "templates.npz") in err[-1] and f"--templates {kept[0]}" in err[-1], err
+
+
+def test_a_broken_cached_graph_is_built_again(tmp_path, monkeypatch, capsys):
+    """Without the shipped graph, `play` builds one into graph-small.npz once; a broken cached
+    file (a copy cut short, a disk error) was an error on every start, never rebuilt: it is a
+    cache, built again."""
+    import game.interaction
+    from game.session import load_graph
+    from game.userdata import data_dir
+
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "xdg"))
+    monkeypatch.setattr(game.interaction, "DEFAULT_GRAPH", tmp_path / "no-graph.npz")
+    cached = data_dir() / "graph-small.npz"
+    cached.parent.mkdir(parents=True)
+    cached.write_bytes(b"PK\x03\x04 cut short")
+    assert load_graph() is not None
+    assert "building it again" in capsys.readouterr().err
+    assert load_graph() is not None and "building" not in capsys.readouterr().err

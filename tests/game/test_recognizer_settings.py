@@ -197,3 +197,14 @@ def test_two_players_each_over_their_own_templates_settings(tmp_path):
     ann, other = (seat.recognizer for seat in s.seats)
     assert (ann.noise_g, ann.null_frames) == (0.9, 9)  # the shared command line over her saved gate
     assert (other.noise_g, other.null_frames) == (0.9, 6)
+
+
+def test_a_config_file_saved_with_a_byte_order_mark_says_so():
+    """Notepad's "UTF-8 with BOM": refused (TOML has no byte-order mark) as "Invalid statement
+    (at line 1, column 1)", a line that shows nothing wrong: the mark is named, and the fix."""
+    path = config_path()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_bytes(b"\xef\xbb\xbf[recognizer]\r\nnoise_g = 0.5\r\n")
+    with pytest.raises(InputError) as exc:
+        read_config()
+    assert str(exc.value) == f"{path}: not a valid TOML file (it starts with a byte-order mark: save it as UTF-8 without BOM)"

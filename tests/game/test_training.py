@@ -465,3 +465,41 @@ def test_actions_naming_no_action_is_one_line_and_exit_2(tmp_path, capsys):
         err = capsys.readouterr().err.strip().splitlines()
         assert len(err) == 1 and err[0].startswith(f"quickjab train: --actions {value!r}: names no action; known: straight_l"), err
     assert not (tmp_path / "t.npz").exists()
+
+
+def test_the_moves_a_player_trained_keep_their_names_when_the_set_is_mirrored():
+    """A set trained left-handed (straight_r, hook_l), then one move trained without
+    --left-handed: the set is mirrored to the player's hands, so the moves they trained are now
+    straight_l and hook_r; the file's `trained` list still said straight_r and hook_l (a move
+    never trained counted as theirs: "4 of 13 moves" for 3)."""
+    from pathlib import Path
+
+    from game.training import base_templates
+
+    defaults = base_templates(Path("/nonexistent/templates.npz"))
+    lefty = Trainer(["straight_r", "hook_l"])
+    lefty.recorded = _recorded(lefty.actions, n=3, seed=1)
+    theirs = lefty.templates(True, base=defaults)
+    assert theirs.meta["trained"] == "hook_l,straight_r"
+    tr = Trainer(["straight_l"])
+    tr.recorded = _recorded(tr.actions, n=3, seed=2)
+    templates = tr.templates(False, base=theirs)
+    assert templates.meta["trained"] == "hook_r,straight_l" and templates.meta["left_handed"] == "0"
+    assert tr.templates(True, base=theirs).meta["trained"] == "hook_l,straight_l,straight_r"
+
+
+def test_training_without_the_handedness_of_the_players_set_says_it_is_mirrored(tmp_path, capsys):
+    """A set trained with --left-handed, `train --actions block` without it: the whole set was
+    mirrored to the right hand without a word (the player had forgotten the flag)."""
+    from game.session import synthesized_templates
+    from game.training import _check_files
+
+    out = tmp_path / "mine.npz"
+    t = synthesized_templates(trials=1)
+    t.meta.update({"source": "quickjab train", "left_handed": "1"})
+    t.save(out)
+    _check_files(SimpleNamespace(source=None, screenshot=None, left_handed=True), out)
+    assert "mirror" not in capsys.readouterr().err
+    _check_files(SimpleNamespace(source=None, screenshot=None, left_handed=False), out)
+    err = capsys.readouterr().err
+    assert str(out) in err and "trained left-handed" in err and "--left-handed" in err
