@@ -170,21 +170,32 @@ SLOW_SHARE = 0.1  # frames whose work passed their period: more than this share,
 SLOW_AFTER_FRAMES = 300  # a run this long at least (5 s at 60 Hz): the first frames' loading is not the machine
 
 
-def slow_machine_hint(budget: FrameBudget, low_power: bool) -> str:
+# the window the low-power hint points at: the smallest whose text keeps its floor (game/hud_style.py
+# FLOOR_DOWN_TO_U: 720 * 0.625 = 450 high); under it the HUD is "a picture of the game" (docs/game.md)
+SMALL_WINDOW = (800, 450)
+SMALLER_BY = 0.75  # pointed at only when it leaves at most this share of the window's pixels
+
+
+def slow_machine_hint(budget: FrameBudget, low_power: bool, size: tuple[int, int] | None = None) -> str:
     """One line for a run whose frames often took longer than their period (a small board
-    rendering the full game), pointing at what to change; "" for a run that kept up."""
+    rendering the full game), pointing at what to change; "" for a run that kept up. `size` is
+    the window's at the end: one that SMALL_WINDOW would hardly shrink (a Pi's 800x480 screen)
+    or is already smaller is not told to shrink."""
     if budget.frames < SLOW_AFTER_FRAMES or budget.frame_overruns <= SLOW_SHARE * budget.frames:
         return ""
     share = f"{100 * budget.frame_overruns / budget.frames:.0f} % of the frames took longer than {budget.frame_period_ms:.1f} ms"
-    if low_power:
-        return f"{share} even in low power: a smaller window (--size 640x360) draws less"
-    return f"{share}: this machine may play better with --low-power (a 30 Hz render, half-size flat shading)"
+    if not low_power:
+        return f"{share}: this machine may play better with --low-power (a 30 Hz render, half-size flat shading)"
+    w, h = SMALL_WINDOW
+    if size is not None and w * h > SMALLER_BY * size[0] * size[1]:
+        return f"{share} even in low power in a {size[0]}x{size[1]} window (F3 shows which stage runs over)"
+    return f"{share} even in low power: a smaller window (--size {w}x{h}) draws less"
 
 
-def say_if_slow(args: argparse.Namespace, budget: FrameBudget) -> None:
+def say_if_slow(args: argparse.Namespace, budget: FrameBudget, size: tuple[int, int] | None = None) -> None:
     """`play`'s last line for a run whose frames often overran (slow_machine_hint); none under
     the virtual clock or --headless, whose frames do not keep the machine's pace."""
-    hint = "" if args.virtual_clock or args.headless else slow_machine_hint(budget, args.low_power)
+    hint = "" if args.virtual_clock or args.headless else slow_machine_hint(budget, args.low_power, size)
     if hint:
         print(f"quickjab play: {hint}", file=sys.stderr)
 
@@ -267,7 +278,8 @@ def run_session(args: argparse.Namespace, caption: str, open_sources: Callable[[
         session.render(0.0)
         try:
             session.loop.run(frames=frames)
-            say_if_slow(args, session.loop.budget)
+            window = pygame.display.get_surface()
+            say_if_slow(args, session.loop.budget, window.get_size() if window is not None else None)
         finally:
             if args.screenshot:
                 save_screenshot(args.screenshot)

@@ -254,6 +254,22 @@ def test_a_run_whose_frames_often_overran_points_at_low_power() -> None:
     assert slow_machine_hint(_budget_with(100, 200), low_power=False) == ""  # too short a run to tell
 
 
+def test_a_slow_low_power_run_is_pointed_at_a_window_that_draws_less_and_stays_readable() -> None:
+    # the window named is the smallest whose text keeps its floor (800x450), not the 640x360
+    # thumbnail; a window it would hardly shrink (a Pi's 800x480 screen) or a smaller one is not
+    # told to take it
+    from game.launch import slow_machine_hint
+
+    slow = _budget_with(100, 600, 1000 / 30)
+    for size in ((1280, 720), (1920, 1080), (960, 540), None):  # None: the window not known
+        assert "a smaller window (--size 800x450) draws less" in slow_machine_hint(slow, low_power=True, size=size), size
+    for size in ((800, 480), (800, 450), (640, 360)):
+        hint = slow_machine_hint(slow, low_power=True, size=size)
+        assert hint.startswith("17 % of the frames took longer than 33.3 ms even in low power") and "--size" not in hint, hint
+        assert f"in a {size[0]}x{size[1]} window" in hint
+    assert "--low-power" in slow_machine_hint(_budget_with(100, 600), low_power=False, size=(640, 360))
+
+
 def test_the_slow_machine_line_is_said_only_where_frames_keep_the_machines_pace(capsys) -> None:
     # under --headless or the virtual clock the frames run as fast as they can: their overruns
     # say nothing of the machine
