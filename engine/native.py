@@ -268,7 +268,7 @@ def load_library(stem: str, source: str, symbols: tuple[str, ...] = ()) -> ctype
                 reason = marker.read_text().strip()
             except OSError:
                 reason = "the build failed"
-            reason += f" (an earlier start's build, remembered: delete {d}/{stem}-*.failed to retry)"
+            reason += f" (an earlier start's build, remembered: delete {d}/*.failed to retry)"  # one reason for all kernels
             continue
         reason = _build(path, source, flags, cc)
         if reason is None:

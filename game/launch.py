@@ -192,12 +192,29 @@ def slow_machine_hint(budget: FrameBudget, low_power: bool, size: tuple[int, int
     return f"{share} even in low power: a smaller window (--size {w}x{h}) draws less"
 
 
-def say_if_slow(args: argparse.Namespace, budget: FrameBudget, size: tuple[int, int] | None = None) -> None:
-    """`play`'s last line for a run whose frames often overran (slow_machine_hint); none under
-    the virtual clock or --headless, whose frames do not keep the machine's pace."""
+def say_if_slow(args: argparse.Namespace, budget: FrameBudget) -> None:
+    """`play`'s last line for a run whose frames often overran (slow_machine_hint, told the
+    window's size); none under the virtual clock or --headless, whose frames do not keep the
+    machine's pace."""
+    import pygame
+
+    window = pygame.display.get_surface() if pygame.display.get_init() else None
+    size = window.get_size() if window is not None else None
     hint = "" if args.virtual_clock or args.headless else slow_machine_hint(budget, args.low_power, size)
     if hint:
         print(f"quickjab play: {hint}", file=sys.stderr)
+
+
+def kernels_line() -> str:
+    """One line when a C kernel built for this session (engine/native.py) runs on numpy for a
+    reason the player did not choose (no C compiler, no writable cache, a failed build): the
+    game plays, its physics and recognition more slowly, which only `quickjab bench` said. ""
+    when they run native, or QUICKJAB_NO_NATIVE / QUICKJAB_NO_JIT asked for numpy."""
+    from engine import native
+
+    if native.disabled() or not any(v.startswith("numpy") for v in native.status().values()):
+        return ""
+    return f"{native.describe()}: the game plays, more slowly (docs/performance.md)"
 
 
 def save_image(surface, path: str | os.PathLike, what: str = "the screenshot") -> None:
@@ -268,8 +285,9 @@ def run_session(args: argparse.Namespace, caption: str, open_sources: Callable[[
             check_visible_window("play")
         pygame.display.set_caption(caption)
         session = make_session(sources, clock, size, pygame.display.get_surface)
-        for line in session.templates_lines():
-            print(f"quickjab play: {line}", file=sys.stderr)
+        for line in [*session.templates_lines(), kernels_line()]:
+            if line:
+                print(f"quickjab play: {line}", file=sys.stderr)
         session.hud_state.show_budget = args.budget
         session.on_toggle_fullscreen = toggle_fullscreen
         # one frame drawn before the loop's clock starts: the first draw builds the ring's static
@@ -278,8 +296,7 @@ def run_session(args: argparse.Namespace, caption: str, open_sources: Callable[[
         session.render(0.0)
         try:
             session.loop.run(frames=frames)
-            window = pygame.display.get_surface()
-            say_if_slow(args, session.loop.budget, window.get_size() if window is not None else None)
+            say_if_slow(args, session.loop.budget)
         finally:
             if args.screenshot:
                 save_screenshot(args.screenshot)

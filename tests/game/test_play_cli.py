@@ -270,6 +270,48 @@ def test_a_slow_low_power_run_is_pointed_at_a_window_that_draws_less_and_stays_r
     assert "--low-power" in slow_machine_hint(_budget_with(100, 600), low_power=False, size=(640, 360))
 
 
+def test_play_on_a_board_without_a_c_compiler_says_so_in_one_line_and_plays(tmp_path) -> None:
+    # the kernels fall back to numpy (engine/native.py); that was said by `quickjab bench` only
+    import os
+    import subprocess
+
+    env = {k: v for k, v in os.environ.items() if k not in ("CC", "QUICKJAB_NO_NATIVE", "QUICKJAB_NO_JIT", "QUICKJAB_CACHE_DIR")}
+    env.update(PATH=str(tmp_path / "no-bin"), XDG_CACHE_HOME=str(tmp_path / "cache"), TMPDIR=str(tmp_path),
+               PYTHONPATH=str(Path(__file__).resolve().parents[2]), SDL_VIDEODRIVER="dummy", SDL_AUDIODRIVER="dummy")
+    argv = [sys.executable, "-m", "tools.cli", "play", "--low-power", "--demo", "--headless", "--frames", "30"]
+    for extra, said in (({}, True), ({"QUICKJAB_NO_NATIVE": "1"}, False)):  # asked for: not said
+        r = subprocess.run(argv, env={**env, **extra}, capture_output=True, text=True, timeout=120)
+        assert r.returncode == 0, r.stderr
+        lines = [x for x in r.stderr.splitlines() if "C kernels" in x]
+        if said:
+            assert len(lines) == 1 and "numpy for contacts, dtw_push_row, stick_project (no C compiler" in lines[0], r.stderr
+            assert lines[0].endswith("the game plays, more slowly (docs/performance.md)")
+        else:
+            assert lines == [], r.stderr
+
+
+def test_the_kernels_line_names_one_reason_for_a_compiler_that_fails_every_kernel(tmp_path, monkeypatch) -> None:
+    # a build that failed is remembered per kernel; the line names the failure once, not once a kernel
+    from engine import native
+    from game.launch import kernels_line
+
+    for var in ("QUICKJAB_NO_NATIVE", "QUICKJAB_NO_JIT"):
+        monkeypatch.delenv(var, raising=False)
+    monkeypatch.setenv("QUICKJAB_CACHE_DIR", str(tmp_path))
+    monkeypatch.setenv("CC", "/bin/false")
+    monkeypatch.setattr(native, "_status", {})
+    for _ in range(2):  # the build, then the remembered failure
+        for stem in ("contacts", "dtw_push_row"):
+            assert native.load_library(stem, f"int {stem}_x(void) {{ return 0; }}\n") is None
+        line = kernels_line()
+        assert line.startswith("C kernels: numpy for contacts, dtw_push_row (/bin/false exit 1") and line.count("/bin/false") == 1, line
+    monkeypatch.setenv("QUICKJAB_NO_NATIVE", "1")
+    assert kernels_line() == ""
+    monkeypatch.setattr(native, "_status", {"contacts": "native: x.so"})
+    monkeypatch.delenv("QUICKJAB_NO_NATIVE")
+    assert kernels_line() == ""
+
+
 def test_the_slow_machine_line_is_said_only_where_frames_keep_the_machines_pace(capsys) -> None:
     # under --headless or the virtual clock the frames run as fast as they can: their overruns
     # say nothing of the machine
