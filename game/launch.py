@@ -9,7 +9,8 @@ from __future__ import annotations
 import argparse
 import os
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from typing import TYPE_CHECKING, TypeVar
 
 from engine import arguments
@@ -217,6 +218,19 @@ def kernels_line() -> str:
     return f"{native.describe()}: the game plays, more slowly (docs/performance.md)"
 
 
+@contextmanager
+def slow_hint_at_the_end(args: argparse.Namespace, budget: FrameBudget) -> Iterator[None]:
+    """say_if_slow when the loop inside ends, by its frame count, the window closed or Ctrl-C in
+    the terminal (often how a run too slow to play is ended: it said nothing then); not after
+    an error."""
+    try:
+        yield
+    except KeyboardInterrupt:
+        say_if_slow(args, budget)
+        raise
+    say_if_slow(args, budget)
+
+
 def save_image(surface, path: str | os.PathLike, what: str = "the screenshot") -> None:
     """`surface` as an image file, its format from the suffix as pygame.image.save picks it.
     Encoded in memory and written by Python: pygame's own writing ignores a failed write (a full
@@ -295,8 +309,8 @@ def run_session(args: argparse.Namespace, caption: str, open_sources: Callable[[
         # five ways), which in the loop's first frame dropped steps on a slow board
         session.render(0.0)
         try:
-            session.loop.run(frames=frames)
-            say_if_slow(args, session.loop.budget)
+            with slow_hint_at_the_end(args, session.loop.budget):
+                session.loop.run(frames=frames)
         finally:
             if args.screenshot:
                 save_screenshot(args.screenshot)

@@ -270,6 +270,24 @@ def test_a_slow_low_power_run_is_pointed_at_a_window_that_draws_less_and_stays_r
     assert "--low-power" in slow_machine_hint(_budget_with(100, 600), low_power=False, size=(640, 360))
 
 
+def test_a_slow_run_ended_with_ctrl_c_still_says_it_was_slow(capsys) -> None:
+    # a slideshow on a small board is often ended from the terminal: the hint was skipped then
+    import argparse
+
+    from game.launch import slow_hint_at_the_end
+
+    args = argparse.Namespace(headless=False, virtual_clock=False, low_power=False)
+    with pytest.raises(KeyboardInterrupt), slow_hint_at_the_end(args, _budget_with(100, 600)):
+        raise KeyboardInterrupt
+    assert "quickjab play: 17 % of the frames" in capsys.readouterr().err
+    with slow_hint_at_the_end(args, _budget_with(100, 600)):
+        pass
+    assert "quickjab play: 17 % of the frames" in capsys.readouterr().err
+    with pytest.raises(RuntimeError), slow_hint_at_the_end(args, _budget_with(100, 600)):
+        raise RuntimeError("a bug")  # an error is the error's to say
+    assert capsys.readouterr().err == ""
+
+
 def test_play_on_a_board_without_a_c_compiler_says_so_in_one_line_and_plays(tmp_path) -> None:
     # the kernels fall back to numpy (engine/native.py); that was said by `quickjab bench` only
     import os
