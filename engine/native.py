@@ -22,6 +22,7 @@ why (`quickjab bench frame` and `bench startup` print it).
 from __future__ import annotations
 
 import ctypes
+import errno
 import hashlib
 import os
 import platform
@@ -36,6 +37,8 @@ CACHE_ENV = "QUICKJAB_CACHE_DIR"
 FLAGS = ["-O3", "-march=native", "-shared", "-fPIC", "-std=c99", "-ffp-contract=off", "-fno-math-errno"]
 # the retry when the compiler rejects -march=native (some ARM gccs, older clangs)
 PORTABLE_FLAGS = [f for f in FLAGS if not f.startswith("-march")]
+# a compiler that failed because its output could not be written: tried again at the next start
+FULL_DISK = tuple(os.strerror(e) for e in (errno.ENOSPC, errno.EDQUOT))
 STALE_TMP_SECONDS = 300.0  # a build takes seconds; a temporary dir older than this was left by a killed one
 BUILD_PREFIX = ".quickjab-build-"  # a build's temporary dir: the cache dir may be shared (~/.cache, /tmp)
 
@@ -188,9 +191,12 @@ def _one_line(text: str, limit: int = 160) -> str:
     return line[:limit]
 
 
-def _build(target: Path, source: str, flags: list[str], cc: str) -> str | None:
+def _build(target: Path, source: str, flags: list[str], cc: str) -> tuple[str, bool] | None:
     """Compile `source` into `target` (atomically: a half-written library never loads).
-    None when built, else the reason in one line."""
+    None when built, else (the reason in one line, whether to remember it): the compiler's
+    failure is remembered (it would fail again, and costs its run); an OSError around it (a full
+    disk, a directory gone, a compiler that does not run) is not: it costs nothing to try again
+    and may be gone by the next start."""
     import subprocess
     import tempfile
 
@@ -200,14 +206,25 @@ def _build(target: Path, source: str, flags: list[str], cc: str) -> str | None:
             src.write_text(source)
             r = subprocess.run([cc, *flags, "-o", str(out), str(src), "-lm"], capture_output=True, timeout=60)
             if r.returncode != 0 or not out.exists():
-                why = _one_line(r.stderr.decode(errors="replace"))
-                return f"{cc} exit {r.returncode}" + (f": {why}" if why else "")
+                stderr = r.stderr.decode(errors="replace")
+                full = next((m for m in FULL_DISK if m in stderr), "")  # the disk's, not the compiler's
+                why = full or _one_line(stderr)
+                return f"{cc} exit {r.returncode}" + (f": {why}" if why else ""), not full
             os.replace(out, target)
         return None
     except subprocess.TimeoutExpired:
-        return f"{cc} took over 60 s"
+        return f"{cc} took over 60 s", True
     except (OSError, subprocess.SubprocessError) as e:
-        return f"{cc}: {e}"
+        return f"{cc}: {e}", False
+
+
+def _remember(marker: Path, reason: str) -> None:
+    """Write a failed build's marker; one that cannot be written whole (a full disk) is removed:
+    an empty marker said nothing and kept the kernel on numpy after the disk had room again."""
+    try:
+        marker.write_text(reason + "\n")
+    except OSError:
+        _remove(marker)
 
 
 def _build_leftover(p: Path) -> bool:
@@ -279,13 +296,13 @@ def load_library(stem: str, source: str, symbols: tuple[str, ...] = ()) -> ctype
         path, marker = library_path(stem, source, flags, d), failure_marker(stem, source, flags, cc, d)
         if marker.exists():
             try:
-                reason = marker.read_text().strip()
+                reason = marker.read_text().strip() or "the build failed"
             except OSError:
                 reason = "the build failed"
-            reason += f" (an earlier start's build, remembered: delete {d}/{stem}-*.failed to retry)"
+            reason += f" (an earlier start's build, remembered: delete {d}/*.failed to retry)"  # one reason for all kernels
             continue
-        reason = _build(path, source, flags, cc)
-        if reason is None:
+        failed = _build(path, source, flags, cc)
+        if failed is None:
             lib = _open(path, symbols)
             if lib is not None:
                 _prune(d, stem, path, markers)
@@ -294,11 +311,10 @@ def load_library(stem: str, source: str, symbols: tuple[str, ...] = ()) -> ctype
             if not path.exists():  # pruned by another kernel version's build meanwhile: not a failure
                 return _numpy(stem, f"{path} was removed while loading it; the next start builds it again")
             _remove(path)
-            reason = f"{cc} built a library that does not load or lacks {', '.join(symbols)}"
-        try:
-            marker.write_text(reason + "\n")
-        except OSError:
-            pass
+            failed = f"{cc} built a library that does not load or lacks {', '.join(symbols)}", True
+        reason, remember = failed
+        if remember:
+            _remember(marker, reason)
     return _numpy(stem, reason)
 
 

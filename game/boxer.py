@@ -116,4 +116,6 @@ class Boxer:
     def keep_inside(self, limit: float) -> None:
         """Keep the root within `limit` metres of the ring's centre lines (inside the ropes)."""
         rx, rz, yaw = self._root
-        self._root = (float(np.clip(rx, -limit, limit)), float(np.clip(rz, -limit, limit)), yaw)
+        # plain floats: np.clip on a Python float costs ~2 us, four times a step (the same values,
+        # NaN and -0.0 included)
+        self._root = (min(max(float(rx), -limit), limit), min(max(float(rz), -limit), limit), yaw)

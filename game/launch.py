@@ -9,7 +9,8 @@ from __future__ import annotations
 import argparse
 import os
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from typing import TYPE_CHECKING, TypeVar
 
 from engine import arguments
@@ -170,23 +171,64 @@ SLOW_SHARE = 0.1  # frames whose work passed their period: more than this share,
 SLOW_AFTER_FRAMES = 300  # a run this long at least (5 s at 60 Hz): the first frames' loading is not the machine
 
 
-def slow_machine_hint(budget: FrameBudget, low_power: bool) -> str:
+# the window the low-power hint points at: the smallest whose text keeps its floor (game/hud_style.py
+# FLOOR_DOWN_TO_U: 720 * 0.625 = 450 high); under it the HUD is "a picture of the game" (docs/game.md)
+SMALL_WINDOW = (800, 450)
+SMALLER_BY = 0.75  # pointed at only when it leaves at most this share of the window's pixels
+
+
+def slow_machine_hint(budget: FrameBudget, low_power: bool, size: tuple[int, int] | None = None) -> str:
     """One line for a run whose frames often took longer than their period (a small board
-    rendering the full game), pointing at what to change; "" for a run that kept up."""
+    rendering the full game), pointing at what to change; "" for a run that kept up. `size` is
+    the window's at the end: one that SMALL_WINDOW would hardly shrink (a Pi's 800x480 screen)
+    or is already smaller is not told to shrink."""
     if budget.frames < SLOW_AFTER_FRAMES or budget.frame_overruns <= SLOW_SHARE * budget.frames:
         return ""
     share = f"{100 * budget.frame_overruns / budget.frames:.0f} % of the frames took longer than {budget.frame_period_ms:.1f} ms"
-    if low_power:
-        return f"{share} even in low power: a smaller window (--size 640x360) draws less"
-    return f"{share}: this machine may play better with --low-power (a 30 Hz render, half-size flat shading)"
+    if not low_power:
+        return f"{share}: this machine may play better with --low-power (a 30 Hz render, half-size flat shading)"
+    w, h = SMALL_WINDOW
+    if size is not None and w * h > SMALLER_BY * size[0] * size[1]:
+        return f"{share} even in low power in a {size[0]}x{size[1]} window (F3 shows which stage runs over)"
+    return f"{share} even in low power: a smaller window (--size {w}x{h}) draws less"
 
 
 def say_if_slow(args: argparse.Namespace, budget: FrameBudget) -> None:
-    """`play`'s last line for a run whose frames often overran (slow_machine_hint); none under
-    the virtual clock or --headless, whose frames do not keep the machine's pace."""
-    hint = "" if args.virtual_clock or args.headless else slow_machine_hint(budget, args.low_power)
+    """`play`'s last line for a run whose frames often overran (slow_machine_hint, told the
+    window's size); none under the virtual clock or --headless, whose frames do not keep the
+    machine's pace."""
+    import pygame
+
+    window = pygame.display.get_surface() if pygame.display.get_init() else None
+    size = window.get_size() if window is not None else None
+    hint = "" if args.virtual_clock or args.headless else slow_machine_hint(budget, args.low_power, size)
     if hint:
         print(f"quickjab play: {hint}", file=sys.stderr)
+
+
+def kernels_line() -> str:
+    """One line when a C kernel built for this session (engine/native.py) runs on numpy for a
+    reason the player did not choose (no C compiler, no writable cache, a failed build): the
+    game plays, its physics and recognition more slowly, which only `quickjab bench` said. ""
+    when they run native, or QUICKJAB_NO_NATIVE / QUICKJAB_NO_JIT asked for numpy."""
+    from engine import native
+
+    if native.disabled() or not any(v.startswith("numpy") for v in native.status().values()):
+        return ""
+    return f"{native.describe()}: the game plays, more slowly (docs/performance.md)"
+
+
+@contextmanager
+def slow_hint_at_the_end(args: argparse.Namespace, budget: FrameBudget) -> Iterator[None]:
+    """say_if_slow when the loop inside ends, by its frame count, the window closed or Ctrl-C in
+    the terminal (often how a run too slow to play is ended: it said nothing then); not after
+    an error."""
+    try:
+        yield
+    except KeyboardInterrupt:
+        say_if_slow(args, budget)
+        raise
+    say_if_slow(args, budget)
 
 
 def save_image(surface, path: str | os.PathLike, what: str = "the screenshot") -> None:
@@ -257,8 +299,9 @@ def run_session(args: argparse.Namespace, caption: str, open_sources: Callable[[
             check_visible_window("play")
         pygame.display.set_caption(caption)
         session = make_session(sources, clock, size, pygame.display.get_surface)
-        for line in session.templates_lines():
-            print(f"quickjab play: {line}", file=sys.stderr)
+        for line in [*session.templates_lines(), kernels_line()]:
+            if line:
+                print(f"quickjab play: {line}", file=sys.stderr)
         session.hud_state.show_budget = args.budget
         session.on_toggle_fullscreen = toggle_fullscreen
         # one frame drawn before the loop's clock starts: the first draw builds the ring's static
@@ -266,8 +309,8 @@ def run_session(args: argparse.Namespace, caption: str, open_sources: Callable[[
         # five ways), which in the loop's first frame dropped steps on a slow board
         session.render(0.0)
         try:
-            session.loop.run(frames=frames)
-            say_if_slow(args, session.loop.budget)
+            with slow_hint_at_the_end(args, session.loop.budget):
+                session.loop.run(frames=frames)
         finally:
             if args.screenshot:
                 save_screenshot(args.screenshot)

@@ -179,3 +179,55 @@ def test_disabled_says_so(cache, monkeypatch):
     monkeypatch.setenv(native.NO_NATIVE_ENV, "1")
     assert native.load_library("k", SRC, ("twice",)) is None
     assert "QUICKJAB_NO_NATIVE" in native.status()["k"]
+
+
+def test_a_build_that_failed_for_a_full_disk_is_tried_again_at_the_next_start(cache, tmp_path, monkeypatch):
+    # the linker's "No space left on device" was remembered as the compiler's failure: the kernel
+    # stayed on numpy (or on the portable flags) after the disk had room again
+    calls = tmp_path / "calls"
+    monkeypatch.setenv("CC", script(tmp_path / "cc", f"echo x >> {calls}\n"
+                                    "echo '/usr/bin/ld: final link failed: No space left on device' >&2\n"
+                                    "echo 'collect2: error: ld returned 1 exit status' >&2\nexit 1\n"))
+    assert native.load_library("k", SRC, ("twice",)) is None
+    assert native.status()["k"] == f"numpy: {tmp_path / 'cc'} exit 1: No space left on device"
+    assert not list((tmp_path / "cache").glob("*.failed"))
+    native.load_library("k", SRC, ("twice",))
+    assert len(calls.read_text().splitlines()) == 4  # both flag sets, at both starts
+
+
+def test_an_oserror_around_the_compiler_is_not_remembered_nor_an_empty_marker_left(cache, tmp_path, monkeypatch):
+    # a full disk: the kernel's source cannot be written (the compiler never runs), and a marker
+    # file is created but its reason cannot be written into it
+    calls = tmp_path / "calls"
+    monkeypatch.setenv("CC", script(tmp_path / "cc", f"echo x >> {calls}\nexit 3\n"))
+    real_write = Path.write_text
+
+    def full(self, text, *args, **kwargs):
+        if self.name == "kernel.c" and os.environ.get("FULL_SRC"):
+            raise OSError(28, "No space left on device")
+        if self.suffix == ".failed":
+            self.touch()  # created, then the write fails
+            raise OSError(28, "No space left on device")
+        return real_write(self, text, *args, **kwargs)
+
+    monkeypatch.setattr(Path, "write_text", full)
+    monkeypatch.setenv("FULL_SRC", "1")
+    assert native.load_library("k", SRC, ("twice",)) is None
+    assert "No space left on device" in native.status()["k"] and not calls.exists()
+    monkeypatch.delenv("FULL_SRC")
+    assert native.load_library("k", SRC, ("twice",)) is None  # the compiler's own failure now
+    assert len(calls.read_text().splitlines()) == 2 and native.status()["k"].endswith("exit 3")
+    assert not list((tmp_path / "cache").glob("*.failed"))  # its marker could not be written: none left
+    native.load_library("k", SRC, ("twice",))
+    assert len(calls.read_text().splitlines()) == 4
+
+
+def test_an_empty_failure_marker_still_says_the_build_failed(cache, tmp_path, monkeypatch):
+    cc = script(tmp_path / "cc", "exit 3\n")
+    monkeypatch.setenv("CC", cc)
+    d = tmp_path / "cache"
+    d.mkdir(parents=True, exist_ok=True)
+    for flags in (native.FLAGS, native.PORTABLE_FLAGS):
+        native.failure_marker("k", SRC, flags, cc, d).write_text("")  # an older version's, on a full disk
+    assert native.load_library("k", SRC, ("twice",)) is None
+    assert native.status()["k"].startswith("numpy: the build failed (an earlier start's build, remembered")

@@ -151,3 +151,24 @@ def test_a_switch_during_a_landed_punch_does_not_land_it_again():
     run(w, a, b, 60)
     a.controller.on_event({"event": "start", "action": "straight_r"})
     assert len(run(w, a, b, 40)) == 1
+
+
+def test_keep_inside_holds_the_root_on_plain_floats_to_the_same_bits(monkeypatch):
+    # four times a 60 Hz step: np.clip on a Python float cost ~2 us each (a small board: ~10x)
+    w, a, _ = ring(1.0)
+    limit = 2.4
+    cases = [0.3, -0.0, 0.0, 2.4, -2.4, 7.5, -7.5, math.inf, -math.inf, math.nan, 5e-324, np.float64(3.1)]
+    expected = [(float(np.clip(v, -limit, limit)), float(np.clip(-v, -limit, limit))) for v in cases]
+
+    def no_numpy(*args, **kwargs):
+        raise AssertionError("np.clip on the 60 Hz path")
+
+    def same(x: float, y: float) -> bool:
+        return (math.isnan(x) and math.isnan(y)) or (x == y and math.copysign(1, x) == math.copysign(1, y))
+
+    monkeypatch.setattr(np, "clip", no_numpy)
+    for v, want in zip(cases, expected, strict=True):
+        a._root = (v, -v, 0.25)
+        a.keep_inside(limit)
+        assert all(type(x) is float for x in a._root[:2]) and a._root[2] == 0.25
+        assert same(a._root[0], want[0]) and same(a._root[1], want[1]), (v, a._root, want)

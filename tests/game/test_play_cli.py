@@ -254,6 +254,82 @@ def test_a_run_whose_frames_often_overran_points_at_low_power() -> None:
     assert slow_machine_hint(_budget_with(100, 200), low_power=False) == ""  # too short a run to tell
 
 
+def test_a_slow_low_power_run_is_pointed_at_a_window_that_draws_less_and_stays_readable() -> None:
+    # the window named is the smallest whose text keeps its floor (800x450), not the 640x360
+    # thumbnail; a window it would hardly shrink (a Pi's 800x480 screen) or a smaller one is not
+    # told to take it
+    from game.launch import slow_machine_hint
+
+    slow = _budget_with(100, 600, 1000 / 30)
+    for size in ((1280, 720), (1920, 1080), (960, 540), None):  # None: the window not known
+        assert "a smaller window (--size 800x450) draws less" in slow_machine_hint(slow, low_power=True, size=size), size
+    for size in ((800, 480), (800, 450), (640, 360)):
+        hint = slow_machine_hint(slow, low_power=True, size=size)
+        assert hint.startswith("17 % of the frames took longer than 33.3 ms even in low power") and "--size" not in hint, hint
+        assert f"in a {size[0]}x{size[1]} window" in hint
+    assert "--low-power" in slow_machine_hint(_budget_with(100, 600), low_power=False, size=(640, 360))
+
+
+def test_a_slow_run_ended_with_ctrl_c_still_says_it_was_slow(capsys) -> None:
+    # a slideshow on a small board is often ended from the terminal: the hint was skipped then
+    import argparse
+
+    from game.launch import slow_hint_at_the_end
+
+    args = argparse.Namespace(headless=False, virtual_clock=False, low_power=False)
+    with pytest.raises(KeyboardInterrupt), slow_hint_at_the_end(args, _budget_with(100, 600)):
+        raise KeyboardInterrupt
+    assert "quickjab play: 17 % of the frames" in capsys.readouterr().err
+    with slow_hint_at_the_end(args, _budget_with(100, 600)):
+        pass
+    assert "quickjab play: 17 % of the frames" in capsys.readouterr().err
+    with pytest.raises(RuntimeError), slow_hint_at_the_end(args, _budget_with(100, 600)):
+        raise RuntimeError("a bug")  # an error is the error's to say
+    assert capsys.readouterr().err == ""
+
+
+def test_play_on_a_board_without_a_c_compiler_says_so_in_one_line_and_plays(tmp_path) -> None:
+    # the kernels fall back to numpy (engine/native.py); that was said by `quickjab bench` only
+    import os
+    import subprocess
+
+    env = {k: v for k, v in os.environ.items() if k not in ("CC", "QUICKJAB_NO_NATIVE", "QUICKJAB_NO_JIT", "QUICKJAB_CACHE_DIR")}
+    env.update(PATH=str(tmp_path / "no-bin"), XDG_CACHE_HOME=str(tmp_path / "cache"), TMPDIR=str(tmp_path),
+               PYTHONPATH=str(Path(__file__).resolve().parents[2]), SDL_VIDEODRIVER="dummy", SDL_AUDIODRIVER="dummy")
+    argv = [sys.executable, "-m", "tools.cli", "play", "--low-power", "--demo", "--headless", "--frames", "30"]
+    for extra, said in (({}, True), ({"QUICKJAB_NO_NATIVE": "1"}, False)):  # asked for: not said
+        r = subprocess.run(argv, env={**env, **extra}, capture_output=True, text=True, timeout=120)
+        assert r.returncode == 0, r.stderr
+        lines = [x for x in r.stderr.splitlines() if "C kernels" in x]
+        if said:
+            assert len(lines) == 1 and "numpy for contacts, dtw_push_row, stick_project (no C compiler" in lines[0], r.stderr
+            assert lines[0].endswith("the game plays, more slowly (docs/performance.md)")
+        else:
+            assert lines == [], r.stderr
+
+
+def test_the_kernels_line_names_one_reason_for_a_compiler_that_fails_every_kernel(tmp_path, monkeypatch) -> None:
+    # a build that failed is remembered per kernel; the line names the failure once, not once a kernel
+    from engine import native
+    from game.launch import kernels_line
+
+    for var in ("QUICKJAB_NO_NATIVE", "QUICKJAB_NO_JIT"):
+        monkeypatch.delenv(var, raising=False)
+    monkeypatch.setenv("QUICKJAB_CACHE_DIR", str(tmp_path))
+    monkeypatch.setenv("CC", "/bin/false")
+    monkeypatch.setattr(native, "_status", {})
+    for _ in range(2):  # the build, then the remembered failure
+        for stem in ("contacts", "dtw_push_row"):
+            assert native.load_library(stem, f"int {stem}_x(void) {{ return 0; }}\n") is None
+        line = kernels_line()
+        assert line.startswith("C kernels: numpy for contacts, dtw_push_row (/bin/false exit 1") and line.count("/bin/false") == 1, line
+    monkeypatch.setenv("QUICKJAB_NO_NATIVE", "1")
+    assert kernels_line() == ""
+    monkeypatch.setattr(native, "_status", {"contacts": "native: x.so"})
+    monkeypatch.delenv("QUICKJAB_NO_NATIVE")
+    assert kernels_line() == ""
+
+
 def test_the_slow_machine_line_is_said_only_where_frames_keep_the_machines_pace(capsys) -> None:
     # under --headless or the virtual clock the frames run as fast as they can: their overruns
     # say nothing of the machine

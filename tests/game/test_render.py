@@ -284,3 +284,23 @@ def test_budget_overlay_measures_a_frame_against_its_period(render_hz, period, m
     monkeypatch.setattr(hud, "blit", lambda surf, text, *a, **k: (said.append(text), real(surf, text, *a, **k))[1])
     hud.draw(pygame.Surface(SIZE), HudState(show_budget=True), loop.budget)
     assert any(t.startswith(f"frame budget {period} ms") for t in said), said[:3]
+
+
+def test_the_facing_vector_is_np_cross_to_the_bit_without_calling_it(monkeypatch) -> None:
+    # each boxer's eyes, every frame in both renderers: np.cross cost ~15 us a call
+    from game.render import facing
+
+    rng = np.random.default_rng(3)
+    rights = [np.array((x, 0.0, z)) for x, z in rng.normal(size=(200, 2))]
+    rights += [np.array(v) for v in ((0.0, 0.0, 1.0), (-0.0, 0.0, -1.0), (1.0, 0.0, 0.0), (-1.0, 0.0, -0.0), (-0.0, 0.0, 0.0))]
+    for r in rights:
+        assert facing(r).tobytes() == np.cross(r, (0.0, 1.0, 0.0)).tobytes(), r
+    scene = Renderer((320, 180))
+    pose = load_library()["guard"].posture(0)
+    bodies = [local_to_world(pose, (0.0, -0.9, 0.0)), local_to_world(pose, (0.0, 0.9, np.pi))]
+
+    def no_cross(*args, **kwargs):
+        raise AssertionError("np.cross in a frame")
+
+    monkeypatch.setattr(np, "cross", no_cross)
+    scene.draw(pygame.Surface((320, 180)), bodies)
