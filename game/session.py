@@ -214,15 +214,16 @@ def load_graph(path: str | Path | None = None):
     if DEFAULT_GRAPH.exists():
         return InteractionGraph.load(DEFAULT_GRAPH, edges=False)
     cached = data_dir() / "graph-small.npz"
+    why = f"no shipped Interaction Graph; building a small one in {cached} (once)"
     if cached.is_file():
         try:
             return InteractionGraph.load(cached, edges=False)
         except InputError as exc:  # a cache: a broken one (cut short, a disk error) is built again
-            print(f"quickjab: {exc}; building it again", file=sys.stderr)
+            why = f"{exc}; building it again"
     from game.actions import load_library
     from game.interaction.build import BuildParams, build_graph
 
-    print(f"quickjab: no shipped Interaction Graph; building a small one in {cached} (once)", file=sys.stderr)
+    print(f"quickjab: {why}", file=sys.stderr)  # one line: the first build, or a broken cache's
     cached.parent.mkdir(parents=True, exist_ok=True)
     build_graph(load_library(), BuildParams(states=3000, bouts=256)).save(cached)
     return InteractionGraph.load(cached, edges=False)
