@@ -182,10 +182,15 @@ class Trainer:
         return templates
 
 
+def _other_hand(base, left_handed: bool) -> bool:
+    """`base` was trained with the other handedness than `left_handed`."""
+    return (base.meta.get("left_handed") == "1") != left_handed
+
+
 def _oriented(base, left_handed: bool):
     """`base` as the player holds the sensors: a set of the other handedness mirrored (the file
     holds the player's own motions)."""
-    return base.mirrored() if (base.meta.get("left_handed") == "1") != left_handed else base
+    return base.mirrored() if _other_hand(base, left_handed) else base
 
 
 def _trained_moves(base, left_handed: bool) -> set[str]:
@@ -194,7 +199,7 @@ def _trained_moves(base, left_handed: bool) -> set[str]:
     from engine.recognition.templates import mirrored_name
 
     names = set(filter(None, base.meta.get("trained", "").split(",")))
-    return {mirrored_name(a) for a in names} if (base.meta.get("left_handed") == "1") != left_handed else names
+    return {mirrored_name(a) for a in names} if _other_hand(base, left_handed) else names
 
 
 def _moves(base, left_handed: bool) -> dict[str, list[np.ndarray]]:
@@ -608,7 +613,7 @@ def _check_files(args: argparse.Namespace, output: Path) -> None:
     if output.exists():
         theirs = Templates.load(output)  # not a template file: said now
         was_left = theirs.meta.get("left_handed") == "1"
-        if theirs.meta.get("source") == "quickjab train" and was_left != bool(args.left_handed):
+        if theirs.meta.get("source") == "quickjab train" and _other_hand(theirs, bool(args.left_handed)):
             print(f"quickjab train: your set at {output} was trained {'left' if was_left else 'right'}-handed; it is "
                   f"saved mirrored for the {'right' if was_left else 'left'} hand"
                   + (" (--left-handed keeps it left-handed)" if was_left else ""), file=sys.stderr)
