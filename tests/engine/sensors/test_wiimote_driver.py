@@ -367,6 +367,23 @@ def test_extension_that_failed_to_set_up_is_tried_again(rec_path, first_id):
     assert not np.array_equal(samples[-1].accel[1], [0.0, 0.0, 1.0])  # the left hand moves
 
 
+@pytest.mark.parametrize("ident", ["0000a4210000", "ff00a0200000", "010000000000"])
+def test_a_nunchuk_whose_id_differs_in_bytes_0_to_3_is_a_nunchuk(rec_path, ident):
+    """The remote's ID register says 00 00 in bytes 4-5 but not Nintendo's A4 20 before them
+    (third-party Nunchuks): Linux's hid-wiimote and Dolphin take it for a Nunchuk, and so do we;
+    the emulated one answers the real set-up (encrypted until initialised) with that ID."""
+    vc = VirtualClock()
+    src = open_source(f"wiimote-emu://{rec_path}", clock=vc.seconds)
+    src.emulator.memory.ext_regs[0xFA:0x100] = bytes.fromhex(ident)
+    samples = []
+    for _ in range(2 * 60):
+        vc.advance(STEP_NS)
+        samples += src.poll()
+    assert src.extension == "nunchuk" and src.stats["nunchuk_plugged"] == 1, src.stats
+    assert not any("not a Nunchuk" in note for note in src.notes), src.notes
+    assert not np.array_equal(samples[-1].accel[1], [0.0, 0.0, 1.0])  # the left hand moves
+
+
 def test_an_extension_that_is_not_a_nunchuk_is_tried_again_every_4_s_not_every_poll(rec_path):
     """A Classic Controller (or any extension that never sets up as a Nunchuk) stays plugged:
     hid-wiimote's check every 4 s, not a set-up script after every poll."""
