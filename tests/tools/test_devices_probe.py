@@ -134,8 +134,12 @@ def test_a_board_that_found_no_imu_yet_answers_but_says_so(pty_pair, capsys):
     assert rc == 0 and "a board answers (HELLO) but has found no IMU yet" in out
 
 
-def test_a_pty_whose_other_end_closes_is_said_lost(pty_pair, capsys):
-    master, path = pty_pair
-    threading.Timer(0.3, os.close, (master,)).start()
+def test_a_pty_whose_other_end_closes_is_said_lost(capsys):
+    master, slave = os.openpty()  # its own pair: the master is closed here, once
+    path = os.ttyname(slave)
+    os.close(slave)
+    closer = threading.Timer(0.3, os.close, (master,))
+    closer.start()
     rc, out = devices(capsys, "--probe-seconds", "3", path)
+    closer.join()
     assert rc == 1 and "the port was lost while probing" in out
