@@ -112,11 +112,12 @@ def test_a_silent_pty_and_a_missing_path_are_no_board(pty_pair, tmp_path, capsys
 def test_bytes_that_are_no_frames_are_told_apart_from_silence(pty_pair, capsys):
     master, path = pty_pair
     stop = threading.Event()
-    feed(master, b"boot: hello world\r\n", 0.02, stop)  # a board speaking something else
+    writer = feed(master, b"boot: hello world\r\n", 0.02, stop)  # a board speaking something else
     try:
         rc, out = devices(capsys, "--json", "--probe-seconds", "0.4", path)
     finally:
         stop.set()
+        writer.join()  # before the fixture closes the master: never a write to a reused descriptor
     r = json.loads(out)["probed"][0]
     assert rc == 1 and not r["answered"] and r["bytes"] > 0 and r["frames"] == 0
     assert "but no protocol v1 frame" in r["result"]
@@ -126,11 +127,12 @@ def test_a_board_that_found_no_imu_yet_answers_but_says_so(pty_pair, capsys):
     master, path = pty_pair
     hello = protocol.encode_hello(0, 1000, 77, 200, 4096, 65500, 30, protocol.IMU_MPU6050, 0)  # flags 0: no sensor
     stop = threading.Event()
-    feed(master, hello, 0.05, stop)
+    writer = feed(master, hello, 0.05, stop)
     try:
         rc, out = devices(capsys, "--probe-seconds", "0.4", path)
     finally:
         stop.set()
+        writer.join()  # before the fixture closes the master: never a write to a reused descriptor
     assert rc == 0 and "a board answers (HELLO) but has found no IMU yet" in out
 
 
