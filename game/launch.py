@@ -27,12 +27,58 @@ HEADLESS_FRAMES = 600  # `--headless` without `--frames` stops after 10 s of pla
 INVISIBLE_DRIVERS = ("offscreen", "dummy")  # SDL video drivers that open no window
 
 
+# The smallest window `play` and `train` open. At 640x360 every screen's text fits, in 12 px type
+# (hud_style.min_text_px; tests/game/test_hud_small_screens.py); under it the HUD cannot be read:
+# at 480x270 and 320x240 its capitals are 4 px high, a REJECTED mark runs into the move's name,
+# and the training screen's checklist and plot go off the bottom of the window. --headless opens
+# no window: its frames (screenshots, thumbnails, quick test runs) may be smaller, down to
+# arguments.SIZE_MIN, with text shrinking past legibility.
+MIN_WINDOW = (640, 360)
+
+
 def parse_size(text: str) -> tuple[int, int]:
     try:
         w, h = (int(v) for v in arguments.window_size(text).lower().split("x"))
     except argparse.ArgumentTypeError as exc:  # one line naming --size, as before
         raise InputError(f"--size {text!r}: {exc}") from None
     return w, h
+
+
+def parse_window_size(text: str, headless: bool, command: str) -> tuple[int, int]:
+    """`--size` for `command`: a window (not --headless) at least MIN_WINDOW, else one line."""
+    w, h = parse_size(text)
+    if not headless and (w < MIN_WINDOW[0] or h < MIN_WINDOW[1]):
+        raise InputError(f"--size {w}x{h}: the {command} window must be at least {MIN_WINDOW[0]}x{MIN_WINDOW[1]} "
+                         "(smaller, its text is unreadable and runs off the screen); --headless draws smaller frames")
+    return w, h
+
+
+def open_window(size: tuple[int, int], flags: int, headless: bool, command: str) -> None:
+    """The display at `size`: a window (not --headless) must show (check_visible_window), and
+    it cannot be dragged below MIN_WINDOW."""
+    import pygame
+
+    pygame.display.set_mode(size, flags)
+    if not headless:
+        check_visible_window(command)
+        keep_window_at_least()
+
+
+def keep_window_at_least(size: tuple[int, int] = MIN_WINDOW) -> None:
+    """Stop the (resizable) window being dragged below `size`, where the HUD cannot be read
+    (MIN_WINDOW). pygame-ce's Window for the display's window; where it has none (an older
+    pygame) or the video driver refuses, the window stays as it is: nothing breaks for it."""
+    import warnings
+
+    import pygame
+
+    try:
+        with warnings.catch_warnings():  # from_display_module is marked for removal in a later pygame-ce
+            warnings.simplefilter("ignore", DeprecationWarning)
+            window = pygame.Window.from_display_module()
+        window.minimum_size = size
+    except (AttributeError, pygame.error):
+        pass
 
 
 # what a headless run of each command needs to be of use: `train` runs until its walk is over
@@ -272,7 +318,7 @@ def run_session(args: argparse.Namespace, caption: str, open_sources: Callable[[
     `open_sources(clock)` returns the sources (opened before the window: a bad URL is an
     error, not a window that opens and closes); `make_session(sources, clock, size,
     surface_provider)` builds the session."""
-    size = parse_size(args.size)
+    size = parse_window_size(args.size, args.headless, "play")
     if args.frames is not None and args.frames < 1:
         raise InputError("--frames must be at least 1")
     refuse_overwriting({"--screenshot": args.screenshot, "--trace": args.trace}, played_files(args))
@@ -294,9 +340,7 @@ def run_session(args: argparse.Namespace, caption: str, open_sources: Callable[[
             sources.extend(opened)
         init_pygame(wants_sound(args))
         flags = pygame.RESIZABLE | (pygame.FULLSCREEN if args.fullscreen and not args.headless else 0)
-        pygame.display.set_mode(size, flags)
-        if not args.headless:
-            check_visible_window("play")
+        open_window(size, flags, args.headless, "play")
         pygame.display.set_caption(caption)
         session = make_session(sources, clock, size, pygame.display.get_surface)
         for line in [*session.templates_lines(), kernels_line()]:

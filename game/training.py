@@ -33,12 +33,12 @@ from engine.errors import InputError, refuse_overwriting
 from engine.sensors.source import PLAYABLE, SourceState, missing_in_short, missing_part
 from game.launch import (
     KEYBOARD_SOURCE,
-    check_visible_window,
     headless_env,
     init_pygame,
     open_on_run_clock,
     open_player_source,
-    parse_size,
+    open_window,
+    parse_window_size,
     save_screenshot,
 )
 
@@ -476,7 +476,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--frames", type=arguments.positive_int, default=None, help="stop after N rendered frames")
     p.add_argument("--screenshot", type=arguments.output_file, metavar="PNG", help="save the last frame to this PNG")
     p.add_argument("--seed", type=arguments.seed, default=0, help="seed of the virtual player's moves (default 0)")
-    p.add_argument("--size", default="1280x720", help="window size WxH (default 1280x720)")
+    p.add_argument("--size", default="1280x720", help="window size WxH (default 1280x720; at least 640x360, smaller frames with --headless)")
     p.add_argument("--recognizer", action="append", default=[], metavar="NAME=VALUE",
                    help="a recognizer setting to save with your templates, e.g. noise_g=0.5 (repeatable; "
                         "docs/recognition.md); the settings your file already holds are kept")
@@ -629,14 +629,12 @@ def _open_window(args: argparse.Namespace, size: tuple[int, int], source) -> Non
     import pygame
 
     init_pygame(sound=False)  # training plays no sound
-    pygame.display.set_mode(size, pygame.RESIZABLE)
-    if not args.headless:
-        try:
-            check_visible_window("train")
-        except InputError:
-            source.close()
-            pygame.quit()
-            raise
+    try:
+        open_window(size, pygame.RESIZABLE, args.headless, "train")
+    except InputError:
+        source.close()
+        pygame.quit()
+        raise
     pygame.display.set_caption("QuickJab - Train your moves")
 
 
@@ -778,7 +776,7 @@ class _TrainingStages:
 
 
 def run(args: argparse.Namespace) -> int:
-    size = parse_size(args.size)
+    size = parse_window_size(args.size, args.headless, "train")
     from engine.recognition.config import parse_assignments
     from game.actions import load_library
 

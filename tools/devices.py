@@ -1,11 +1,15 @@
 """`quickjab devices`: list the Wiimotes (model, path) and serial ports this machine can see,
-with the source URL to open each."""
+with the source URL to open each. `quickjab devices PATH...` also probes those ports (a pty from
+`quickjab bridge emulate` or socat, which the list never shows) for a board answering with the
+serial protocol's HELLO; exit status 1 when one does not."""
 
 from __future__ import annotations
 
 import argparse
 import json
 import sys
+
+from engine import arguments
 
 
 def no_device_hint(url: str) -> str:
@@ -24,6 +28,12 @@ def no_device_hint(url: str) -> str:
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("devices", help="list Wiimotes and serial ports", description=__doc__)
     p.add_argument("--json", action="store_true", help="print one JSON object instead of text")
+    p.add_argument("paths", nargs="*", metavar="PATH",
+                   help="serial ports to probe for a board (e.g. /dev/pts/5, which the list never shows): each is "
+                        "opened, asked for a HELLO and read for --probe-seconds; opening a port may reset an Arduino-"
+                        "style board, and a port another program has open loses bytes to the probe")
+    p.add_argument("--probe-seconds", type=arguments.float_range(0.0, 60.0, lo_open=True), default=None, metavar="S",
+                   help="how long to wait for each probed port's HELLO (default 1.5; a board sends one every second)")
     p.set_defaults(func=run)
 
 
@@ -66,10 +76,15 @@ def run(args: argparse.Namespace) -> int:
 
     wiimotes, wproblem = find_wiimotes()
     ports, sproblem = find_serial_ports()
+    probed = probe_paths(args.paths, args.probe_seconds)
+    status = 1 if any(not r["answered"] for r in probed) else 0
     if args.json:
-        json.dump({"wiimotes": wiimotes, "serial_ports": ports, "problems": [x for x in (wproblem, sproblem) if x]}, sys.stdout, indent=2)
+        listing = {"wiimotes": wiimotes, "serial_ports": ports, "problems": [x for x in (wproblem, sproblem) if x]}
+        if args.paths:  # a key of its own, only when asked: the listing's keys stay as they were
+            listing["probed"] = probed
+        json.dump(listing, sys.stdout, indent=2)
         print()
-        return 0
+        return status
     print("Wiimotes:")
     for w in wiimotes:
         extra = f"  (kernel driver: {w['kernel_driver']}, see docs/wiimote.md)" if w["kernel_driver"] == "wiimote" else ""
@@ -82,4 +97,17 @@ def run(args: argparse.Namespace) -> int:
         print(f"  {s['path']:<20} {s['description']:<30} {s['url']}")
     if not ports:
         print(f"  none found{': ' + sproblem if sproblem else ''}")
-    return 0
+    if args.paths:
+        print("Probed:")
+        for r in probed:
+            print(f"  {r['path']:<20} {r['result']}" + (f"  {r['url']}" if r["answered"] else ""))
+    return status
+
+
+def probe_paths(paths: list[str], seconds: float | None) -> list[dict]:
+    """Each path's probe (tools.serial_probe) as a dict, in the order given."""
+    if not paths:
+        return []
+    from tools.serial_probe import PROBE_S, probe
+
+    return [probe(path, seconds or PROBE_S).as_dict() for path in paths]

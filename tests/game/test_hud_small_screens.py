@@ -318,3 +318,70 @@ def test_the_amber_strip_covers_no_text(size, strip) -> None:
     bare.draw(pygame.Surface(size), st, budget())  # nothing under the clock to clear: where the strip goes
     if size[0] / size[1] >= 16 / 9:
         assert box == bare.panels[strip]
+
+
+@pytest.fixture
+def caps_any(monkeypatch) -> dict[str, int]:
+    """`caps` without its 800x450 line-height floor: the cap height each string was rendered in."""
+    seen: dict[str, int] = {}
+
+    class Font(pygame.font.Font):
+        def render(self, text, *args, **kwargs):
+            cap = self.metrics("H")[0][3]
+            seen[text] = min(seen.get(text, cap), cap)
+            return super().render(text, *args, **kwargs)
+
+    monkeypatch.setattr(pygame.font, "Font", Font)
+    return seen
+
+
+def test_the_smallest_window_keeps_every_screen_readable_and_inside_it(scene, caps_any) -> None:
+    """At game.launch.MIN_WINDOW (640x360, the smallest window `play` and `train` open) every
+    screen's text is of the window's floor (12 px type: caps 7 px; 4 px at 480x270 and 320x240,
+    which are refused) and stays inside its panel, clear of the others."""
+    from game.hud_style import min_text_px
+    from game.launch import MIN_WINDOW
+    from game.training import READY_STEPS, Trainer, TrainingScreen
+
+    pygame.init()
+    assert MIN_WINDOW == (640, 360) and min_text_px(MIN_WINDOW[1] / 720) == 12
+    # check_layout's own caps floor is 800x450's (8 px): it gets caps raised to it, and this
+    # window's floor (7 px) is asserted on the real ones after it
+    for name, make in SCREENS.items():
+        surf = pygame.Surface(MIN_WINDOW)
+        Renderer(MIN_WINDOW).draw(surf, scene)
+        hud, st = make()
+        hud.layout = []
+        hud.draw(surf, st, budget() if st.show_budget else None)
+        check_layout(MIN_WINDOW, hud.layout, hud.panels, {t: max(c, MIN_CAP_PX) for t, c in caps_any.items()})
+        assert min(caps_any[t] for t, _, _ in hud.layout) >= 7, name
+    for phase in ("show", "record", "done"):
+        trainer = Trainer(["straight_l", "step_forward", "uppercut_r"] + ["hook_l"] * 10)
+        trainer.phase, trainer.phase_step = phase, READY_STEPS // 2
+        screen = TrainingScreen(load_library(), trainer, "keyboard://?profile=experienced&seed=4&auto=1")
+        for k in range(60):
+            screen.push_frame(np.sin(np.arange(6) + k / 5.0))
+        surf = pygame.Surface(MIN_WINDOW)
+        screen.layout = []
+        screen.draw(surf)
+        check_layout(MIN_WINDOW, screen.layout, {**screen.panels, "screen": surf.get_rect()},
+                     {t: max(c, MIN_CAP_PX) for t, c in caps_any.items()})
+        assert min(caps_any[t] for t, _, _ in screen.layout) >= 7, phase
+
+
+@pytest.mark.filterwarnings("ignore::DeprecationWarning")  # pygame-ce's Window.from_display_module
+def test_the_window_cannot_be_dragged_below_the_smallest() -> None:
+    # a resizable window dragged to 320x240 would draw the HUD that --size refuses
+    from game.launch import MIN_WINDOW, keep_window_at_least
+
+    pygame.init()
+    pygame.display.set_mode((800, 450), pygame.RESIZABLE)
+    try:
+        keep_window_at_least()
+        window = pygame.Window.from_display_module()
+        window.size = (320, 240)
+        assert pygame.display.get_surface().get_size() == MIN_WINDOW
+        window.size = (900, 500)
+        assert pygame.display.get_surface().get_size() == (900, 500)
+    finally:
+        pygame.display.quit()

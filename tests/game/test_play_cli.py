@@ -344,3 +344,28 @@ def test_the_slow_machine_line_is_said_only_where_frames_keep_the_machines_pace(
         assert ("quickjab play: 17 % of the frames" in err) == said, (headless, virtual, err)
     say_if_slow(argparse.Namespace(headless=False, virtual_clock=False, low_power=False), _budget_with(0, 600))
     assert capsys.readouterr().err == ""
+
+
+@pytest.mark.parametrize("command", ["play", "train"])
+@pytest.mark.parametrize("size", ["480x270", "320x240", "639x480", "1280x359"])
+def test_a_window_under_640x360_is_refused_in_one_line(command, size, tmp_path, capsys) -> None:
+    """Under 640x360 the HUD cannot be read (4 px capitals at 480x270 and 320x240, a REJECTED mark
+    over the move's name, the training checklist off the window): refused before anything opens."""
+    shot = tmp_path / "shot.png"
+    argv = [command, "--demo", "--size", size, "--screenshot", str(shot)]
+    if command == "play":
+        argv += ["--virtual-clock", "--frames", "2", "--no-sound"]
+    else:
+        argv += ["--actions", "straight_r", "-o", str(tmp_path / "t.npz")]
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [f"quickjab {command}: --size {size}: the {command} window must be at least 640x360 (smaller, its "
+                   "text is unreadable and runs off the screen); --headless draws smaller frames"], err
+    assert not shot.exists()
+
+
+def test_the_smallest_window_plays_and_headless_frames_may_be_smaller(tmp_path, capsys) -> None:
+    for size, options in (("640x360", ["--virtual-clock"]), ("320x240", ["--headless"])):
+        shot = tmp_path / f"{size}.png"
+        assert main(["play", "--demo", *options, "--frames", "2", "--no-sound", "--size", size, "--screenshot", str(shot)]) == 0
+        assert pygame.image.load(str(shot)).get_size() == tuple(int(v) for v in size.split("x"))

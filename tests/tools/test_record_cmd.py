@@ -117,3 +117,28 @@ def test_an_output_folder_that_cannot_take_the_file_is_said_before_recording(tmp
     err = capsys.readouterr().err
     assert "no directory" in err and "source demo://" not in err
     assert time.perf_counter() - t0 < 1.5
+
+
+def test_record_from_an_emulated_wiimote_with_seconds_stops_by_itself(tmp_path, capsys):
+    """`wiimote-emu://...?seconds=S` ends the source: `record` without --seconds stops there, as
+    it does at the end of a replay, and the file holds the samples stamped before S."""
+    import numpy as np
+
+    from engine.recording import Recording, write_recording
+
+    t = np.arange(0, 2, 1 / 60)
+    accel = np.zeros((len(t), 2, 3))
+    accel[:, :, 2] = 1.0
+    accel[:, 0, 0] = np.sin(2 * np.pi * t)
+    rec = tmp_path / "rec.csv"
+    write_recording(rec, Recording(t, accel))
+    out = tmp_path / "out.csv"
+    t0 = time.perf_counter()
+    rc = main(["record", "--source", f"wiimote-emu://{rec}?seconds=0.6", "-o", str(out)])
+    elapsed = time.perf_counter() - t0
+    err = capsys.readouterr().err
+    assert rc == 0 and "wrote" in err
+    assert 0.6 <= elapsed < 10
+    got = read_recording(out)
+    assert got.sensors == 2 and 20 <= len(got) <= 60  # ~100 reports a second, after the set-up
+    assert got.t[-1] - got.t[0] < 0.6

@@ -38,6 +38,9 @@ calibration (X 10 bits, Y and Z 9), and the log of what was sent lets tests comp
                  assumes, "on status reports the drm is reset"; Dolphin stops it only on
                  extension events)
   player=1       LED the driver sets
+  seconds=S      the source ends (state `ended`, as a replay does at its end) S seconds after
+                 the emulator starts, so `record` and the game stop on their own; default:
+                 never (a remote stays on; with loop=0 it holds the recording's last values)
 """
 
 from __future__ import annotations
@@ -49,7 +52,14 @@ from typing import Any
 import numpy as np
 
 from engine.recording import MAX_DURATION_S, Recording, read_recording
-from engine.sensors.source import SourceError, parse_source_url, url_flag, url_number
+from engine.sensors.source import (
+    Sample,
+    SourceError,
+    SourceState,
+    parse_source_url,
+    url_flag,
+    url_number,
+)
 from engine.sensors.wiimote import protocol as p
 from engine.sensors.wiimote.driver import WiimoteSource
 from engine.sensors.wiimote.emulated_memory import EmulatedMemory
@@ -545,11 +555,34 @@ def emulator_from_url(url: str, clock: Callable[[], float]) -> tuple[EmulatedBus
     return EmulatedBus([remote]), remote, params
 
 
-def open_emulated(url: str, clock: Callable[[], float]) -> WiimoteSource:
+class EmulatedWiimoteSource(WiimoteSource):
+    """The real driver on an emulated remote, which with `seconds` ends as a finite source
+    does: a real remote never ends, so the end is the source's, not a report the emulator
+    sends. Samples stamped from `seconds` on are not delivered; the driver is closed (rumble
+    and LEDs off, as at any close) and the state is ENDED from then on."""
+
+    def __init__(self, *, emulator: EmulatedWiimote, seconds: float | None = None, **kwargs: Any) -> None:
+        super().__init__(**kwargs)
+        self.emulator = emulator  # for tests
+        # on the emulator's time line, as its `<event>_at` times are
+        self.end_at = None if seconds is None else emulator.t0 + seconds
+
+    def poll(self) -> list[Sample]:
+        if self.state is SourceState.ENDED:
+            return []
+        out = super().poll()
+        if self.end_at is not None and self.clock() >= self.end_at:
+            out = [s for s in out if s.t < self.end_at]
+            self.close()
+            self.state = SourceState.ENDED
+        return out
+
+
+def open_emulated(url: str, clock: Callable[[], float]) -> EmulatedWiimoteSource:
     """`wiimote-emu://recording.csv?options`: the real driver on an emulated remote."""
     bus, remote, params = emulator_from_url(url, clock)
     player = int(url_number(url, params, "player", 1, 1, 4, integer=True))
-    source = WiimoteSource(url=url, clock=clock, backend=bus, player=player)
+    seconds = url_number(url, params, "seconds", 0, 0, MAX_DURATION_S, lo_open=True) if "seconds" in params else None
+    source = EmulatedWiimoteSource(url=url, clock=clock, backend=bus, player=player, emulator=remote, seconds=seconds)
     source.description = f"wiimote-emu {remote.rec.meta.get('source', '')}".strip()
-    source.emulator = remote  # type: ignore[attr-defined]  # for tests and the HUD
     return source

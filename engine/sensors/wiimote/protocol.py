@@ -82,7 +82,10 @@ EXT_CALIBRATION = 0xA40020
 EXT_ID = 0xA400FA
 EXT_INIT1 = 0xA400F0  # write 0x55 ...
 EXT_INIT2 = 0xA400FB  # ... then 0x00: extension initialised without encryption
-NUNCHUK_ID_SUFFIX = bytes([0xA4, 0x20, 0x00, 0x00])  # bytes 2..5 of the 6-byte ID
+# The Nunchuk's ID is `00 00` in bytes 4..5 of the 6-byte ID at 0xA400FA (WiiBrew: "0x0000 at
+# 0xa400fe"). Linux (hid-wiimote-core.c, wiimote_cmd_read_ext) and Dolphin (WiimoteController.cpp,
+# ProcessExtensionID) look at those two bytes only: third-party Nunchuks differ in bytes 0..3.
+NUNCHUK_ID_SUFFIX = bytes([0x00, 0x00])
 # Status battery byte of fresh cells: wiiuse's WM_MAX_BATTERY_CODE. Others differ: Linux
 # (hid-wiimote-core.c) reports byte * 100 / 255; Dolphin (WiimoteReport.h) fits the Home
 # menu's bars, charge = byte * 2.46 / 255 - 0.013 (full near 0x69).
@@ -397,8 +400,9 @@ def with_rumble(report: bytes, on: bool) -> bytes:
 
 
 def is_nunchuk_id(ident: bytes) -> bool:
-    """A 6-byte extension ID (0xA400FA) naming a Nunchuk: `.. .. A4 20 00 00`."""
-    return len(ident) >= 6 and bytes(ident[2:6]) == NUNCHUK_ID_SUFFIX
+    """A 6-byte extension ID (0xA400FA) naming a Nunchuk: `.. .. .. .. 00 00` (Nintendo's
+    is `00 00 A4 20 00 00`)."""
+    return len(ident) >= 6 and bytes(ident[4:6]) == NUNCHUK_ID_SUFFIX
 
 
 def model_name(product_id: int, product_string: str | None = "") -> str | None:

@@ -12,7 +12,7 @@ import pytest
 
 from engine.clock import VirtualClock
 from engine.recording import Recording, read_recording, write_recording
-from engine.sensors import SourceState, open_source
+from engine.sensors import SourceError, SourceState, open_source
 from engine.sensors.wiimote import WiimoteNotFound, WiimoteSource
 from engine.sensors.wiimote import protocol as p
 from engine.sensors.wiimote.emulator import EmulatedBus, EmulatedWiimote
@@ -364,6 +364,49 @@ def test_extension_that_failed_to_set_up_is_tried_again(rec_path, first_id):
         samples += src.poll()
     assert src.extension == "nunchuk" and src.state is SourceState.CONNECTED
     assert src.stats["nunchuk_plugged"] == 1 and "extension_removed" not in src.stats
+    assert not np.array_equal(samples[-1].accel[1], [0.0, 0.0, 1.0])  # the left hand moves
+
+
+def test_seconds_ends_the_emulated_source_as_a_replay_ends(rec_path):
+    """`seconds=S`: the source delivers what was stamped before S s after the emulator started,
+    then is ENDED (what makes `record` and the game stop), the remote's rumble and LEDs off as
+    at a close. Without it the remote streams on past its recording (looped, or held with loop=0)."""
+    vc = VirtualClock()
+    src, samples, states = session(f"wiimote-emu://{rec_path}?seconds=1.5", 3.0, vc)
+    assert src.state is SourceState.ENDED
+    assert [state for _, state in states][-2:] == [SourceState.CONNECTED, SourceState.ENDED]
+    ended_at = states[-1][0]
+    assert 1.5 <= ended_at < 1.5 + 1.5 / 60  # the first poll at or after 1.5 s
+    assert samples and max(s.t for s in samples) < 1.5 and max(s.t for s in samples) > 1.4
+    assert src.poll() == [] and src.state is SourceState.ENDED
+    assert src.emulator.outputs[-1] == p.build_leds(0)  # closed: LEDs off
+    read = [d for d in src.emulator.sent if d.read_at is not None]
+    assert len(read) - 2 <= len(samples) < len(read)  # those read in the last poll but stamped from 1.5 s on are not
+    for query in ("", "?loop=0"):
+        src, samples, _ = session(f"wiimote-emu://{rec_path}{query}", 6.0)  # the recording is 4 s
+        assert src.state is SourceState.CONNECTED and max(s.t for s in samples) > 5.9
+
+
+@pytest.mark.parametrize("bad", ["0", "-1", "nan", "1e9", "soon"])
+def test_seconds_out_of_range_is_one_line(rec_path, bad):
+    with pytest.raises(SourceError, match="seconds must be a number above 0"):
+        open_source(f"wiimote-emu://{rec_path}?seconds={bad}", clock=VirtualClock().seconds)
+
+
+@pytest.mark.parametrize("ident", ["0000a4210000", "ff00a0200000", "010000000000"])
+def test_a_nunchuk_whose_id_differs_in_bytes_0_to_3_is_a_nunchuk(rec_path, ident):
+    """The remote's ID register says 00 00 in bytes 4-5 but not Nintendo's A4 20 before them
+    (third-party Nunchuks): Linux's hid-wiimote and Dolphin take it for a Nunchuk, and so do we;
+    the emulated one answers the real set-up (encrypted until initialised) with that ID."""
+    vc = VirtualClock()
+    src = open_source(f"wiimote-emu://{rec_path}", clock=vc.seconds)
+    src.emulator.memory.ext_regs[0xFA:0x100] = bytes.fromhex(ident)
+    samples = []
+    for _ in range(2 * 60):
+        vc.advance(STEP_NS)
+        samples += src.poll()
+    assert src.extension == "nunchuk" and src.stats["nunchuk_plugged"] == 1, src.stats
+    assert not any("not a Nunchuk" in note for note in src.notes), src.notes
     assert not np.array_equal(samples[-1].accel[1], [0.0, 0.0, 1.0])  # the left hand moves
 
 

@@ -89,6 +89,16 @@ def test_nunchuk_decode():
     assert decode_nunchuk(b"\x00\x01") is None
 
 
+def test_nunchuk_id_is_bytes_4_and_5():
+    # Linux (wiimote_cmd_read_ext) and Dolphin (ProcessExtensionID) decide on bytes 4-5 only:
+    # 00 00 is a Nunchuk whatever bytes 0-3 say; 01 01 a Classic Controller, 01 03 a guitar.
+    assert p.is_nunchuk_id(bytes.fromhex("0000a4200000"))  # Nintendo's
+    assert p.is_nunchuk_id(bytes.fromhex("ff00a4210000"))  # other bytes 0-3
+    assert p.is_nunchuk_id(bytes.fromhex("0000a4200000ff"))  # a longer read: the first 6 count
+    for other in ("0000a4200101", "0000a4200103", "0000a4200405", "ffffffffffff", "fefe9a1efefe", "0000a42000"):
+        assert not p.is_nunchuk_id(bytes.fromhex(other)), other
+
+
 def test_wiimote_calibration_dolphin_default():
     body = bytes([0x80, 0x80, 0x80, 0x00, 0x9A, 0x9A, 0x9A, 0x00, 0x00])
     cal = parse_calibration(body + bytes([(0x55 + sum(body)) & 0xFF]))
