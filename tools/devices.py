@@ -20,8 +20,10 @@ def no_device_hint(url: str) -> str:
         return ("check that the Wiimote is paired and awake (press 1 and 2; `quickjab devices` lists the ones found; "
                 "docs/wiimote.md)")
     if scheme == "serial":
+        port = url.split("://", 1)[-1].split("?", 1)[0]
         return ("check the port (`quickjab devices` lists USB serial ports; an emulator's is the path `quickjab bridge "
-                "emulate` printed, or its --link) and that the board is plugged in")
+                f"emulate` printed, or its --link; `quickjab devices {port}` says whether a board answers there) "
+                "and that the board is plugged in")
     return "check that the device is connected (`quickjab devices` lists Wiimotes and serial ports)"
 
 

@@ -52,6 +52,7 @@ def test_record_with_seconds_shorter_than_the_timeout_still_fails(tmp_path, caps
     assert rc == 2
     err = capsys.readouterr().err
     assert "never connected" in err and "check the port" in err  # the same advice as after the timeout
+    assert f"quickjab devices {tmp_path / 'nothing'}" in err  # the probe for a port the list never shows
 
 
 def test_a_full_disk_leaves_a_recording_that_reads_to_its_last_whole_row(tmp_path):
