@@ -211,6 +211,8 @@ def _bad_other(other: object) -> str | None:
 def read_chrome_trace(path: str | os.PathLike) -> dict:
     """Load a trace (object or bare-array form) and check every field the profile relies on.
     Raises TraceError naming the file on anything else."""
+    if os.fspath(path) == "":  # Path("") is ".": the error named the current folder
+        raise TraceError("the trace path is empty")
     path = Path(path)
     try:
         st = os.stat(path)
