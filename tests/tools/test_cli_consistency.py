@@ -122,7 +122,7 @@ def test_bench_recognition_json(capsys):
     assert first["templates"] == 3 and first["per_action"] == 1 and first["push_us"] > 0
     assert first["auto"] in ("scan", "loop", "jit", "native") and first[f"{first['auto']}_us"] > 0
     assert fig["sizes"][1]["templates"] == 6 and fig["sizes"][1]["per_action"] == 3
-    assert "sweep" not in fig
+    assert "sweep_us" not in fig  # only with --sweep
     assert main(["bench", "recognition", "--sizes", "13", "--repeat", "1", "--buffer", "4", "--json"]) == 0
     fig = json.loads(capsys.readouterr().out)
     assert set(fig["targets"]) == {"13 templates"}
