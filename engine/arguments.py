@@ -91,15 +91,26 @@ window_size.__name__ = "size"
 
 def output_file(text: str) -> str:
     """An argparse type for a file a command writes at its end (a screenshot, a trace, a plot):
-    a folder that is missing or not writable is said before the work, not in a traceback after."""
-    folder = Path(text).parent
+    a place it cannot be written is said before the work, not in a traceback after. Folders
+    not made yet are fine: the command makes them when it writes (as `synth -o new/s.csv` and
+    every other output do), so what is checked is the nearest folder that is there."""
     if Path(text).is_dir():
         raise argparse.ArgumentTypeError(f"{text} is a directory, not a file name")
+    folder = existing_folder(text)
     if not folder.is_dir():
-        raise argparse.ArgumentTypeError(f"{text}: no directory {folder}")
+        raise argparse.ArgumentTypeError(f"{text}: {folder} is not a directory")
     if not os.access(folder, os.W_OK):
         raise argparse.ArgumentTypeError(f"{text}: cannot write in {folder}")
     return text
+
+
+def existing_folder(path: str | os.PathLike) -> Path:
+    """The nearest of `path`'s parents that exists (it may be a file: then nothing can be made
+    under it): the folder in which a missing output folder would be made."""
+    folder = Path(path).parent
+    while not os.path.lexists(folder) and folder != folder.parent:
+        folder = folder.parent
+    return folder
 
 
 output_file.__name__ = "file"

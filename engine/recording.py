@@ -322,6 +322,7 @@ class RecordingWriter:
         self.sensors = sensors
         self.t0 = t0  # recording time = host time - t0; the first sample sets it when None
         try:
+            self.path.parent.mkdir(parents=True, exist_ok=True)  # `record -o new/r.csv`: made, as every output's folder
             self._file = open(self.path, "wb", buffering=0)
         except OSError as exc:
             raise RecordingError(self.path, None, f"cannot write: {exc.strerror}") from None

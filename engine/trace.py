@@ -131,6 +131,7 @@ def _span_event(budget: FrameBudget, r: int, name: str, limit_ns: float, origin:
 def write_chrome_trace(budget: FrameBudget, path: str | os.PathLike) -> None:
     try:
         data = json.dumps(chrome_trace(budget)).encode("utf-8")
+        Path(path).parent.mkdir(parents=True, exist_ok=True)  # `--trace new/t.json`: made, as every output's folder
         write_replacing(path, lambda f: f.write(data))  # whole, or the previous trace as it was
     except OSError as exc:  # a full disk's ENOSPC names no file
         raise TraceError(f"{path}: cannot write the trace ({exc.strerror or exc})") from None
@@ -210,6 +211,8 @@ def _bad_other(other: object) -> str | None:
 def read_chrome_trace(path: str | os.PathLike) -> dict:
     """Load a trace (object or bare-array form) and check every field the profile relies on.
     Raises TraceError naming the file on anything else."""
+    if os.fspath(path) == "":  # Path("") is ".": the error named the current folder
+        raise TraceError("the trace path is empty")
     path = Path(path)
     try:
         st = os.stat(path)

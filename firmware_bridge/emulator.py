@@ -136,6 +136,7 @@ class PtyPort:
             tmp = f"{self.link}.{os.getpid()}.tmp"
             if os.path.lexists(tmp):
                 os.unlink(tmp)
+            os.makedirs(os.path.dirname(tmp) or ".", exist_ok=True)  # `--link new/qj`: made, as every output's folder
             os.symlink(self.name, tmp)
             os.replace(tmp, self.link)
         return self.name

@@ -552,6 +552,7 @@ def write_bvh(path: str | os.PathLike, positions: np.ndarray, fps: float = FPS, 
     lines += [" ".join(f"{v:.6f}" for v in row) for row in data]
     path = Path(path)
     try:
+        path.parent.mkdir(parents=True, exist_ok=True)  # `bvh export -o new/x.bvh`: made, as every output's folder
         path.write_text("\n".join(lines) + "\n", encoding="utf-8")
     except OSError as exc:  # a full disk: ENOSPC names no file
         raise BVHError(f"{path}: cannot write ({exc.strerror or exc})") from None

@@ -289,6 +289,7 @@ def save_image(surface, path: str | os.PathLike, what: str = "the screenshot") -
     buf = io.BytesIO()
     try:
         pygame.image.save(surface, buf, os.path.basename(path))
+        os.makedirs(os.path.dirname(path) or ".", exist_ok=True)  # a folder not made yet is made, as for every output
         with open(path, "wb") as f:
             f.write(buf.getvalue())
     except (OSError, pygame.error) as exc:

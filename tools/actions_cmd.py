@@ -1,7 +1,7 @@
 """`quickjab actions`: the action library.
 
   quickjab actions list                          every action, kind, duration, windows
-  quickjab actions sheet -o docs/img/actions.png a contact sheet of key frames (pygame)
+  quickjab actions sheet [-o actions.png]        a contact sheet of key frames (pygame)
   quickjab actions author [-o DIR]               rewrite the shipped JSON from tools/author_actions.py
 """
 
@@ -23,8 +23,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     ls.set_defaults(func=run_list)
     sheet = cmds.add_parser("sheet", help="draw a contact sheet PNG of every action's key frames",
                             description="Draw a contact sheet PNG of every action's key frames (pygame).")
-    sheet.add_argument("-o", "--output", default="docs/img/actions.png",
-                       help="PNG to write (default docs/img/actions.png, from where the command runs)")
+    # in the current folder, as templates build's templates.npz: docs/img/actions.png made a
+    # docs/img/ wherever it ran; the repository's figure is `-o docs/img/actions.png` (docs/motion.md)
+    sheet.add_argument("-o", "--output", default="actions.png",
+                       help="PNG to write (default actions.png in the current folder)")
     sheet.add_argument("--dir", default=None, help="action folder (default: the shipped library)")
     sheet.add_argument("--add", action="append", default=[], metavar="JSON_OR_DIR",
                        help="also draw these actions (e.g. cut with `quickjab bvh cut`; a file or a folder of *.json; repeatable)")

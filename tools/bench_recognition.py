@@ -17,6 +17,7 @@ buffer, for the DTW step alone and for the whole DualBufferRecognizer.push (its 
 from __future__ import annotations
 
 import argparse
+import json
 import time
 from collections.abc import Callable
 
@@ -37,6 +38,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--buffer", type=int, default=60, help="query frames (default 60)")
     p.add_argument("--repeat", type=int, default=5, help="buffers timed per size (best kept)")
     p.add_argument("--sweep", action="store_true", help="also time scan vs loop (and jit) over many sizes")
+    p.add_argument("--json", action="store_true", help="print JSON instead of a table")
 
 
 def _signals(rng: np.random.Generator, n: int, dim: int, lo: int = 30, hi: int = 60) -> list[np.ndarray]:
@@ -122,8 +124,68 @@ def _size(text: str) -> tuple[int, int]:
     return int(actions) * int(per or 1), int(per or 1)
 
 
+def _measure(tm: list[np.ndarray], query: np.ndarray, repeat: int, per_action: int, jit: bool, native: bool) -> dict:
+    """One size's figures (us per frame; nan where not measured) and the peer's description."""
+    from engine.recognition.dtw import IncrementalDTW
+
+    n = len(tm)
+    times = {m: _time_incremental(tm, query, m, repeat) for m in ("scan", "loop")} if n <= 1000 else \
+        {"scan": float("nan"), "loop": float("nan")}  # numpy at thousands: seconds, and never chosen
+    times["jit"] = _time_incremental(tm, query, "jit", repeat) if jit else float("nan")
+    times["native"] = _time_incremental(tm, query, "native", repeat) if native else float("nan")
+    auto = IncrementalDTW(tm).method
+    push = _time_push(tm, query, repeat, per_action)
+    try:
+        peer, how = _time_peer(tm, query, repeat)
+    except ImportError:
+        peer, how = float("nan"), "dtaidistance not installed"
+    chosen = times[auto] if auto in times else _time_incremental(tm, query, auto, repeat)
+    return {"times": times, "auto": auto, "chosen": chosen, "push": push, "peer": peer, "how": how,
+            "ratio": peer / chosen, "push_ratio": peer / push}
+
+
+def _targets(n: int, per_action: int, label: str, m: dict) -> tuple[str, dict[str, bool]] | None:
+    """The issue targets this size has, as (its name in the targets line, {check: met}), or None."""
+    if per_action == 1 and n in TARGETS:
+        max_us, min_ratio = TARGETS[n]
+        checks = {f"{m['auto']} <= {max_us:g} us": m["chosen"] <= max_us, f">= {min_ratio:g}x": m["ratio"] >= min_ratio}
+        if n == 13:
+            checks[f"push <= {max_us:g} us"] = m["push"] <= max_us
+        return f"{n} templates", checks
+    target = PUSH_TARGETS.get((n // per_action, per_action))
+    if per_action > 1 and target:
+        max_us, min_ratio = target
+        return label, {f"push <= {max_us:g} us": m["push"] <= max_us, f"push >= {min_ratio:g}x": m["push_ratio"] >= min_ratio}
+    return None
+
+
+def _row(label: str, m: dict) -> str:
+    t = m["times"]
+    return (f"{label:>9} | {_cell(t['scan'], 8)} | {_cell(t['loop'], 8)} | {_cell(t['jit'], 8)} | {m['auto']:>6} | "
+            f"{m['push']:8.1f} | {_cell(t['native'], 9)} | {_cell(m['peer'], 15)} | {_cell(m['ratio'], 8)} | "
+            f"{_cell(m['push_ratio'], 6)} | {m['how']}")
+
+
+def _figure(value: float) -> float | None:
+    """A figure for --json: null where it was not measured (nan is not JSON)."""
+    return None if value != value else round(value, 3)
+
+
+def _json_size(label: str, n: int, per_action: int, m: dict) -> dict:
+    return {"size": label, "templates": n, "per_action": per_action,
+            **{f"{k}_us": _figure(v) for k, v in m["times"].items()}, "auto": m["auto"], "push_us": _figure(m["push"]),
+            "peer_us": _figure(m["peer"]), "peer": m["how"], "speedup_vs_peer": _figure(m["ratio"]),
+            "push_speedup_vs_peer": _figure(m["push_ratio"])}
+
+
+def _sweep(rng: np.random.Generator, query: np.ndarray, dim: int, jit: bool, native: bool) -> dict[int, dict[str, float]]:
+    methods = ("scan", "loop") + (("jit",) if jit else ()) + (("native",) if native else ())
+    return {n: {m: _time_incremental(tm, query, m, 3) for m in methods}
+            for n in (25, 50, 100, 200, 300, 500, 1000) for tm in [_signals(rng, n, dim)]}
+
+
 def run(args: argparse.Namespace) -> int:
-    from engine.recognition.dtw import IncrementalDTW, jit_available, native_available
+    from engine.recognition.dtw import jit_available, native_available
 
     rng = np.random.default_rng(0)
     try:
@@ -132,46 +194,33 @@ def run(args: argparse.Namespace) -> int:
         raise InputError(f"--sizes {args.sizes!r}: expected counts like 13,1000 or 13x3") from None
     query = np.cumsum(rng.normal(0, 0.3, (args.buffer, args.dim)), axis=0)
     jit, native = jit_available(), native_available()
-    print(f"per-frame cost, {args.dim}-D frames, {args.buffer}-frame buffer, templates of 30-60 frames")
+    say = (lambda line: None) if args.json else print  # --json: the one JSON object is all of stdout
+    say(f"per-frame cost, {args.dim}-D frames, {args.buffer}-frame buffer, templates of 30-60 frames")
     if not native:
-        print("native: no C compiler (or QUICKJAB_NO_NATIVE / QUICKJAB_NO_JIT set): auto uses numpy, or jit for many templates")
+        say("native: no C compiler (or QUICKJAB_NO_NATIVE / QUICKJAB_NO_JIT set): auto uses numpy, or jit for many templates")
     if not jit:
-        print("jit: numba not importable (or QUICKJAB_NO_JIT=1)")
-    print(f"{'templates':>9} | {'scan us':>8} | {'loop us':>8} | {'jit us':>8} | {'auto':>6} | {'push us':>8} | {'native us':>9} | {'dtaidistance us':>15} | {'x faster':>8} | {'push x':>6} | peer")
+        say("jit: numba not importable (or QUICKJAB_NO_JIT=1)")
+    say(f"{'templates':>9} | {'scan us':>8} | {'loop us':>8} | {'jit us':>8} | {'auto':>6} | {'push us':>8} | {'native us':>9} | {'dtaidistance us':>15} | {'x faster':>8} | {'push x':>6} | peer")
+    fig: dict = {"dim": args.dim, "buffer_frames": args.buffer, "template_frames": [30, 60], "repeat": args.repeat,
+                 "native_available": native, "jit_available": jit, "sizes": [], "targets": {}}
     verdicts = []
     for (n, per_action), label in sizes:
-        tm = _signals(rng, n, args.dim)
-        times = {m: _time_incremental(tm, query, m, args.repeat) for m in ("scan", "loop")} if n <= 1000 else \
-            {"scan": float("nan"), "loop": float("nan")}  # numpy at thousands: seconds, and never chosen
-        times["jit"] = _time_incremental(tm, query, "jit", args.repeat) if jit else float("nan")
-        times["native"] = _time_incremental(tm, query, "native", args.repeat) if native else float("nan")
-        auto = IncrementalDTW(tm).method
-        push = _time_push(tm, query, args.repeat, per_action)
-        try:
-            peer, how = _time_peer(tm, query, args.repeat)
-        except ImportError:
-            peer, how = float("nan"), "dtaidistance not installed"
-        chosen = times[auto] if auto in times else _time_incremental(tm, query, auto, args.repeat)
-        ratio, push_ratio = peer / chosen, peer / push
-        print(f"{label:>9} | {_cell(times['scan'], 8)} | {_cell(times['loop'], 8)} | {_cell(times['jit'], 8)} | {auto:>6} | "
-              f"{push:8.1f} | {_cell(times['native'], 9)} | {_cell(peer, 15)} | {_cell(ratio, 8)} | {_cell(push_ratio, 6)} | {how}")
-        if per_action == 1 and n in TARGETS:
-            max_us, min_ratio = TARGETS[n]
-            checks = [(f"{auto} <= {max_us:g} us", chosen <= max_us), (f">= {min_ratio:g}x", ratio >= min_ratio)]
-            if n == 13:
-                checks.append((f"push <= {max_us:g} us", push <= max_us))
-            verdicts.append(f"{n} templates: " + ", ".join(f"{name} {'yes' if ok else 'NO'}" for name, ok in checks))
-        target = PUSH_TARGETS.get((n // per_action, per_action))
-        if per_action > 1 and target:
-            max_us, min_ratio = target
-            verdicts.append(f"{label}: push <= {max_us:g} us {'yes' if push <= max_us else 'NO'}, "
-                            f"push >= {min_ratio:g}x {'yes' if push_ratio >= min_ratio else 'NO'}")
+        m = _measure(_signals(rng, n, args.dim), query, args.repeat, per_action, jit, native)
+        say(_row(label, m))
+        fig["sizes"].append(_json_size(label, n, per_action, m))
+        target = _targets(n, per_action, label, m)
+        if target:
+            name, checks = target
+            fig["targets"][name] = checks
+            verdicts.append(f"{name}: " + ", ".join(f"{check} {'yes' if ok else 'NO'}" for check, ok in checks.items()))
     if verdicts:
-        print("targets: " + "; ".join(verdicts))
+        say("targets: " + "; ".join(verdicts))
     if args.sweep:
-        methods = ("scan", "loop") + (("jit",) if jit else ()) + (("native",) if native else ())
-        print("\n" + " vs ".join(methods) + " (us per frame)")
-        for n in (25, 50, 100, 200, 300, 500, 1000):
-            tm = _signals(rng, n, args.dim)
-            print(f"{n:>5}: " + "  ".join(f"{m} {_time_incremental(tm, query, m, 3):8.1f}" for m in methods))
+        sweep = _sweep(rng, query, args.dim, jit, native)
+        say("\n" + " vs ".join(next(iter(sweep.values()))) + " (us per frame)")
+        for n, row in sweep.items():
+            say(f"{n:>5}: " + "  ".join(f"{m} {us:8.1f}" for m, us in row.items()))
+        fig["sweep_us"] = {str(n): {m: _figure(us) for m, us in row.items()} for n, row in sweep.items()}
+    if args.json:
+        print(json.dumps(fig, indent=2))
     return 0

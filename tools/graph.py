@@ -40,6 +40,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     i = cmds.add_parser("info", help="states, edges, build parameters and file size",
                         description="Print what a graph file holds.")
     i.add_argument("graph", nargs="?", default=None, help="the .npz (default: the shipped graph)")
+    # as `graph duel --graph` and `bench graph --graph` take it; the positional keeps working
+    i.add_argument("--graph", dest="graph_option", default=None, metavar="GRAPH", help="the .npz, as the positional argument (as graph duel takes it)")
     i.add_argument("--json", action="store_true", help="machine-readable output")
     i.set_defaults(func=cmd_info)
 
@@ -92,9 +94,17 @@ def cmd_build(args: argparse.Namespace) -> int:
     return 0
 
 
+def _info_graph(args: argparse.Namespace) -> str | None:
+    """graph info's file: the positional or --graph; both naming different files is refused."""
+    given, option = args.graph, args.graph_option
+    if given is not None and option is not None and Path(given).absolute() != Path(option).absolute():
+        raise InputError(f"info: {given} and --graph {option}: give the graph once")
+    return given if given is not None else option
+
+
 def cmd_info(args: argparse.Namespace) -> int:
     from game.interaction import InteractionGraph
-    path = _graph_path(args.graph)
+    path = _graph_path(_info_graph(args))
     g = InteractionGraph.load(path)
     info = g.info()
     if args.json:

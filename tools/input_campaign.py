@@ -781,9 +781,12 @@ def _bad_game_args(q: list[str], d: Path, good_rec: str, tpl: str, out: Path) ->
         "templates-build-recognizer-bad": q + ["templates", "build", str(d / "trials"), "-o", str(out / "t.npz"), "--recognizer", "adapt=-1"],
         "evaluate-recognizer-unknown": ev_base + ["--recognizer", "x=1"],
         "evaluate-plot-xyz": ev_base + ["--mains", "6", "--plot", str(out / "fig.xyz")],
-        "play-screenshot-no-dir": q + ["play", "--headless", "--frames", "2", "--screenshot", str(out / "no" / "s.png")],
+        # a missing folder is made (as for every output); one under a file cannot be
+        "play-screenshot-under-a-file": q + ["play", "--headless", "--frames", "2", "--screenshot",
+                                             _write(d, "plain/file", "x") + "/no/s.png"],
         "play-trace-a-dir": q + ["play", "--headless", "--frames", "2", "--trace", str(out)],
-        "scope-screenshot-no-dir": q + ["scope", "--headless", "--frames", "2", "--screenshot", str(out / "no" / "s.png")],
+        "scope-screenshot-under-a-file": q + ["scope", "--headless", "--frames", "2", "--screenshot",
+                                              _write(d, "plain/file", "x") + "/no/s.png"],
         # /dev/full passes the folder check and takes nothing (a full disk): pygame.error, or ENOSPC naming no file
         "play-screenshot-dev-full": q + ["play", "--headless", "--frames", "2", "--screenshot", "/dev/full"],
         "play-trace-dev-full": q + ["play", "--headless", "--frames", "2", "--trace", "/dev/full"],

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 from collections import Counter
 
 import numpy as np
@@ -193,6 +194,7 @@ def save_figure(fig, path: str, dpi: float) -> None:
     import matplotlib.pyplot as plt
 
     try:
+        os.makedirs(os.path.dirname(path) or ".", exist_ok=True)  # `--plot new/p.png`: made, as every output's folder
         fig.savefig(path, dpi=dpi)
     except OSError as exc:
         raise InputError(f"{path}: cannot write the plot ({exc.strerror or exc})") from None

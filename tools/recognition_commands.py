@@ -266,6 +266,8 @@ def cmd_recognize(args: argparse.Namespace) -> int:
                      where=["templates", "config file", "command line"])
     rec = DualBufferRecognizer.from_config(templates, config)
     try:
+        if args.output:  # a folder not made yet is made, as for every output
+            Path(args.output).parent.mkdir(parents=True, exist_ok=True)
         out = open(args.output, "w", encoding="utf-8") if args.output else sys.stdout
         try:
             t0 = float(rec_file.t[0])  # events carry the recording's own seconds (docs/formats.md)

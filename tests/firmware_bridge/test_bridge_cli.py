@@ -155,12 +155,14 @@ def test_bad_numbers_are_one_line_and_exit_2(capsys):
 
 def test_a_link_in_a_missing_folder_is_one_line_before_the_port_opens(tmp_path, capsys):
     """The review: `--link /no/such/dir/l` ended in `[Errno 2] No such file or directory:
-    '/dev/pts/0' -> '/no/such/dir/l.12435.tmp'`, after the port was announced."""
-    link = tmp_path / "missing" / "qj-bridge"
+    '/dev/pts/0' -> '/no/such/dir/l.12435.tmp'`, after the port was announced. A missing folder
+    is made now (as for every output); one that cannot be (a file in its place) is refused."""
+    (tmp_path / "plain").write_text("x")
+    link = tmp_path / "plain" / "missing" / "qj-bridge"
     with pytest.raises(SystemExit) as exit_:
         main(["bridge", "emulate", "--seconds", "1", "--link", str(link)])
     assert exit_.value.code == 2
-    assert capsys.readouterr().err == (f"quickjab bridge emulate: argument --link: {link}: no directory {link.parent}"
+    assert capsys.readouterr().err == (f"quickjab bridge emulate: argument --link: {link}: {tmp_path / 'plain'} is not a directory"
                                        " (see quickjab bridge emulate --help)\n")
 
 

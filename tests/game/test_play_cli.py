@@ -53,12 +53,15 @@ def test_bad_input_is_one_line_and_exit_2(tmp_path, capsys) -> None:
     assert "missing.npz" in capsys.readouterr().err
 
 
-def test_a_screenshot_or_trace_in_a_missing_folder_is_refused_before_the_match(tmp_path, capsys) -> None:
-    for option in ("--screenshot", "--trace"):  # were a pygame.error traceback, an exit 2 after the match
+def test_a_screenshot_or_trace_under_a_file_is_refused_before_the_match(tmp_path, capsys) -> None:
+    # were a pygame.error traceback, an exit 2 after the match; a missing folder is made now,
+    # as for every output, but not under a file
+    (tmp_path / "no").write_text("x")
+    for option in ("--screenshot", "--trace"):
         with pytest.raises(SystemExit) as exit_:
-            main(["play", "--headless", "--frames", "5", "--source", "keyboard://", option, str(tmp_path / "no" / "s.png")])
+            main(["play", "--headless", "--frames", "5", "--source", "keyboard://", option, str(tmp_path / "no" / "d" / "s.png")])
         err = capsys.readouterr().err.strip().splitlines()
-        assert exit_.value.code == 2 and len(err) == 1 and "no directory" in err[0], err
+        assert exit_.value.code == 2 and len(err) == 1 and "is not a directory" in err[0], err
 
 
 @pytest.mark.parametrize("where, says", [

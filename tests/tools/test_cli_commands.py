@@ -108,7 +108,7 @@ def test_a_bad_argument_is_one_line_and_exit_2(capsys, argv):
 @pytest.mark.parametrize("argv, prog", [
     (["play", "--low-pwer"], "quickjab play"),
     (["bench", "loop", "--no-such-option"], "quickjab bench loop"),
-    (["graph", "info", "--graph"], "quickjab graph info"),
+    (["graph", "info", "--graf"], "quickjab graph info"),
 ])
 def test_an_unknown_option_is_named_by_the_command_given_it(capsys, argv, prog):
     """The review: `quickjab play --low-pwer` said `quickjab: unrecognized arguments ... (see
@@ -194,6 +194,7 @@ def test_evaluate_users_are_refused_in_their_own_words(capsys, users):
 
 def test_unwritable_output_is_one_line(tmp_path, shared_data):
     src = shared_data / "punchbuddy" / "right-hook-50-matt-combo-lh-4.csv"
+    (tmp_path / "no").write_text("a file where a folder would be made")
     r = quickjab("record", "--source", f"replay://{src}?speed=100", "-o", str(tmp_path / "no" / "dir" / "x.csv"))
     assert r.returncode == 2 and "Traceback" not in r.stderr and "x.csv" in r.stderr
 

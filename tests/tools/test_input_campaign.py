@@ -17,7 +17,7 @@ SAMPLE = [  # one or two per input kind
     "tpl/zip-bomb/recognize", "tpl/nan-gravity/recognize",
     "graph/grid-distance_step-zero/info", "graph/meta-deep/info", "tpl/recognizer-deep/own-play", "trace/deep/profile", "trace/args-int/profile",
     "bvh/ftime-1e9/cut", "bvh/unmapped-24mb/info", "bvh/end-site-outside/info", "url/demo-rate-1e9/record", "url/emu-drop-2/record",
-    "arg/eval-folds-huge", "arg/play-screenshot-no-dir", "arg/synth-session-nan", "ok/record-emu-400k",
+    "arg/eval-folds-huge", "arg/play-screenshot-under-a-file", "arg/synth-session-nan", "ok/record-emu-400k",
     "config/wrong-type/play", "config/fifo/recognize", "config/dev-zero/play", "tpl/recognizer-unknown/recognize", "arg/play-recognizer-unknown",
     "rec/accel-1e300/recognize", "tpl/signals-1e200/evaluate", "eval/pp-unlabelled", "eval/stream-all-label/folds",
     "eval/trials-huge/build", "eval/accel-1e306/bridge-emulate",

@@ -108,15 +108,17 @@ def test_sigterm_ends_a_recording_as_ctrl_c_does(tmp_path):
 
 def test_an_output_folder_that_cannot_take_the_file_is_said_before_recording(tmp_path, capsys):
     """-o in a missing folder was found out only once the source had connected and sent samples:
-    a Wiimote paired and the player ready, then 'cannot write'. Now before the source is opened."""
+    a Wiimote paired and the player ready, then 'cannot write'. Now before the source is opened.
+    (A missing folder is made now, as for every output: a file where the folder would go cannot be.)"""
     import pytest
 
+    (tmp_path / "plain").write_text("x")
     t0 = time.perf_counter()
     with pytest.raises(SystemExit) as exc:
-        main(["record", "--source", "demo://", "-o", str(tmp_path / "missing" / "out.csv"), "--seconds", "2"])
+        main(["record", "--source", "demo://", "-o", str(tmp_path / "plain" / "sub" / "out.csv"), "--seconds", "2"])
     assert exc.value.code == 2
     err = capsys.readouterr().err
-    assert "no directory" in err and "source demo://" not in err
+    assert "is not a directory" in err and "source demo://" not in err
     assert time.perf_counter() - t0 < 1.5
 
 
