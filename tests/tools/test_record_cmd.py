@@ -117,3 +117,27 @@ def test_an_output_folder_that_cannot_take_the_file_is_said_before_recording(tmp
     err = capsys.readouterr().err
     assert "no directory" in err and "source demo://" not in err
     assert time.perf_counter() - t0 < 1.5
+
+
+def test_recording_over_a_file_keeps_the_old_one_beside_it(tmp_path, capsys):
+    """-o naming a file that is there (a mistyped name, the last take) emptied it when the
+    recording began: that take was lost. A file with anything in it is moved to a numbered name
+    beside it first, and said; an empty one (mkstemp's) is written over without a word."""
+    out = tmp_path / "take.csv"
+    out.write_bytes(b"an earlier take\n")
+    argv = ["record", "--source", "demo://?rate=200", "-o", str(out), "--seconds", "0.7"]
+    assert main(argv) == 0
+    aside = tmp_path / "take-old.csv"
+    assert aside.read_bytes() == b"an earlier take\n"
+    err = capsys.readouterr().err
+    assert [line for line in err.splitlines() if "take-old" in line] == [f"{out} was not empty: moved to {aside}"]
+    first = out.read_bytes()
+    assert len(read_recording(out)) > 50
+    assert main(argv) == 0
+    assert (tmp_path / "take-old-2.csv").read_bytes() == first and aside.read_bytes() == b"an earlier take\n"
+    assert f"moved to {tmp_path / 'take-old-2.csv'}" in capsys.readouterr().err
+    empty = tmp_path / "empty.csv"
+    empty.touch()
+    assert main(["record", "--source", "demo://?rate=200", "-o", str(empty), "--seconds", "0.7"]) == 0
+    assert "moved" not in capsys.readouterr().err and len(read_recording(empty)) > 50
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["empty.csv", "take-old-2.csv", "take-old.csv", "take.csv"]
