@@ -128,3 +128,30 @@ def test_a_part_file_left_by_a_killed_writer_goes_when_the_file_is_written_again
     write_replacing(target, lambda f: f.write(b"second"))
     assert sorted(p.name for p in tmp_path.iterdir()) == [other.name, "trace.json"]
     assert target.read_bytes() == b"second" and other.read_bytes() == b"not ours"
+
+
+BUSY_WRITER = """
+import sys
+from engine.npz_files import write_replacing
+
+for i in range(300):
+    write_replacing(sys.argv[1], lambda f: f.write(sys.argv[2].encode() * 4096))
+"""
+
+
+def test_processes_writing_one_file_at_once_never_take_each_others_part_file(tmp_path):
+    # each write clears the parts of writers that are gone: one still writing, or one that has
+    # just made its part file and not yet locked it, keeps its own (a first version lost writes so)
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    repo = Path(__file__).resolve().parents[2]
+    target = tmp_path / "templates.npz"
+    procs = [subprocess.Popen([sys.executable, "-c", BUSY_WRITER, str(target), tag], cwd=repo, stderr=subprocess.PIPE,
+                              text=True, env={**os.environ, "PYTHONPATH": str(repo)}) for tag in "ab"]
+    errors = [p.communicate(timeout=120)[1] for p in procs]
+    assert [p.returncode for p in procs] == [0, 0], errors
+    assert [p.name for p in tmp_path.iterdir()] == ["templates.npz"]
+    assert target.read_bytes() in (b"a" * 4096, b"b" * 4096)
