@@ -4,14 +4,13 @@ to the recording CSV of docs/formats.md, flushed at least every 0.25 s."""
 from __future__ import annotations
 
 import argparse
-import contextlib
-import signal
 import sys
 import time
 from pathlib import Path
 
 from engine import arguments
 from engine.errors import InputError, refuse_overwriting
+from engine.interrupt import stop_signals_as_ctrl_c
 from engine.recording import RecordingWriter
 from engine.sensors import SourceState, open_source
 from engine.sensors.source import url_file
@@ -200,26 +199,10 @@ def run(args: argparse.Namespace) -> int:
     if not args.connect_timeout > 0:
         raise InputError(f"--connect-timeout {args.connect_timeout}: must be positive")
     refuse_overwriting({"-o": args.output}, [url_file(args.source)])
-    with stop_signals_end_recording():
+    # SIGTERM (`kill`, a service manager, `timeout`) and SIGHUP (the terminal closed) end a
+    # recording as Ctrl-C does: the samples held for the rate are written, the file is synced and
+    # closed, and the summary says what was written (their default: none of it, and exit 143)
+    with stop_signals_as_ctrl_c():
         record(args.source, args.output, args.seconds, args.label, connect_timeout=args.connect_timeout)
     return 0
 
-
-@contextlib.contextmanager
-def stop_signals_end_recording():
-    """SIGTERM (`kill`, a service manager, `timeout`) and SIGHUP (the terminal closed) end a
-    recording as Ctrl-C does: the samples held for the rate are written, the file is synced and
-    closed, and the summary says what was written. Their default ended the process on the spot,
-    with neither (and exit status 143, as if the recording had failed)."""
-    def stop(signum, frame) -> None:
-        raise KeyboardInterrupt
-
-    previous = {}
-    for sig in filter(None, (signal.SIGTERM, getattr(signal, "SIGHUP", None))):  # Windows has no SIGHUP
-        with contextlib.suppress(ValueError):  # not the main thread: the default stays
-            previous[sig] = signal.signal(sig, stop)
-    try:
-        yield
-    finally:
-        for sig, handler in previous.items():
-            signal.signal(sig, handler)
