@@ -4,6 +4,8 @@ to the recording CSV of docs/formats.md, flushed at least every 0.25 s."""
 from __future__ import annotations
 
 import argparse
+import os
+import stat
 import sys
 import time
 from pathlib import Path
@@ -44,6 +46,39 @@ def part_path(output: str | Path, part: int) -> Path:
     """The file for the `part`-th sensor layout of one run: out.csv, then out.2.csv, out.3.csv..."""
     out = Path(output)
     return out if part == 1 else out.with_name(f"{out.stem}.{part}{out.suffix}")
+
+
+def keep_aside(output: str | Path) -> Path | None:
+    """A file with anything in it at `output` (through a link, the file it points to) moved to
+    `<name>-old<suffix>` beside it, else `<name>-old-2<suffix>`, `-old-3`...: the recording is
+    written in place (what keeps a kill to the last rows), and opening the file emptied it, so a
+    mistyped -o lost a take. None when nothing is there, the file is empty (mkstemp's: nothing
+    to lose) or it is not a regular file (/dev/null, a pipe: written to as before)."""
+    target = Path(output)
+    if target.is_symlink():
+        target = Path(os.path.realpath(target))
+    try:
+        st = os.stat(target)
+    except FileNotFoundError:
+        return None
+    if not stat.S_ISREG(st.st_mode) or st.st_size == 0:
+        return None
+    n = 1
+    while True:
+        aside = target.with_name(f"{target.stem}-old{f'-{n}' if n > 1 else ''}{target.suffix}")
+        try:
+            os.link(target, aside)  # never over another file, as a rename would be
+        except FileExistsError:
+            n += 1
+            continue
+        except OSError:  # a file system without hard links (FAT on an SD card): checked, then renamed
+            if aside.exists():
+                n += 1
+                continue
+            os.rename(target, aside)
+            return aside
+        os.unlink(target)
+        return aside
 
 
 def link_counts(stats: dict[str, int]) -> str:
@@ -152,6 +187,12 @@ class _RecordingParts:
         path = part_path(self.output, len(self.files) + 1)
         if self.files:
             head["continues"] = str(self.files[-1].name)
+        try:
+            aside = keep_aside(path)
+        except OSError as exc:
+            raise InputError(f"{path}: cannot move the file there aside ({exc.strerror or exc}); give another -o") from None
+        if aside is not None:
+            print(f"{path} was not empty: moved to {aside}", file=sys.stderr)
         w = RecordingWriter(path, width, head, t0=self.t0)
         self.files.append(path)
         return w
