@@ -141,3 +141,16 @@ def test_recording_over_a_file_keeps_the_old_one_beside_it(tmp_path, capsys):
     assert main(["record", "--source", "demo://?rate=200", "-o", str(empty), "--seconds", "0.7"]) == 0
     assert "moved" not in capsys.readouterr().err and len(read_recording(empty)) > 50
     assert sorted(p.name for p in tmp_path.iterdir()) == ["empty.csv", "take-old-2.csv", "take-old.csv", "take.csv"]
+
+
+def test_replaying_a_recording_cut_mid_row_says_the_row_left_out(tmp_path, capsys):
+    # read_recording leaves the cut row out and notes it; the command that opened the file says it
+    src = tmp_path / "cut.csv"
+    rows = "".join(f"{i / 100:.6f},0.1234,0.1234,1.1234,\n" for i in range(40))
+    src.write_text("# rate_hz: 100\n# recorded_from: demo://\nt,rx,ry,rz,label\n" + rows[:-4])  # '1.1234' cut to '1.1'
+    out = tmp_path / "out.csv"
+    assert main(["record", "--source", f"replay://{src}?speed=20", "-o", str(out), "--seconds", "5"]) == 0
+    err = capsys.readouterr().err
+    assert f"{src}:43: the last row has no line end" in err
+    rec = read_recording(out)
+    assert len(rec) == 39 and (rec.accel[:, 0, 2] == 1.1234).all()
