@@ -20,6 +20,11 @@ import numpy as np
 
 from engine.errors import not_a_regular_file
 
+try:
+    import fcntl
+except ImportError:  # Windows: no part file is locked, and none is removed
+    fcntl = None
+
 MAX_MEMBERS = 256
 
 
@@ -103,13 +108,88 @@ def read_json(array: np.ndarray) -> object:
         raise NpzFileError(str(exc)) from None
 
 
+PART_SUFFIX = ".part"
+PART_RANDOM = 8  # the random characters tempfile.mkstemp puts in a name
+_PART_CHARS = frozenset("abcdefghijklmnopqrstuvwxyz0123456789_")  # tempfile's alphabet
+
+
+def _is_part_of(name: str, target_name: str) -> bool:
+    """Whether `name` is one of write_replacing's temporary files for `target_name`
+    (`.<target_name>.<8 random characters>.part`): the exact shape, so that the parts of
+    `take.csv.old` are not taken for those of `take.csv`."""
+    prefix = f".{target_name}."
+    middle = name[len(prefix):-len(PART_SUFFIX)]
+    return (name.startswith(prefix) and name.endswith(PART_SUFFIX)
+            and len(name) == len(prefix) + PART_RANDOM + len(PART_SUFFIX) and set(middle) <= _PART_CHARS)
+
+
+def _lock(fd: int, blocking: bool) -> bool:
+    """An exclusive flock on `fd`; False when another holds it (blocking=False). The lock goes
+    with the process, even at a SIGKILL: a part file nobody holds is one whose writer is gone."""
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | (0 if blocking else fcntl.LOCK_NB))
+    except BlockingIOError:
+        return False
+    return True
+
+
+def _remove_stale_parts(target: str) -> None:
+    """Remove the part files of `target` left by writers that were killed (SIGKILL, a power cut):
+    each such kill left one for good. A writer still alive holds a lock on its own, so two
+    processes writing one file at once never take each other's. Best effort: a folder that
+    cannot be listed, or a part that cannot be removed, is left as it was."""
+    folder, name = os.path.dirname(target), os.path.basename(target)
+    try:
+        entries = [e for e in os.scandir(folder) if _is_part_of(e.name, name)]
+    except OSError:
+        return
+    for entry in entries:
+        try:
+            if not entry.is_file(follow_symlinks=False):
+                continue
+            fd = os.open(entry.path, os.O_RDONLY | os.O_NOFOLLOW | os.O_NONBLOCK)
+        except OSError:
+            continue
+        try:
+            # the lock held while the name is removed: a writer that made this file an instant
+            # ago and locks it now finds it gone (write_replacing then makes another)
+            if _lock(fd, blocking=False) and os.path.samestat(os.fstat(fd), os.stat(entry.path, follow_symlinks=False)):
+                os.unlink(entry.path)
+        except OSError:
+            pass
+        finally:
+            os.close(fd)
+
+
+def _own_part(target: str) -> tuple[int, str, int | None]:
+    """A new part file for `target`: (its fd, its name, a second fd holding its lock, None
+    without flock). The lock fd stays open until the file is renamed over `target`, so the lock
+    is held from the file's first byte to the rename."""
+    import tempfile
+
+    while True:
+        fd, tmp = tempfile.mkstemp(dir=os.path.dirname(target), prefix=f".{os.path.basename(target)}.", suffix=PART_SUFFIX)
+        if fcntl is None:
+            return fd, tmp, None
+        lock_fd = os.dup(fd)  # one open file, so the lock outlives `fd` (closed before the rename);
+        # not opened again by name: a cleaner may have removed that name already
+        try:
+            _lock(lock_fd, blocking=True)
+        except OSError:  # a file system without locks: written unlocked, as before (cleaners skip it)
+            return fd, tmp, lock_fd
+        if os.fstat(lock_fd).st_nlink:  # not removed by a cleaner between mkstemp and the lock
+            return fd, tmp, lock_fd
+        os.close(lock_fd)
+        os.close(fd)
+
+
 def write_replacing(path: str | os.PathLike, write: Callable[[object], None]) -> None:
     """Call `write(f)` with a binary file that becomes `path` only once it is whole: written
     beside it, synced and renamed over it, so a full disk or a Ctrl-C halfway leaves the previous
     file as it was and no part of the new one. A `path` that exists and is not a regular file (a
-    device such as /dev/full, a pipe) is written in place; a link keeps pointing where it did."""
+    device such as /dev/full, a pipe) is written in place; a link keeps pointing where it did.
+    The part files of earlier writes of `path` that were killed are removed first."""
     import stat
-    import tempfile
 
     target = os.path.realpath(path)
     try:
@@ -120,7 +200,9 @@ def write_replacing(path: str | os.PathLike, write: Callable[[object], None]) ->
         with open(target, "wb") as f:
             write(f)
         return
-    fd, tmp = tempfile.mkstemp(dir=os.path.dirname(target), prefix=f".{os.path.basename(target)}.", suffix=".part")
+    if fcntl is not None:  # without flock a dead writer's part cannot be told from a live one's
+        _remove_stale_parts(target)
+    fd, tmp, lock_fd = _own_part(target)
     try:
         with os.fdopen(fd, "wb") as f:
             write(f)
@@ -134,3 +216,6 @@ def write_replacing(path: str | os.PathLike, write: Callable[[object], None]) ->
     except BaseException:
         os.unlink(tmp)
         raise
+    finally:
+        if lock_fd is not None:
+            os.close(lock_fd)

@@ -36,6 +36,7 @@ MAX_ACCEL_G = 1000.0
 MAX_LINE_CHARS = 1 << 20  # metadata and header lines
 MAX_META_KEYS = 1000  # distinct metadata keys: each is Python objects ~10x its text (a recording has a few)
 CHUNK_ROWS = 8192  # rows converted to numbers at once
+RECORDER_KEY = "recorded_from"  # the metadata key of files `quickjab record` wrote (docs/formats.md)
 # Labels and metadata may come from bytes that are not UTF-8 (a file name, an argument), which
 # Python holds as lone surrogates that UTF-8 cannot encode: written as \udcff, they stay readable
 UNENCODABLE = "backslashreplace"
@@ -58,6 +59,8 @@ class Recording:
     accel: np.ndarray
     labels: list[str] = field(default_factory=list)
     meta: dict[str, str] = field(default_factory=dict)
+    # what the reader left out and why, one line each naming file:line (a row cut by a power cut)
+    notes: list[str] = field(default_factory=list)
 
     def __post_init__(self) -> None:
         self.t = np.asarray(self.t, dtype=np.float64)
@@ -175,7 +178,11 @@ def _read_rows(path: Path, f: io.TextIOBase, max_rows: int) -> Recording:
     fields: list[list[str]] = []  # the numeric fields of the rows not yet converted, as text
     linenos: list[int] = []
     need = max(numeric) + 1
-    reader = csv.reader(itertools.chain.from_iterable(_line_blocks(path, f, header_line)))
+    # `quickjab record` writes this key and ends every row with a line end: in its files a last
+    # line without one is a row cut mid-write (a power cut), its last number maybe cut short
+    # ('1.1234' read as '1.1'); a hand-written CSV may well end without one, and keeps its row
+    cut: list[int] | None = [] if RECORDER_KEY in meta else None
+    reader = csv.reader(itertools.chain.from_iterable(_line_blocks(path, f, header_line, cut)))
     for row in reader:
         line_at = header_line + reader.line_num
         if not row or (len(row) == 1 and not row[0].strip()):
@@ -195,19 +202,24 @@ def _read_rows(path: Path, f: io.TextIOBase, max_rows: int) -> Recording:
         raise RecordingError(path, None, "no samples")
     values = values[:n]
     _check_times(path, values[:, 0], lines[:n])
-    return Recording(values[:, 0], values[:, 1:].reshape(n, sensors, 3), labels, meta)
+    notes = [f"{path}:{line}: the last row has no line end (the recording was cut mid-write): left out" for line in cut or []]
+    return Recording(values[:, 0], values[:, 1:].reshape(n, sensors, 3), labels, meta, notes)
 
 
-def _line_blocks(path: Path, f: io.TextIOBase, lineno: int) -> Iterator[list[str]]:
+def _line_blocks(path: Path, f: io.TextIOBase, lineno: int, cut: list[int] | None = None) -> Iterator[list[str]]:
     """The file's lines after line `lineno` in blocks, each line held to MAX_LINE_CHARS as the
     header is: csv's field limit bounds one field, not a row, and a 200 MB row of "0," split
     into 100 million fields took 1 GB before any check could see it. Blocks keep the check at
-    C speed (a generator step per line made a 100 MB file 60 % slower to read; these, about 10 %)."""
+    C speed (a generator step per line made a 100 MB file 60 % slower to read; these, about 10 %).
+    With `cut` (a list), a last line without its line end is left out and its number appended."""
     while lines := f.readlines(1 << 14):
         if max(map(len, lines)) > MAX_LINE_CHARS:
             k = next(i for i, line in enumerate(lines) if len(line) > MAX_LINE_CHARS)
             raise RecordingError(path, lineno + k + 1, f"a line over {MAX_LINE_CHARS} characters")
         lineno += len(lines)
+        if cut is not None and not lines[-1].endswith(("\n", "\r")):  # only a file's last line can
+            cut.append(lineno)
+            lines = lines[:-1]
         yield lines
 
 

@@ -313,6 +313,18 @@ def played_files(args: argparse.Namespace) -> list[str | None]:
 
 def run_session(args: argparse.Namespace, caption: str, open_sources: Callable[[object], list],
                 make_session: Callable[..., object]) -> int:
+    """_run_session, ended by SIGTERM (`kill`, `timeout`, a service manager) or SIGHUP (the
+    terminal closed) as by Ctrl-C: the screenshot and trace written, the slow-machine hint, exit
+    130. SIGHUP's default ended the run on the spot, with none of it; so did SIGTERM before the
+    window, and in the loop SDL made it a closed window (exit 0), depending on SDL's build."""
+    from engine.interrupt import stop_signals_as_ctrl_c
+
+    with stop_signals_as_ctrl_c():  # before pygame starts: SDL then leaves SIGTERM alone
+        return _run_session(args, caption, open_sources, make_session)
+
+
+def _run_session(args: argparse.Namespace, caption: str, open_sources: Callable[[object], list],
+                 make_session: Callable[..., object]) -> int:
     """What one- and two-player play share: the window (or none: --headless, which stops after
     HEADLESS_FRAMES without --frames), a clear error when SDL shows no window, the clock, the
     templates line, the loop, then the screenshot and trace, and the sources closed.

@@ -256,6 +256,8 @@ def cmd_recognize(args: argparse.Namespace) -> int:
     refuse_overwriting({"-o": args.output}, [args.recording, args.templates])
     templates = Templates.load(args.templates)
     rec_file = read_recording(args.recording)
+    for note in rec_file.notes:
+        print(f"quickjab recognize: {note}", file=sys.stderr)
     times, frames, _ = recording_frames(rec_file)
     if frames.shape[1] != templates.dim:
         raise InputError(f"{args.recording}: {frames.shape[1]} values per frame, templates {args.templates} have D = {templates.dim}")

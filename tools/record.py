@@ -4,15 +4,16 @@ to the recording CSV of docs/formats.md, flushed at least every 0.25 s."""
 from __future__ import annotations
 
 import argparse
-import contextlib
-import signal
+import os
+import stat
 import sys
 import time
 from pathlib import Path
 
 from engine import arguments
 from engine.errors import InputError, refuse_overwriting
-from engine.recording import RecordingWriter
+from engine.interrupt import stop_signals_as_ctrl_c
+from engine.recording import RECORDER_KEY, RecordingWriter
 from engine.sensors import SourceState, open_source
 from engine.sensors.source import url_file
 from tools.devices import no_device_hint
@@ -47,6 +48,39 @@ def part_path(output: str | Path, part: int) -> Path:
     return out if part == 1 else out.with_name(f"{out.stem}.{part}{out.suffix}")
 
 
+def keep_aside(output: str | Path) -> Path | None:
+    """A file with anything in it at `output` (through a link, the file it points to) moved to
+    `<name>-old<suffix>` beside it, else `<name>-old-2<suffix>`, `-old-3`...: the recording is
+    written in place (what keeps a kill to the last rows), and opening the file emptied it, so a
+    mistyped -o lost a take. None when nothing is there, the file is empty (mkstemp's: nothing
+    to lose) or it is not a regular file (/dev/null, a pipe: written to as before)."""
+    target = Path(output)
+    if target.is_symlink():
+        target = Path(os.path.realpath(target))
+    try:
+        st = os.stat(target)
+    except FileNotFoundError:
+        return None
+    if not stat.S_ISREG(st.st_mode) or st.st_size == 0:
+        return None
+    n = 1
+    while True:
+        aside = target.with_name(f"{target.stem}-old{f'-{n}' if n > 1 else ''}{target.suffix}")
+        try:
+            os.link(target, aside)  # never over another file, as a rename would be
+        except FileExistsError:
+            n += 1
+            continue
+        except OSError:  # a file system without hard links (FAT on an SD card): checked, then renamed
+            if aside.exists():
+                n += 1
+                continue
+            os.rename(target, aside)
+            return aside
+        os.unlink(target)
+        return aside
+
+
 def link_counts(stats: dict[str, int]) -> str:
     """The end-of-run line about the link: what came in and what was lost or rejected on the way
     (the counters a source has; a serial source has them all)."""
@@ -75,6 +109,8 @@ def record(url: str, output: str, seconds: float | None, label: str = "", poll_s
     continues in a new file, out.2.csv and so on, whose header has the new columns: a row never
     has another width than its file's header (docs/formats.md), so every file reads back."""
     source = open_source(url)
+    for note in source.notes:
+        print(note, file=sys.stderr)
     parts = _RecordingParts(source, url, output, label)
     try:
         _poll_into(parts, seconds, poll_s, connect_timeout)
@@ -135,7 +171,7 @@ class _RecordingParts:
 
     def __init__(self, source, url: str, output: str, label: str):
         self.source, self.url, self.output, self.label = source, url, output, label
-        self.meta = {"source": source.description or url, "recorded_from": url}
+        self.meta = {"source": source.description or url, RECORDER_KEY: url}
         self.writer: RecordingWriter | None = None
         self.pending: list = []  # samples held until the rate is known
         self.rows = 0  # rows in the part files already closed
@@ -153,6 +189,12 @@ class _RecordingParts:
         path = part_path(self.output, len(self.files) + 1)
         if self.files:
             head["continues"] = str(self.files[-1].name)
+        try:
+            aside = keep_aside(path)
+        except OSError as exc:
+            raise InputError(f"{path}: cannot move the file there aside ({exc.strerror or exc}); give another -o") from None
+        if aside is not None:
+            print(f"{path} was not empty: moved to {aside}", file=sys.stderr)
         w = RecordingWriter(path, width, head, t0=self.t0)
         self.files.append(path)
         return w
@@ -200,26 +242,10 @@ def run(args: argparse.Namespace) -> int:
     if not args.connect_timeout > 0:
         raise InputError(f"--connect-timeout {args.connect_timeout}: must be positive")
     refuse_overwriting({"-o": args.output}, [url_file(args.source)])
-    with stop_signals_end_recording():
+    # SIGTERM (`kill`, a service manager, `timeout`) and SIGHUP (the terminal closed) end a
+    # recording as Ctrl-C does: the samples held for the rate are written, the file is synced and
+    # closed, and the summary says what was written (their default: none of it, and exit 143)
+    with stop_signals_as_ctrl_c():
         record(args.source, args.output, args.seconds, args.label, connect_timeout=args.connect_timeout)
     return 0
 
-
-@contextlib.contextmanager
-def stop_signals_end_recording():
-    """SIGTERM (`kill`, a service manager, `timeout`) and SIGHUP (the terminal closed) end a
-    recording as Ctrl-C does: the samples held for the rate are written, the file is synced and
-    closed, and the summary says what was written. Their default ended the process on the spot,
-    with neither (and exit status 143, as if the recording had failed)."""
-    def stop(signum, frame) -> None:
-        raise KeyboardInterrupt
-
-    previous = {}
-    for sig in filter(None, (signal.SIGTERM, getattr(signal, "SIGHUP", None))):  # Windows has no SIGHUP
-        with contextlib.suppress(ValueError):  # not the main thread: the default stays
-            previous[sig] = signal.signal(sig, stop)
-    try:
-        yield
-    finally:
-        for sig, handler in previous.items():
-            signal.signal(sig, handler)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import fnmatch
+import sys
 from collections.abc import Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from pathlib import Path
@@ -33,7 +34,10 @@ def grid_phase(phase: float) -> Iterator[None]:
 
 def read_labelled_frames(path: str | Path) -> tuple[np.ndarray, list[str]]:
     """A recording's (m, D) frames on the 60 Hz grid (at the `grid_phase`) and a label per frame."""
-    _, frames, labels = recording_frames(read_recording(path), phase=_grid_phase)
+    rec = read_recording(path)
+    for note in rec.notes:  # a trial recorded with `quickjab record` and cut by a power cut
+        print(note, file=sys.stderr)
+    _, frames, labels = recording_frames(rec, phase=_grid_phase)
     return frames, labels
 
 

@@ -64,6 +64,7 @@ class Source:
     description: str = ""
     stats: dict[str, int] = field(default_factory=dict)
     buttons: int = 0  # buttons held (the Wiimote's core bits, Home 0x0080); 0 where there are none
+    notes: list[str] = field(default_factory=list)  # lines for the console once opened (a replay's cut row)
     capabilities: ClassVar[frozenset[str]] = frozenset()  # PLAYABLE, KEYS, REWIND: what else it can do
 
     def poll(self) -> list[Sample]:

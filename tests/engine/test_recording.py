@@ -239,3 +239,40 @@ def test_text_from_a_non_utf8_file_name_or_argument_is_written_escaped(tmp_path)
     assert back.labels == ["\\udcff"] * 2 and back.meta["recorded_from"] == "replay://\\udcff.csv"
     write_recording(tmp_path / "whole.csv", Recording(back.t, back.accel, [odd] * 2, {"source": odd}))
     assert read_recording(tmp_path / "whole.csv").labels == ["\\udcff"] * 2
+
+
+def _recorded(path: Path, rows: int) -> bytes:
+    """A file as `quickjab record` writes it (its `recorded_from` line), `rows` two-hand rows."""
+    with RecordingWriter(path, 2, {"source": "demo", "recorded_from": "demo://"}) as w:
+        for i in range(rows):
+            w.write(Sample(i / 100, np.full((2, 3), 0.1234 + i)), "jab")
+    return path.read_bytes()
+
+
+@pytest.mark.parametrize("keep", [-3, -8, -30])  # inside the label, inside the last number, fields short
+def test_a_recording_cut_mid_row_reads_without_its_cut_row_and_says_so(tmp_path, keep):
+    """A power cut mid-write leaves the last row without its line end, often inside a number
+    ('1.1234' cut to '1.1'): that row was read as if whole. Our writer ends every row with one,
+    so in a file of ours a last line without it is a cut row: left out, and noted (file, line)."""
+    path = tmp_path / "cut.csv"
+    data = _recorded(path, 10)
+    path.write_bytes(data[:keep])
+    rec = read_recording(path)
+    assert len(rec) == 9
+    assert rec.accel[-1, 1, 2] == pytest.approx(8.1234)
+    line = data.count(b"\n")  # the cut row's line: the file's last
+    assert len(rec.notes) == 1 and rec.notes[0].startswith(f"{path}:{line}: ")
+    assert "cut" in rec.notes[0] and "\n" not in rec.notes[0]
+    path.write_bytes(data)
+    assert len(read_recording(path)) == 10 and read_recording(path).notes == []
+
+
+def test_a_hand_written_csv_without_a_final_line_end_keeps_its_last_row(tmp_path):
+    # only a file that says it is ours (`recorded_from`) is known to end every row with a line end
+    path = tmp_path / "hand.csv"
+    path.write_text("# rate_hz: 60\n# source: made by hand\nt,rx,ry,rz\n0.0,0,0,1\n0.1,0,0,1.25")
+    rec = read_recording(path)
+    assert len(rec) == 2 and rec.accel[-1, 0, 2] == 1.25 and rec.notes == []
+    path.write_text("t,rx,ry,rz\n0.0,0,0,1\n0.1,0")
+    with pytest.raises(RecordingError, match="fields"):  # as before: a short row in a file of anyone's
+        read_recording(path)

@@ -82,3 +82,76 @@ def test_the_new_file_is_synced_before_it_replaces_the_old(tmp_path, monkeypatch
     npz_files.write_replacing(tmp_path / "t.npz", lambda f: f.write(b"data"))
     assert calls == ["fsync", "replace"]
     assert (tmp_path / "t.npz").read_bytes() == b"data"
+
+
+SLOW_WRITER = """
+import sys, time
+from engine.npz_files import write_replacing
+
+def write(f):
+    f.write(b"half a file")
+    f.flush()
+    print("writing", flush=True)
+    time.sleep(120)  # killed before this ends
+
+write_replacing(sys.argv[1], write)
+"""
+
+
+def test_a_part_file_left_by_a_killed_writer_goes_when_the_file_is_written_again(tmp_path):
+    """A SIGKILL mid-write (a templates set, a graph cache, a trace) left `.<name>.<random>.part`
+    beside the file for good, one more each time. The next write of that file removes those of
+    writers that are gone, and never the one a writer still alive is writing."""
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    from engine.npz_files import write_replacing
+
+    repo = Path(__file__).resolve().parents[2]
+    target = tmp_path / "trace.json"
+    other = tmp_path / ".trace.json.old.abcdefgh.part"  # another file's name: never touched
+    other.write_bytes(b"not ours")
+    proc = subprocess.Popen([sys.executable, "-c", SLOW_WRITER, str(target)], cwd=repo, stdout=subprocess.PIPE,
+                            text=True, env={**os.environ, "PYTHONPATH": str(repo)})
+    try:
+        assert proc.stdout.readline() == "writing\n"
+        live = sorted(tmp_path.glob(".trace.json.????????.part"))
+        assert len(live) == 1 and live[0].read_bytes() == b"half a file"
+        write_replacing(target, lambda f: f.write(b"first"))  # while the other writer is alive
+        assert sorted(tmp_path.glob(".trace.json.????????.part")) == live and target.read_bytes() == b"first"
+    finally:
+        proc.kill()
+        proc.wait()
+    assert live[0].exists()  # nothing runs at a SIGKILL
+    write_replacing(target, lambda f: f.write(b"second"))
+    assert sorted(p.name for p in tmp_path.iterdir()) == [other.name, "trace.json"]
+    assert target.read_bytes() == b"second" and other.read_bytes() == b"not ours"
+
+
+BUSY_WRITER = """
+import sys
+from engine.npz_files import write_replacing
+
+for i in range(300):
+    write_replacing(sys.argv[1], lambda f: f.write(sys.argv[2].encode() * 4096))
+"""
+
+
+def test_processes_writing_one_file_at_once_never_take_each_others_part_file(tmp_path):
+    # each write clears the parts of writers that are gone: one still writing, or one that has
+    # just made its part file and not yet locked it, keeps its own (a first version lost writes so)
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    repo = Path(__file__).resolve().parents[2]
+    target = tmp_path / "templates.npz"
+    procs = [subprocess.Popen([sys.executable, "-c", BUSY_WRITER, str(target), tag], cwd=repo, stderr=subprocess.PIPE,
+                              text=True, env={**os.environ, "PYTHONPATH": str(repo)}) for tag in "ab"]
+    errors = [p.communicate(timeout=120)[1] for p in procs]
+    assert [p.returncode for p in procs] == [0, 0], errors
+    assert [p.name for p in tmp_path.iterdir()] == ["templates.npz"]
+    assert target.read_bytes() in (b"a" * 4096, b"b" * 4096)

@@ -372,3 +372,34 @@ def test_the_smallest_window_plays_and_headless_frames_may_be_smaller(tmp_path, 
         shot = tmp_path / f"{size}.png"
         assert main(["play", "--demo", *options, "--frames", "2", "--no-sound", "--size", size, "--screenshot", str(shot)]) == 0
         assert pygame.image.load(str(shot)).get_size() == tuple(int(v) for v in size.split("x"))
+
+
+@pytest.mark.parametrize("signame", ["SIGTERM", "SIGHUP"])
+def test_play_ended_by_sigterm_or_sighup_writes_its_trace_as_ctrl_c_does(tmp_path, signame) -> None:
+    """`kill`, a service manager, `timeout` (SIGTERM) or a closed terminal (SIGHUP) ended play on
+    the spot, or as a closed window where SDL caught SIGTERM: no trace, or an exit status that
+    said nothing of the interruption. Now it is Ctrl-C's end: the trace written, exit 130."""
+    import os
+    import signal
+    import subprocess
+    import time
+
+    from engine.trace import read_chrome_trace
+
+    trace = tmp_path / "run.json"
+    env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[2]), "SDL_VIDEODRIVER": "dummy",
+           "SDL_AUDIODRIVER": "dummy", "XDG_DATA_HOME": str(tmp_path / "data"), "XDG_CONFIG_HOME": str(tmp_path / "config")}
+    argv = [sys.executable, "-m", "tools.cli", "play", "--headless", "--demo", "--frames", "10000000", "--trace", str(trace)]
+    proc = subprocess.Popen(argv, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    try:
+        said = proc.stderr.readline()  # the templates line: the window is open, the loop next
+        assert said.startswith("quickjab play:"), said
+        time.sleep(1.0)  # some frames for the trace
+        proc.send_signal(getattr(signal, signame))
+        err = said + proc.communicate(timeout=60)[1]
+    finally:
+        proc.kill()
+        proc.wait()
+    assert proc.returncode == 130, err
+    assert "Traceback" not in err and f"quickjab play: wrote {trace}" in err
+    assert any(ev.get("name") == "frame" for ev in read_chrome_trace(trace)["traceEvents"])

@@ -145,3 +145,40 @@ def test_record_from_an_emulated_wiimote_with_seconds_stops_by_itself(tmp_path, 
     got = read_recording(out)
     assert got.sensors == 2 and 20 <= len(got) <= 60  # ~100 reports a second, after the set-up
     assert got.t[-1] - got.t[0] < 0.6
+
+
+def test_recording_over_a_file_keeps_the_old_one_beside_it(tmp_path, capsys):
+    """-o naming a file that is there (a mistyped name, the last take) emptied it when the
+    recording began: that take was lost. A file with anything in it is moved to a numbered name
+    beside it first, and said; an empty one (mkstemp's) is written over without a word."""
+    out = tmp_path / "take.csv"
+    out.write_bytes(b"an earlier take\n")
+    argv = ["record", "--source", "demo://?rate=200", "-o", str(out), "--seconds", "0.7"]
+    assert main(argv) == 0
+    aside = tmp_path / "take-old.csv"
+    assert aside.read_bytes() == b"an earlier take\n"
+    err = capsys.readouterr().err
+    assert [line for line in err.splitlines() if "take-old" in line] == [f"{out} was not empty: moved to {aside}"]
+    first = out.read_bytes()
+    assert len(read_recording(out)) > 50
+    assert main(argv) == 0
+    assert (tmp_path / "take-old-2.csv").read_bytes() == first and aside.read_bytes() == b"an earlier take\n"
+    assert f"moved to {tmp_path / 'take-old-2.csv'}" in capsys.readouterr().err
+    empty = tmp_path / "empty.csv"
+    empty.touch()
+    assert main(["record", "--source", "demo://?rate=200", "-o", str(empty), "--seconds", "0.7"]) == 0
+    assert "moved" not in capsys.readouterr().err and len(read_recording(empty)) > 50
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["empty.csv", "take-old-2.csv", "take-old.csv", "take.csv"]
+
+
+def test_replaying_a_recording_cut_mid_row_says_the_row_left_out(tmp_path, capsys):
+    # read_recording leaves the cut row out and notes it; the command that opened the file says it
+    src = tmp_path / "cut.csv"
+    rows = "".join(f"{i / 100:.6f},0.1234,0.1234,1.1234,\n" for i in range(40))
+    src.write_text("# rate_hz: 100\n# recorded_from: demo://\nt,rx,ry,rz,label\n" + rows[:-4])  # '1.1234' cut to '1.1'
+    out = tmp_path / "out.csv"
+    assert main(["record", "--source", f"replay://{src}?speed=20", "-o", str(out), "--seconds", "5"]) == 0
+    err = capsys.readouterr().err
+    assert f"{src}:43: the last row has no line end" in err
+    rec = read_recording(out)
+    assert len(rec) == 39 and (rec.accel[:, 0, 2] == 1.1234).all()
