@@ -447,14 +447,12 @@ class Session(Ring):
         if self.opponent.controller.finished_action():
             self._cpu_rest = self._rest_next
 
-    def apply_hit(self, step: int, hit: Hit | dict) -> None:
-        """A hit (game.hits.Hit, or a dict of its keys): the blow's damage (blow_damage), the
-        CPU's scaled by its difficulty, then land it."""
-        hit = Hit.of(hit)
+    def damage_of(self, hit: Hit) -> float:
+        """A blow's damage (blow_damage), the CPU's scaled by its difficulty."""
         damage = blow_damage(hit)
         if hit.attacker == 1:
             damage *= self.difficulty.current.damage
-        self.land_blow(step, hit, damage)
+        return damage
 
     def rumble(self, target: int) -> None:
         """The boxer who was hit: its player feels it (the CPU has no controller)."""

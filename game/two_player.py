@@ -279,11 +279,9 @@ class TwoPlayerSession(Session):
     def _opponent(self, step: int, dt: float) -> None:
         self._step_boxer(1, dt)
 
-    def apply_hit(self, step: int, hit: Hit | dict) -> None:
-        """The one-player session's blow (blow_damage, land_blow), but a fair fight: no CPU
-        difficulty on top."""
-        hit = Hit.of(hit)
-        self.land_blow(step, hit, blow_damage(hit))
+    def damage_of(self, hit: Hit) -> float:
+        """The one-player session's blow (blow_damage), but a fair fight: no CPU difficulty on top."""
+        return blow_damage(hit)
 
     def rumble(self, target: int) -> None:
         """The player who was hit feels it in their own controller."""
