@@ -1,7 +1,9 @@
 """The ring both game modes share (game/session.py: one player against the CPU;
 game/two_player.py: two people): two boxers in the physics world at their marks, the physics,
-hits and match stages (game/stages.py), the referee's blows, the knockdown hold, the corners
-between rounds, the view and the state hash. The session around it brings the input, the
+hits and match stages (game/stages.py), what a recognizer's event does to a boxer (`_act_on`),
+the referee's blows, the knockdown hold, the corners between rounds, the view and the state
+hash. A pause freezes the ring: no physics step, no contacts (`_physics`), no clip steps (the
+sessions' boxer stages), and a motion begun under it does nothing (`_act_on`). The session around it brings the input, the
 recognition and the opponent: it sets `config`, `match`, `hud_state`, `sounds`, `view`,
 `events_log`, `blows_log` and `loop`, and says what a blow does (`damage_of`), its rumble, a decided round
 (`_rounds_over`), the source line (`_show_sources`) and a new match mean in its mode."""
@@ -62,6 +64,21 @@ class Ring:
     def rumble(self, target: int) -> None:
         """The boxer who was hit: the session makes its player feel it (_show_blow)."""
 
+    def _act_on(self, i: int, recognizer, ev: dict) -> None:
+        """Boxer i acts on its recognizer's event while blows count. A motion that starts under
+        the pause is over for the boxer there and then (`character_finished`: the rest of it is
+        discarded): its second half, the hand coming back, started a punch after the resume,
+        the boxer never having played the first to discard it."""
+        # a whole-motion switch is the recognizer's final word on a motion already over:
+        # a label for the record, too late for the character to act on
+        if self.match.fighting and not ev.get("whole_motion"):
+            self.boxers[i].controller.on_event(ev)
+            clip = self.lib.get(ev.get("action") or "")
+            if ev.get("event") == "start" and clip is not None and clip.kind == "attack":
+                self.sounds.play("punch", 0.5)
+        elif self.match.paused and ev.get("event") == "start":
+            recognizer.character_finished()
+
     def _hold_knockdown(self, i: int) -> None:
         """While the referee counts, the downed boxer stays down (the clip's low frame)."""
         ctrl = self.boxers[i].controller
@@ -72,6 +89,12 @@ class Ring:
                 ctrl.play("knockdown", from_frame=min(ctrl.frame, hold) if ctrl.action == "knockdown" else 0)
 
     def _physics(self, step: int, dt: float) -> None:
+        if self.match.paused:
+            # the pause freezes the ring: no step, no contacts (a fist that touched under the
+            # pause spent its hand on a blow the paused referee did not count), a still picture
+            self.contacts = []
+            self.prev_joints = self.curr_joints
+            return
         self.contacts = self.world.step(dt)
         self.prev_joints, self.curr_joints = self.curr_joints, [b.joint_positions().copy() for b in self.boxers]
         self.renderer.step_effects()
