@@ -10,7 +10,7 @@ scripted match is reproducible and its state hashes. Rules, kept simple and dete
 - Every blow of a step counts before any knockdown is decided (`land` each, then
   `settle_knockdowns`), so the order of the contacts decides nothing. Both boxers floored in one
   step both go down and are counted together, each rising at its own count; when neither can
-  go on (both counted out, or one TKO'd and the other counted out) the match is a draw,
+  go on (each counted out or stopped by its third knockdown of the round) the match is a draw,
   "double KO"; when only one cannot, the other wins by KO or TKO.
 - Between rounds a 3 s break; each boxer recovers 20 health.
 - After round 3 the scorecards decide: each round 10-9 to whoever dealt more damage (10-10

@@ -3,10 +3,11 @@ game/two_player.py: two people): two boxers in the physics world at their marks,
 hits and match stages (game/stages.py), what a recognizer's event does to a boxer (`_act_on`),
 the referee's blows, the knockdown hold, the corners between rounds, the view and the state
 hash. A pause freezes the ring: no physics step, no contacts (`_physics`), no clip steps (the
-sessions' boxer stages), and a motion begun under it does nothing (`_act_on`). The session around it brings the input, the
-recognition and the opponent: it sets `config`, `match`, `hud_state`, `sounds`, `view`,
-`events_log`, `blows_log` and `loop`, and says what a blow does (`damage_of`), its rumble, a decided round
-(`_rounds_over`), the source line (`_show_sources`) and a new match mean in its mode."""
+sessions' boxer stages), and a motion begun under it does nothing (`_act_on`). The session
+around it brings the input, the recognition and the opponent: it sets `config`, `match`,
+`hud_state`, `sounds`, `view`, `events_log`, `blows_log` and `loop`, and says what a blow does
+(`damage_of`), its rumble, a decided round (`_rounds_over`), the source line (`_show_sources`)
+and a new match mean in its mode."""
 
 from __future__ import annotations
 
