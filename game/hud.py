@@ -44,7 +44,7 @@ from game.hud_style import (  # noqa: F401
     text_scale,
 )
 from game.hud_text import TextCache, TextLayer  # noqa: F401 (TextCache: importable from here as before)
-from game.match import MatchSnapshot
+from game.match import DOUBLE_KO, MatchSnapshot
 from game.rules import MAX_HEALTH
 
 
@@ -172,13 +172,18 @@ def action_label(action: str) -> str:
 
 
 def result_title(result: str, winner: int | None, wins: tuple[str, str]) -> str:
-    """The banner after the last bell: "KO - YOU WIN", "CPU WINS ON POINTS", "DRAW" (not the
-    match's own word for it, "points - YOU WIN"); `wins` says each side's win."""
+    """The banner after the last bell: "KO - YOU WIN", "CPU WINS ON POINTS", "DRAW", "DOUBLE KO -
+    DRAW" (not the match's own word for it, "points - YOU WIN"); `wins` says each side's win."""
     if winner is None:
-        return "DRAW"
+        return f"{result.upper()} - DRAW" if result == DOUBLE_KO else "DRAW"
     if result in ("KO", "TKO"):
         return f"{result} - {wins[winner]}"
     return f"{wins[winner]} ON POINTS"
+
+
+def knockdown_line(downed: tuple[int, ...]) -> str:
+    """The line under the referee's count: "DOUBLE KNOCKDOWN" when both boxers are down."""
+    return "DOUBLE KNOCKDOWN" if len(downed) == 2 else "KNOCKDOWN"
 
 
 def lost_lines(state: str, rewinds: bool = False) -> tuple[str, str]:
@@ -392,12 +397,13 @@ class Hud(TextLayer):
                 self.menu_line(surf, "Enter: a new match", mid, (w // 2, h * 0.42 + 60 * u), DIM, u)
                 if st.difficulty:
                     self.menu_line(surf, f"D: difficulty {st.difficulty}", int(30 * u), (w // 2, h * 0.42 + 104 * u), DIM, u)
-        elif st.match.phase == "count" and st.match.down is not None:
+        elif st.match.phase == "count" and st.match.downed:
             # left of the ring's centre line: in the middle of the screen it sat over the far
             # corner post, white on white
             cx = w * COUNT_X
             self.count_rect = self._banner(surf, f"{st.match.count}", int(140 * u), (cx, h * 0.40), alpha=215)
-            self.blit(surf, "KNOCKDOWN", mid, (cx, h * 0.40 + 70 * u), SWITCH_COLOR, "midtop")
+            said, size = self.text.fit(knockdown_line(st.match.downed), mid, int(2 * cx))  # within the window
+            self.blit(surf, said, size, (cx, h * 0.40 + 70 * u), SWITCH_COLOR, "midtop")
         elif st.match.paused and not st.disconnected:
             self._banner(surf, "PAUSED", big, (w // 2, h * 0.42))
             self.menu_line(surf, "Esc or Home to resume", mid, (w // 2, h * 0.42 + 56 * u), DIM, u)

@@ -7,6 +7,11 @@ scripted match is reproducible and its state hashes. Rules, kept simple and dete
   number per second. A boxer rises at count 3 x (its knockdowns in the match, this one
   included), with 40 health; one who would rise at 10 or later is counted out (KO). Three knockdowns in one
   round end it (TKO).
+- Every blow of a step counts before any knockdown is decided (`land` each, then
+  `settle_knockdowns`), so the order of the contacts decides nothing. Both boxers floored in one
+  step both go down and are counted together, each rising at its own count; when neither can
+  go on (each counted out or stopped by its third knockdown of the round) the match is a draw,
+  "double KO"; when only one cannot, the other wins by KO or TKO.
 - Between rounds a 3 s break; each boxer recovers 20 health.
 - After round 3 the scorecards decide: each round 10-9 to whoever dealt more damage (10-10
   when even), minus one point per knockdown suffered in the round. Equal totals: a draw.
@@ -29,7 +34,7 @@ COUNT_OUT = 10
 RISE_HEALTH = 40.0
 BREAK_RECOVERY = 20.0
 KNOCKDOWNS_FOR_TKO = 3
-
+DOUBLE_KO = "double KO"  # both floored in one step, and neither can go on: a draw
 
 
 class MatchEvent(NamedTuple):
@@ -53,7 +58,7 @@ class MatchSnapshot:
     seconds_left: float = float(ROUND_SECONDS)
     phase: str = "fight"
     count: int = 0
-    down: int | None = None
+    downed: tuple[int, ...] = ()  # who is on the canvas (both after a double knockdown)
     knockdowns: tuple[int, int] = (0, 0)
     winner: int | None = None
     result: str = ""
@@ -83,11 +88,11 @@ class Match:
     scores: list[int] = field(default_factory=lambda: [0, 0])
     # who won each round so far: the round's points (damage, knockdowns), or the KO/TKO; None even
     round_winners: list[int | None] = field(default_factory=list)
-    down: int | None = None  # who is on the canvas
+    downed: list[int] = field(default_factory=list)  # who is on the canvas, 0 and 1 in order
     count: int = 0  # the referee's current number
     count_steps: int = 0
     winner: int | None = None  # 0, 1, or None (draw / not over)
-    result: str = ""  # "KO", "TKO", "points", "draw"
+    result: str = ""  # "KO", "TKO", "points", "draw", "double KO" (winner None)
     hits: list[int] = field(default_factory=lambda: [0, 0])  # landed BY boxer i
     events: list[MatchEvent] = field(default_factory=list)  # since the last drain
 
@@ -98,7 +103,7 @@ class Match:
     # -- queries -----------------------------------------------------------------------
     @property
     def fighting(self) -> bool:
-        """True while blows count: in a round, not paused, nobody down."""
+        """True while blows count: in a round, not paused, nobody down (the count stops them)."""
         return self.phase == FIGHT and not self.paused
 
     @property
@@ -111,8 +116,15 @@ class Match:
     def snapshot(self) -> MatchSnapshot:
         return MatchSnapshot(
             (self.health[0], self.health[1]), self.round, self.rounds, self.seconds_left(), self.phase,
-            self.count, self.down, (self.knockdowns[0], self.knockdowns[1]), self.winner, self.result, self.paused,
+            self.count, tuple(self.downed), (self.knockdowns[0], self.knockdowns[1]), self.winner, self.result, self.paused,
         )
+
+    def _down_key(self) -> int | tuple[int, ...] | None:
+        """Who is down, for the state hash: the one boxer as before double knockdowns existed
+        (so a match without one hashes as it did), both as a pair."""
+        if len(self.downed) == 1:
+            return self.downed[0]
+        return tuple(self.downed) or None
 
     def drain_events(self) -> list[MatchEvent]:
         """What happened since the last call: ("bell", -1), ("knockdown", i), ("rise", i), ("over", i)..."""
@@ -124,7 +136,7 @@ class Match:
         return (
             self.round, self.phase, self.paused, self.clock_steps, tuple(round(h, 6) for h in self.health),
             tuple(self.knockdowns), tuple(self.round_knockdowns), tuple(round(d, 6) for d in self.round_damage),
-            tuple(self.scores), self.down, self.count, self.count_steps, self.winner, self.result, tuple(self.hits),
+            tuple(self.scores), self._down_key(), self.count, self.count_steps, self.winner, self.result, tuple(self.hits),
         )
 
     # -- input -------------------------------------------------------------------------
@@ -133,18 +145,32 @@ class Match:
             self.paused = not self.paused
 
     def hit(self, target: int, damage: float) -> bool:
-        """Boxer `target` takes `damage`. Returns True when the blow counted (not a NaN or
-        infinite one: NaN knocked the boxer down, max(0, health - nan) being 0, and left NaN in
-        the round's damage)."""
+        """One blow on its own: `land` it, then `settle_knockdowns`. Returns whether it counted."""
+        counted = self.land(target, damage)
+        self.settle_knockdowns()
+        return counted
+
+    def land(self, target: int, damage: float) -> bool:
+        """Boxer `target` takes `damage`; whether it goes down waits for `settle_knockdowns`, once
+        every blow of the step has landed (deciding at the first blow let the other boxer's blow
+        in the same step go uncounted: the order of the contacts decided the trade). Returns True
+        when the blow counted (not a NaN or infinite one: NaN knocked the boxer down,
+        max(0, health - nan) being 0, and left NaN in the round's damage)."""
         if not self.fighting or not math.isfinite(damage) or damage <= 0:
             return False
         attacker = 1 - target
         self.health[target] = max(0.0, self.health[target] - damage)
         self.round_damage[attacker] += damage
         self.hits[attacker] += 1
-        if self.health[target] <= 0.0:
-            self._knockdown(target)
         return True
+
+    def settle_knockdowns(self) -> None:
+        """Every boxer the step's blows took to 0 health goes down, both at once when both were."""
+        if not self.fighting:
+            return
+        floored = [i for i in (0, 1) if self.health[i] <= 0.0]
+        if floored:
+            self._knockdown(floored)
 
     # -- time --------------------------------------------------------------------------
     def step(self) -> None:
@@ -175,28 +201,40 @@ class Match:
         """The count at which `boxer`, down now, gets up (knockdowns already include this one)."""
         return 3 * self.knockdowns[boxer]
 
-    def _knockdown(self, boxer: int) -> None:
-        self.knockdowns[boxer] += 1
-        self.round_knockdowns[boxer] += 1
-        self.down = boxer
+    def _knockdown(self, boxers: list[int]) -> None:
+        for boxer in boxers:
+            self.knockdowns[boxer] += 1
+            self.round_knockdowns[boxer] += 1
+        self.downed = list(boxers)
         self.phase = COUNT
         self.count = 0
         self.count_steps = 0
-        self.events.append(MatchEvent("knockdown", boxer))
-        if self.round_knockdowns[boxer] >= KNOCKDOWNS_FOR_TKO:
-            self._finish(1 - boxer, "TKO")
+        for boxer in boxers:
+            self.events.append(MatchEvent("knockdown", boxer))
+        stopped = [b for b in boxers if self.round_knockdowns[b] >= KNOCKDOWNS_FOR_TKO]
+        if stopped:
+            # the other one down too and unable to rise either: neither can go on
+            out = [b for b in boxers if b in stopped or self.rise_count(b) >= COUNT_OUT]
+            if len(out) == 2:
+                self._finish(None, DOUBLE_KO)
+            else:
+                self._finish(1 - stopped[0], "TKO")
 
     def _maybe_rise(self) -> None:
-        boxer = self.down
-        assert boxer is not None
-        rise = self.rise_count(boxer)
-        if rise >= COUNT_OUT and self.count >= COUNT_OUT:
-            self._finish(1 - boxer, "KO")
-        elif rise < COUNT_OUT and self.count >= rise:
-            self.health[boxer] = RISE_HEALTH
-            self.down = None
+        """Each boxer down rises at its own count; at COUNT_OUT whoever is still down is out."""
+        for boxer in list(self.downed):
+            rise = self.rise_count(boxer)
+            if rise < COUNT_OUT and self.count >= rise:
+                self.health[boxer] = RISE_HEALTH
+                self.downed.remove(boxer)
+                self.events.append(MatchEvent("rise", boxer))
+        if self.downed and self.count >= COUNT_OUT:
+            if len(self.downed) == 2:
+                self._finish(None, DOUBLE_KO)
+            else:
+                self._finish(1 - self.downed[0], "KO")
+        elif not self.downed:
             self.phase = FIGHT
-            self.events.append(MatchEvent("rise", boxer))
 
     def _score_round(self) -> None:
         d = self.round_damage
@@ -221,10 +259,11 @@ class Match:
         self.health = [min(MAX_HEALTH, h + BREAK_RECOVERY) for h in self.health]
 
     def _finish(self, winner: int | None, result: str) -> None:
-        if result in ("KO", "TKO"):
+        if result in ("KO", "TKO", DOUBLE_KO):
             self.round_winners.append(winner)  # the round ends with the match
         self.phase = OVER
         self.winner = winner
         self.result = result
-        self.down = self.down if result in ("KO", "TKO") else None
+        if result not in ("KO", "TKO", DOUBLE_KO):
+            self.downed = []  # (nobody is down when the bell ends a round)
         self.events.append(MatchEvent("over", -1 if winner is None else winner))

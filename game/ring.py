@@ -1,10 +1,13 @@
 """The ring both game modes share (game/session.py: one player against the CPU;
 game/two_player.py: two people): two boxers in the physics world at their marks, the physics,
-hits and match stages (game/stages.py), the referee's blows, the knockdown hold, the corners
-between rounds, the view and the state hash. The session around it brings the input, the
-recognition and the opponent: it sets `config`, `match`, `hud_state`, `sounds`, `view`,
-`events_log`, `blows_log` and `loop`, and says what a blow's rumble, a decided round
-(`_rounds_over`), the source line (`_show_sources`) and a new match mean in its mode."""
+hits and match stages (game/stages.py), what a recognizer's event does to a boxer (`_act_on`),
+the referee's blows, the knockdown hold, the corners between rounds, the view and the state
+hash. A pause freezes the ring: no physics step, no contacts (`_physics`), no clip steps (the
+sessions' boxer stages), and a motion begun under it does nothing (`_act_on`). The session
+around it brings the input, the recognition and the opponent: it sets `config`, `match`,
+`hud_state`, `sounds`, `view`, `events_log`, `blows_log` and `loop`, and says what a blow does
+(`damage_of`), its rumble, a decided round (`_rounds_over`), the source line (`_show_sources`)
+and a new match mean in its mode."""
 
 from __future__ import annotations
 
@@ -60,31 +63,74 @@ class Ring:
         return self.view.target_surface()
 
     def rumble(self, target: int) -> None:
-        """The boxer who was hit: the session makes its player feel it (land_blow)."""
+        """The boxer who was hit: the session makes its player feel it (_show_blow)."""
+
+    def _act_on(self, i: int, recognizer, ev: dict) -> None:
+        """Boxer i acts on its recognizer's event while blows count. A motion that starts under
+        the pause is over for the boxer there and then (`character_finished`: the rest of it is
+        discarded): its second half, the hand coming back, started a punch after the resume,
+        the boxer never having played the first to discard it."""
+        # a whole-motion switch is the recognizer's final word on a motion already over:
+        # a label for the record, too late for the character to act on
+        if self.match.fighting and not ev.get("whole_motion"):
+            self.boxers[i].controller.on_event(ev)
+            clip = self.lib.get(ev.get("action") or "")
+            if ev.get("event") == "start" and clip is not None and clip.kind == "attack":
+                self.sounds.play("punch", 0.5)
+        elif self.match.paused and ev.get("event") == "start":
+            recognizer.character_finished()
 
     def _hold_knockdown(self, i: int) -> None:
         """While the referee counts, the downed boxer stays down (the clip's low frame)."""
         ctrl = self.boxers[i].controller
         clip = self.lib.get("knockdown")
-        if self.match.down == i and clip is not None:
+        if i in self.match.downed and clip is not None:
             hold = int(clip.frames * KNOCKDOWN_HOLD)
             if ctrl.action != "knockdown" or ctrl.frame > hold:
                 ctrl.play("knockdown", from_frame=min(ctrl.frame, hold) if ctrl.action == "knockdown" else 0)
 
     def _physics(self, step: int, dt: float) -> None:
+        if self.match.paused:
+            # the pause freezes the ring: no step, no contacts (a fist that touched under the
+            # pause spent its hand on a blow the paused referee did not count), a still picture
+            self.contacts = []
+            self.prev_joints = self.curr_joints
+            return
         self.contacts = self.world.step(dt)
         self.prev_joints, self.curr_joints = self.curr_joints, [b.joint_positions().copy() for b in self.boxers]
         self.renderer.step_effects()
 
     def _hits(self, step: int, dt: float) -> None:
-        for hit in hits_from_contacts(self.contacts, list(self.boxers)):
-            self.apply_hit(step, hit)
+        """Every blow of the step lands before the referee decides who goes down (the first
+        contact's knockdown used to end the exchange: the order of the contacts decided it)."""
+        landed = [(hit, self.damage_of(hit)) for hit in hits_from_contacts(self.contacts, list(self.boxers))]
+        counted = [(hit, damage) for hit, damage in landed if self.match.land(1 - hit.attacker, damage)]
+        self.match.settle_knockdowns()
+        for hit, damage in counted:
+            self._show_blow(step, hit, damage)
+
+    def damage_of(self, hit: Hit) -> float:
+        """What the blow does to the other boxer (the session's mode says: game.rules.blow_damage,
+        the CPU's scaled by its difficulty)."""
+        raise NotImplementedError
+
+    def apply_hit(self, step: int, hit: Hit | dict) -> None:
+        """One blow on its own (game.hits.Hit, or a dict of its keys): its damage (damage_of),
+        then land it."""
+        hit = Hit.of(hit)
+        self.land_blow(step, hit, self.damage_of(hit))
 
     def land_blow(self, step: int, hit: Hit, damage: float) -> None:
-        """The referee counts the blow; reaction, flash, sound, rumble (both modes)."""
+        """The referee counts the blow and decides a knockdown; reaction, flash, sound, rumble."""
+        counted = self.match.land(1 - hit.attacker, damage)
+        self.match.settle_knockdowns()
+        if counted:
+            self._show_blow(step, hit, damage)
+
+    def _show_blow(self, step: int, hit: Hit, damage: float) -> None:
+        """A blow the referee counted: logged; reaction (unless it floored the boxer), flash,
+        sound, rumble (both modes)."""
         target = 1 - hit.attacker
-        if not self.match.hit(target, damage):
-            return
         self.blows_log.append((step, hit.attacker, hit.target, hit.blocked, round(damage, 4)))
         point = hit.point
         if point is None:
@@ -94,7 +140,7 @@ class Ring:
             self.sounds.play("block")
         else:
             self.sounds.play("hit" if damage >= 8 else "hit_light")
-            if self.match.down != target:
+            if target not in self.match.downed:
                 self.boxers[target].react(hit)
         self.rumble(target)
 

@@ -393,19 +393,15 @@ class Session(Ring):
             self.events_log.append(ev)
             self.pilot.saw(ev)
             self.hud_state.mark(ev)
-            # a whole-motion switch is the recognizer's final word on a motion already over:
-            # a label for the record, too late for the character to act on
-            if self.match.fighting and not ev.get("whole_motion"):
-                self.player.controller.on_event(ev)
-                clip = self.lib.get(ev.get("action") or "")
-                if ev.get("event") == "start" and clip is not None and clip.kind == "attack":
-                    self.sounds.play("punch", 0.5)
+            self._act_on(0, self.recognizer, ev)
         rec = self.recognizer
         active = rec.state == "active"
         self.hud_state.main_fill = min(rec.count, self.hud_state.main_size) if active else 0
         self.hud_state.supp_fill = min(rec.count, rec.supplementary) if active else 0
 
     def _player(self, step: int, dt: float) -> None:
+        if self.match.paused:
+            return  # the pause freezes the ring (Ring._physics)
         self._hold_knockdown(0)
         ox, oz, _ = self.opponent.root
         self.player.turn_towards(ox, oz)
@@ -425,6 +421,8 @@ class Session(Ring):
         self._apply_difficulty()
 
     def _opponent(self, step: int, dt: float) -> None:
+        if self.match.paused:
+            return  # its clip and its rest wait with the match (the rest ran on under the pause)
         self._hold_knockdown(1)
         if self.match.fighting:
             me, them = self.opponent.controller, self.player.controller
@@ -447,14 +445,12 @@ class Session(Ring):
         if self.opponent.controller.finished_action():
             self._cpu_rest = self._rest_next
 
-    def apply_hit(self, step: int, hit: Hit | dict) -> None:
-        """A hit (game.hits.Hit, or a dict of its keys): the blow's damage (blow_damage), the
-        CPU's scaled by its difficulty, then land it."""
-        hit = Hit.of(hit)
+    def damage_of(self, hit: Hit) -> float:
+        """A blow's damage (blow_damage), the CPU's scaled by its difficulty."""
         damage = blow_damage(hit)
         if hit.attacker == 1:
             damage *= self.difficulty.current.damage
-        self.land_blow(step, hit, damage)
+        return damage
 
     def rumble(self, target: int) -> None:
         """The boxer who was hit: its player feels it (the CPU has no controller)."""

@@ -249,21 +249,18 @@ class TwoPlayerSession(Session):
             if seat.frame_vec is None:
                 continue
             rec, hud = seat.recognizer, seat.hud
-            boxer = self.boxers[seat.index]
             for ev in rec.push(seat.frame_vec, t=step * dt):
                 self.events_log.append((seat.index, ev))
                 seat.pilot_seen |= ev.get("event") == "start"
                 hud.mark(ev)
-                if self.match.fighting and not ev.get("whole_motion"):
-                    boxer.controller.on_event(ev)
-                    clip = self.lib.get(ev.get("action") or "")
-                    if ev.get("event") == "start" and clip is not None and clip.kind == "attack":
-                        self.sounds.play("punch", 0.5)
+                self._act_on(seat.index, rec, ev)
             active = rec.state == "active"
             hud.main_fill = min(rec.count, hud.main_size) if active else 0
             hud.supp_fill = min(rec.count, rec.supplementary) if active else 0
 
     def _step_boxer(self, i: int, dt: float) -> None:
+        if self.match.paused:
+            return  # the pause freezes the ring (Ring._physics)
         self._hold_knockdown(i)
         me, other = self.boxers[i], self.boxers[1 - i]
         ox, oz, _ = other.root
@@ -279,11 +276,9 @@ class TwoPlayerSession(Session):
     def _opponent(self, step: int, dt: float) -> None:
         self._step_boxer(1, dt)
 
-    def apply_hit(self, step: int, hit: Hit | dict) -> None:
-        """The one-player session's blow (blow_damage, land_blow), but a fair fight: no CPU
-        difficulty on top."""
-        hit = Hit.of(hit)
-        self.land_blow(step, hit, blow_damage(hit))
+    def damage_of(self, hit: Hit) -> float:
+        """The one-player session's blow (blow_damage), but a fair fight: no CPU difficulty on top."""
+        return blow_damage(hit)
 
     def rumble(self, target: int) -> None:
         """The player who was hit feels it in their own controller."""

@@ -105,7 +105,7 @@ def test_menu_lines_under_a_banner_read_against_the_canvas(size, screen, monkeyp
 @pytest.mark.parametrize("players", [1, 2])
 @pytest.mark.parametrize("result, winner, title", [
     ("points", 0, "{} ON POINTS"), ("points", 1, "{} ON POINTS"), ("KO", 0, "KO - {}"), ("TKO", 1, "TKO - {}"),
-    ("draw", None, "DRAW"),
+    ("draw", None, "DRAW"), ("double KO", None, "DOUBLE KO - DRAW"),
 ])
 def test_the_result_banner_reads_as_words(players, result, winner, title, monkeypatch) -> None:
     pygame.init()

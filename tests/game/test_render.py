@@ -203,7 +203,7 @@ def test_knockdown_count_is_clear_of_the_corner_posts(size) -> None:
     r = Renderer(size)
     surf = pygame.Surface(size)
     hud = Hud()
-    hud.draw(surf, HudState(match=MatchSnapshot(phase="count", down=1, count=2, knockdowns=(0, 2))))
+    hud.draw(surf, HudState(match=MatchSnapshot(phase="count", downed=(1,), count=2, knockdowns=(0, 2))))
     assert hud.count_rect is not None and surf.get_rect().contains(hud.count_rect)
     for x, z in ((-1, -1), (1, -1), (1, 1), (-1, 1)):
         ends = np.array([[x * POST_HALF, 0.0, z * POST_HALF], [x * POST_HALF, POST_HEIGHT, z * POST_HALF]])

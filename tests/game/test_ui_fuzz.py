@@ -490,7 +490,8 @@ def test_texts_stay_inside_a_window_narrow_for_its_height(size, players) -> None
     pygame.init()
     surf = pygame.Surface(size)
     for match, lost in ((MatchSnapshot(), False), (MatchSnapshot(phase="over", winner=1, result="points"), False),
-                        (MatchSnapshot(paused=True), True), (MatchSnapshot(paused=True), False)):
+                        (MatchSnapshot(paused=True), True), (MatchSnapshot(paused=True), False),
+                        (MatchSnapshot(phase="count", downed=(0, 1), count=2), False)):
         st = HudState(match=match, source=SourceSnapshot(url="keyboard://?seed=3"), keyboard_banner=True,
                       keys=key_help(KEYMAPS["left" if players == 2 else "all"]), disconnected=lost, difficulty="normal")
         hud = Hud() if players == 1 else TwoPlayerHud(HudState(keys=key_help(KEYMAPS["right"])))
@@ -510,6 +511,8 @@ def result_or_lost(match, lost: bool) -> str:
         return "CONTROLLER DISCONNECTED"
     if match.phase == "over":
         return result_title(match.result, match.winner, ("YOU WIN", "CPU WINS"))
+    if match.downed:
+        return "DOUBLE KNOCKDOWN" if len(match.downed) == 2 else "KNOCKDOWN"
     return "PAUSED" if match.paused else "ROUND 1/3"
 
 
