@@ -10,10 +10,32 @@ import pygame
 
 from game.hud_style import MIN_TEXT_PX, SWITCH_COLOR, TEXT, min_text_px
 
+# One font per size for the whole process, not per cache: pygame-ce keeps a font's file open
+# while the font lives (and for good when the font outlives pygame.quit()), and every HUD and
+# training screen made its own, one per size it drew at. A process that made many (the tests:
+# fuzzed windows of many sizes, ~140 fonts a session) passed 1024 open files, where pyserial's
+# select() on a serial port fails. Cleared at pygame.quit() (release_fonts, registered with it).
+_FONTS: dict[int, pygame.font.Font] = {}
+
+
+def release_fonts() -> None:
+    """Close the fonts. Registered with pygame.quit(), which calls it before its font module
+    goes: a font alive after that keeps its file open for the process's life, and cannot be
+    drawn with."""
+    _FONTS.clear()
+
+
+def _font(size: int) -> pygame.font.Font:
+    font = _FONTS.get(size)
+    if font is None:
+        if not _FONTS:  # the first since pygame started (again): its quit forgets them
+            pygame.register_quit(release_fonts)
+        font = _FONTS[size] = pygame.font.Font(None, size)
+    return font
+
 
 class TextCache:
     def __init__(self) -> None:
-        self._fonts: dict[int, pygame.font.Font] = {}
         self._cache: dict[tuple, pygame.Surface] = {}
         self._fits: dict[tuple, tuple[str, int]] = {}  # fit's answers, by text, size, width and floor
         self.floor = MIN_TEXT_PX  # the smallest size rendered: `for_window` sets it per window
@@ -25,9 +47,7 @@ class TextCache:
         return u
 
     def font(self, size: int) -> pygame.font.Font:
-        if size not in self._fonts:
-            self._fonts[size] = pygame.font.Font(None, size)
-        return self._fonts[size]
+        return _font(size)
 
     def render(self, text: str, size: int, color=TEXT, shadow: bool = True) -> pygame.Surface:
         """`text` in pygame's default font at `size` px, never under the floor."""

@@ -6,6 +6,7 @@ dummy driver: the fonts and rectangles the game really draws)."""
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Iterator
 
 import numpy as np
 import pygame
@@ -13,6 +14,7 @@ import pytest
 
 from game.actions import load_library
 from game.hud import Hud, HudState, SourceSnapshot
+from game.hud_text import release_fonts
 from game.hud_two_player import TwoPlayerHud
 from game.keyboard_source import KEYMAPS, key_help
 from game.match import MatchSnapshot
@@ -34,7 +36,7 @@ def scene():
 
 
 @pytest.fixture
-def caps(monkeypatch) -> dict[str, int]:
+def caps(monkeypatch) -> Iterator[dict[str, int]]:
     """The cap height (px) of the font each string was rendered in, the smallest if several."""
     seen: dict[str, int] = {}
 
@@ -45,8 +47,10 @@ def caps(monkeypatch) -> dict[str, int]:
             assert self.get_linesize() >= MIN_LINE_PX, (text, self.get_linesize())
             return super().render(text, *args, **kwargs)
 
+    release_fonts()  # the fonts are shared: made again through the spy, and not kept after it
     monkeypatch.setattr(pygame.font, "Font", Font)
-    return seen
+    yield seen
+    release_fonts()
 
 
 def busy(n: int = 1, **kw) -> HudState:
@@ -323,7 +327,7 @@ def test_the_amber_strip_covers_no_text(size, strip) -> None:
 
 
 @pytest.fixture
-def caps_any(monkeypatch) -> dict[str, int]:
+def caps_any(monkeypatch) -> Iterator[dict[str, int]]:
     """`caps` without its 800x450 line-height floor: the cap height each string was rendered in."""
     seen: dict[str, int] = {}
 
@@ -333,8 +337,10 @@ def caps_any(monkeypatch) -> dict[str, int]:
             seen[text] = min(seen.get(text, cap), cap)
             return super().render(text, *args, **kwargs)
 
+    release_fonts()  # the fonts are shared: made again through the spy, and not kept after it
     monkeypatch.setattr(pygame.font, "Font", Font)
-    return seen
+    yield seen
+    release_fonts()
 
 
 def test_the_smallest_window_keeps_every_screen_readable_and_inside_it(scene, caps_any) -> None:
