@@ -129,7 +129,10 @@ class FixedStepLoop:
 
     def run_frame(self, limit: int | None = None) -> int:
         """One rendered frame: due steps (at most `limit`), render, wait. Returns the number
-        of steps run. Steps held back by `limit` stay owed; they are not dropped."""
+        of steps run. Steps held back by `limit` stay owed; they are not dropped, and the
+        frame does not wait for its deadline: the next frame reads the same clock and runs them
+        first, as this frame would have (so `run(steps=...)` split into calls of any size runs
+        every step at the same clock reading; see docs/engine.md)."""
         now = self.clock.now_ns()
         perf = time.perf_counter_ns
         frame_start = perf()
@@ -176,7 +179,8 @@ class FixedStepLoop:
         finally:
             self._in_stages = False
         wait_start = perf()
-        self._wait_next_deadline()
+        if run == allowed:  # else held back by `limit`: the next frame is this one's rest
+            self._wait_next_deadline()
         end = perf()
         budget.end_frame(end, run, dropped, end - wait_start)
         self.frame_index += 1

@@ -7,9 +7,9 @@ time) and afterwards only opens it (~1 ms). Without a compiler (cc, gcc, clang o
 non-POSIX system, or with QUICKJAB_NO_NATIVE=1 (or QUICKJAB_NO_JIT=1: no compiled code at all)
 it returns None and the caller runs its numpy version. The physics kernels follow numpy's
 operations one for one (no fused multiply-add, -ffp-contract=off; no reassociation; sqrt
-correctly rounded), so worlds step to the same bits with or without a compiler; the DTW
-kernel's scores equal the numpy scan's to ~1e-14 (the scan sums in another order), and the
-recognizer's events are the same.
+correctly rounded), so worlds step to the same bits with or without a compiler; so do the DTW
+kernel's scores and the numpy "loop" method that `method="auto"` runs without it
+(engine/recognition/dtw_loop.py), so the recognizer decides the same.
 
 What can go wrong is handled once, not on every start: a cached library that does not open or
 lacks its symbols (corrupt, another machine's) is deleted and rebuilt once; a failed build is

@@ -70,8 +70,9 @@ class RecognizerConfig:
     # Rejection (on/off): refuse a motion whose best score is over its template's learned
     # threshold. Off only to study the recognizer (every motion then becomes some action).
     reject: bool = True
-    # DTW implementation: "auto" picks the C kernel, else numba, else numpy; all give the same
-    # decisions (tested). A name forces one: "native", "jit", "scan" or "loop".
+    # DTW implementation: "auto" picks the C kernel, else numba, else numpy's "loop"; the three
+    # give the same scores to the bit (tested), so the same decisions. A name forces one:
+    # "native", "jit", "scan" or "loop" ("scan" rounds differently: its decisions may differ).
     dtw_method: str = "auto"
     # Open-end progress (fraction of the motion's length): while the hand moves, the motion's n
     # frames must reach at least min_progress * n frames into a template. 0.75 lets a full

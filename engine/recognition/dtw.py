@@ -11,20 +11,25 @@ steps twice, the start cell twice). Every path from (0, 0) to (i, j) then has to
 i + j + 2, so dividing by it normalizes by path length exactly while the DP stays optimal.
 
 Within a row, D[i, j] = min(a_j, D[i, j-1] + c_j) with a_j from the previous row: a min-plus
-scan. Two ways to run it, identical results:
+scan. Four ways to run it (equal scores, to the bit but for the scan, see below):
 - "scan": the closed form D_j = C_j + min_{k<=j}(a_k - C_k), C = cumsum(c), i.e. numpy
   `cumsum` and `minimum.accumulate` over the whole (L, T) block. A fixed handful of calls:
   fastest for a few dozen templates.
 - "loop": a Python loop over template positions j, each step one vectorized operation across
-  all T templates. Per call cost grows with T slowly, so it wins for hundreds of templates.
+  all T templates, doing the C kernel's operations in its order (dtw_loop.py): its scores are
+  "native"'s and "jit"'s bit for bit. Per call cost grows with T slowly (at the game's ~160
+  templates it is as fast as the scan, at 13 several times slower).
 - "jit": one compiled numba call per frame (dtw_kernel.push_row_kernel()) doing the local costs, the
   row, the normalization and the per-template minimum; no numpy call overhead, and its loop over
   templates vectorizes. Needs numba (not installed, or QUICKJAB_NO_JIT=1: unavailable).
 - "native": the same kernel in C (dtw_native.py), built once with the system's C compiler and
   loaded with ctypes: no numba import (~0.6 s, ~110 MB) at start-up. Same results as "jit".
 `method="auto"` picks "native" when it can be had; else "jit" from JIT_FROM_TEMPLATES templates
-(where its start-up cost pays) when numba is available; else scan or loop by the number of
-templates (measured by `quickjab bench recognition`).
+(where its start-up cost pays) when numba is available; else "loop". All three give the same
+scores to the bit, so a run's events and state hash do not depend on which one a machine (or a
+process whose kernel build failed) runs. The scan's scores differ in the last bits (up to ~1e-9
+on game input: its expanded costs cancel where a frame equals a template frame) and it is
+used only when named.
 """
 
 from __future__ import annotations
@@ -34,15 +39,14 @@ from collections.abc import Sequence
 import numpy as np
 
 from engine.recognition.dtw_kernel import push_row_kernel
+from engine.recognition.dtw_loop import loop_buffers, loop_row
 from engine.recognition.dtw_native import push_row_native
 from engine.recognition.dtw_templates import TemplateEdits, pad_templates
 
-# Below this many templates the scan's few whole-block calls beat the per-position loop;
-# measured with `quickjab bench recognition --sweep` (crossover between 100 and 300 templates).
-LOOP_FROM_TEMPLATES = 200
 # Local costs: |t - q|^2 = |t|^2 - 2 t.q + |q|^2 from precomputed squared norms and one
 # matrix-vector product (half the cost of a broadcast subtract-square-sum; rounding ~1e-7 g).
-# `exact_costs=True` computes them the direct way (the reference tests use it; "jit" always does).
+# `exact_costs=True` computes them the direct way (the reference tests use it; "jit", "native"
+# and "loop" always do, in the kernel's order).
 METHODS = ("scan", "loop", "jit", "native")
 # numba's import and code load cost ~0.6 s and ~110 MB of a process (issue 14): without the C
 # kernel, auto takes it only from here, where numpy's per-frame cost passes ~0.25 ms.
@@ -61,12 +65,14 @@ def native_available() -> bool:
 
 
 def auto_method(n_templates: int) -> str:
-    """The method `method="auto"` runs for this many templates (numba imported only when chosen)."""
+    """The method `method="auto"` runs for this many templates (numba imported only when chosen):
+    always one whose scores are the C kernel's bit for bit, so that a run's decisions do not
+    depend on whether a compiler was there ("scan" rounds differently: only by name)."""
     if native_available():
         return "native"
     if n_templates >= JIT_FROM_TEMPLATES and jit_available():
         return "jit"
-    return "loop" if n_templates >= LOOP_FROM_TEMPLATES else "scan"
+    return "loop"
 
 
 class IncrementalDTW(TemplateEdits):
@@ -188,6 +194,7 @@ class IncrementalDTW(TemplateEdits):
     def _init_numpy_buffers(self, exact_costs: bool) -> None:
         """What the numpy methods ("scan", "loop") reuse every frame; "jit" needs none of it."""
         self._expanded = not exact_costs
+        self._loop = loop_buffers(self.tmpl) if self.method == "loop" else None
         sqnorm = np.einsum("ltd,ltd->lt", self.tmpl, self.tmpl)
         # [-2t, |t|^2, 1] . [q, 1, |q|^2]: the -2 is folded in here, so a frame is one copy.
         self._flat = np.concatenate(
@@ -252,31 +259,24 @@ class IncrementalDTW(TemplateEdits):
         if self.method == "jit":
             return self._push_jit(frame)
         q = np.asarray(frame, dtype=np.float64)
-        c = self._local_costs(q)
         # Rows are stored with one sentinel position in front (index 0): +inf for real rows, 0
         # in the virtual row before the first frame, so D[0, 0] = 2 c_0 needs no special case.
         prev_left, prev_up, _ = self._views[2 if self.n == 0 else self._cur]
         self._cur ^= 1
         _, row, row_t = self._views[self._cur]
-        # a_j = min(D[i-1, j] + c_j, D[i-1, j-1] + 2 c_j) = c_j + min(D[i-1, j], D[i-1, j-1] + c_j)
         if self.method == "scan":
+            # a_j = min(D[i-1, j] + c_j, D[i-1, j-1] + 2 c_j) = c_j + min(D[i-1, j], D[i-1, j-1] + c_j);
             # row_j = C_j + min_{k<=j}(a_k - C_k), C = cumsum(c); a_k - C_k is
             # min(D[i-1, k], D[i-1, k-1] + c_k) - C_{k-1}, built in the row buffer itself.
+            c = self._local_costs(q)
             np.add.accumulate(c, axis=0, out=self._cum)  # = cumsum, with less call overhead
             np.add(prev_left, c, out=row)
             np.minimum(prev_up, row, out=row)
             row -= self._cum_excl
             np.minimum.accumulate(row, axis=0, out=row)
             row += self._cum
-        else:
-            a = self._tmp
-            np.add(prev_left, c, out=a)
-            np.minimum(prev_up, a, out=a)
-            a += c
-            row[0] = a[0]
-            for j in range(1, self.L):
-                np.add(row[j - 1], c[j], out=row[j])
-                np.minimum(row[j], a[j], out=row[j])
+        else:  # "loop": the C kernel's operations (dtw_loop.py), its scores bit for bit
+            loop_row(self._loop, q, prev_left, prev_up, row)
         self._row = row
         self.n += 1
         return self._normalized_scores(row, row_t)

@@ -7,8 +7,11 @@ shared library in the user's cache directory, and afterwards costs a dlopen (~1 
 
 The arithmetic is the numba kernel's, operation for operation (no fused multiply-add:
 -ffp-contract=off; sqrt correctly rounded), so "native" and "jit" give the same scores bit for
-bit. The numpy scan sums in another order: its scores differ in the last bits (equal to ~1e-14:
-1.5e-14 at most on the shipped templates, measured), and the recognizer gives the same events.
+bit, and so does the numpy "loop" method (dtw_loop.py: the same operations in the same order),
+which `method="auto"` runs where this kernel cannot be had. The numpy scan sums in another order
+and expands its local costs: its scores differ in the last bits (1.5e-14 on noisy queries, but
+up to 1.4e-9 in the scripted match, where rest frames equal template frames and the expansion
+cancels), so it is run only when named.
 
 `push_row_native()` is None when there is no C compiler (cc, or $CC) and no library built
 earlier (a failed build is remembered: engine/native.py), or when QUICKJAB_NO_NATIVE=1 (or QUICKJAB_NO_JIT=1: no compiled kernel at all) is set;

@@ -253,6 +253,35 @@ def test_run_steps_is_exact_even_when_a_frame_owes_catch_up_steps():
     assert loop.dropped_steps == 0 and 0.0 <= loop.alpha <= 1.0
 
 
+@pytest.mark.parametrize("render_hz", [60, 30, 25])
+def test_how_run_steps_is_split_does_not_change_the_clock_any_step_sees(render_hz):
+    """`run(steps=N)` in one call or in calls of any size: every step runs at the same clock
+    reading, so a headless run's state cannot depend on how a tool splits it. A frame cut short
+    by the steps left does not wait for its deadline: the next call's first frame runs the held
+    steps at the same reading. Before, it waited: at 30 Hz, 7-step calls ran every seventh step
+    a frame late (the low-power scripted match's state hash changed with the split)."""
+
+    def seen(chunks: list[int]) -> tuple[list[tuple[int, int]], int, int]:
+        clock, loop = make_loop(render_hz=render_hz)
+        log: list[tuple[int, int]] = []
+
+        def stage(step: int, dt: float) -> None:
+            log.append((step, clock.now_ns()))
+            if step == 40:
+                clock.stall(120_000_000)  # catch-up frames of several steps, split too
+
+        loop.add_stage("s", stage, 1.0)
+        for n in chunks:
+            loop.run(steps=n)
+        assert loop.step_index == sum(chunks)
+        return log, loop.dropped_steps, clock.now_ns()
+
+    whole = seen([120])
+    assert seen([7] * 17 + [1]) == whole
+    assert seen([1] * 120) == whole
+    assert seen([3, 38, 1, 1, 77]) == whole
+
+
 @pytest.mark.parametrize("stall_ms", [260, 1010, 5_008.4])
 def test_a_stall_past_the_clamp_accounts_for_every_step_too(stall_ms):
     """A hitch longer than the 250 ms clamp: the whole steps the clamp cut off were dropped but

@@ -71,6 +71,63 @@ def test_scripted_match_is_reproducible() -> None:
     assert s.match.round > 1 or s.match.over or s.match.clock_steps < 30 * 60  # the clock ran
 
 
+def test_the_state_hash_does_not_depend_on_how_run_is_split() -> None:
+    """Low power renders every second step: `run(steps=7)` calls ended frames half way, and
+    the held step then ran a frame later, when the keyboard source had more samples (the state
+    hash changed with the split). Every step now sees the clock the whole run would."""
+    import game.keyboard_source  # noqa: F401 - registers keyboard://
+
+    hashes = []
+    for chunks in ([600], [7] * 85 + [5]):
+        pygame.init()
+        clock = VirtualClock()
+        source = open_source("keyboard://?seed=5", clock=clock.seconds)
+        cfg = SessionConfig(seed=5, size=SIZE, sound=False, render=True, graph=GRAPH, demo=True, low_power=True)
+        s = Session(source, cfg, clock=clock)
+        for n in chunks:
+            s.loop.run(steps=n)
+        assert s.loop.step_index == 600
+        hashes.append(s.state_hash())
+    assert hashes[0] == hashes[1]
+
+
+_KERNEL_RUN = """
+import json
+from engine import native
+from tools.scripted_match import build_session
+s = build_session(seed=0, render=False)
+s.loop.run(steps=900)
+print(json.dumps({"hash": s.state_hash(), "dtw": s.recognizer.dtw.method, "kernels": native.status()}))
+"""
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="the C kernels are POSIX only")
+def test_the_scripted_match_does_not_depend_on_the_c_kernels(tmp_path) -> None:
+    """A process runs the C kernels when they built, numpy when they did not (no compiler, a
+    failed build, QUICKJAB_NO_NATIVE=1): the match is the same to the bit either way. The DTW's
+    numpy fallback was the scan, whose scores differed in the last bits; it is the kernel's
+    own operations now (engine/recognition/dtw_loop.py)."""
+    import json
+    import os
+    import subprocess
+
+    from engine import native
+
+    root = Path(__file__).resolve().parents[2]
+    runs = []
+    for extra in ({}, {native.NO_NATIVE_ENV: "1"}):
+        env = {k: v for k, v in os.environ.items() if k not in (native.NO_NATIVE_ENV, native.NO_JIT_ENV)}
+        env.update({native.CACHE_ENV: str(tmp_path / "cache"), "PYTHONPATH": str(root), **extra})
+        out = subprocess.run([sys.executable, "-c", _KERNEL_RUN], cwd=root, env=env, capture_output=True,
+                             text=True, timeout=300)
+        assert out.returncode == 0, out.stderr
+        runs.append(json.loads(out.stdout.strip().splitlines()[-1]))
+    assert runs[1]["dtw"] == "loop" and all(v.startswith("numpy") for v in runs[1]["kernels"].values())
+    if native.compiler() is not None:
+        assert runs[0]["dtw"] == "native", runs[0]["kernels"]
+    assert runs[0]["hash"] == runs[1]["hash"]
+
+
 def test_a_different_seed_plays_differently() -> None:
     a = make_session("keyboard://?seed=1", seed=1, render=False, demo=True)
     b = make_session("keyboard://?seed=2", seed=2, render=False, demo=True)

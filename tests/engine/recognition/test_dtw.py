@@ -63,9 +63,49 @@ def test_identical_sequences_score_zero_and_distance_is_symmetric():
     assert dtw_distance(a, b) > 0
 
 
-def test_auto_method_picks_loop_for_many_templates_without_jit(monkeypatch):
+def test_auto_method_picks_loop_without_jit_or_native(monkeypatch):
     monkeypatch.setattr(dtw, "jit_available", lambda: False)  # with numba, auto is "jit" (test_dtw_jit)
     monkeypatch.setattr(dtw, "native_available", lambda: False)  # with a C compiler, "native"
     few = [np.zeros((5, 3))] * 13
-    assert IncrementalDTW(few).method == "scan"
+    assert IncrementalDTW(few).method == "loop"  # the kernel's scores, bit for bit (below)
     assert IncrementalDTW(few * 40).method == "loop"
+
+
+def kernel_scores(templates, query, progress):
+    """Per query frame, the C kernel's scores and row, from its line-by-line Python original
+    (dtw_kernel._push_row_py, run uncompiled): what "native" and "jit" compute."""
+    from engine.recognition.dtw_kernel import _push_row_py
+    from engine.recognition.dtw_templates import pad_templates
+
+    tmpl, lengths = pad_templates(templates)
+    ldt = np.ascontiguousarray(tmpl.transpose(0, 2, 1))
+    L, T = tmpl.shape[:2]
+    prev = np.full((L + 1, T), np.inf)
+    prev[0] = 0.0
+    out = []
+    for n, q in enumerate(query):
+        cur, scores = np.full((L + 1, T), np.inf), np.empty(T)
+        _push_row_py(ldt, lengths, q, prev, cur, np.empty(T), np.empty(T), np.empty(T, dtype=np.int64),
+                     n, progress, scores)
+        out.append((scores, cur[1:]))
+        prev = cur
+    return out
+
+
+@pytest.mark.parametrize("progress", [0.0, 0.75, 1e9])
+def test_auto_without_a_compiler_scores_to_the_bit_as_the_c_kernel(monkeypatch, progress):
+    """The numpy method auto falls back on (no compiler, a failed build, QUICKJAB_NO_NATIVE)
+    gives the kernel's scores and rows bit for bit, so a run's events do not depend on whether
+    the kernel was there. The scan it fell back on before cancels where a frame equals a
+    template frame (a hand at rest): 1.4e-9 off in the scripted match (2e-7 relative)."""
+    monkeypatch.setattr(dtw, "native_available", lambda: False)
+    monkeypatch.setattr(dtw, "jit_available", lambda: False)
+    rng = np.random.default_rng(3)
+    rest = np.array([0.0, 0.1, 0.99, 0.05, -0.2, 0.97])
+    templates = [np.vstack([np.repeat(rest[None], 4, 0), rng.normal(0, 1, (int(rng.integers(3, 30)), 6))])
+                 for _ in range(40)]
+    query = np.vstack([np.repeat(rest[None], 3, 0), templates[7][4:] + rng.normal(0, 0.01, (len(templates[7]) - 4, 6))])
+    d = IncrementalDTW(templates, min_progress=progress)
+    for q, (scores, row) in zip(query, kernel_scores(templates, query, progress), strict=True):
+        np.testing.assert_array_equal(d.push(q), scores)
+        np.testing.assert_array_equal(d._row, row)

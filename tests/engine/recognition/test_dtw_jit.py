@@ -89,15 +89,15 @@ def test_jit_takes_any_frame_like_and_rejects_a_wrong_length():
         a.push(np.zeros(4))
 
 
-def test_auto_picks_native_else_jit_for_many_else_scan_or_loop(monkeypatch):
+def test_auto_picks_native_else_jit_for_many_else_loop(monkeypatch):
     few = [np.zeros((5, 3))] * 13
-    assert IncrementalDTW(few).method == ("native" if dtw.native_available() else "scan")
+    assert IncrementalDTW(few).method == ("native" if dtw.native_available() else "loop")
     monkeypatch.setattr(dtw, "native_available", lambda: False)
-    assert IncrementalDTW(few).method == "scan"  # numba is not worth its start-up for 13
+    assert IncrementalDTW(few).method == "loop"  # numba is not worth its start-up for 13
     many = few * (dtw.JIT_FROM_TEMPLATES // 13 + 1)
     assert IncrementalDTW(many).method == ("jit" if dtw.jit_available() else "loop")
     monkeypatch.setattr(dtw, "jit_available", lambda: False)
-    assert IncrementalDTW(few).method == "scan"
+    assert IncrementalDTW(few).method == "loop"
     assert IncrementalDTW(few * 40).method == "loop"
     with pytest.raises(ValueError, match="numba"):
         IncrementalDTW(few, method="jit")
@@ -118,7 +118,7 @@ def test_fallback_without_numba(monkeypatch, hide):
     templates = [rng.normal(size=(int(rng.integers(2, 9)), 3)) for _ in range(4)]
     query = rng.normal(size=(6, 3))
     d = IncrementalDTW(templates, min_progress=1.25)
-    assert d.method == "scan"
+    assert d.method == "loop"  # the kernels' scores bit for bit (test_dtw.py)
     for i, q in enumerate(query):
         scores = d.push(q)
         for k, t in enumerate(templates):
@@ -145,7 +145,7 @@ def test_no_jit_env_var_in_a_fresh_process_runs_the_recognizer_on_numpy():
         trials = [np.vstack([np.tile(g, (5, 1)), bump + rng.normal(0, 0.02, bump.shape), np.tile(g, (5, 1))]) for _ in range(3)]
         rec = DualBufferRecognizer(Templates.from_trials({"jab": trials}))
         events = [e for f in np.vstack([np.tile(g, (10, 1)), bump, np.tile(g, (20, 1))]) for e in rec.push(f)]
-        assert not jit_available() and rec.dtw.method == "scan", rec.dtw.method
+        assert not jit_available() and rec.dtw.method == "loop", rec.dtw.method
         assert "numba" not in sys.modules
         assert [e["event"] for e in events][:1] == ["start"] and events[0]["action"] == "jab", events
         print("ok")

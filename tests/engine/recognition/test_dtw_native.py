@@ -1,6 +1,6 @@
 """The "native" (C, ctypes) method of IncrementalDTW: equal to the full reference DTW for every
-prefix, bit for bit equal to the numba kernel, the same recognizer events as the numpy scan on a
-synthesized session, built once and reused, and absent (numpy then) without a C compiler."""
+prefix, bit for bit equal to the numba kernel and the numpy "loop" (auto's fallback), the same
+recognizer events as the numpy scan on a synthesized session, built once and reused, and absent (numpy then) without a C compiler."""
 
 from __future__ import annotations
 
@@ -53,8 +53,11 @@ def test_native_is_the_jit_kernel_bit_for_bit(n_templates):
     native = IncrementalDTW(templates, method="native", min_progress=1.25)
     other = (IncrementalDTW(templates, method="jit", min_progress=1.25) if dtw.jit_available() else
              IncrementalDTW(templates, method="scan", exact_costs=True, min_progress=1.25))
+    loop = IncrementalDTW(templates, method="loop", min_progress=1.25)  # numpy, the kernel's operations
     for q in query:
         a, b = native.push(q), other.push(q)
+        np.testing.assert_array_equal(loop.push(q), a)
+        np.testing.assert_array_equal(loop._row, native._row)
         if other.method == "jit":
             assert np.array_equal(a, b)
         else:
@@ -63,7 +66,7 @@ def test_native_is_the_jit_kernel_bit_for_bit(n_templates):
 
 
 @needs_native
-def test_recognizer_events_native_equal_scan_on_a_synthesized_session():
+def test_recognizer_events_native_equal_loop_and_scan_on_a_synthesized_session():
     from engine.recognition import Templates
     from game.actions import load_library
     from tools.synth import synth_session
@@ -72,13 +75,14 @@ def test_recognizer_events_native_equal_scan_on_a_synthesized_session():
     signal, _ = synth_session(load_library(), 90.0, "experienced", np.random.default_rng(5))
     frames = signal.reshape(len(signal), -1)
     events = {}
-    for method in ("native", "scan"):
+    for method in ("native", "loop", "scan"):
         rec = DualBufferRecognizer(templates, dtw_method=method)
         assert rec.dtw.method == method
         events[method] = [e for f in frames for e in rec.push(f)]
     assert len(events["native"]) > 20
+    assert events["loop"] == events["native"]  # the fallback's: every field, scores included
     assert [(e["event"], e.get("action"), e["frame"]) for e in events["native"]] == \
-        [(e["event"], e.get("action"), e["frame"]) for e in events["scan"]]
+        [(e["event"], e.get("action"), e["frame"]) for e in events["scan"]]  # on this session
 
 
 def test_without_a_compiler_there_is_no_native_kernel_and_auto_uses_numpy(monkeypatch, tmp_path):
@@ -88,7 +92,7 @@ def test_without_a_compiler_there_is_no_native_kernel_and_auto_uses_numpy(monkey
     monkeypatch.delenv(dtw_native.NO_NATIVE_ENV, raising=False)
     monkeypatch.delenv("QUICKJAB_NO_JIT", raising=False)
     assert dtw_native.push_row_native() is None and not dtw.native_available()
-    assert IncrementalDTW([np.zeros((5, 3))] * 13).method == "scan"
+    assert IncrementalDTW([np.zeros((5, 3))] * 13).method == "loop"
     with pytest.raises(ValueError, match="C compiler"):
         IncrementalDTW([np.zeros((5, 3))], method="native")
 
