@@ -28,6 +28,7 @@ import time
 
 import numpy as np
 
+from engine import arguments
 from engine.clock import STEP_MS
 from engine.errors import InputError
 
@@ -50,8 +51,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="seconds of the real-clock 60 Hz run for real dropped steps (0 skips; default 10)")
     p.add_argument("--seed", type=int, default=0, help="match seed (default 0)")
     p.add_argument("--size", default="1280x720", help="render surface WxH (default 1280x720)")
-    p.add_argument("--templates", metavar="NPZ", help="recognition templates (default: shipped, else synthesized)")
-    p.add_argument("--graph", metavar="NPZ", help="Interaction Graph table (default: the shipped one)")
+    p.add_argument("--templates", metavar="NPZ", type=arguments.path_argument, help="recognition templates (default: shipped, else synthesized)")
+    p.add_argument("--graph", metavar="NPZ", type=arguments.path_argument, help="Interaction Graph table (default: the shipped one)")
     p.add_argument("--json", action="store_true", help="print JSON instead of a table")
     p.add_argument("--players", type=int, choices=(1, 2), default=1,
                    help="2: the two-player match (two keyboard players, two recognizers; game.two_player)")

@@ -11,7 +11,7 @@ import sys
 import time
 from dataclasses import asdict
 
-from engine.arguments import output_file
+from engine.arguments import output_file, path_argument
 from engine.errors import InputError
 
 
@@ -24,7 +24,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         description="Run the firmware's sampling loop against a simulated IMU on a pseudo-terminal. "
         "Then: quickjab record --source serial:///dev/pts/N -o out.csv (or the --link path, which "
         "survives --unplug-at).")
-    e.add_argument("--replay", metavar="REC.CSV", help="feed the simulated IMU from this recording (looped)")
+    e.add_argument("--replay", metavar="REC.CSV", type=path_argument, help="feed the simulated IMU from this recording (looped)")
     e.add_argument("--player", choices=PLAYER_PROFILES, default=None,
                    help="feed it a virtual player's boxing instead (random actions with rests, both hands, on the "
                    "game's axes, a minute looped): `play` and `recognize` take its punches as a player's; "
