@@ -28,7 +28,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     b = cmds.add_parser("build", help="sample, solve and save a graph",
                         description="Sample bouts in the bout model, merge states, expand every "
                         "action from every state, solve by value iteration, save the .npz.")
-    b.add_argument("-o", "--output", required=True, type=arguments.path_argument, help="where to write the .npz")
+    # checked before the build (about a minute), not when the table is saved after it
+    b.add_argument("-o", "--output", required=True, type=arguments.output_file, help="where to write the .npz")
     b.add_argument("--seed", type=arguments.seed, default=0, help="random seed (the build is deterministic for it)")
     b.add_argument("--states", type=arguments.int_range(10, 1_000_000), default=60000, help="states to keep (most visited cells)")
     b.add_argument("--bouts", type=arguments.int_range(1, 65_536), default=None, help="sampling bouts run at once")
