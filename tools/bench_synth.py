@@ -14,15 +14,17 @@ import time
 
 import numpy as np
 
+from engine import arguments
 from engine.clock import STEP_DT
 
 DT = STEP_DT
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--trials", type=int, default=200, help="trials synthesized per timed run")
-    p.add_argument("--steps", type=int, default=600, help="game steps per timed run")
-    p.add_argument("--repeats", type=int, default=5, help="timed runs per figure (min and median shown)")
+    # 0 was a division by zero, a negative count an empty min(): both tracebacks
+    p.add_argument("--trials", type=arguments.int_range(1, 100_000), default=200, help="trials synthesized per timed run")
+    p.add_argument("--steps", type=arguments.int_range(1, 1_000_000), default=600, help="game steps per timed run")
+    p.add_argument("--repeats", type=arguments.int_range(1, 1000), default=5, help="timed runs per figure (min and median shown)")
     p.add_argument("--action", default="hook_r", help="action to synthesize (default hook_r)")
     p.add_argument("--json", action="store_true", help="print JSON instead of a table")
 

@@ -8,6 +8,10 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
+from tools.cli import main
+
 REPO = Path(__file__).resolve().parents[2]
 SMALL = ["--trials", "2", "--steps", "30", "--repeats", "2"]
 
@@ -44,3 +48,14 @@ def test_bench_synth_table_and_a_bad_action(tmp_path):
     assert "one hook_r trial" in r.stdout and "whole step" in r.stdout and "motion layer / physics:" in r.stdout
     r = run_cli([*SMALL, "--action", "moonwalk", "--json"], tmp_path)
     assert r.returncode == 2 and r.stdout == "" and r.stderr.strip().splitlines() == ["quickjab bench: unknown action 'moonwalk'"]
+
+
+def test_counts_out_of_range_are_one_line(capsys):
+    """--trials 0 was a division by zero, --repeats 0 an empty min(): tracebacks."""
+    for option, value, said in (("--trials", "0", "between 1 and 100000"), ("--steps", "-3", "between 1 and 1000000"),
+                                ("--repeats", "0", "between 1 and 1000")):
+        with pytest.raises(SystemExit) as exit_:
+            main(["bench", "synth", option, value])
+        err = capsys.readouterr().err.strip().splitlines()
+        assert exit_.value.code == 2 and len(err) == 1, err
+        assert err[0].startswith(f"quickjab bench synth: argument {option}: {value} is out of range: must be {said}"), err
