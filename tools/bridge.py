@@ -121,8 +121,17 @@ def player_motion(profile: str, seed: int):
     return recording_motion("virtual player", lambda _: session)
 
 
-def run_emulate(args: argparse.Namespace) -> int:
+def _read_saying_notes(path: str):
+    """read_recording, saying what it left out (a cut last row), as every other reader does."""
     from engine.recording import read_recording
+
+    rec = read_recording(path)
+    for note in rec.notes:
+        print(f"quickjab bridge: {note}", file=sys.stderr)
+    return rec
+
+
+def run_emulate(args: argparse.Namespace) -> int:
     from firmware_bridge.emulator import (
         Emulator,
         EmulatorDef,
@@ -133,7 +142,7 @@ def run_emulate(args: argparse.Namespace) -> int:
 
     check_emulate_args(args)
     if args.replay:
-        signal, sensors = recording_motion(args.replay, read_recording)  # RecordingError names the file
+        signal, sensors = recording_motion(args.replay, _read_saying_notes)  # RecordingError names the file
     elif args.player:
         signal, sensors = player_motion(args.player, args.seed or 0)
     else:
