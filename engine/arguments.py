@@ -89,11 +89,24 @@ def window_size(text: str) -> str:
 window_size.__name__ = "size"
 
 
+def path_argument(text: str) -> str:
+    """An argparse type for any path a command reads or writes: an empty one is refused, for
+    Path("") is "." (the current folder): `recognize ""` said the folder was no recording,
+    `templates build ""` read it as trials and `graph info ""` showed the shipped graph."""
+    if not text:
+        raise argparse.ArgumentTypeError("the path is empty")
+    return text
+
+
+path_argument.__name__ = "path"
+
+
 def output_file(text: str) -> str:
     """An argparse type for a file a command writes at its end (a screenshot, a trace, a plot):
     a place it cannot be written is said before the work, not in a traceback after. Folders
     not made yet are fine: the command makes them when it writes (as `synth -o new/s.csv` and
     every other output do), so what is checked is the nearest folder that is there."""
+    path_argument(text)
     if Path(text).is_dir():
         raise argparse.ArgumentTypeError(f"{text} is a directory, not a file name")
     folder = existing_folder(text)

@@ -32,7 +32,44 @@ class TraceError(InputError):
 
 
 def _us(ns: int) -> float:
-    return ns / 1000
+    """`ns` in microseconds: the float next to ns / 1000 whose product with 1000 truncates back
+    to `ns`. The float nearest ns / 1000 is often a hair below it (0.001 has no exact binary
+    form), and readers that truncate ts * 1000 and dur * 1000 to whole nanoseconds (Perfetto's
+    JSON import) then put ~0.1 % of spans 1 ns outside their frame, which in nanoseconds they
+    never are: from these, ts and dur come back exact, and so does the nesting."""
+    us = ns / 1000
+    while int(us * 1000) != ns:  # a few ulps at most: the next float up (down below zero)
+        us = math.nextafter(us, math.copysign(math.inf, ns))
+    return us
+
+
+def _ts_dur(start_ns: int, end_ns: int) -> tuple[float, float]:
+    """An X event's ts and dur (µs) from its start and end (ns from the origin): each truncates
+    back to its nanoseconds (_us), and ts + dur summed in floating point reaches _us(end_ns), so
+    that readers that add before truncating get the end's nanoseconds back too."""
+    ts = _us(start_ns)
+    return ts, _lengthened(ts, _us(end_ns - start_ns), _us(end_ns))
+
+
+def _lengthened(ts: float, dur: float, end: float) -> float:
+    """dur, lengthened by the few ulps (far below 1 ns: it truncates as before) that let
+    ts + dur, in floating point, reach `end`."""
+    for _ in range(4):  # one step, or two where the sum rounds
+        total = ts + dur
+        if total >= end:
+            break
+        dur += end - total
+    return dur
+
+
+def _enclose(open_events: list[dict], event: dict) -> None:
+    """Let every event `event` nests in end, as a float sum, no earlier than it: a stage ending
+    in the nanosecond its frame ends (`wait`) may have the larger sum of the two by an ulp, which
+    a reader comparing ts + dur saw as a span leaving its frame."""
+    end = event["ts"] + event["dur"]
+    for parent in reversed(open_events):
+        parent["dur"] = _lengthened(parent["ts"], parent["dur"], end)
+        end = parent["ts"] + parent["dur"]
 
 
 def chrome_trace(budget: FrameBudget) -> dict:
@@ -79,9 +116,10 @@ def _frame_events(budget: FrameBudget, frames: np.ndarray, spans: np.ndarray) ->
     for j, fr in enumerate(frames):
         start, end = int(budget.f_start[fr]), int(budget.f_end[fr])
         work = end - start - int(budget.f_wait[fr])
+        ts, dur = _ts_dur(start - origin, end - origin)
         frame_event = {
             "ph": "X", "name": "frame", "cat": "frame", "pid": PID, "tid": TID,
-            "ts": _us(start - origin), "dur": _us(end - start),
+            "ts": ts, "dur": dur,
             "args": {
                 "frame": first_frame + j,
                 "steps": int(budget.f_steps[fr]),
@@ -96,12 +134,17 @@ def _frame_events(budget: FrameBudget, frames: np.ndarray, spans: np.ndarray) ->
         # in time order, the outer of two that start together first: a span is recorded when it
         # ends, so the ring holds it before the stage around it (ts went back on the thread)
         rows = rows[np.lexsort((budget.s_depth[rows], budget.s_start[rows]))]
+        open_events = [frame_event]  # the frame, and the spans the next one may nest in, by depth
         for r in rows:
             stage = int(budget.s_stage[r])
             if stage == unaccounted_id:
                 frame_event["args"]["unaccounted_us"] = _us(int(budget.s_dur[r]))
                 continue
-            events.append(_span_event(budget, r, names[stage], limits_ns[stage], origin))
+            span = _span_event(budget, r, names[stage], limits_ns[stage], origin)
+            del open_events[span["args"]["depth"] + 1:]
+            _enclose(open_events, span)
+            open_events.append(span)
+            events.append(span)
         dropped_total += int(budget.f_dropped[fr])
         events.append({
             "ph": "C", "name": "budget", "pid": PID, "tid": TID, "ts": _us(end - origin),
@@ -121,10 +164,11 @@ def _span_event(budget: FrameBudget, r: int, name: str, limit_ns: float, origin:
     args = {"step": int(budget.s_step[r]), "depth": depth}
     if depth == 0 and dur > limit_ns:
         args["overrun"] = True  # over the stage's declared budget: visible in Perfetto
+    start = int(budget.s_start[r]) - origin
+    ts, dur_us = _ts_dur(start, start + dur)
     return {
         "ph": "X", "name": name, "cat": "stage" if depth == 0 else "span",
-        "pid": PID, "tid": TID,
-        "ts": _us(int(budget.s_start[r]) - origin), "dur": _us(dur), "args": args,
+        "pid": PID, "tid": TID, "ts": ts, "dur": dur_us, "args": args,
     }
 
 

@@ -51,8 +51,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--size", default="1280x720", help="window size WxH (default 1280x720; at least 640x360, smaller frames with --headless)")
     p.add_argument("--fullscreen", action="store_true", help="start fullscreen (F11 toggles)")
     p.add_argument("--low-power", action="store_true", help="render at 30 Hz on a half-size surface, flat shading, no antialiasing, fewer solver iterations (docs/performance.md)")
-    p.add_argument("--templates", metavar="NPZ", help="recognition templates (default: yours from `quickjab train`, else the shipped set)")
-    p.add_argument("--graph", metavar="NPZ", help="Interaction Graph table (default: the shipped one)")
+    p.add_argument("--templates", metavar="NPZ", type=arguments.path_argument, help="recognition templates (default: yours from `quickjab train`, else the shipped set)")
+    p.add_argument("--graph", metavar="NPZ", type=arguments.path_argument, help="Interaction Graph table (default: the shipped one)")
     p.add_argument("--difficulty", choices=("easy", "normal", "hard", "adaptive"), default=None,
                    help="the CPU: how often it takes its best action, how late it reacts, its rest between moves, how "
                         "much its blows hurt; adaptive follows you to about half the rounds won (default normal; "

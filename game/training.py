@@ -470,7 +470,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="comma-separated subset of actions (default: all 13); the others keep the templates you have")
     p.add_argument("--reset", action="store_true",
                    help="delete your trained templates (play goes back to the default set) and exit")
-    p.add_argument("-o", "--output", default=None, help="where to save the templates (default: your data directory)")
+    p.add_argument("-o", "--output", default=None, type=arguments.path_argument, help="where to save the templates (default: your data directory)")
     p.add_argument("--profile", default=None, metavar="NAME", help="save as this player's templates (`play --profile NAME`; default: your default set)")
     p.add_argument("--headless", action="store_true", help="no window: SDL dummy driver, virtual clock (a live serial:// or wiimote:// device: the real clock)")
     p.add_argument("--frames", type=arguments.positive_int, default=None, help="stop after N rendered frames")
@@ -577,6 +577,8 @@ def _open_source(args: argparse.Namespace, clock):
         print("quickjab train: demo: the virtual player performs every move by itself", file=sys.stderr)
     elif fallback:
         print(f"quickjab train: {fallback}: training from the keyboard (press a key to perform)", file=sys.stderr)
+    for note in source.notes:  # a replayed recording's row left out (a cut last row)
+        print(f"quickjab train: {note}", file=sys.stderr)
     playable = PLAYABLE in source.capabilities  # a virtual player performs the moves
     auto = args.demo or (playable and bool(source.auto))
     if playable:

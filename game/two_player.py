@@ -458,6 +458,8 @@ def run_match(args) -> int:
                     opened.append(open_source(url, clock=clock.seconds))
                 except (InputError, OSError) as exc:  # which player's source, in the one line
                     raise InputError(f"{seat_label(i, (args.source, args.source2)[i])}: {exc}") from None
+                for note in opened[-1].notes:  # a replayed recording's row left out, as one player's play says it
+                    print(f"quickjab play: {seat_label(i, (args.source, args.source2)[i])}: {note}", file=sys.stderr)
         except BaseException:
             for source in opened:
                 source.close()

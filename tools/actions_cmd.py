@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import os
 
+from engine import arguments
 from game.actions import load_library
 
 
@@ -19,21 +20,21 @@ def register(sub: argparse._SubParsersAction) -> None:
     cmds = p.add_subparsers(dest="actions_command", metavar="SUBCOMMAND", required=True)
     ls = cmds.add_parser("list", help="every action with its kind, duration and windows",
                          description="Every action with its kind, duration, attack windows, reach and damage.")
-    ls.add_argument("--dir", default=None, help="action folder (default: the shipped library)")
+    ls.add_argument("--dir", default=None, type=arguments.path_argument, help="action folder (default: the shipped library)")
     ls.set_defaults(func=run_list)
     sheet = cmds.add_parser("sheet", help="draw a contact sheet PNG of every action's key frames",
                             description="Draw a contact sheet PNG of every action's key frames (pygame).")
     # in the current folder, as templates build's templates.npz: docs/img/actions.png made a
     # docs/img/ wherever it ran; the repository's figure is `-o docs/img/actions.png` (docs/motion.md)
-    sheet.add_argument("-o", "--output", default="actions.png",
+    sheet.add_argument("-o", "--output", default="actions.png", type=arguments.path_argument,
                        help="PNG to write (default actions.png in the current folder)")
-    sheet.add_argument("--dir", default=None, help="action folder (default: the shipped library)")
-    sheet.add_argument("--add", action="append", default=[], metavar="JSON_OR_DIR",
+    sheet.add_argument("--dir", default=None, type=arguments.path_argument, help="action folder (default: the shipped library)")
+    sheet.add_argument("--add", action="append", default=[], metavar="JSON_OR_DIR", type=arguments.path_argument,
                        help="also draw these actions (e.g. cut with `quickjab bvh cut`; a file or a folder of *.json; repeatable)")
     sheet.set_defaults(func=run_sheet)
     author = cmds.add_parser("author", help="regenerate the action JSON files",
                              description="Regenerate the action JSON files from tools/author_actions.py.")
-    author.add_argument("-o", "--output", default=None, help="folder (default: game/assets/actions)")
+    author.add_argument("-o", "--output", default=None, type=arguments.path_argument, help="folder (default: game/assets/actions)")
     author.set_defaults(func=run_author)
 
 

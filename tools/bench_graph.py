@@ -19,7 +19,7 @@ from engine import arguments
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--graph", default=None,
+    p.add_argument("--graph", default=None, type=arguments.path_argument,
                    help="time loading/looking up this file instead of building one")
     p.add_argument("--states", type=int, default=60000, help="states of the graph to build")
     p.add_argument("--seed", type=arguments.seed, default=0, help="seed of the build and the look-ups (default 0)")

@@ -15,13 +15,15 @@ import time
 
 import numpy as np
 
+from engine import arguments
 from engine.clock import RealClock, VirtualClock
 from engine.loop import FixedStepLoop
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--steps", type=int, default=20000, help="steps for the overhead figure (default 20000)")
-    p.add_argument("--frames", type=int, default=300, help="real-time frames for the lateness figure (default 300, 5 s)")
+    # 0 was a division by zero (--steps) or an empty percentile (--frames): tracebacks
+    p.add_argument("--steps", type=arguments.int_range(1, 10_000_000), default=20000, help="steps for the overhead figure (default 20000)")
+    p.add_argument("--frames", type=arguments.int_range(1, 216_000), default=300, help="real-time frames for the lateness figure (default 300, 5 s)")
     p.add_argument("--json", action="store_true", help="print JSON instead of a table")
 
 

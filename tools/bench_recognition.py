@@ -23,8 +23,14 @@ from collections.abc import Callable
 
 import numpy as np
 
+from engine import arguments
 from engine.errors import InputError
 
+# The recognizer's own limits, written out: importing them would load the recognizer whenever
+# `bench` builds its parser (tools/bench.py); a test holds them equal.
+MAX_FRAMES = 6000  # engine/recognition/config.py: its longest buffer (100 s)
+MAX_TEMPLATES = 10_000  # engine/recognition/templates.py: the most a template file may hold
+MAX_DIM = 60  # 20 sensors; the push's gravity and gate go per sensor of 3 values
 # Issue 3's speed targets: templates -> (max us per frame, min x faster than the peer).
 TARGETS = {13: (30.0, 10.0), 1000: (600.0, 30.0)}
 # Issue 14's, for the whole push: (actions, templates per action) -> (max us, min x the peer).
@@ -34,11 +40,23 @@ PUSH_TARGETS = {(13, 3): (40.0, 10.0), (1000, 3): (600.0, 30.0)}
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--sizes", default="13,1000,13x3,1000x3",
                    help="template counts, or ACTIONSxK for K templates per action (default 13,1000,13x3,1000x3)")
-    p.add_argument("--dim", type=int, default=6, help="values per frame (default 6)")
-    p.add_argument("--buffer", type=int, default=60, help="query frames (default 60)")
-    p.add_argument("--repeat", type=int, default=5, help="buffers timed per size (best kept)")
+    p.add_argument("--dim", type=_dim, default=6, help=f"values per frame, 3 per sensor (default 6, at most {MAX_DIM})")
+    p.add_argument("--buffer", type=arguments.int_range(1, MAX_FRAMES), default=60, help="query frames (default 60)")
+    p.add_argument("--repeat", type=arguments.int_range(1, 1000), default=5, help="buffers timed per size (best kept)")
     p.add_argument("--sweep", action="store_true", help="also time scan vs loop (and jit) over many sizes")
     p.add_argument("--json", action="store_true", help="print JSON instead of a table")
+
+
+def _dim(text: str) -> int:
+    """An argparse type for --dim: 3 values per sensor, as the push takes them (0 or 4 was a
+    traceback from the templates, a negative one from numpy)."""
+    dim = arguments.int_range(3, MAX_DIM)(text)
+    if dim % 3:
+        raise argparse.ArgumentTypeError(f"{dim} is not a multiple of 3 (3 values per sensor)")
+    return dim
+
+
+_dim.__name__ = "integer"
 
 
 def _signals(rng: np.random.Generator, n: int, dim: int, lo: int = 30, hi: int = 60) -> list[np.ndarray]:
@@ -119,9 +137,13 @@ def _time_peer(templates: list[np.ndarray], query: np.ndarray, repeat: int) -> t
 
 
 def _size(text: str) -> tuple[int, int]:
-    """"13" -> (13 templates, 1 per action); "13x3" -> (39 templates, 3 per action)."""
+    """"13" -> (13 templates, 1 per action); "13x3" -> (39 templates, 3 per action); ValueError
+    for no templates or more than a template file may hold."""
     actions, _, per = text.strip().partition("x")
-    return int(actions) * int(per or 1), int(per or 1)
+    n, per_action = int(actions) * int(per or 1), int(per or 1)
+    if int(actions) < 1 or per_action < 1 or n > MAX_TEMPLATES:  # 0 was a traceback from the templates
+        raise ValueError(text)
+    return n, per_action
 
 
 def _measure(tm: list[np.ndarray], query: np.ndarray, repeat: int, per_action: int, jit: bool, native: bool) -> dict:
@@ -191,7 +213,8 @@ def run(args: argparse.Namespace) -> int:
     try:
         sizes = [(_size(s), s.strip()) for s in args.sizes.split(",")]
     except ValueError:
-        raise InputError(f"--sizes {args.sizes!r}: expected counts like 13,1000 or 13x3") from None
+        raise InputError(f"--sizes {args.sizes!r}: expected counts like 13,1000 or 13x3, "
+                         f"from 1 to {MAX_TEMPLATES} templates each") from None
     query = np.cumsum(rng.normal(0, 0.3, (args.buffer, args.dim)), axis=0)
     jit, native = jit_available(), native_available()
     say = (lambda line: None) if args.json else print  # --json: the one JSON object is all of stdout

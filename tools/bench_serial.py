@@ -21,6 +21,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from engine import arguments
 from engine.clock import RealClock
 
 if TYPE_CHECKING:
@@ -30,8 +31,10 @@ TICK_MASK = (1 << 30) - 1
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--seconds", type=float, default=5.0, help="seconds per reader (default 5)")
-    p.add_argument("--rate", type=int, default=200, help="emulated sample rate in Hz (default 200)")
+    # --seconds 0 was a division by zero; --rate as `bridge emulate --rate` takes it (its emulator
+    # refused 0 in a process of its own, which came back as "emulator did not start", a traceback)
+    p.add_argument("--seconds", type=arguments.float_range(0.0, 3600.0, lo_open=True), default=5.0, help="seconds per reader (default 5)")
+    p.add_argument("--rate", type=arguments.int_range(1, 1000), default=200, help="emulated sample rate in Hz (default 200)")
     p.add_argument("--json", action="store_true", help="print JSON instead of a table")
 
 

@@ -11,7 +11,7 @@ import sys
 import time
 from dataclasses import asdict
 
-from engine.arguments import output_file
+from engine.arguments import output_file, path_argument
 from engine.errors import InputError
 
 
@@ -24,7 +24,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         description="Run the firmware's sampling loop against a simulated IMU on a pseudo-terminal. "
         "Then: quickjab record --source serial:///dev/pts/N -o out.csv (or the --link path, which "
         "survives --unplug-at).")
-    e.add_argument("--replay", metavar="REC.CSV", help="feed the simulated IMU from this recording (looped)")
+    e.add_argument("--replay", metavar="REC.CSV", type=path_argument, help="feed the simulated IMU from this recording (looped)")
     e.add_argument("--player", choices=PLAYER_PROFILES, default=None,
                    help="feed it a virtual player's boxing instead (random actions with rests, both hands, on the "
                    "game's axes, a minute looped): `play` and `recognize` take its punches as a player's; "
@@ -121,8 +121,17 @@ def player_motion(profile: str, seed: int):
     return recording_motion("virtual player", lambda _: session)
 
 
-def run_emulate(args: argparse.Namespace) -> int:
+def _read_saying_notes(path: str):
+    """read_recording, saying what it left out (a cut last row), as every other reader does."""
     from engine.recording import read_recording
+
+    rec = read_recording(path)
+    for note in rec.notes:
+        print(f"quickjab bridge: {note}", file=sys.stderr)
+    return rec
+
+
+def run_emulate(args: argparse.Namespace) -> int:
     from firmware_bridge.emulator import (
         Emulator,
         EmulatorDef,
@@ -133,7 +142,7 @@ def run_emulate(args: argparse.Namespace) -> int:
 
     check_emulate_args(args)
     if args.replay:
-        signal, sensors = recording_motion(args.replay, read_recording)  # RecordingError names the file
+        signal, sensors = recording_motion(args.replay, _read_saying_notes)  # RecordingError names the file
     elif args.player:
         signal, sensors = player_motion(args.player, args.seed or 0)
     else:

@@ -38,18 +38,18 @@ def register(sub: argparse._SubParsersAction) -> None:
     info = cmds.add_parser("info", help="what a BVH file holds and how it maps onto our skeleton",
                            description="What a BVH file holds (joints, frames, rate) and which of its joints "
                            "drive each of our skeleton's.")
-    info.add_argument("file", metavar="FILE.bvh", help="the BVH file")
+    info.add_argument("file", metavar="FILE.bvh", type=arguments.path_argument, help="the BVH file")
     info.set_defaults(func=run_info)
     cut = cmds.add_parser("cut", help="retarget a BVH and cut an action from a frame range",
                           description="Retarget a BVH onto our skeleton at 60 Hz and cut frames --start..--end "
                           "into an action JSON (preview it: quickjab actions sheet --add NAME.json).")
-    cut.add_argument("file", metavar="FILE.bvh", help="the BVH file")
+    cut.add_argument("file", metavar="FILE.bvh", type=arguments.path_argument, help="the BVH file")
     cut.add_argument("--start", type=arguments.non_negative_int, required=True, help="first frame (60 Hz, after resampling)")
     cut.add_argument("--end", type=arguments.non_negative_int, required=True, help="last frame (inclusive)")
     cut.add_argument("--name", required=True, help="action name")
     cut.add_argument("--kind", default="attack", choices=KINDS, help="what the action is in the game (default attack)")
     cut.add_argument("--no-guard-blend", action="store_true", help="do not blend the ends into the guard")
-    cut.add_argument("-o", "--output", required=True, help="action JSON to write")
+    cut.add_argument("-o", "--output", required=True, type=arguments.path_argument, help="action JSON to write")
     cut.set_defaults(func=run_cut)
     exp = cmds.add_parser("export", help="play actions of the library and write them as BVH",
                           description="Play actions of the library and write them as BVH (Blender opens it); "
@@ -58,7 +58,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     exp.add_argument("--opponent", default=None,
                      help="actions of a second boxer: simulate both in the physics world (a bout)")
     exp.add_argument("--gap", type=arguments.float_range(0.0, 100.0, lo_open=True), default=0.85, help="distance between the boxers in a bout (m)")
-    exp.add_argument("-o", "--output", required=True, help="BVH file to write")
+    exp.add_argument("-o", "--output", required=True, type=arguments.path_argument, help="BVH file to write")
     exp.set_defaults(func=run_export)
 
 

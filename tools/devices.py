@@ -30,7 +30,7 @@ def no_device_hint(url: str) -> str:
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("devices", help="list Wiimotes and serial ports", description=__doc__)
     p.add_argument("--json", action="store_true", help="print one JSON object instead of text")
-    p.add_argument("paths", nargs="*", metavar="PATH",
+    p.add_argument("paths", nargs="*", metavar="PATH", type=arguments.path_argument,
                    help="serial ports to probe for a board (e.g. /dev/pts/5, which the list never shows): each is "
                         "opened, asked for a HELLO and read for --probe-seconds; opening a port may reset an Arduino-"
                         "style board, and a port another program has open loses bytes to the probe")

@@ -28,7 +28,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     b = cmds.add_parser("build", help="sample, solve and save a graph",
                         description="Sample bouts in the bout model, merge states, expand every "
                         "action from every state, solve by value iteration, save the .npz.")
-    b.add_argument("-o", "--output", required=True, help="where to write the .npz")
+    # checked before the build (about a minute), not when the table is saved after it
+    b.add_argument("-o", "--output", required=True, type=arguments.output_file, help="where to write the .npz")
     b.add_argument("--seed", type=arguments.seed, default=0, help="random seed (the build is deterministic for it)")
     b.add_argument("--states", type=arguments.int_range(10, 1_000_000), default=60000, help="states to keep (most visited cells)")
     b.add_argument("--bouts", type=arguments.int_range(1, 65_536), default=None, help="sampling bouts run at once")
@@ -39,9 +40,9 @@ def register(sub: argparse._SubParsersAction) -> None:
 
     i = cmds.add_parser("info", help="states, edges, build parameters and file size",
                         description="Print what a graph file holds.")
-    i.add_argument("graph", nargs="?", default=None, help="the .npz (default: the shipped graph)")
+    i.add_argument("graph", nargs="?", default=None, type=arguments.path_argument, help="the .npz (default: the shipped graph)")
     # as `graph duel --graph` and `bench graph --graph` take it; the positional keeps working
-    i.add_argument("--graph", dest="graph_option", default=None, metavar="GRAPH", help="the .npz, as the positional argument (as graph duel takes it)")
+    i.add_argument("--graph", dest="graph_option", default=None, type=arguments.path_argument, metavar="GRAPH", help="the .npz, as the positional argument (as graph duel takes it)")
     i.add_argument("--json", action="store_true", help="machine-readable output")
     i.set_defaults(func=cmd_info)
 
@@ -51,7 +52,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "With --opponent virtual (or experienced / novice): whole matches of the game per "
                         "--difficulty against the virtual player through the real recognizer; print the "
                         "player's round win rate and rounds per match (tools/virtual_duel.py).")
-    d.add_argument("--graph", default=None, help="the .npz (default: the shipped graph)")
+    d.add_argument("--graph", default=None, type=arguments.path_argument, help="the .npz (default: the shipped graph)")
     d.add_argument("--bouts", type=arguments.int_range(1, 1_000_000), default=200, help="bouts per opponent")
     d.add_argument("--opponent", choices=["random", "greedy", "both", "virtual", "experienced", "novice"], default="both",
                    help="bout-model policies (random, greedy, both), or the virtual player in the game (virtual: experienced and novice)")

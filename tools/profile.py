@@ -276,7 +276,7 @@ def plot_profile(trace: dict, summary: dict, out: str, max_bars: int = 600) -> d
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("profile", help="summarize a frame-budget Chrome trace (table, --plot, --json)",
                        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("trace", metavar="TRACE.json", help="a Chrome trace written by the loop (e.g. `quickjab scope --trace`)")
+    p.add_argument("trace", metavar="TRACE.json", type=arguments.path_argument, help="a Chrome trace written by the loop (e.g. `quickjab scope --trace`)")
     p.add_argument("--plot", type=arguments.plot_file, metavar="PNG", help="draw the frame-time histogram and stacked per-stage bars here")
     p.add_argument("--json", action="store_true", help="print the summary as JSON")
     p.set_defaults(func=run)

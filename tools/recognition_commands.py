@@ -137,8 +137,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                         description="Build recognition templates from trial recordings, one folder of CSVs per "
                         "action (TRIALS_DIR/<action>/*.csv, as `quickjab synth --trials` writes them); "
                         "`play --templates`, `recognize` and `evaluate --templates` read the file.")
-    b.add_argument("trials_dir", metavar="TRIALS_DIR", help="a folder with one folder of trial CSVs per action (TRIALS_DIR/<action>/*.csv)")
-    b.add_argument("-o", "--output", default="templates.npz", help="output .npz (default templates.npz)")
+    b.add_argument("trials_dir", metavar="TRIALS_DIR", type=arguments.path_argument, help="a folder with one folder of trial CSVs per action (TRIALS_DIR/<action>/*.csv)")
+    b.add_argument("-o", "--output", default="templates.npz", type=arguments.path_argument, help="output .npz (default templates.npz)")
     b.add_argument("--method", choices=METHODS, default=None, help="trials (default), average (Eq. 1) or dba")
     b.add_argument("--feature", choices=FEATURES, default=None, help="what DTW compares (default log)")
     b.add_argument("--mirror", action="store_true", help="mirror for a left-handed player (swap hands, flip x, swap _l/_r)")
@@ -154,10 +154,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                        description="Replay a recording through the recognizer, deciding as `play` does (the "
                        "templates' saved settings, your config file's [recognizer] table, then these options), "
                        "and print its events as JSON lines: start, switch, end, reject (docs/formats.md).")
-    r.add_argument("recording", metavar="REC.csv", help="the recording to replay (docs/formats.md; any sample rate)")
-    r.add_argument("--templates", required=True, metavar="T.npz",
+    r.add_argument("recording", metavar="REC.csv", type=arguments.path_argument, help="the recording to replay (docs/formats.md; any sample rate)")
+    r.add_argument("--templates", required=True, metavar="T.npz", type=arguments.path_argument,
                    help="recognition templates: `templates build` or `train -o` wrote them, or game/assets/templates.npz")
-    r.add_argument("-o", "--output", default=None, help="write the JSON lines here instead of stdout")
+    r.add_argument("-o", "--output", default=None, type=arguments.path_argument, help="write the JSON lines here instead of stdout")
     r.add_argument("--main", type=_main_arg, default=None, help="main buffer in frames or 'auto' (default 6)")
     _recognizer_args(r)
     r.set_defaults(func=cmd_recognize)
@@ -179,9 +179,9 @@ def _register_evaluate(sub: argparse._SubParsersAction) -> None:
             "from the true onset: the first frame 0.3 g away from the rest before the motion."
         ),
     )
-    e.add_argument("inputs", nargs="*", metavar="INPUT", help="trial dirs (<root>/<action>/*.csv) or labelled recording CSVs")
-    e.add_argument("--templates", default=None, metavar="T.npz", help="the templates to test the INPUTs with")
-    e.add_argument("--train", default=None, metavar="TRIALS_DIR", help="build templates from these trials")
+    e.add_argument("inputs", nargs="*", metavar="INPUT", type=arguments.path_argument, help="trial dirs (<root>/<action>/*.csv) or labelled recording CSVs")
+    e.add_argument("--templates", default=None, metavar="T.npz", type=arguments.path_argument, help="the templates to test the INPUTs with")
+    e.add_argument("--train", default=None, metavar="TRIALS_DIR", type=arguments.path_argument, help="build templates from these trials")
     _data_set_args(e)
     e.add_argument("--keep", type=_keep, default=None,
                    help="templates: keep each action's KEEP most representative trials (e.g. --trials 5 --keep 3), "
@@ -201,15 +201,15 @@ def _register_evaluate(sub: argparse._SubParsersAction) -> None:
 
 def _data_set_args(e: argparse.ArgumentParser) -> None:
     """`evaluate`'s data sets and their protocols' options."""
-    e.add_argument("--uwave", default=None, metavar="DIR", help="the uWave protocol on DIR/U<n>/gesture<k>/d<day>-r<rep>.csv")
+    e.add_argument("--uwave", default=None, metavar="DIR", type=arguments.path_argument, help="the uWave protocol on DIR/U<n>/gesture<k>/d<day>-r<rep>.csv")
     e.add_argument("--users", type=_users, default="1-6", help="uWave users (default 1-6)")
     e.add_argument("--fresh", action="store_true",
                    help="trials (and --isolated): a new recognizer for every trial (no adaptation, no gate learnt from the trials before); default: one player's session")
-    e.add_argument("--phone-punches", default=None, metavar="DIR",
+    e.add_argument("--phone-punches", default=None, metavar="DIR", type=arguments.path_argument,
                    help="cross-session: DIR/<hand>_<punch>_<fast|slow>.csv; per hand, templates from the first "
                         "--trials punches of each kind in one set, tested on every punch of the other set, and on "
                         "the hand's recorded mixed sequences DIR/<hand>_mixed_<name>.csv when there are any")
-    e.add_argument("--punchbuddy", default=None, metavar="DIR",
+    e.add_argument("--punchbuddy", default=None, metavar="DIR", type=arguments.path_argument,
                    help="two gloves: DIR/right-<kind>-<count>-<person>-combo-l<h|j|c|u>-<n>.csv, each punch a burst of "
                         "one glove; templates from the first --trials punches per hand of one person's session, tested "
                         "on the person's other sessions ('<person> across sessions') and from a person's sessions, "

@@ -128,7 +128,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     mode.add_argument("--session", type=arguments.float_range(0.0, MAX_DURATION_S, lo_open=True), metavar="SECONDS", help="length of a continuous recording")
     mode.add_argument("--templates", action="store_true",
                       help="build recognition templates (-o NPZ) from 3 synthesized trials per action")
-    p.add_argument("-o", "--output", required=True,
+    p.add_argument("-o", "--output", required=True, type=arguments.path_argument,
                    help="DIR for --trials, a .csv file for --session, an .npz for --templates")
     p.add_argument("--seed", type=arguments.seed, default=None,
                    help=f"random seed (default 0; {DEFAULT_TEMPLATE_SEED} for --templates)")

@@ -128,6 +128,20 @@ def test_help_for_every_new_command(capsys):
     assert "--replay" in capsys.readouterr().out
 
 
+@pytest.mark.parametrize("option, value, said", [
+    ("--seconds", "0", "0 is out of range: must be > 0 and <= 3600"),
+    ("--rate", "0", "0 is out of range: must be between 1 and 1000"),
+])
+def test_bench_serial_numbers_out_of_range_are_one_line(capsys, option, value, said):
+    """--seconds 0 was a division by zero, --rate 0 "emulator did not start" (a RuntimeError:
+    the emulator refused it in a process of its own)."""
+    with pytest.raises(SystemExit) as exit_:
+        main(["bench", "serial", option, value])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert exit_.value.code == 2 and len(err) == 1, err
+    assert err[0].startswith(f"quickjab bench serial: argument {option}: {said}"), err
+
+
 def test_bench_serial_runs_and_reports_both_readers(capsys):
     import json
 

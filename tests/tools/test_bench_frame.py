@@ -124,3 +124,32 @@ def test_the_real_clock_run_draws_once_before_its_loop_as_play_does(monkeypatch,
     out = realtime(args, (320, 180), low_power=False)
     assert made == [False]  # one draw, before the loop ran
     assert out["steps"] == 3
+
+
+def test_the_virtual_clock_runs_draw_once_before_timing_and_report_it_apart(monkeypatch, tmp_path) -> None:
+    """The virtual-clock runs counted the first, cache-building draw (the ring's static layers,
+    the HUD's fonts: ~10x a frame) in the render stage's max, while the real-clock run and play
+    draw it before their loop: now drawn before the timed run too, its time `first_draw_ms`."""
+    import argparse
+
+    import tools.scripted_match as scripted
+    from tools.bench_frame import measure
+
+    made = []
+
+    def session(*a, **kw):
+        s = build_session(*a, **kw)
+        draw = s.render
+        s.render = lambda alpha: (made.append(s.loop.running), draw(alpha))[1]
+        return s
+
+    monkeypatch.setattr(scripted, "build_session", session)
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path))
+    args = argparse.Namespace(players=1, seed=0, templates=None, graph=None, steps=6, repeats=2, low_power=False,
+                              all_modes=False)
+    full = measure("full", args, (320, 180))
+    assert made == [False, False]  # one draw per run, before its loop ran
+    assert full["first_draw_ms"] > 0
+    assert full["stages"]["render"]["least"]["n"] == full["frames"] == 6  # the loop's frames alone are timed
+    made.clear()
+    assert measure("naive", args, (320, 180))["first_draw_ms"] is None and made == []  # the peer draws nothing

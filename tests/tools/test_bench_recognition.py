@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import re
 
+import pytest
+
 from engine.recognition import dtw
 from tools.cli import main
 
@@ -42,3 +44,44 @@ def test_a_figure_not_measured_is_a_dash_not_nan():
     from tools.bench_recognition import _cell
 
     assert _cell(float("nan"), 8) == "       -" and _cell(12.345, 8) == "    12.3"
+
+
+@pytest.mark.parametrize("option, value, said", [
+    ("--dim", "0", "0 is out of range: must be between 3 and 60"),
+    ("--dim", "-1", "-1 is out of range"),
+    ("--dim", "4", "4 is not a multiple of 3 (3 values per sensor)"),
+    ("--dim", "61", "61 is out of range"),
+    ("--buffer", "0", "0 is out of range: must be between 1 and 6000"),
+    ("--buffer", "-2", "-2 is out of range"),
+    ("--repeat", "0", "0 is out of range: must be between 1 and 1000"),
+    ("--repeat", "-1", "-1 is out of range"),
+    ("--repeat", "x", "expected an integer, not 'x'"),
+])
+def test_out_of_range_numbers_are_one_line(capsys, option, value, said):
+    """--dim 0 or 4 and --buffer 0 were tracebacks (the templates, a division by zero), --repeat 0
+    printed inf for every figure."""
+    with pytest.raises(SystemExit) as exit_:
+        main(["bench", "recognition", "--sizes", "3", option, value])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert exit_.value.code == 2 and len(err) == 1, err
+    assert err[0].startswith(f"quickjab bench recognition: argument {option}: {said}"), err
+
+
+@pytest.mark.parametrize("sizes", ["0", "-2", "2x0", "0x3", "10001", "5000x3"])
+def test_sizes_without_templates_or_too_many_are_one_line(capsys, sizes):
+    assert main(["bench", "recognition", "--sizes", sizes]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--sizes" in err[0] and "from 1 to 10000 templates" in err[0], err
+
+
+def test_the_limits_are_the_recognizers():
+    from engine.recognition import config, templates
+    from tools import bench_recognition
+
+    assert bench_recognition.MAX_FRAMES == config.MAX_FRAMES
+    assert bench_recognition.MAX_TEMPLATES == templates.MAX_TEMPLATES
+
+
+def test_a_dim_of_several_sensors_runs(capsys):
+    assert main(["bench", "recognition", "--sizes", "2", "--repeat", "1", "--buffer", "2", "--dim", "9", "--json"]) == 0
+    assert '"dim": 9' in capsys.readouterr().out
