@@ -137,23 +137,29 @@ def true_onset(trial: np.ndarray, fraction: float = 0.1) -> int:
 
 
 def stream_onset(frames: np.ndarray, first: int, end: int, prev_end: int = 0) -> int:
-    """A labelled interval [first, end)'s true onset. The rest: the mean of the stillest
-    REST_WINDOW frames (least summed spread of the sensors' readings about their mean) in
-    [max(prev_end, first - REST_SEARCH), first), `prev_end` being the previous interval's end
-    (hand labels start after the wind-up, so the frames just before `first` are already moving).
-    The onset: the first frame after that window ONSET_G away from the rest, before `end`;
-    `first` when none is."""
+    """A labelled interval [first, end)'s true onset (`stream_rest`'s second figure)."""
+    return stream_rest(frames, first, end, prev_end)[1]
+
+
+def stream_rest(frames: np.ndarray, first: int, end: int, prev_end: int = 0) -> tuple[int, int]:
+    """A labelled interval [first, end)'s rest and true onset: (the frame after the rest, the
+    onset). The rest: the mean of the stillest REST_WINDOW frames (least summed spread of the
+    sensors' readings about their mean) in [max(prev_end, first - REST_SEARCH), first),
+    `prev_end` being the previous interval's end (hand labels start after the wind-up, so the
+    frames just before `first` are already moving). The onset: the first frame after that
+    window ONSET_G away from the rest, before `end`; `first` when none is. A decision before
+    the rest's end was made while the hand still rested: it is not this punch's."""
     x = np.asarray(frames, dtype=np.float64)
     lo = max(prev_end, first - REST_SEARCH, 0)
     w = min(REST_WINDOW, first - lo)
     if w < 2:  # no room between the intervals: the frames just before the label
         lo, w = max(0, first - REST_WINDOW), min(REST_WINDOW, first)
     if w < 1:
-        return first
+        return first, first
     k = lo + int(np.argmin(window_spread(x[lo:first], w)))
     rest = x[k : k + w].mean(axis=0)
     away = _away_from_rest(x[k + w : end], rest)
-    return k + w + int(away[0]) if len(away) else first
+    return k + w, k + w + int(away[0]) if len(away) else first
 
 
 def _decisions(events: Iterable[dict]) -> tuple[str | None, str | None, int, int | None]:
@@ -282,23 +288,32 @@ def score_stream(
     tolerance: int = EARLY_TOLERANCE,
     frames: np.ndarray | None = None,
     onsets: Sequence[int] | None = None,
+    rest_ends: Sequence[int] | None = None,
 ) -> Summary:
     """Match starts to intervals, in order: each interval takes the first start not yet taken
     inside [first - tolerance, end) (hand-labelled intervals begin after the wind-up the sensor
     already sees, and a start in the last frames of an interval that already has one is the
-    next punch's). Starts outside every (widened) interval are false starts; the other starts
-    not taken, inside a (widened) interval, are `extra_starts` (a player sees a second punch, e.g.
+    next punch's) and not before the end of the rest before it: a start decided while the hand
+    still rested (on the previous punch's return, or a drift) is not this punch's, whatever it
+    names. Starts outside every (widened) interval are false starts; the other starts not
+    taken, inside a (widened) interval, are `extra_starts` (a player sees a second punch, e.g.
     the return of a full blow after the character's clip ended). The lag is counted from each
-    interval's true onset: `onsets[i]` when given (a spliced stream's, see `mixed_stream`), else
-    `stream_onset` (the rest after the previous interval) when the `frames` are given, else its
-    first labelled frame."""
+    interval's true onset: `onsets[i]` and `rest_ends[i]` when given (a spliced stream's, see
+    `mixed_stream`), else `stream_rest` (the rest after the previous interval) when the
+    `frames` are given, else its first labelled frame (and no rest bound)."""
     s = Summary(main)
     starts = [e for e in events if e["event"] == "start"]
     used: set[int] = set()
     prev_end = 0
     for i, (action, a, b) in enumerate(ivs):
         prev, prev_end = prev_end, b
-        mine = [k for k, e in enumerate(starts) if a - tolerance <= e["frame"] < b and k not in used]
+        rest_end, onset = (a - tolerance, a) if frames is None else stream_rest(frames, a, b, prev)
+        if onsets is not None:
+            onset = onsets[i]
+        if rest_ends is not None:
+            rest_end = rest_ends[i]
+        lo = max(a - tolerance, rest_end)
+        mine = [k for k, e in enumerate(starts) if lo <= e["frame"] < b and k not in used]
         if not mine:
             s.outcomes.append(Outcome(action, None, None, -1, None))
             continue
@@ -307,7 +322,6 @@ def score_stream(
         e = starts[k]
         after = [x for x in events if x["frame"] >= e["frame"]]
         first, final, last_np, at = _decisions(after)
-        onset = onsets[i] if onsets is not None else a if frames is None else stream_onset(frames, a, b, prev)
         s.outcomes.append(Outcome(action, first, final, last_np, at - onset, _recognizer_onset(after, onset)))
     labelled = np.zeros(n_frames, dtype=bool)
     for _, a, b in ivs:
@@ -450,7 +464,7 @@ def punch_files(root: str | Path) -> dict[tuple[str, str], dict[str, Path]]:
 
 def evaluate_cross_session(
     train: Mapping[str, tuple[np.ndarray, Sequence[str]]],
-    test: Sequence[tuple[np.ndarray, Sequence[str]] | tuple[np.ndarray, Sequence[str], Sequence[int]]],
+    test: Sequence[tuple[np.ndarray, Sequence[str]] | tuple[np.ndarray, Sequence[str], Sequence[int], Sequence[int]]],
     mains: Sequence[int | str],
     trials: int = 3,
     template_kwargs: Mapping | None = None,
@@ -465,18 +479,19 @@ def evaluate_cross_session(
     `stream_trials` does),
     then every test recording replayed whole as a stream (a fresh recognizer per recording) and
     scored with `score_stream`; a spliced stream (`mixed_stream`) brings its punches' true onsets
-    as a third item. Pooled over the test recordings. Training recordings that give no templates
+    and rest ends as a third and fourth item. Pooled over the test recordings. Training recordings that give no templates
     (no interval of their action, one too short) are an InputError naming `where`."""
     templates = first_trials_templates(train, trials, template_kwargs, where, draw, template_lead)
     pooled = [Summary(m) for m in mains]
-    for frames, labels, *onsets in test:
+    for frames, labels, *spliced in test:
         ivs = intervals(labels)
-        if onsets and len(onsets[0]) != len(ivs):
-            raise ValueError(f"{len(onsets[0])} onsets for {len(ivs)} labelled intervals")
+        onsets, rest_ends = (spliced + [None, None])[:2]
+        if onsets is not None and len(onsets) != len(ivs):
+            raise ValueError(f"{len(onsets)} onsets for {len(ivs)} labelled intervals")
         for m, pool in zip(mains, pooled, strict=True):
             rec = DualBufferRecognizer(templates, main=m, **rec_kwargs)
             events = replay_stream(rec, frames, clip_frames)
-            s = score_stream(events, ivs, len(frames), m, frames=frames, onsets=onsets[0] if onsets else None)
+            s = score_stream(events, ivs, len(frames), m, frames=frames, onsets=onsets, rest_ends=rest_ends)
             pool.add(s)
     return pooled
 
@@ -640,19 +655,22 @@ def _stillest_window(x: np.ndarray, lo: int, hi: int, w: int = REST_WINDOW) -> i
     return lo + int(np.argmin(window_spread(x[lo:hi], w)))
 
 
-def punch_segments(frames: np.ndarray, labels: Sequence[str]) -> list[tuple[np.ndarray, list[str], np.ndarray, int, int]]:
+def punch_segments(frames: np.ndarray, labels: Sequence[str]) -> list[tuple[np.ndarray, list[str], np.ndarray, int, int, int]]:
     """Every labelled punch of a recording with the rest around it: (frames, labels, rest, cut,
-    onset), onset being the punch's true onset in the recording (`stream_onset`),
+    onset, rest end), onset being the punch's true onset in the recording and rest end the
+    frame after the rest before it (`stream_rest`),
     cut at frame `cut` in the middle of the stillest REST_WINDOW frames of the gap before it, up to
     the middle of those of the gap after it (at most REST_SEARCH frames from the label; the label's
     own edge when the gap is shorter); `rest` is the mean of the window before the punch (its guard)."""
     x = np.asarray(frames, dtype=np.float64)
     labels = list(labels)
     ivs = intervals(labels)
-    cuts, rests, onsets = [], [], []
+    cuts, rests, onsets, rest_ends = [], [], [], []
     prev_end = 0
     for _, a, b in ivs:
-        onsets.append(stream_onset(x, a, b, prev_end))
+        rest_end, onset = stream_rest(x, a, b, prev_end)
+        onsets.append(onset)
+        rest_ends.append(rest_end)
         k = _stillest_window(x, max(prev_end, a - REST_SEARCH), a)
         k = k if k is not None else max(prev_end, a - REST_WINDOW)
         cuts.append(min(k + REST_WINDOW // 2, a))
@@ -661,7 +679,8 @@ def punch_segments(frames: np.ndarray, labels: Sequence[str]) -> list[tuple[np.n
     b = ivs[-1][2] if ivs else len(x)
     k = _stillest_window(x, b, min(len(x), b + REST_SEARCH))
     cuts.append(k + REST_WINDOW // 2 if k is not None else min(len(x), b + REST_WINDOW))
-    return [(x[cuts[i] : cuts[i + 1]], labels[cuts[i] : cuts[i + 1]], rests[i], cuts[i], onsets[i]) for i in range(len(ivs))]
+    return [(x[cuts[i] : cuts[i + 1]], labels[cuts[i] : cuts[i + 1]], rests[i], cuts[i], onsets[i], rest_ends[i])
+            for i in range(len(ivs))]
 
 
 def _turn(frames: np.ndarray, src: np.ndarray, dst: np.ndarray, share: np.ndarray | None = None) -> np.ndarray:
@@ -688,12 +707,14 @@ def _turn(frames: np.ndarray, src: np.ndarray, dst: np.ndarray, share: np.ndarra
 
 
 def _turned_in(
-    frames: np.ndarray, labels: Sequence[str], rest: np.ndarray, guard: np.ndarray, cut: int, onset: int, turn_in: int
-) -> tuple[np.ndarray, list[str], np.ndarray, int, int]:
+    frames: np.ndarray, labels: Sequence[str], rest: np.ndarray, guard: np.ndarray, cut: int, onset: int,
+    rest_end: int, turn_in: int,
+) -> tuple[np.ndarray, list[str], np.ndarray, int, int, int]:
     """A punch segment (`punch_segments`) whose rest is turned into `guard`, the turn undone over
     the `turn_in` frames before its own onset, the punch as recorded; and its true onset: the
     first frame of the turn or after it ONSET_G away from the turned rest (the punch's own onset
-    when the turn is too small to get there). A segment whose rest before the turn is shorter than
+    when the turn is too small to get there); its rest ends where the turn begins, at the latest.
+    A segment whose rest before the turn is shorter than
     REST_WINDOW frames starts with more rest: its first REST_WINDOW // 2 frames (the stillest
     window's second half, see `punch_segments`) played back and forth, so it keeps its noise."""
     pad = max(0, turn_in + REST_WINDOW - (onset - cut))
@@ -704,16 +725,17 @@ def _turned_in(
     at = onset - cut  # the punch's own onset in the segment
     turned = _turn(frames, rest, guard, np.clip((at - np.arange(len(frames))) / turn_in, 0.0, 1.0))
     away = _away_from_rest(turned[at - turn_in : at], _turn(rest[None], rest, guard)[0])
-    return turned, labels, guard, cut, cut + (at - turn_in + int(away[0]) if len(away) else at)
+    return turned, labels, guard, cut, cut + (at - turn_in + int(away[0]) if len(away) else at), min(rest_end, onset - turn_in)
 
 
 def mixed_stream(
     recordings: Sequence[tuple[np.ndarray, Sequence[str]]], seed: int = 0, one_guard: bool = False, turn_in: int = 0
-) -> tuple[np.ndarray, list[str], list[int]]:
+) -> tuple[np.ndarray, list[str], list[int], list[int]]:
     """One labelled stream of every punch of `recordings` (single-kind files), each with the rest
     around it (`punch_segments`), in an order shuffled with `seed`; SPLICE_FRAMES of linear ramp
     between two segments; the stream opens with LEAD_REST frames of the rest before one recording's
-    first punch, then that punch. Returns the frames, the labels and each punch's true onset: the
+    first punch, then that punch. Returns the frames, the labels, each punch's true onset and the
+    frame after its rest (`stream_rest`, never earlier than its segment, after the ramp): the
     one in its own recording (`stream_onset` there), not one measured in the stream, where the
     rest before a punch may lie before a splice's ramp (a guard change the splice made, not the
     player) and the onset would fall on the ramp.
@@ -743,17 +765,18 @@ def mixed_stream(
         guard = np.mean([s[2] for s in segs], axis=0)
         lead = _turn(lead, segs[first][2], guard) if len(lead) else lead
         if turn_in > 0:
-            segs = [_turned_in(f, lab, r, guard, c, on, turn_in) for f, lab, r, c, on in segs]
+            segs = [_turned_in(f, lab, r, guard, c, on, re, turn_in) for f, lab, r, c, on, re in segs]
         else:
-            segs = [(_turn(f, r, guard), lab, guard, c, on) for f, lab, r, c, on in segs]
+            segs = [(_turn(f, r, guard), lab, guard, c, on, re) for f, lab, r, c, on, re in segs]
     if not len(lead):
         lead = segs[first][0][:1]
-    parts, labels, onsets = [lead], [""] * len(lead), []
+    parts, labels, onsets, rest_ends = [lead], [""] * len(lead), [], []
     for n, i in enumerate(order):
-        f, lab, _, cut, onset = segs[i]
+        f, lab, _, cut, onset, rest_end = segs[i]
         ramp = np.linspace(parts[-1][-1], f[0], SPLICE_FRAMES + 2)[1:-1] if n else f[:0]
         parts += [ramp, f]
         labels += [""] * len(ramp)
         onsets.append(len(labels) + onset - cut)  # its own (a whole turn keeps the distances from the rest)
+        rest_ends.append(len(labels) + max(0, rest_end - cut))  # never on the splice's ramp
         labels += list(lab)
-    return np.vstack(parts), labels, onsets
+    return np.vstack(parts), labels, onsets, rest_ends

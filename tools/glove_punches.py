@@ -23,7 +23,7 @@ from tools.evaluate_recognition import (
     Summary,
     replay_stream,
     score_stream,
-    stream_onset,
+    stream_rest,
     stream_trials,
 )
 from tools.trial_files import read_frames, templates_from_trials
@@ -67,22 +67,25 @@ def glove_bursts(frames: np.ndarray, sensor: int) -> list[tuple[int, int]]:
     return out
 
 
-def glove_intervals(frames: np.ndarray, left_action: str, right_action: str) -> tuple[list[Interval], list[int]]:
+def glove_intervals(frames: np.ndarray, left_action: str, right_action: str) -> tuple[list[Interval], list[int], list[int]]:
     """Every burst of both gloves as (action, first, end), sorted by first frame (left before right
-    on a tie), and each one's true onset: `stream_onset` on its own glove's readings, the rest
-    searched after the same glove's previous burst."""
+    on a tie), each one's true onset and the frame after its rest: `stream_rest` on its own
+    glove's readings, the rest searched after the same glove's previous burst."""
     x = np.asarray(frames, dtype=np.float64)
     ivs: list[Interval] = []
     onsets: list[int] = []
+    rest_ends: list[int] = []
     for sensor, action in ((LEFT_SENSOR, left_action), (RIGHT_SENSOR, right_action)):
         own = x[:, 3 * sensor : 3 * sensor + 3]
         prev_end = 0
         for a, b in glove_bursts(x, sensor):
             ivs.append((action, a, b))
-            onsets.append(stream_onset(own, a, a + ONSET_SEARCH, prev_end))
+            rest_end, onset = stream_rest(own, a, a + ONSET_SEARCH, prev_end)
+            onsets.append(onset)
+            rest_ends.append(rest_end)
             prev_end = b
     order = sorted(range(len(ivs)), key=lambda i: ivs[i][1])  # stable: left first on a tie
-    return [ivs[i] for i in order], [onsets[i] for i in order]
+    return [ivs[i] for i in order], [onsets[i] for i in order], [rest_ends[i] for i in order]
 
 
 def glove_files(root: str | Path) -> dict[str, list[GloveFile]]:
@@ -101,9 +104,9 @@ class _Loaded:
     """Each file's 60 Hz frames, intervals and onsets, read once."""
 
     def __init__(self) -> None:
-        self._cache: dict[Path, tuple[np.ndarray, list[Interval], list[int]]] = {}
+        self._cache: dict[Path, tuple[np.ndarray, list[Interval], list[int], list[int]]] = {}
 
-    def __call__(self, f: GloveFile) -> tuple[np.ndarray, list[Interval], list[int]]:
+    def __call__(self, f: GloveFile) -> tuple[np.ndarray, list[Interval], list[int], list[int]]:
         path, left, right = f
         if path not in self._cache:
             frames = read_frames(path)
@@ -120,7 +123,7 @@ def _training_trials(train: Sequence[GloveFile], load: _Loaded, trials: int) -> 
     cut: dict[str, list[np.ndarray]] = {}
     used: list[Path] = []
     for f in train:
-        frames, ivs, _ = load(f)
+        frames, ivs, *_ = load(f)
         for action in f[1:]:
             mine = [iv for iv in ivs if iv[0] == action][:trials]
             if action not in cut and mine:
@@ -141,11 +144,11 @@ def _test(train: Sequence[GloveFile], tests: Sequence[GloveFile], load: _Loaded,
         return 0
     templates = templates_from_trials(cut, ", ".join(map(str, used)), **(template_kwargs or {}))
     for f in tested:
-        frames, ivs, onsets = load(f)
+        frames, ivs, onsets, rest_ends = load(f)
         for pool in pooled:
             rec = DualBufferRecognizer(templates, main=pool.main, **rec_kwargs)
             events = replay_stream(rec, frames, clip_frames)
-            s = score_stream(events, ivs, len(frames), pool.main, frames=frames, onsets=onsets)
+            s = score_stream(events, ivs, len(frames), pool.main, frames=frames, onsets=onsets, rest_ends=rest_ends)
             pool.add(s)
     return len(tested)
 

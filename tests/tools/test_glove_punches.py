@@ -72,7 +72,7 @@ def test_glove_intervals_onset_is_measured_on_the_punching_glove_alone():
     punch(x, 0, 200)
     # the left glove (sensor 1) is already moving from frame 160 on, under the burst bar
     x[160:230, 3] += 0.6 * np.sin(np.linspace(0, 3 * np.pi, 70))
-    ivs, onsets = glove_intervals(x, "hook_l", "straight_r")
+    ivs, onsets, _ = glove_intervals(x, "hook_l", "straight_r")
     assert ivs == [("straight_r", 200, 205)]
     assert onsets == [190]
     # the same search on both gloves' readings would put it where the left glove started moving
@@ -87,7 +87,7 @@ def test_glove_intervals_rest_is_searched_after_the_same_gloves_previous_burst()
     wind_up(x, 1, 150, 10)
     punch(x, 1, 150)
     punch(x, 0, 132)  # the right glove punches in between
-    ivs, onsets = glove_intervals(x, "hook_l", "hook_r")
+    ivs, onsets, _ = glove_intervals(x, "hook_l", "hook_r")
     assert ivs == [("hook_l", 115, 120), ("hook_r", 132, 137), ("hook_l", 150, 155)]
     # the second left punch's rest is the new guard, after its glove's own previous burst: not the
     # stiller old guard before that burst (onset 115), and not cut short by the right glove's punch
@@ -104,7 +104,7 @@ def test_glove_intervals_come_sorted_by_first_frame_left_first_on_a_tie():
         for at, k in bursts.items():
             wind_up(x, sensor, at, k)
             punch(x, sensor, at)
-    ivs, onsets = glove_intervals(x, "uppercut_l", "hook_r")
+    ivs, onsets, _ = glove_intervals(x, "uppercut_l", "hook_r")
     assert ivs == [("hook_r", 50, 55), ("uppercut_l", 100, 105), ("hook_r", 200, 205), ("uppercut_l", 300, 305),
                    ("uppercut_l", 500, 505), ("hook_r", 500, 505), ("hook_r", 700, 705)]
     # each onset stays with its own interval through the sort: its own wind-up's first frame
@@ -146,7 +146,7 @@ def test_real_files_burst_counts_are_within_10_percent_of_their_names(punchbuddy
         for f, left, right in files:
             count = int(GLOVE_NAME.fullmatch(f.name)["count"])
             _, frames, _ = recording_frames(read_recording(f))
-            ivs, onsets = glove_intervals(frames, left, right)
+            ivs, onsets, _ = glove_intervals(frames, left, right)
             for action in (left, right):
                 n = sum(iv[0] == action for iv in ivs)
                 assert abs(n - count) <= 0.1 * count, (f.name, action, n)

@@ -214,6 +214,37 @@ def test_stream_onset_finds_the_rest_before_a_label_that_starts_mid_motion():
     assert s.extra_starts == 1 and s.false_starts == 0
 
 
+def test_a_start_decided_while_the_hand_still_rests_is_not_the_punchs():
+    """A start decided before the rest ahead of a punch ended (on the previous punch's return, or
+    a drift in the rest) was credited to the punch when it fell within the 20 frames a start may
+    precede the label, with a negative lag and, in a file of one kind, the right action. It is
+    now an extra start, and the punch takes the first start after its rest."""
+    from tools.evaluate_recognition import score_stream, stream_rest
+
+    rng = np.random.default_rng(1)
+    prev = rest(20) + [0.0, 1.5, 0.0]  # the previous punch's return, still moving at its label's end
+    still = rest(12) + rng.normal(0, 0.01, (12, 3))
+    punch = np.tile(G, (40, 1))
+    punch[:, 1] += np.arange(40) * 0.1  # 0.3 g away at its fourth frame
+    stream = np.vstack([prev, still, punch])
+    label = 20 + 12 + 6
+    rest_end, onset = stream_rest(stream, label, len(stream), prev_end=20)
+    assert 20 + 8 <= rest_end <= 20 + 12 < onset <= 20 + 12 + 4  # the stillest 8 frames lie in the rest
+    ivs = [("x", 0, 20), ("jab", label, len(stream))]
+    early = {"event": "start", "action": "jab", "frame": 25}  # within 20 frames of the label, before the rest's end
+    assert label - 20 <= early["frame"] < rest_end
+    late = {"event": "start", "action": "hook", "frame": onset + 4}
+    s = score_stream([early, late], ivs, len(stream), 6, frames=stream)
+    assert s.outcomes[1].first == "hook" and s.outcomes[1].lag == 4 and s.extra_starts == 1
+    # a start in the rest's last frames: not this punch's either; one after it is, however early
+    for frame, taken in ((rest_end - 1, "hook"), (rest_end, "jab")):
+        s = score_stream([{**early, "frame": frame}, late], ivs, len(stream), 6, frames=stream)
+        assert s.outcomes[1].first == taken, frame
+    # a spliced stream's rest ends are given with its onsets
+    s = score_stream([early, late], ivs, len(stream), 6, frames=stream, onsets=[0, onset], rest_ends=[0, 24])
+    assert s.outcomes[1].first == "jab" and s.outcomes[1].lag == 25 - onset
+
+
 def test_evaluate_prints_lag_median_and_p90_and_accepts_auto(tmp_path, trials_dir, capsys):
     assert main(["evaluate", "--train", str(trials_dir), str(trials_dir), "--mains", "6", "--noise-g", "auto", "--json"]) == 0
     row = json.loads(capsys.readouterr().out.splitlines()[-1])
@@ -334,7 +365,7 @@ def test_mixed_stream_splices_every_punch_once_in_a_seeded_order():
     rng = np.random.default_rng(0)
     tilted = np.array([0.0, np.sin(1.0), np.cos(1.0)])  # this kind's guard is 57 degrees off
     recs = [single_kind_recording(rng, "jab", 0, G, 4, 40, 0.01), single_kind_recording(rng, "upper", 1, tilted, 4, 40, 0.01)]
-    frames, labels, _ = mixed_stream(recs, seed=1)
+    frames, labels, *_ = mixed_stream(recs, seed=1)
     ivs = intervals(labels)
     assert sorted(a for a, _, _ in ivs) == ["jab"] * 4 + ["upper"] * 4
     assert all(b - a == 24 for _, a, b in ivs)  # each punch whole, none merged with another
@@ -344,11 +375,11 @@ def test_mixed_stream_splices_every_punch_once_in_a_seeded_order():
     # the splices are ramps, not steps: no jump bigger than the punches' own
     assert np.abs(np.diff(frames, axis=0)).max() < 1.0
     # one guard: the rest just before every punch points the same way
-    frames, labels, _ = mixed_stream(recs, seed=1, one_guard=True)
+    frames, labels, *_ = mixed_stream(recs, seed=1, one_guard=True)
     rests = np.array([frames[a - REST_WINDOW // 2 : a].mean(axis=0) for _, a, _ in intervals(labels)])
     rests /= np.linalg.norm(rests, axis=1, keepdims=True)
     assert np.allclose(rests, rests[0], atol=0.05)
-    plain = np.array([f[a - 4 : a].mean(axis=0) for f, lab, _ in [mixed_stream(recs, seed=1)] for _, a, _ in intervals(lab)])
+    plain = np.array([f[a - 4 : a].mean(axis=0) for f, lab, *_ in [mixed_stream(recs, seed=1)] for _, a, _ in intervals(lab)])
     assert np.ptp(plain[:, 1]) > 0.5  # as recorded the two kinds' guards differ
 
 
@@ -369,7 +400,7 @@ def test_mixed_stream_onsets_are_the_punches_own_not_the_splice_ramps():
             on = stream_onset(frames, a, b, prev)
             own.setdefault(round(float(frames[b - 1].sum()), 9), frames[on : on + 8])
             prev = b
-    frames, labels, onsets = mixed_stream(recs, seed=1)
+    frames, labels, onsets, _ = mixed_stream(recs, seed=1)
     ivs = intervals(labels)
     assert len(onsets) == len(ivs)
     on_ramp = 0
@@ -398,8 +429,8 @@ def test_mixed_stream_turned_in_rests_in_one_guard_and_throws_each_punch_as_reco
             on = stream_onset(frames, a, b, prev)
             peaks[round(float(frames[a + 12].sum()), 9)] = (frames[on:b], b - on)
             prev = b
-    frames, labels, onsets = mixed_stream(recs, seed=1, one_guard=True, turn_in=TURN_IN)
-    turned, turned_labels, _ = mixed_stream(recs, seed=1, one_guard=True)
+    frames, labels, onsets, _ = mixed_stream(recs, seed=1, one_guard=True, turn_in=TURN_IN)
+    turned, turned_labels, *_ = mixed_stream(recs, seed=1, one_guard=True)
     guards = []
     for (_, a, b), on in zip(intervals(labels), onsets, strict=True):
         own, n = peaks[round(float(frames[a + 12].sum()), 9)]  # the punch as recorded, unturned
@@ -431,7 +462,7 @@ def test_evaluate_phone_punches_tests_recorded_mixed_sequences(tmp_path, capsys)
         (tmp_path / f.name).symlink_to(f)  # read in place, not copied
 
     slow = [recording_frames(read_recording(f))[1:] for f in punch_files(root)[("left", "slow")].values()]
-    frames, labels, _ = mixed_stream(slow, seed=2)
+    frames, labels, *_ = mixed_stream(slow, seed=2)
     t = np.arange(len(frames)) / 60.0
     write_recording(tmp_path / "left_mixed_a.csv", Recording(t, frames.reshape(len(frames), 1, 3), labels))
     assert main(["evaluate", "--phone-punches", str(tmp_path), "--mains", "6", "--json"]) == 0
