@@ -141,25 +141,29 @@ def stream_onset(frames: np.ndarray, first: int, end: int, prev_end: int = 0) ->
     return stream_rest(frames, first, end, prev_end)[1]
 
 
-def stream_rest(frames: np.ndarray, first: int, end: int, prev_end: int = 0) -> tuple[int, int]:
-    """A labelled interval [first, end)'s rest and true onset: (the frame after the rest, the
-    onset). The rest: the mean of the stillest REST_WINDOW frames (least summed spread of the
-    sensors' readings about their mean) in [max(prev_end, first - REST_SEARCH), first),
-    `prev_end` being the previous interval's end (hand labels start after the wind-up, so the
-    frames just before `first` are already moving). The onset: the first frame after that
-    window ONSET_G away from the rest, before `end`; `first` when none is. A decision before
-    the rest's end was made while the hand still rested: it is not this punch's."""
+def stream_rest(frames: np.ndarray, first: int, end: int, prev_end: int = 0) -> tuple[int | None, int]:
+    """A labelled interval [first, end)'s rest and true onset: (the frame after the rest, or
+    None when that window is no rest, the onset). The rest: the mean of the stillest
+    REST_WINDOW frames (least summed spread of the sensors' readings about their mean) in
+    [max(prev_end, first - REST_SEARCH), first), `prev_end` being the previous interval's end
+    (hand labels start after the wind-up, so the frames just before `first` are already
+    moving). The onset: the first frame after that window ONSET_G away from the rest, before
+    `end`; `first` when none is. A decision before the rest's end was made while the hand still
+    rested: it is not this punch's. A window with a frame ONSET_G from its own mean is still
+    moving by the onset's own measure (a shadow boxer's punches follow each other without
+    one: the stillest frames between two are the next one's wind-up): no rest end then."""
     x = np.asarray(frames, dtype=np.float64)
     lo = max(prev_end, first - REST_SEARCH, 0)
     w = min(REST_WINDOW, first - lo)
     if w < 2:  # no room between the intervals: the frames just before the label
         lo, w = max(0, first - REST_WINDOW), min(REST_WINDOW, first)
     if w < 1:
-        return first, first
+        return None, first
     k = lo + int(np.argmin(window_spread(x[lo:first], w)))
     rest = x[k : k + w].mean(axis=0)
     away = _away_from_rest(x[k + w : end], rest)
-    return k + w, k + w + int(away[0]) if len(away) else first
+    still = not len(_away_from_rest(x[k : k + w], rest))
+    return k + w if still else None, k + w + int(away[0]) if len(away) else first
 
 
 def _decisions(events: Iterable[dict]) -> tuple[str | None, str | None, int, int | None]:
@@ -288,14 +292,14 @@ def score_stream(
     tolerance: int = EARLY_TOLERANCE,
     frames: np.ndarray | None = None,
     onsets: Sequence[int] | None = None,
-    rest_ends: Sequence[int] | None = None,
+    rest_ends: Sequence[int | None] | None = None,
 ) -> Summary:
     """Match starts to intervals, in order: each interval takes the first start not yet taken
     inside [first - tolerance, end) (hand-labelled intervals begin after the wind-up the sensor
     already sees, and a start in the last frames of an interval that already has one is the
-    next punch's) and not before the end of the rest before it: a start decided while the hand
-    still rested (on the previous punch's return, or a drift) is not this punch's, whatever it
-    names. Starts outside every (widened) interval are false starts; the other starts not
+    next punch's) and not before the end of the rest before it, where there is one (`stream_rest`):
+    a start decided while the hand still rested (on the previous punch's return, or a drift)
+    is not this punch's, whatever it names. Starts outside every (widened) interval are false starts; the other starts not
     taken, inside a (widened) interval, are `extra_starts` (a player sees a second punch, e.g.
     the return of a full blow after the character's clip ended). The lag is counted from each
     interval's true onset: `onsets[i]` and `rest_ends[i]` when given (a spliced stream's, see
@@ -307,12 +311,12 @@ def score_stream(
     prev_end = 0
     for i, (action, a, b) in enumerate(ivs):
         prev, prev_end = prev_end, b
-        rest_end, onset = (a - tolerance, a) if frames is None else stream_rest(frames, a, b, prev)
+        rest_end, onset = (None, a) if frames is None else stream_rest(frames, a, b, prev)
         if onsets is not None:
             onset = onsets[i]
         if rest_ends is not None:
             rest_end = rest_ends[i]
-        lo = max(a - tolerance, rest_end)
+        lo = a - tolerance if rest_end is None else max(a - tolerance, rest_end)
         mine = [k for k, e in enumerate(starts) if lo <= e["frame"] < b and k not in used]
         if not mine:
             s.outcomes.append(Outcome(action, None, None, -1, None))
@@ -655,7 +659,7 @@ def _stillest_window(x: np.ndarray, lo: int, hi: int, w: int = REST_WINDOW) -> i
     return lo + int(np.argmin(window_spread(x[lo:hi], w)))
 
 
-def punch_segments(frames: np.ndarray, labels: Sequence[str]) -> list[tuple[np.ndarray, list[str], np.ndarray, int, int, int]]:
+def punch_segments(frames: np.ndarray, labels: Sequence[str]) -> list[tuple[np.ndarray, list[str], np.ndarray, int, int, int | None]]:
     """Every labelled punch of a recording with the rest around it: (frames, labels, rest, cut,
     onset, rest end), onset being the punch's true onset in the recording and rest end the
     frame after the rest before it (`stream_rest`),
@@ -665,7 +669,7 @@ def punch_segments(frames: np.ndarray, labels: Sequence[str]) -> list[tuple[np.n
     x = np.asarray(frames, dtype=np.float64)
     labels = list(labels)
     ivs = intervals(labels)
-    cuts, rests, onsets, rest_ends = [], [], [], []
+    cuts, rests, onsets, rest_ends = [], [], [], []  # rest_ends: int or None (`stream_rest`)
     prev_end = 0
     for _, a, b in ivs:
         rest_end, onset = stream_rest(x, a, b, prev_end)
@@ -708,8 +712,8 @@ def _turn(frames: np.ndarray, src: np.ndarray, dst: np.ndarray, share: np.ndarra
 
 def _turned_in(
     frames: np.ndarray, labels: Sequence[str], rest: np.ndarray, guard: np.ndarray, cut: int, onset: int,
-    rest_end: int, turn_in: int,
-) -> tuple[np.ndarray, list[str], np.ndarray, int, int, int]:
+    rest_end: int | None, turn_in: int,
+) -> tuple[np.ndarray, list[str], np.ndarray, int, int, int | None]:
     """A punch segment (`punch_segments`) whose rest is turned into `guard`, the turn undone over
     the `turn_in` frames before its own onset, the punch as recorded; and its true onset: the
     first frame of the turn or after it ONSET_G away from the turned rest (the punch's own onset
@@ -725,12 +729,14 @@ def _turned_in(
     at = onset - cut  # the punch's own onset in the segment
     turned = _turn(frames, rest, guard, np.clip((at - np.arange(len(frames))) / turn_in, 0.0, 1.0))
     away = _away_from_rest(turned[at - turn_in : at], _turn(rest[None], rest, guard)[0])
-    return turned, labels, guard, cut, cut + (at - turn_in + int(away[0]) if len(away) else at), min(rest_end, onset - turn_in)
+    turn_start = onset - turn_in
+    return turned, labels, guard, cut, cut + (at - turn_in + int(away[0]) if len(away) else at), \
+        None if rest_end is None else min(rest_end, turn_start)
 
 
 def mixed_stream(
     recordings: Sequence[tuple[np.ndarray, Sequence[str]]], seed: int = 0, one_guard: bool = False, turn_in: int = 0
-) -> tuple[np.ndarray, list[str], list[int], list[int]]:
+) -> tuple[np.ndarray, list[str], list[int], list[int | None]]:
     """One labelled stream of every punch of `recordings` (single-kind files), each with the rest
     around it (`punch_segments`), in an order shuffled with `seed`; SPLICE_FRAMES of linear ramp
     between two segments; the stream opens with LEAD_REST frames of the rest before one recording's
@@ -777,6 +783,6 @@ def mixed_stream(
         parts += [ramp, f]
         labels += [""] * len(ramp)
         onsets.append(len(labels) + onset - cut)  # its own (a whole turn keeps the distances from the rest)
-        rest_ends.append(len(labels) + max(0, rest_end - cut))  # never on the splice's ramp
+        rest_ends.append(None if rest_end is None else len(labels) + max(0, rest_end - cut))  # never on the ramp
         labels += list(lab)
     return np.vstack(parts), labels, onsets, rest_ends

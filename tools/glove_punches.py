@@ -67,14 +67,14 @@ def glove_bursts(frames: np.ndarray, sensor: int) -> list[tuple[int, int]]:
     return out
 
 
-def glove_intervals(frames: np.ndarray, left_action: str, right_action: str) -> tuple[list[Interval], list[int], list[int]]:
+def glove_intervals(frames: np.ndarray, left_action: str, right_action: str) -> tuple[list[Interval], list[int], list[int | None]]:
     """Every burst of both gloves as (action, first, end), sorted by first frame (left before right
     on a tie), each one's true onset and the frame after its rest: `stream_rest` on its own
     glove's readings, the rest searched after the same glove's previous burst."""
     x = np.asarray(frames, dtype=np.float64)
     ivs: list[Interval] = []
     onsets: list[int] = []
-    rest_ends: list[int] = []
+    rest_ends: list[int | None] = []
     for sensor, action in ((LEFT_SENSOR, left_action), (RIGHT_SENSOR, right_action)):
         own = x[:, 3 * sensor : 3 * sensor + 3]
         prev_end = 0
@@ -104,9 +104,9 @@ class _Loaded:
     """Each file's 60 Hz frames, intervals and onsets, read once."""
 
     def __init__(self) -> None:
-        self._cache: dict[Path, tuple[np.ndarray, list[Interval], list[int], list[int]]] = {}
+        self._cache: dict[Path, tuple[np.ndarray, list[Interval], list[int], list[int | None]]] = {}
 
-    def __call__(self, f: GloveFile) -> tuple[np.ndarray, list[Interval], list[int], list[int]]:
+    def __call__(self, f: GloveFile) -> tuple[np.ndarray, list[Interval], list[int], list[int | None]]:
         path, left, right = f
         if path not in self._cache:
             frames = read_frames(path)

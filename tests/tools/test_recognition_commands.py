@@ -240,6 +240,12 @@ def test_a_start_decided_while_the_hand_still_rests_is_not_the_punchs():
     for frame, taken in ((rest_end - 1, "hook"), (rest_end, "jab")):
         s = score_stream([{**early, "frame": frame}, late], ivs, len(stream), 6, frames=stream)
         assert s.outcomes[1].first == taken, frame
+    # no still window before it (a shadow boxer's combo: the stillest frames between two punches
+    # still move 0.3 g about their mean): no rest end, and a start may come 20 frames early
+    sway = rest(12) + np.sin(np.arange(12) * 1.7)[:, None] * [0.0, 0.5, 0.0]
+    moving = np.vstack([prev, sway, punch])
+    assert stream_rest(moving, label, len(moving), prev_end=20)[0] is None
+    assert score_stream([early, late], ivs, len(moving), 6, frames=moving).outcomes[1].first == "jab"
     # a spliced stream's rest ends are given with its onsets
     s = score_stream([early, late], ivs, len(stream), 6, frames=stream, onsets=[0, onset], rest_ends=[0, 24])
     assert s.outcomes[1].first == "jab" and s.outcomes[1].lag == 25 - onset
