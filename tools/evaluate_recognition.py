@@ -59,6 +59,10 @@ class Outcome:
     # it decided; negative when the recognizer's onset came first. The rest of `lag` is the main
     # buffer filling from there (docs/recognition.md, "Where the lag goes").
     onset_lag: int | None = None
+    # whether a still rest came before the punch (`stream_rest`), so that its true onset is the
+    # definition's, 0.3 g from that rest; without one (a shadow boxer's punches in a row) the
+    # onset is measured from frames that still move, or is the first labelled frame
+    rested: bool = True
 
     @property
     def group(self) -> int:
@@ -95,6 +99,7 @@ class Summary:
         c = self.counts() / n
         lags = [o.lag for o in self.outcomes if o.lag is not None]
         split = [(o.onset_lag, o.lag - o.onset_lag) for o in self.outcomes if o.lag is not None and o.onset_lag is not None]
+        rested = [o.lag for o in self.outcomes if o.lag is not None and o.rested]
         started = sum(o.first is not None for o in self.outcomes)
         out = {
             "main": self.main,
@@ -108,6 +113,10 @@ class Summary:
             "lag_ms": round(float(np.median(lags)) * 1000 / 60, 1) if lags else None,
             "lag_p90_ms": round(float(np.percentile(lags, 90)) * 1000 / 60, 1) if lags else None,
         }
+        if len(rested) < len(lags):  # some punches had no rest to measure from: the lag of those that had
+            out["lag_rested_n"] = len(rested)
+            out["lag_rested_ms"] = round(float(np.median(rested)) * 1000 / 60, 1) if rested else None
+            out["lag_rested_p90_ms"] = round(float(np.percentile(rested, 90)) * 1000 / 60, 1) if rested else None
         if split:  # medians of each part: they need not add up to lag_ms
             out["lag_to_onset_ms"] = round(float(np.median([a for a, _ in split])) * 1000 / 60, 1)
             out["lag_onset_to_decision_ms"] = round(float(np.median([b for _, b in split])) * 1000 / 60, 1)
@@ -326,7 +335,8 @@ def score_stream(
         e = starts[k]
         after = [x for x in events if x["frame"] >= e["frame"]]
         first, final, last_np, at = _decisions(after)
-        s.outcomes.append(Outcome(action, first, final, last_np, at - onset, _recognizer_onset(after, onset)))
+        s.outcomes.append(Outcome(action, first, final, last_np, at - onset, _recognizer_onset(after, onset),
+                                  rested=rest_end is not None))
     labelled = np.zeros(n_frames, dtype=bool)
     for _, a, b in ivs:
         labelled[max(0, a - tolerance) : b] = True
@@ -393,6 +403,8 @@ def format_table(rows: Sequence[dict]) -> str:
             "lag_to_onset_ms", "lag_onset_to_decision_ms"]
     if any("false_starts" in r for r in rows):
         cols += ["started", "type", "false_starts", "false_starts_per_idle_min", "extra_starts"]
+    if any("lag_rested_n" in r for r in rows):
+        cols += ["lag_rested_n", "lag_rested_ms", "lag_rested_p90_ms"]
     head = " | ".join(cols)
     lines = [head, "-" * len(head)]
     for r in rows:

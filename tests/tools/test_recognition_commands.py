@@ -245,7 +245,13 @@ def test_a_start_decided_while_the_hand_still_rests_is_not_the_punchs():
     sway = rest(12) + np.sin(np.arange(12) * 1.7)[:, None] * [0.0, 0.5, 0.0]
     moving = np.vstack([prev, sway, punch])
     assert stream_rest(moving, label, len(moving), prev_end=20)[0] is None
-    assert score_stream([early, late], ivs, len(moving), 6, frames=moving).outcomes[1].first == "jab"
+    s = score_stream([early, late], ivs, len(moving), 6, frames=moving)
+    assert s.outcomes[1].first == "jab" and not s.outcomes[1].rested
+    # its lag counts from frames that still move: the lag of the punches after a rest is said apart
+    s.add(score_stream([early, late], ivs, len(stream), 6, frames=stream))
+    row = s.row()
+    assert row["lag_rested_n"] == 1 and row["lag_rested_ms"] == round(4 * 1000 / 60, 1)
+    assert "lag_rested_n" not in score_stream([early, late], ivs, len(stream), 6, frames=stream).row()
     # a spliced stream's rest ends are given with its onsets
     s = score_stream([early, late], ivs, len(stream), 6, frames=stream, onsets=[0, onset], rest_ends=[0, 24])
     assert s.outcomes[1].first == "jab" and s.outcomes[1].lag == 25 - onset
