@@ -27,12 +27,12 @@ HEADLESS_FRAMES = 600  # `--headless` without `--frames` stops after 10 s of pla
 INVISIBLE_DRIVERS = ("offscreen", "dummy")  # SDL video drivers that open no window
 
 
-# The smallest window `play` and `train` open. At 640x360 every screen's text fits, in 12 px type
-# (hud_style.min_text_px; tests/game/test_hud_small_screens.py); under it the HUD cannot be read:
+# The smallest window whose text is readable. At 640x360 every screen's text fits, in 12 px type
+# (hud_style.min_text_px; tests/game/test_hud_small_screens.py); under it the HUD is hard to read:
 # at 480x270 and 320x240 its capitals are 4 px high, a REJECTED mark runs into the move's name,
-# and the training screen's checklist and plot go off the bottom of the window. --headless opens
-# no window: its frames (screenshots, thumbnails, quick test runs) may be smaller, down to
-# arguments.SIZE_MIN, with text shrinking past legibility.
+# and the training screen's checklist and plot go off the bottom of the window. A smaller --size
+# is said, not refused (a board's 480x320 screen has no larger window to give); the window a
+# player drags is kept at least this large, or at least the --size asked for.
 MIN_WINDOW = (640, 360)
 
 
@@ -45,23 +45,23 @@ def parse_size(text: str) -> tuple[int, int]:
 
 
 def parse_window_size(text: str, headless: bool, command: str) -> tuple[int, int]:
-    """`--size` for `command`: a window (not --headless) at least MIN_WINDOW, else one line."""
+    """`--size` for `command`; a window (not --headless) under MIN_WINDOW is said in one line."""
     w, h = parse_size(text)
     if not headless and (w < MIN_WINDOW[0] or h < MIN_WINDOW[1]):
-        raise InputError(f"--size {w}x{h}: the {command} window must be at least {MIN_WINDOW[0]}x{MIN_WINDOW[1]} "
-                         "(smaller, its text is unreadable and runs off the screen); --headless draws smaller frames")
+        print(f"quickjab {command}: --size {w}x{h}: under {MIN_WINDOW[0]}x{MIN_WINDOW[1]} the text is hard to read "
+              "and some of it runs off the window", file=sys.stderr)
     return w, h
 
 
 def open_window(size: tuple[int, int], flags: int, headless: bool, command: str) -> None:
     """The display at `size`: a window (not --headless) must show (check_visible_window), and
-    it cannot be dragged below MIN_WINDOW."""
+    it cannot be dragged below MIN_WINDOW (or below `size`, where that is smaller)."""
     import pygame
 
     pygame.display.set_mode(size, flags)
     if not headless:
         check_visible_window(command)
-        keep_window_at_least()
+        keep_window_at_least((min(size[0], MIN_WINDOW[0]), min(size[1], MIN_WINDOW[1])))
 
 
 def keep_window_at_least(size: tuple[int, int] = MIN_WINDOW) -> None:

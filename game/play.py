@@ -48,7 +48,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--trace", type=arguments.output_file, metavar="JSON", help="write the loop's Chrome trace here on exit")
     p.add_argument("--virtual-clock", action="store_true", help="a virtual clock in a real window: the same frames as --headless with a simulated source (tests; a live device too)")
     p.add_argument("--seed", type=arguments.seed, default=0, help="seed for the virtual player and anything random (default 0)")
-    p.add_argument("--size", default="1280x720", help="window size WxH (default 1280x720; at least 640x360, smaller frames with --headless)")
+    p.add_argument("--size", default="1280x720", help="window size WxH (default 1280x720; under 640x360 the text is hard to read)")
     p.add_argument("--fullscreen", action="store_true", help="start fullscreen (F11 toggles)")
     p.add_argument("--low-power", action="store_true", help="render at 30 Hz on a half-size surface, flat shading, no antialiasing, fewer solver iterations (docs/performance.md)")
     p.add_argument("--templates", metavar="NPZ", type=arguments.path_argument, help="recognition templates (default: yours from `quickjab train`, else the shipped set)")

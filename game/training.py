@@ -476,7 +476,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--frames", type=arguments.positive_int, default=None, help="stop after N rendered frames")
     p.add_argument("--screenshot", type=arguments.output_file, metavar="PNG", help="save the last frame to this PNG")
     p.add_argument("--seed", type=arguments.seed, default=0, help="seed of the virtual player's moves (default 0)")
-    p.add_argument("--size", default="1280x720", help="window size WxH (default 1280x720; at least 640x360, smaller frames with --headless)")
+    p.add_argument("--size", default="1280x720", help="window size WxH (default 1280x720; under 640x360 the text is hard to read)")
     p.add_argument("--recognizer", action="append", default=[], metavar="NAME=VALUE",
                    help="a recognizer setting to save with your templates, e.g. noise_g=0.5 (repeatable; "
                         "docs/recognition.md); the settings your file already holds are kept")

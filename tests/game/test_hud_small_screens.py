@@ -344,9 +344,9 @@ def caps_any(monkeypatch) -> Iterator[dict[str, int]]:
 
 
 def test_the_smallest_window_keeps_every_screen_readable_and_inside_it(scene, caps_any) -> None:
-    """At game.launch.MIN_WINDOW (640x360, the smallest window `play` and `train` open) every
+    """At game.launch.MIN_WINDOW (640x360, the smallest window whose text is readable) every
     screen's text is of the window's floor (12 px type: caps 7 px; 4 px at 480x270 and 320x240,
-    which are refused) and stays inside its panel, clear of the others."""
+    which are said) and stays inside its panel, clear of the others."""
     from game.hud_style import min_text_px
     from game.launch import MIN_WINDOW
     from game.training import READY_STEPS, Trainer, TrainingScreen
@@ -379,7 +379,7 @@ def test_the_smallest_window_keeps_every_screen_readable_and_inside_it(scene, ca
 
 @pytest.mark.filterwarnings("ignore::DeprecationWarning")  # pygame-ce's Window.from_display_module
 def test_the_window_cannot_be_dragged_below_the_smallest() -> None:
-    # a resizable window dragged to 320x240 would draw the HUD that --size refuses
+    # a resizable window dragged to 320x240 would draw a HUD too small to read
     from game.launch import MIN_WINDOW, keep_window_at_least
 
     pygame.init()
