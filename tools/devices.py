@@ -21,9 +21,9 @@ def no_device_hint(url: str) -> str:
                 "docs/wiimote.md)")
     if scheme == "serial":
         port = url.split("://", 1)[-1].split("?", 1)[0]
+        probe = "" if port == "auto" else f"; `quickjab devices {port}` says whether a board answers there"
         return ("check the port (`quickjab devices` lists USB serial ports; an emulator's is the path `quickjab bridge "
-                f"emulate` printed, or its --link; `quickjab devices {port}` says whether a board answers there) "
-                "and that the board is plugged in")
+                f"emulate` printed, or its --link{probe}) and that the board is plugged in")
     return "check that the device is connected (`quickjab devices` lists Wiimotes and serial ports)"
 
 

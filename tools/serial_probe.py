@@ -79,8 +79,10 @@ def _ask(port: Any) -> None:
 def probe(path: str, seconds: float = PROBE_S, baud: int = 115200) -> ProbeResult:
     """Open `path` (a device path or pyserial URL; a leading `serial://` is taken off), ask for a
     HELLO and read until one comes or `seconds` pass. Never raises for what the port does."""
-    import termios
-
+    try:
+        from termios import error as port_error  # what a tty's settings raise on a port gone
+    except ImportError:  # not a POSIX system: pyserial's own errors only
+        port_error = OSError
     import serial
 
     from firmware_bridge import protocol
@@ -89,7 +91,7 @@ def probe(path: str, seconds: float = PROBE_S, baud: int = 115200) -> ProbeResul
     out = ProbeResult(path=path, url=f"serial://{name}")
     try:
         port = _open(name, baud)
-    except (OSError, ValueError, serial.SerialException, termios.error) as exc:
+    except (OSError, ValueError, serial.SerialException, port_error) as exc:
         out.result = f"cannot open it as a serial port ({exc})"
         return out
     decoder = protocol.Decoder()
@@ -108,12 +110,12 @@ def probe(path: str, seconds: float = PROBE_S, baud: int = 115200) -> ProbeResul
                 out.frames += 1
                 if frame.msg_type == protocol.HELLO:
                     hello = protocol.Hello(frame)
-    except (OSError, serial.SerialException, termios.error) as exc:
+    except (OSError, serial.SerialException, port_error) as exc:
         lost = f"the port was lost while probing ({exc}): the other end closed, or the device went away"
     finally:
         try:
             port.close()
-        except (OSError, serial.SerialException, termios.error):
+        except (OSError, serial.SerialException, port_error):
             pass
     out.bytes = decoder.bytes_in
     out.counts = {k: v for k, v in decoder.counts().items() if v and k not in ("frames_ok", "bytes_in")}
@@ -133,4 +135,4 @@ def _silence(out: ProbeResult, seconds: float, baud: int) -> str:
         return (f"{out.bytes} bytes in {seconds:g} s but no protocol v1 frame: another kind of device, or one sending "
                 f"at another baud rate than {baud} (a USB CDC board ignores the rate)")
     return (f"nothing in {seconds:g} s: no board there, or it is not streaming (a port another program has open "
-            "may lose its bytes to it)")
+            "may lose its bytes to it; a board that restarts when its port opens may need a longer --probe-seconds)")

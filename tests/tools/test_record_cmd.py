@@ -182,3 +182,12 @@ def test_replaying_a_recording_cut_mid_row_says_the_row_left_out(tmp_path, capsy
     assert f"{src}:43: the last row has no line end" in err
     rec = read_recording(out)
     assert len(rec) == 39 and (rec.accel[:, 0, 2] == 1.1234).all()
+
+
+def test_the_no_board_hint_offers_the_probe_for_a_named_port_only():
+    """`quickjab devices auto` would try a file named auto: the hint for serial://auto leaves the
+    probe out, and names the port for a path."""
+    from tools.devices import no_device_hint
+
+    assert "quickjab devices /dev/ttyACM0`" in no_device_hint("serial:///dev/ttyACM0?axes=x,y,z")
+    assert "devices auto" not in no_device_hint("serial://auto?vid=2e8a") and "lists USB serial ports" in no_device_hint("serial://auto")
