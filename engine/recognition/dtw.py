@@ -17,8 +17,8 @@ scan. Four ways to run it (equal scores, to the bit but for the scan, see below)
   fastest for a few dozen templates.
 - "loop": a Python loop over template positions j, each step one vectorized operation across
   all T templates, doing the C kernel's operations in its order (dtw_loop.py): its scores are
-  "native"'s and "jit"'s bit for bit. Per call cost grows with T slowly (at the game's ~160
-  templates it is as fast as the scan, at 13 several times slower).
+  "native"'s and "jit"'s bit for bit. Per call cost grows with T slowly (at the game's 156
+  templates about a quarter over the scan's, at 13 several times it).
 - "jit": one compiled numba call per frame (dtw_kernel.push_row_kernel()) doing the local costs, the
   row, the normalization and the per-template minimum; no numpy call overhead, and its loop over
   templates vectorizes. Needs numba (not installed, or QUICKJAB_NO_JIT=1: unavailable).
