@@ -21,7 +21,9 @@ Two kinds of input: isolated trials (rest padded before and after, as a player s
 the guard) and labelled streams (every labelled interval is one motion; starts outside any
 interval are false starts). In streams a simulated character plays each started action's clip,
 `clip_frames` (CLIP_FRAMES, 24) from its start (a switch continues the clip at n_p), and then calls
-`character_finished()`, as the game does; clip_frames=0: no character.
+`character_finished()`, as the game does; clip_frames=0: no character. With `Clips` (what
+`quickjab evaluate` runs), an action the game has is played as the game's boxer plays it: its own
+clip, from a switch's n_p on, finished on its last frame.
 """
 
 from __future__ import annotations
@@ -273,10 +275,42 @@ def stream_trials(frames: np.ndarray, ivs: Sequence[tuple[str, int, int]], lead:
     return out
 
 
-def replay_stream(rec: DualBufferRecognizer, frames: np.ndarray, clip_frames: int = CLIP_FRAMES) -> list[dict]:
+@dataclass(frozen=True)
+class Clips:
+    """The simulated character's clips: `per_action` frames for the actions the game has (its
+    boxer plays a started action's clip from frame 0 and a switch's from its n_p, and is done on
+    the clip's last frame), `frames` from the motion's start for any other name (the phone sets'
+    jab, hook, ...; a switch continues the clip)."""
+
+    frames: int
+    per_action: Mapping[str, int]
+
+
+def game_clips(frames: int = CLIP_FRAMES) -> Clips | int:
+    """The shipped action library's clip lengths (game/actions), `frames` for other names; 0 (no
+    character) stays 0."""
+    if frames <= 0:
+        return 0
+    from game.actions import load_library
+
+    return Clips(frames, {name: clip.frames for name, clip in load_library().items() if not clip.loop})
+
+
+def _clip_end(e: dict, clip_frames: int | Clips) -> int | None:
+    """The frame after whose push the character is done with the action `e` starts or switches to."""
+    from_frame = e.get("from_frame", 0)
+    n = clip_frames.per_action.get(e["action"]) if isinstance(clip_frames, Clips) else None
+    if n is not None:
+        return e["frame"] + max(n - 1 - from_frame, 0)
+    frames = clip_frames.frames if isinstance(clip_frames, Clips) else clip_frames
+    return e["frame"] - from_frame + frames if frames > 0 else None
+
+
+def replay_stream(rec: DualBufferRecognizer, frames: np.ndarray, clip_frames: int | Clips = CLIP_FRAMES) -> list[dict]:
     """Events of a whole stream, with a simulated character that finishes each action
-    `clip_frames` after its start (a switch continues at n_p, so the end does not move) and
-    then calls `character_finished()`; with clip_frames=0 it never does."""
+    `clip_frames` after its start (a switch continues at n_p, so the end does not move), or as
+    the game does with `Clips`, and then calls `character_finished()`; with clip_frames=0 it
+    never does."""
     rec.reset()
     events: list[dict] = []
     clip_end = None
@@ -284,8 +318,7 @@ def replay_stream(rec: DualBufferRecognizer, frames: np.ndarray, clip_frames: in
         evs = rec.push(f)
         for e in evs:
             if e["event"] in ("start", "switch"):
-                start = e["frame"] - e.get("from_frame", 0)
-                clip_end = start + clip_frames if clip_frames > 0 else None
+                clip_end = _clip_end(e, clip_frames)
         events.extend(evs)
         if clip_end is not None and i >= clip_end:
             rec.character_finished()
@@ -353,7 +386,7 @@ def evaluate_stream_folds(
     mains: Sequence[int | str],
     folds: int = 2,
     template_kwargs: Mapping | None = None,
-    clip_frames: int = CLIP_FRAMES,
+    clip_frames: int | Clips = CLIP_FRAMES,
     where: str = "the labelled stream",
     **rec_kwargs,
 ) -> list[Summary]:
@@ -386,7 +419,7 @@ def evaluate_stream(
     frames: np.ndarray,
     labels: Sequence[str],
     mains: Sequence[int | str],
-    clip_frames: int = CLIP_FRAMES,
+    clip_frames: int | Clips = CLIP_FRAMES,
     **rec_kwargs,
 ) -> list[Summary]:
     """A labelled stream against given templates."""
@@ -484,7 +517,7 @@ def evaluate_cross_session(
     mains: Sequence[int | str],
     trials: int = 3,
     template_kwargs: Mapping | None = None,
-    clip_frames: int = CLIP_FRAMES,
+    clip_frames: int | Clips = CLIP_FRAMES,
     where: str = "the training recordings",
     draw: int = 0,
     template_lead: int = 10,

@@ -20,6 +20,7 @@ from engine.errors import InputError
 from engine.recognition import DualBufferRecognizer
 from tools.evaluate_recognition import (
     CLIP_FRAMES,
+    Clips,
     Summary,
     replay_stream,
     score_stream,
@@ -134,7 +135,7 @@ def _training_trials(train: Sequence[GloveFile], load: _Loaded, trials: int) -> 
 
 
 def _test(train: Sequence[GloveFile], tests: Sequence[GloveFile], load: _Loaded, pooled: Sequence[Summary],
-          trials: int, template_kwargs: Mapping | None, clip_frames: int, rec_kwargs: Mapping) -> int:
+          trials: int, template_kwargs: Mapping | None, clip_frames: int | Clips, rec_kwargs: Mapping) -> int:
     """Templates from `train`, then each test file whose actions they all have replayed whole
     through a fresh recognizer per main size (`pooled`: one Summary per main), scored from each
     punch's own onset. Returns how many files were tested."""
@@ -158,7 +159,7 @@ def evaluate_gloves(
     mains: Sequence[int | str],
     trials: int = 3,
     template_kwargs: Mapping | None = None,
-    clip_frames: int = CLIP_FRAMES,
+    clip_frames: int | Clips = CLIP_FRAMES,
     **rec_kwargs,
 ) -> dict[str, list[Summary]]:
     """Rows "punchbuddy <person> across sessions" (templates from each of the person's files

@@ -193,7 +193,11 @@ def _register_evaluate(sub: argparse._SubParsersAction) -> None:
     e.add_argument("--feature", choices=FEATURES, default=None, help="template feature when building (default log)")
     e.add_argument("--plot", type=arguments.plot_file, default=None, metavar="PNG", help="draw Figs. 8-9 style bars")
     e.add_argument("--clip-frames", type=arguments.int_range(0, MAX_BUFFER), default=CLIP_FRAMES,
-                   help=f"streams: the simulated character's clip length, then character_finished() (default {CLIP_FRAMES}; 0 = never)")
+                   help=f"streams: the simulated character's clip length, then character_finished() (default {CLIP_FRAMES}; "
+                        "0 = never); an action the game has plays its own clip, as the boxer does, unless --fixed-clips")
+    e.add_argument("--fixed-clips", action="store_true",
+                   help="streams: every action's clip --clip-frames long from the motion's start, the game's actions too "
+                        "(how the figures were measured before the game's own clips)")
     e.add_argument("--json", action="store_true", help="print the rows as JSON lines instead of a table")
     _recognizer_args(e)
     e.set_defaults(func=cmd_evaluate)
@@ -298,6 +302,8 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
             raise InputError("--plot needs matplotlib (pip install 'quickjab[dev]')") from None
     if not (args.uwave or args.phone_punches or args.punchbuddy or args.inputs):
         raise InputError("nothing to evaluate: give INPUTs, --uwave DIR, --phone-punches DIR, --punchbuddy DIR, or see --help")
+    if not args.fixed_clips:  # the game's actions as the game's boxer plays them
+        args.clip_frames = ev.game_clips(args.clip_frames)
 
     def at_phase(k: int) -> dict[str, list[ev.Summary]]:
         with grid_phase(k / args.phases):
