@@ -1,5 +1,5 @@
 """A recording cut mid-write (its last row without a line end, in a file `quickjab record` wrote)
-has that row left out by read_recording, which notes it (Recording.notes, Source.notes). record,
+has that row left out by read_recording, which notes it (Recording.notes, Source.file_notes). record,
 one-player play, recognize and the trial readers said the note; train, two-player play, scope,
 bridge emulate --replay and replays through wiimote-emu:// said nothing."""
 
@@ -53,7 +53,7 @@ def test_scope_says_the_note(cut, capsys):
 def test_wiimote_emu_carries_the_note(cut, capsys, tmp_path):
     assert said(capsys, ["play", *HEADLESS, "--source", f"wiimote-emu://{cut}"]) == note("quickjab play: ", cut)
     out = tmp_path / "out.csv"
-    assert said(capsys, ["record", "--source", f"wiimote-emu://{cut}?seconds=0.3", "-o", str(out), "--seconds", "2"]) == note("", cut)
+    assert said(capsys, ["record", "--source", f"wiimote-emu://{cut}?seconds=0.3", "-o", str(out), "--seconds", "2"]) == note("quickjab record: ", cut)
 
 
 def test_bridge_emulate_replay_says_the_note(cut, capsys):
