@@ -59,3 +59,17 @@ def test_wiimote_emu_carries_the_note(cut, capsys, tmp_path):
 def test_bridge_emulate_replay_says_the_note(cut, capsys):
     argv = ["bridge", "emulate", "--replay", str(cut), "--seconds", "0.2", "--quiet"]
     assert said(capsys, argv) == note("quickjab bridge: ", cut)
+
+
+def test_the_trial_readers_say_the_note_as_their_command(cut, capsys, tmp_path):
+    # they said it without the `quickjab <command>: ` every other command puts before it
+    trials = tmp_path / "trials" / "jab"
+    trials.mkdir(parents=True)
+    (trials / "a.csv").write_text(cut.read_text())
+    whole = cut.read_text() + "99,\n"  # the cut row made whole again, with its line end
+    for name in ("b.csv", "c.csv"):
+        (trials / name).write_text(whole)
+    tpl = tmp_path / "t.npz"
+    assert said(capsys, ["templates", "build", str(tmp_path / "trials"), "-o", str(tpl)]) == note("quickjab templates: ", trials / "a.csv")
+    argv = ["evaluate", str(tmp_path / "trials"), "--templates", str(tpl), "--mains", "6"]
+    assert said(capsys, argv) == note("quickjab evaluate: ", trials / "a.csv")
