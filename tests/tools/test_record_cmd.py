@@ -18,15 +18,12 @@ REPO = Path(__file__).resolve().parents[2]
 
 def test_record_from_a_missing_serial_port_exits_2(tmp_path, capsys):
     out = tmp_path / "out.csv"
-    t0 = time.perf_counter()
     rc = main(["record", "--source", f"serial://{tmp_path / 'no-such-port'}", "-o", str(out), "--connect-timeout", "0.5"])
-    elapsed = time.perf_counter() - t0
     err = capsys.readouterr().err
     assert rc == 2
-    assert "no device connected after 0.5 s" in err
+    assert "no device connected after 0.5 s" in err  # ended by the connect timeout, not by hand
     assert "wrote 0 samples" not in err
     assert not out.exists()
-    assert elapsed < 10  # ended by the connect timeout, not by hand
 
 
 def test_record_from_serial_auto_without_a_board_exits_2(tmp_path, capsys):
@@ -106,20 +103,24 @@ def test_sigterm_ends_a_recording_as_ctrl_c_does(tmp_path):
     assert f"wrote {rows} samples to {out}" in err
 
 
-def test_an_output_folder_that_cannot_take_the_file_is_said_before_recording(tmp_path, capsys):
+def test_an_output_folder_that_cannot_take_the_file_is_said_before_recording(tmp_path, capsys, monkeypatch):
     """-o in a missing folder was found out only once the source had connected and sent samples:
     a Wiimote paired and the player ready, then 'cannot write'. Now before the source is opened.
     (A missing folder is made now, as for every output: a file where the folder would go cannot be.)"""
     import pytest
 
+    import tools.record
+
+    def no_source(*args, **kwargs):
+        raise AssertionError("the source was opened before -o was refused")
+
+    monkeypatch.setattr(tools.record, "open_source", no_source)
     (tmp_path / "plain").write_text("x")
-    t0 = time.perf_counter()
     with pytest.raises(SystemExit) as exc:
         main(["record", "--source", "demo://", "-o", str(tmp_path / "plain" / "sub" / "out.csv"), "--seconds", "2"])
     assert exc.value.code == 2
     err = capsys.readouterr().err
     assert "is not a directory" in err and "source demo://" not in err
-    assert time.perf_counter() - t0 < 1.5
 
 
 def _swinging_recording(path: Path) -> Path:
