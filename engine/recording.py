@@ -11,8 +11,9 @@ import csv
 import io
 import itertools
 import os
+import sys
 import time
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -77,6 +78,13 @@ class Recording:
 
     def samples(self) -> list[Sample]:
         return [Sample(float(t), a) for t, a in zip(self.t, self.accel, strict=True)]
+
+
+def say_notes(notes: Iterable[str], prog: str) -> None:
+    """Say each note (a Recording's `notes`, a source's `file_notes`) on stderr as every command
+    says its lines: `quickjab <prog>: <note>`."""
+    for note in notes:
+        print(f"quickjab {prog}: {note}", file=sys.stderr)
 
 
 def _header_columns(sensors: int) -> list[str]:

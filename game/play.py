@@ -99,8 +99,9 @@ def run(args: argparse.Namespace) -> int:
         source, fallback = open_player_source(args.source, args.demo, args.seed, clock.seconds)
         if fallback:
             print(f"quickjab play: {fallback}: playing from the keyboard", file=sys.stderr)
-        for note in source.notes:
-            print(f"quickjab play: {note}", file=sys.stderr)
+        from engine.recording import say_notes
+
+        say_notes(source.file_notes, "play")  # a replayed recording's row left out (a cut last row)
         return [source]
 
     def session(sources: list, clock, size: tuple[int, int], surface_provider):

@@ -577,8 +577,9 @@ def _open_source(args: argparse.Namespace, clock):
         print("quickjab train: demo: the virtual player performs every move by itself", file=sys.stderr)
     elif fallback:
         print(f"quickjab train: {fallback}: training from the keyboard (press a key to perform)", file=sys.stderr)
-    for note in source.notes:  # a replayed recording's row left out (a cut last row)
-        print(f"quickjab train: {note}", file=sys.stderr)
+    from engine.recording import say_notes
+
+    say_notes(source.file_notes, "train")  # a replayed recording's row left out (a cut last row)
     playable = PLAYABLE in source.capabilities  # a virtual player performs the moves
     auto = args.demo or (playable and bool(source.auto))
     if playable:

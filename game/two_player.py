@@ -426,8 +426,7 @@ def seat_templates(profile: str | None, templates: str | None, option: str = "--
 def run_match(args) -> int:
     """`quickjab play --players 2`: both seats' templates and sources, then play as one
     player does (game.launch.run_session: headless frames, window check, screenshot, trace)."""
-    import sys
-
+    from engine.recording import say_notes
     from engine.sensors import open_source
     from game.user_config import recognizer_settings
 
@@ -445,8 +444,7 @@ def run_match(args) -> int:
     cpu_options = [opt for opt, value in (("--difficulty", args.difficulty), ("--graph", args.graph)) if value is not None]
     if cpu_options:
         notes.append(f"{' and '.join(cpu_options)} ignored with --players 2: they set the CPU, and two people box")
-    for note in url_notes + notes:
-        print(f"quickjab play: {note}", file=sys.stderr)
+    say_notes(url_notes + notes, "play")
 
     def sources(clock) -> list[Source]:
         import game.keyboard_source  # noqa: F401 - registers keyboard://
@@ -458,8 +456,9 @@ def run_match(args) -> int:
                     opened.append(open_source(url, clock=clock.seconds))
                 except (InputError, OSError) as exc:  # which player's source, in the one line
                     raise InputError(f"{seat_label(i, (args.source, args.source2)[i])}: {exc}") from None
-                for note in opened[-1].notes:  # a replayed recording's row left out, as one player's play says it
-                    print(f"quickjab play: {seat_label(i, (args.source, args.source2)[i])}: {note}", file=sys.stderr)
+                # a replayed recording's row left out, as one player's play says it, after the player's name
+                seat = seat_label(i, (args.source, args.source2)[i])
+                say_notes([f"{seat}: {note}" for note in opened[-1].file_notes], "play")
         except BaseException:
             for source in opened:
                 source.close()

@@ -123,11 +123,10 @@ def player_motion(profile: str, seed: int):
 
 def _read_saying_notes(path: str):
     """read_recording, saying what it left out (a cut last row), as every other reader does."""
-    from engine.recording import read_recording
+    from engine.recording import read_recording, say_notes
 
     rec = read_recording(path)
-    for note in rec.notes:
-        print(f"quickjab bridge: {note}", file=sys.stderr)
+    say_notes(rec.notes, "bridge")
     return rec
 
 

@@ -15,7 +15,7 @@ from engine.frames import recording_frames
 from engine.recognition import DualBufferRecognizer, Templates
 from engine.recognition.config import layered, parse_assignments
 from engine.recognition.templates import FEATURES, METHODS
-from engine.recording import read_recording
+from engine.recording import read_recording, say_notes
 from tools.evaluation_settings import CLIP_FRAMES
 
 if TYPE_CHECKING:
@@ -243,7 +243,7 @@ def cmd_build(args: argparse.Namespace) -> int:
 
     refuse_overwriting({"-o": args.output}, [f for fs in trial_paths(args.trials_dir, args.glob).values() for f in fs])
     settings = parse_assignments(args.recognizer)
-    trials = load_trials_dir(args.trials_dir, args.glob)
+    trials = load_trials_dir(args.trials_dir, args.glob, prog="templates")
     kwargs = {k: v for k, v in (("method", args.method), ("feature", args.feature), ("keep", args.keep)) if v}
     templates = templates_from_trials(trials, args.trials_dir, **kwargs)
     if args.mirror:
@@ -260,8 +260,7 @@ def cmd_recognize(args: argparse.Namespace) -> int:
     refuse_overwriting({"-o": args.output}, [args.recording, args.templates])
     templates = Templates.load(args.templates)
     rec_file = read_recording(args.recording)
-    for note in rec_file.notes:
-        print(f"quickjab recognize: {note}", file=sys.stderr)
+    say_notes(rec_file.notes, "recognize")
     times, frames, _ = recording_frames(rec_file)
     if frames.shape[1] != templates.dim:
         raise InputError(f"{args.recording}: {frames.shape[1]} values per frame, templates {args.templates} have D = {templates.dim}")

@@ -13,7 +13,7 @@ from pathlib import Path
 from engine import arguments
 from engine.errors import InputError, refuse_overwriting
 from engine.interrupt import stop_signals_as_ctrl_c
-from engine.recording import RECORDER_KEY, RecordingWriter
+from engine.recording import RECORDER_KEY, RecordingWriter, say_notes
 from engine.sensors import SourceState, open_source
 from engine.sensors.source import url_file
 from tools.devices import no_device_hint
@@ -109,8 +109,7 @@ def record(url: str, output: str, seconds: float | None, label: str = "", poll_s
     continues in a new file, out.2.csv and so on, whose header has the new columns: a row never
     has another width than its file's header (docs/formats.md), so every file reads back."""
     source = open_source(url)
-    for note in source.notes:
-        print(note, file=sys.stderr)
+    say_notes(source.file_notes, "record")  # a replayed recording's row left out (a cut last row)
     parts = _RecordingParts(source, url, output, label)
     try:
         _poll_into(parts, seconds, poll_s, connect_timeout)

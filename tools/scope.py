@@ -389,8 +389,9 @@ def run(args: argparse.Namespace) -> int:
         headless_env()
     clock, source = open_on_run_clock("scope", args.headless, lambda c: open_source(args.source, clock=c.seconds),
                                       lambda opened: [opened])
-    for note in source.notes:  # a replayed recording's row left out (a cut last row), as play says it
-        print(f"quickjab scope: {note}", file=sys.stderr)
+    from engine.recording import say_notes
+
+    say_notes(source.file_notes, "scope")  # a replayed recording's row left out (a cut last row), as play says it
     if not args.connect_timeout > 0:
         raise InputError(f"--connect-timeout {args.connect_timeout}: must be positive")
     scope = run_scope(source, clock=clock, frames=args.frames, screenshot=args.screenshot, trace=args.trace, view=view,

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import fnmatch
-import sys
 from collections.abc import Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from pathlib import Path
@@ -14,7 +13,7 @@ import numpy as np
 from engine.errors import InputError
 from engine.frames import recording_frames
 from engine.recognition import Templates
-from engine.recording import read_recording
+from engine.recording import read_recording, say_notes
 
 # The grid phase every recording is read at (`quickjab evaluate --phases`: each set at several
 # phases, pooled); 0 everywhere else. Set only through `grid_phase`.
@@ -32,18 +31,19 @@ def grid_phase(phase: float) -> Iterator[None]:
         _grid_phase = before
 
 
-def read_labelled_frames(path: str | Path) -> tuple[np.ndarray, list[str]]:
-    """A recording's (m, D) frames on the 60 Hz grid (at the `grid_phase`) and a label per frame."""
+def read_labelled_frames(path: str | Path, prog: str = "evaluate") -> tuple[np.ndarray, list[str]]:
+    """A recording's (m, D) frames on the 60 Hz grid (at the `grid_phase`) and a label per frame.
+    What the reader left out (a trial recorded with `quickjab record` and cut by a power cut) is
+    said as `quickjab <prog>: ...`: `evaluate` reads most trials, `templates build` passes its own."""
     rec = read_recording(path)
-    for note in rec.notes:  # a trial recorded with `quickjab record` and cut by a power cut
-        print(note, file=sys.stderr)
+    say_notes(rec.notes, prog)
     _, frames, labels = recording_frames(rec, phase=_grid_phase)
     return frames, labels
 
 
-def read_frames(path: str | Path) -> np.ndarray:
+def read_frames(path: str | Path, prog: str = "evaluate") -> np.ndarray:
     """A recording's (m, D) frames on the 60 Hz grid (at the `grid_phase`)."""
-    return read_labelled_frames(path)[0]
+    return read_labelled_frames(path, prog)[0]
 
 
 def trial_paths(root: str | Path, pattern: str = "*.csv") -> dict[str, list[Path]]:
@@ -60,12 +60,13 @@ def trial_paths(root: str | Path, pattern: str = "*.csv") -> dict[str, list[Path
     return out
 
 
-def load_trials_dir(root: str | Path, pattern: str = "*.csv") -> dict[str, list[np.ndarray]]:
-    """{action: [frames, ...]} for the files of `trial_paths`. Raises InputError when nothing is there."""
+def load_trials_dir(root: str | Path, pattern: str = "*.csv", prog: str = "evaluate") -> dict[str, list[np.ndarray]]:
+    """{action: [frames, ...]} for the files of `trial_paths`, a note said as `quickjab <prog>: `
+    (read_labelled_frames). Raises InputError when nothing is there."""
     root = Path(root)
     if not root.is_dir():
         raise InputError(f"{root}: not a directory of trials (<root>/<action>/*.csv)")
-    out = {action: [read_frames(f) for f in files] for action, files in trial_paths(root, pattern).items()}
+    out = {action: [read_frames(f, prog) for f in files] for action, files in trial_paths(root, pattern).items()}
     if not out:
         raise InputError(f"{root}: no trials matching {pattern!r} under <root>/<action>/")
     dims = {t.shape[1] for ts in out.values() for t in ts}

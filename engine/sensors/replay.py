@@ -45,7 +45,7 @@ class ReplaySource(Source):
             raise SourceError(f"{url}: speed must be positive, not {speed}")
         super().__init__(url=url, sensors=rec.sensors, clock=clock, description=rec.meta.get("source", "replay"))
         self.rec = rec
-        self.notes = list(rec.notes)  # a row left out of the file (read_recording): said by who opened it
+        self.file_notes = list(rec.notes)  # a row left out of the file (read_recording): said by who opened it
         self.speed = speed
         self.loop = loop
         self._rel = rec.t - rec.t[0]

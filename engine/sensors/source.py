@@ -64,7 +64,9 @@ class Source:
     description: str = ""
     stats: dict[str, int] = field(default_factory=dict)
     buttons: int = 0  # buttons held (the Wiimote's core bits, Home 0x0080); 0 where there are none
-    notes: list[str] = field(default_factory=list)  # lines for the console once opened (a replay's cut row)
+    # what the reader of the file the source replays left out (a cut last row; Recording.notes),
+    # said once opened (engine.recording.say_notes); the Wiimote driver's own `notes` are another list
+    file_notes: list[str] = field(default_factory=list)
     capabilities: ClassVar[frozenset[str]] = frozenset()  # PLAYABLE, KEYS, REWIND: what else it can do
 
     def poll(self) -> list[Sample]:

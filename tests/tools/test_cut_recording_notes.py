@@ -1,5 +1,5 @@
 """A recording cut mid-write (its last row without a line end, in a file `quickjab record` wrote)
-has that row left out by read_recording, which notes it (Recording.notes, Source.notes). record,
+has that row left out by read_recording, which notes it (Recording.notes, Source.file_notes). record,
 one-player play, recognize and the trial readers said the note; train, two-player play, scope,
 bridge emulate --replay and replays through wiimote-emu:// said nothing."""
 
@@ -53,9 +53,23 @@ def test_scope_says_the_note(cut, capsys):
 def test_wiimote_emu_carries_the_note(cut, capsys, tmp_path):
     assert said(capsys, ["play", *HEADLESS, "--source", f"wiimote-emu://{cut}"]) == note("quickjab play: ", cut)
     out = tmp_path / "out.csv"
-    assert said(capsys, ["record", "--source", f"wiimote-emu://{cut}?seconds=0.3", "-o", str(out), "--seconds", "2"]) == note("", cut)
+    assert said(capsys, ["record", "--source", f"wiimote-emu://{cut}?seconds=0.3", "-o", str(out), "--seconds", "2"]) == note("quickjab record: ", cut)
 
 
 def test_bridge_emulate_replay_says_the_note(cut, capsys):
     argv = ["bridge", "emulate", "--replay", str(cut), "--seconds", "0.2", "--quiet"]
     assert said(capsys, argv) == note("quickjab bridge: ", cut)
+
+
+def test_the_trial_readers_say_the_note_as_their_command(cut, capsys, tmp_path):
+    # they said it without the `quickjab <command>: ` every other command puts before it
+    trials = tmp_path / "trials" / "jab"
+    trials.mkdir(parents=True)
+    (trials / "a.csv").write_text(cut.read_text())
+    whole = cut.read_text() + "99,\n"  # the cut row made whole again, with its line end
+    for name in ("b.csv", "c.csv"):
+        (trials / name).write_text(whole)
+    tpl = tmp_path / "t.npz"
+    assert said(capsys, ["templates", "build", str(tmp_path / "trials"), "-o", str(tpl)]) == note("quickjab templates: ", trials / "a.csv")
+    argv = ["evaluate", str(tmp_path / "trials"), "--templates", str(tpl), "--mains", "6"]
+    assert said(capsys, argv) == note("quickjab evaluate: ", trials / "a.csv")

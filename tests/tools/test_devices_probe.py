@@ -136,12 +136,32 @@ def test_a_board_that_found_no_imu_yet_answers_but_says_so(pty_pair, capsys):
     assert rc == 0 and "a board answers (HELLO) but has found no IMU yet" in out
 
 
+def close_once_asked(master: int) -> threading.Thread:
+    """Close `master` once the probe has asked for a HELLO: the request is sent only once its port
+    is open, so the other end goes away while it probes (a timer raced the open: 'cannot open')."""
+    def run():
+        asked, deadline = b"", time.monotonic() + 60  # the deadline only ends a probe that never asks
+        try:
+            while protocol.HELLO_REQUEST not in asked and time.monotonic() < deadline:
+                if not select.select([master], [], [], 0.1)[0]:
+                    continue
+                try:
+                    asked += os.read(master, 64)
+                except OSError:  # EIO: nobody has the other end open yet
+                    time.sleep(0.01)
+        finally:
+            os.close(master)
+
+    thread = threading.Thread(target=run, daemon=True)
+    thread.start()
+    return thread
+
+
 def test_a_pty_whose_other_end_closes_is_said_lost(capsys):
-    master, slave = os.openpty()  # its own pair: the master is closed here, once
+    master, slave = os.openpty()  # its own pair: the master is closed by close_once_asked, once
     path = os.ttyname(slave)
     os.close(slave)
-    closer = threading.Timer(0.3, os.close, (master,))
-    closer.start()
-    rc, out = devices(capsys, "--probe-seconds", "3", path)
+    closer = close_once_asked(master)
+    rc, out = devices(capsys, "--probe-seconds", "30", path)  # the loss ends it, not the 30 s
     closer.join()
-    assert rc == 1 and "the port was lost while probing" in out
+    assert rc == 1 and "the port was lost while probing" in out, out

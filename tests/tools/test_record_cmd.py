@@ -18,15 +18,12 @@ REPO = Path(__file__).resolve().parents[2]
 
 def test_record_from_a_missing_serial_port_exits_2(tmp_path, capsys):
     out = tmp_path / "out.csv"
-    t0 = time.perf_counter()
     rc = main(["record", "--source", f"serial://{tmp_path / 'no-such-port'}", "-o", str(out), "--connect-timeout", "0.5"])
-    elapsed = time.perf_counter() - t0
     err = capsys.readouterr().err
     assert rc == 2
-    assert "no device connected after 0.5 s" in err
+    assert "no device connected after 0.5 s" in err  # ended by the connect timeout, not by hand
     assert "wrote 0 samples" not in err
     assert not out.exists()
-    assert elapsed < 10  # ended by the connect timeout, not by hand
 
 
 def test_record_from_serial_auto_without_a_board_exits_2(tmp_path, capsys):
@@ -106,25 +103,28 @@ def test_sigterm_ends_a_recording_as_ctrl_c_does(tmp_path):
     assert f"wrote {rows} samples to {out}" in err
 
 
-def test_an_output_folder_that_cannot_take_the_file_is_said_before_recording(tmp_path, capsys):
+def test_an_output_folder_that_cannot_take_the_file_is_said_before_recording(tmp_path, capsys, monkeypatch):
     """-o in a missing folder was found out only once the source had connected and sent samples:
     a Wiimote paired and the player ready, then 'cannot write'. Now before the source is opened.
     (A missing folder is made now, as for every output: a file where the folder would go cannot be.)"""
     import pytest
 
+    import tools.record
+
+    def no_source(*args, **kwargs):
+        raise AssertionError("the source was opened before -o was refused")
+
+    monkeypatch.setattr(tools.record, "open_source", no_source)
     (tmp_path / "plain").write_text("x")
-    t0 = time.perf_counter()
     with pytest.raises(SystemExit) as exc:
         main(["record", "--source", "demo://", "-o", str(tmp_path / "plain" / "sub" / "out.csv"), "--seconds", "2"])
     assert exc.value.code == 2
     err = capsys.readouterr().err
     assert "is not a directory" in err and "source demo://" not in err
-    assert time.perf_counter() - t0 < 1.5
 
 
-def test_record_from_an_emulated_wiimote_with_seconds_stops_by_itself(tmp_path, capsys):
-    """`wiimote-emu://...?seconds=S` ends the source: `record` without --seconds stops there, as
-    it does at the end of a replay, and the file holds the samples stamped before S."""
+def _swinging_recording(path: Path) -> Path:
+    """Two seconds of two still hands, the right one swinging: what the emulated remote replays."""
     import numpy as np
 
     from engine.recording import Recording, write_recording
@@ -133,18 +133,47 @@ def test_record_from_an_emulated_wiimote_with_seconds_stops_by_itself(tmp_path, 
     accel = np.zeros((len(t), 2, 3))
     accel[:, :, 2] = 1.0
     accel[:, 0, 0] = np.sin(2 * np.pi * t)
-    rec = tmp_path / "rec.csv"
-    write_recording(rec, Recording(t, accel))
+    write_recording(path, Recording(t, accel))
+    return path
+
+
+def test_record_from_an_emulated_wiimote_with_seconds_stops_by_itself(tmp_path, capsys):
+    """`wiimote-emu://...?seconds=S` ends the source: `record` without --seconds stops there, as
+    it does at the end of a replay, and the file holds the samples stamped before S. (How many
+    there are depends on the machine: the emulated remote reports on the real clock, after a
+    set-up that takes real time; so does how long the run takes.)"""
+    rec = _swinging_recording(tmp_path / "rec.csv")
     out = tmp_path / "out.csv"
-    t0 = time.perf_counter()
-    rc = main(["record", "--source", f"wiimote-emu://{rec}?seconds=0.6", "-o", str(out)])
-    elapsed = time.perf_counter() - t0
+    rc = main(["record", "--source", f"wiimote-emu://{rec}?seconds=0.6", "-o", str(out)])  # no --seconds: S ends it
     err = capsys.readouterr().err
-    assert rc == 0 and "wrote" in err
-    assert 0.6 <= elapsed < 10
+    assert rc == 0 and "wrote" in err, err
     got = read_recording(out)
-    assert got.sensors == 2 and 20 <= len(got) <= 60  # ~100 reports a second, after the set-up
-    assert got.t[-1] - got.t[0] < 0.6
+    assert got.sensors == 2 and len(got) >= 1
+    assert f"wrote {len(got)} samples to {out}" in err
+    assert got.t[-1] - got.t[0] < 0.6  # every sample stamped before S (the first one after the set-up)
+
+
+def test_the_kernel_driver_warning_is_said_once(tmp_path):
+    """The Wiimote driver says a bound hid-wiimote once (its `notes`, each also logged); record,
+    play, train and scope said a source's notes again after opening it, so the line came twice.
+    What they say now is the source's `file_notes` (a replayed file's cut row), another list."""
+    from engine.sensors import open_source
+
+    rec = _swinging_recording(tmp_path / "rec.csv")
+    url = f"wiimote-emu://{rec}?kernel_driver=1&seconds=0.5"
+    source = open_source(url)
+    try:
+        assert any("hid-wiimote" in note for note in source.notes) and source.file_notes == []
+    finally:
+        source.close()
+    out = tmp_path / "out.csv"
+    proc = subprocess.run(  # its own process: stderr as a user sees it, the driver's log line included
+        [sys.executable, "-m", "tools.cli", "record", "--source", url, "-o", str(out)],
+        cwd=REPO, env={**os.environ, "PYTHONPATH": str(REPO)}, capture_output=True, text=True, timeout=120,
+    )
+    assert proc.returncode == 0, proc.stderr
+    said = [line for line in proc.stderr.splitlines() if "bound to the kernel's hid-wiimote driver" in line]
+    assert len(said) == 1, proc.stderr
 
 
 def test_recording_over_a_file_keeps_the_old_one_beside_it(tmp_path, capsys):

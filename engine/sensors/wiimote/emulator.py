@@ -585,6 +585,7 @@ def open_emulated(url: str, clock: Callable[[], float]) -> EmulatedWiimoteSource
     seconds = url_number(url, params, "seconds", 0, 0, MAX_DURATION_S, lo_open=True) if "seconds" in params else None
     source = EmulatedWiimoteSource(url=url, clock=clock, backend=bus, player=player, emulator=remote, seconds=seconds)
     source.description = f"wiimote-emu {remote.rec.meta.get('source', '')}".strip()
-    # a row the reader left out (a cut last row), said by who opened it as for replay://
-    source.notes[:0] = remote.rec.notes
+    # a row the reader left out (a cut last row), said by who opened it as for replay://; the
+    # driver's own `notes` (the kernel driver, a clone's calibration) it logs itself
+    source.file_notes = list(remote.rec.notes)
     return source
