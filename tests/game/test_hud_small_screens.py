@@ -35,22 +35,28 @@ def scene():
             local_to_world(lib["guard"].posture(0), (0.0, 0.9, np.pi))]
 
 
-@pytest.fixture
-def caps(monkeypatch) -> Iterator[dict[str, int]]:
-    """The cap height (px) of the font each string was rendered in, the smallest if several."""
+def _cap_heights(monkeypatch, min_line_px: int) -> Iterator[dict[str, int]]:
+    """The cap height (px) of the font each string was rendered in, the smallest if several;
+    every font's line height at least `min_line_px`."""
     seen: dict[str, int] = {}
 
     class Font(pygame.font.Font):
         def render(self, text, *args, **kwargs):
             cap = self.metrics("H")[0][3]
             seen[text] = min(seen.get(text, cap), cap)
-            assert self.get_linesize() >= MIN_LINE_PX, (text, self.get_linesize())
+            assert self.get_linesize() >= min_line_px, (text, self.get_linesize())
             return super().render(text, *args, **kwargs)
 
     release_fonts()  # the fonts are shared: made again through the spy, and not kept after it
     monkeypatch.setattr(pygame.font, "Font", Font)
     yield seen
     release_fonts()
+
+
+@pytest.fixture
+def caps(monkeypatch) -> Iterator[dict[str, int]]:
+    """The cap height of the font each string was rendered in; lines at least MIN_LINE_PX."""
+    yield from _cap_heights(monkeypatch, MIN_LINE_PX)
 
 
 def busy(n: int = 1, **kw) -> HudState:
@@ -329,18 +335,7 @@ def test_the_amber_strip_covers_no_text(size, strip) -> None:
 @pytest.fixture
 def caps_any(monkeypatch) -> Iterator[dict[str, int]]:
     """`caps` without its 800x450 line-height floor: the cap height each string was rendered in."""
-    seen: dict[str, int] = {}
-
-    class Font(pygame.font.Font):
-        def render(self, text, *args, **kwargs):
-            cap = self.metrics("H")[0][3]
-            seen[text] = min(seen.get(text, cap), cap)
-            return super().render(text, *args, **kwargs)
-
-    release_fonts()  # the fonts are shared: made again through the spy, and not kept after it
-    monkeypatch.setattr(pygame.font, "Font", Font)
-    yield seen
-    release_fonts()
+    yield from _cap_heights(monkeypatch, 0)
 
 
 def test_the_smallest_window_keeps_every_screen_readable_and_inside_it(scene, caps_any) -> None:

@@ -100,17 +100,11 @@ def test_the_simulations_row_shows_its_per_step_target(tmp_path) -> None:
     assert float(row.split()[1]) == SIM_TARGET_P99_MS and row.rstrip().endswith("-"), row
 
 
-def test_the_real_clock_run_draws_once_before_its_loop_as_play_does(monkeypatch, tmp_path) -> None:
-    """`play` draws one frame before its loop starts (the first draw builds the ring's static
-    layers and the HUD's fonts: 22 ms here against 2.3 for a frame, ~120 ms on a loaded board);
-    the bench's real-clock run did not, so its first frame overran and, on a slow board, dropped
-    steps that play does not: the figure the zero-dropped-steps target reads."""
-    import argparse
-
+def _draws_seen(monkeypatch, tmp_path) -> list[bool]:
+    """The scripted sessions the bench builds note, at each draw, whether their loop was running."""
     import tools.scripted_match as scripted
-    from tools.bench_frame import realtime
 
-    made = []
+    made: list[bool] = []
 
     def session(*a, **kw):
         s = build_session(*a, **kw)
@@ -120,6 +114,19 @@ def test_the_real_clock_run_draws_once_before_its_loop_as_play_does(monkeypatch,
 
     monkeypatch.setattr(scripted, "build_session", session)
     monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path))
+    return made
+
+
+def test_the_real_clock_run_draws_once_before_its_loop_as_play_does(monkeypatch, tmp_path) -> None:
+    """`play` draws one frame before its loop starts (the first draw builds the ring's static
+    layers and the HUD's fonts: 22 ms here against 2.3 for a frame, ~120 ms on a loaded board);
+    the bench's real-clock run did not, so its first frame overran and, on a slow board, dropped
+    steps that play does not: the figure the zero-dropped-steps target reads."""
+    import argparse
+
+    from tools.bench_frame import realtime
+
+    made = _draws_seen(monkeypatch, tmp_path)
     args = argparse.Namespace(players=1, seed=0, templates=None, graph=None, realtime_seconds=0.05)
     out = realtime(args, (320, 180), low_power=False)
     assert made == [False]  # one draw, before the loop ran
@@ -132,19 +139,9 @@ def test_the_virtual_clock_runs_draw_once_before_timing_and_report_it_apart(monk
     draw it before their loop: now drawn before the timed run too, its time `first_draw_ms`."""
     import argparse
 
-    import tools.scripted_match as scripted
     from tools.bench_frame import measure
 
-    made = []
-
-    def session(*a, **kw):
-        s = build_session(*a, **kw)
-        draw = s.render
-        s.render = lambda alpha: (made.append(s.loop.running), draw(alpha))[1]
-        return s
-
-    monkeypatch.setattr(scripted, "build_session", session)
-    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path))
+    made = _draws_seen(monkeypatch, tmp_path)
     args = argparse.Namespace(players=1, seed=0, templates=None, graph=None, steps=6, repeats=2, low_power=False,
                               all_modes=False)
     full = measure("full", args, (320, 180))
