@@ -67,7 +67,10 @@ Per 60 Hz frame (`push`):
   the discard (OTHER_HAND_*), and that frame is the next motion's onset (a combo). Beyond the
   paper, the same launch ends a decided motion (`complete`) that has run, since its start, the
   rest of its best template past the main buffer (`_ran_course`): without a character nothing
-  else ended a motion the boxer never rested from, and the other hand's punch was lost.
+  else ended a motion the boxer never rested from, and the other hand's punch was lost. And a
+  decided motion that the `complete` rule ends while a character still plays its clip goes into
+  that discard (HANDOVER_OVER), for an action that has another hand: the punching hand's return
+  started that hand's action again just as the other hand's punch came (the game's long hooks).
 - Beyond the paper: a decided motion that has lasted as long as its action's longest template, and
   at least `supplementary` frames, ends there (`complete`) whether or not the hand has rested:
   without a character calling `character_finished()` a hand that never rests held one motion open
@@ -197,6 +200,8 @@ class DualBufferRecognizer(TemplateSet, DecisionRules, Adaptation):
         self._acts = np.empty(len(self._motion))  # the gate's activity since the onset
         self._recent = np.empty((BACKDATE_MAX, self.dim))  # the last idle frames (ring), for back-dating
         self._moved = False  # a motion has started (a `start`) since the recognizer was built
+        self._has_character = False  # the caller has called `character_finished()` (HANDOVER_OVER)
+        self._handover = False  # the discard began at a `complete` end, not at the clip's end
         self.reset()
 
     @classmethod
@@ -256,12 +261,14 @@ class DualBufferRecognizer(TemplateSet, DecisionRules, Adaptation):
     def character_finished(self) -> None:
         """The character's clip of the current action ended (IV-C): the rest of this motion
         (the hand coming back) is discarded until a null signal or `discard_frames` frames."""
+        self._has_character = True
         if self.state != ACTIVE or self.action is None:
             return
         self._queued.append(self._event("end", self.action_names[self.action], None, reason="character_finished"))
         self._after_peak = self._peak_act_seen
         self._begin_motion_state()
         self.state = DISCARD
+        self._handover = False
 
     # -- the per-frame step ------------------------------------------------------------------
     def push(self, frame: np.ndarray, t: float | None = None) -> list[RecognizerEvent]:
@@ -371,11 +378,14 @@ class DualBufferRecognizer(TemplateSet, DecisionRules, Adaptation):
         rejected = self.action is None and self.count > self.window
         complete = complete or self._outlasted()
         if self.quiet >= self.null_frames or complete or rejected:
+            handover = False
             if self.action is not None and self._called_off():
                 events.append(self._event("reject", self.action_names[self.action], None, called_off=True))
             elif self.action is not None:
                 if self._extended:
                     self._late_switch(self._moving_hand(self._usable(self._stop_scores if self._stopped else self.dtw.scores)), events)
+                # the character's clip still plays: its end's discard begins now (HANDOVER_OVER)
+                handover = complete and self._hands_over()
                 if self.adapt and self.count <= max(self.window, self._extend_to):
                     self._adapt()
                 events.append(self._event("end", self.action_names[self.action], None, reason="complete" if complete else None))
@@ -389,7 +399,8 @@ class DualBufferRecognizer(TemplateSet, DecisionRules, Adaptation):
                     self.gate.learn(float(a))
             self._after_peak = self._peak_act_seen if complete else 0.0
             self._begin_motion_state()
-            self.state = IDLE
+            self.state = DISCARD if handover else IDLE
+            self._handover = handover
 
     def _event(self, kind: str, action: str | None, score: float | None, **flags) -> RecognizerEvent:
         """The event decided now; a start or switch carries the motion estimate and onset so far."""

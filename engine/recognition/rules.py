@@ -76,6 +76,18 @@ DISCARD_HOLD = 1.5
 # character to end the motion first.
 OTHER_HAND_SHARE = 0.35
 OTHER_HAND_RATIO = 0.5
+# The handover (two or more sensors, twenty-seventh round): a decided motion that the `complete`
+# rule ends while a character is playing its clip (the caller has called `character_finished()`
+# before, and has not yet for this motion) goes into the discard the clip's end would have begun,
+# not back to idle: a long clip (the game's hooks, 30-32 frames) outlasted the punch, and the
+# punching hand's return, no longer discarded, started the punching hand's action again just as
+# the other glove's punch came. Only for an action that has another hand (a sensor under
+# OTHER_HAND_SHARE of its activity), so that the other hand's launch can end that discard: by the
+# OTHER_HAND_* bars, or once that hand moves HANDOVER_OVER x as far (from the motion's onset
+# gravity) as the punching hand does on this frame (a punch of the other hand thrown while this one
+# landed, whose launch was already under way when the motion began, rarely reaches half of the
+# punching hand's peak against that gravity).
+HANDOVER_OVER = 1.5
 # The moving hand (two or more sensors, eighteenth round): while one sensor has moved clearly the
 # most since the onset (every other sensor's peak distance from its reading on the motion's first
 # frame under MOVING_HAND_RATIO of its own), a decision in the buffers or at the end does not name
@@ -251,12 +263,19 @@ class DecisionRules:
             return
         launch = max((d for d, o in zip(dev, other, strict=True) if o), default=0.0)
         strong = launch >= OTHER_HAND_RATIO * own_peak and launch >= self.gate.noise_g
+        if self._handover and self.state == DISCARD and not strong and launch >= self.gate.noise_g:
+            strong = launch >= HANDOVER_OVER * max((d for d, o in zip(dev, other, strict=True) if not o), default=0.0)
         if strong and (self.state == DISCARD or self._ran_course()):  # (the DTW's scores read only then)
             if self.state == ACTIVE:
                 self._end_complete(events)
             self._begin_motion_state()
             self.state = IDLE  # (nothing to back-date: no idle frame since the discarded motion)
             self._hand_g0 = None
+
+    def _hands_over(self) -> bool:
+        """A decided motion ending by the `complete` rule goes into the discard (see HANDOVER_OVER):
+        two or more sensors, a caller with a character, an action that has another hand."""
+        return self._hands > 1 and self._has_character and any(self._other_hands[self.action])
 
     def _ran_course(self) -> bool:
         """A decided motion that has run, since its start, the rest of its best template past the
