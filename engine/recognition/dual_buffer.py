@@ -109,6 +109,7 @@ from engine.recognition.gate import (
     BACKDATE_MAX,
     NoiseGate,
 )
+from engine.recognition.motion_end import MotionEnd
 from engine.recognition.rules import (
     ACTIVE,
     AUTO_MAX_MAIN,
@@ -148,7 +149,7 @@ def _check_keywords(settings: dict[str, object]) -> None:
         raise ValueError(str(exc)) from None
 
 
-class DualBufferRecognizer(TemplateSet, DecisionRules, Adaptation):
+class DualBufferRecognizer(TemplateSet, DecisionRules, MotionEnd, Adaptation):
     """Frames in, action events out (the module docstring's rules). Owns a gate, features and a speed
     estimate; the rules, template set and adaptation are mixins over its one motion state."""
 
@@ -378,29 +379,7 @@ class DualBufferRecognizer(TemplateSet, DecisionRules, Adaptation):
         rejected = self.action is None and self.count > self.window
         complete = complete or self._outlasted()
         if self.quiet >= self.null_frames or complete or rejected:
-            handover = False
-            if self.action is not None and self._called_off():
-                events.append(self._event("reject", self.action_names[self.action], None, called_off=True))
-            elif self.action is not None:
-                if self._extended:
-                    self._late_switch(self._moving_hand(self._usable(self._stop_scores if self._stopped else self.dtw.scores)), events)
-                # the character's clip still plays: its end's discard begins now (HANDOVER_OVER)
-                handover = complete and self._hands_over()
-                if self.adapt and self.count <= max(self.window, self._extend_to):
-                    self._adapt()
-                events.append(self._event("end", self.action_names[self.action], None, reason="complete" if complete else None))
-            elif self.pending:
-                events.append(self._event("reject", None, None))
-            if self.action is None and self.gate.auto and not self._moved and self._peak_act_seen < self._action_bar.min():
-                # Nothing has started yet and this motion, rejected and weaker than any template's
-                # start, was noise crossing a gate set too low: its frames count as rest (a punch
-                # no template matched, learnt as rest, raised the gate over every later punch).
-                for a in self._acts[: min(self.dtw.n, self.window)]:
-                    self.gate.learn(float(a))
-            self._after_peak = self._peak_act_seen if complete else 0.0
-            self._begin_motion_state()
-            self.state = DISCARD if handover else IDLE
-            self._handover = handover
+            self._end_motion(complete, events)
 
     def _event(self, kind: str, action: str | None, score: float | None, **flags) -> RecognizerEvent:
         """The event decided now; a start or switch carries the motion estimate and onset so far."""

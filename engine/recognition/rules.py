@@ -272,11 +272,6 @@ class DecisionRules:
             self.state = IDLE  # (nothing to back-date: no idle frame since the discarded motion)
             self._hand_g0 = None
 
-    def _hands_over(self) -> bool:
-        """A decided motion ending by the `complete` rule goes into the discard (see HANDOVER_OVER):
-        two or more sensors, a caller with a character, an action that has another hand."""
-        return self._hands > 1 and self._has_character and any(self._other_hands[self.action])
-
     def _ran_course(self) -> bool:
         """A decided motion that has run, since its start, the rest of its best template past the
         main buffer: where a character's clip would be ending. Without a character (a caller that
