@@ -101,9 +101,13 @@ class Ring:
         self.renderer.step_effects()
 
     def _hits(self, step: int, dt: float) -> None:
+        self._land(step, hits_from_contacts(self.contacts, list(self.boxers)))
+
+    def _land(self, step: int, hits: list[Hit]) -> None:
         """Every blow of the step lands before the referee decides who goes down (the first
-        contact's knockdown used to end the exchange: the order of the contacts decided it)."""
-        landed = [(hit, self.damage_of(hit)) for hit in hits_from_contacts(self.contacts, list(self.boxers))]
+        contact's knockdown used to end the exchange: the order of the contacts decided it);
+        then the counted ones' reaction, flash, sound, rumble."""
+        landed = [(hit, self.damage_of(hit)) for hit in hits]
         counted = [(hit, damage) for hit, damage in landed if self.match.land(1 - hit.attacker, damage)]
         self.match.settle_knockdowns()
         for hit, damage in counted:
@@ -115,17 +119,8 @@ class Ring:
         raise NotImplementedError
 
     def apply_hit(self, step: int, hit: Hit | dict) -> None:
-        """One blow on its own (game.hits.Hit, or a dict of its keys): its damage (damage_of),
-        then land it."""
-        hit = Hit.of(hit)
-        self.land_blow(step, hit, self.damage_of(hit))
-
-    def land_blow(self, step: int, hit: Hit, damage: float) -> None:
-        """The referee counts the blow and decides a knockdown; reaction, flash, sound, rumble."""
-        counted = self.match.land(1 - hit.attacker, damage)
-        self.match.settle_knockdowns()
-        if counted:
-            self._show_blow(step, hit, damage)
+        """One blow on its own (game.hits.Hit, or a dict of its keys), landed as a step's are."""
+        self._land(step, [Hit.of(hit)])
 
     def _show_blow(self, step: int, hit: Hit, damage: float) -> None:
         """A blow the referee counted: logged; reaction (unless it floored the boxer), flash,
