@@ -459,3 +459,20 @@ def test_play_ended_while_the_match_loads_writes_its_trace_as_in_the_loop(tmp_pa
     data = json.loads(trace.read_text())
     assert data["otherData"]["frames_total"] == 0 and all(ev["ph"] == "M" for ev in data["traceEvents"])
     assert pygame.image.load(str(shot)).get_size() == (1280, 720)
+
+
+def test_train_says_a_backslash_in_minus_o_is_no_folder_here(tmp_path, monkeypatch, capsys) -> None:
+    """`train -o 'C:\\Users\\me\\t.npz'` on Linux or macOS saved one file of that literal name in
+    the current folder, unsaid: a backslash is a character of a name there. Said in one line
+    (a name it is, so it is not refused)."""
+    import os
+
+    if os.sep == "\\" or os.altsep == "\\":
+        pytest.skip("a folder separator on this system")
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "xdg"))
+    monkeypatch.chdir(tmp_path)
+    name = "C:\\Users\\me\\t.npz"
+    main(["train", "--headless", "--demo", "--actions", "straight_r", "--frames", "2", "-o", name])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert (f"quickjab train: -o {name}: a backslash is not a folder separator on this system: "
+            f"this names one file, {name}, in {tmp_path}") in err, err
