@@ -101,6 +101,16 @@ def path_argument(text: str) -> str:
 path_argument.__name__ = "path"
 
 
+def backslash_note(text: str) -> str:
+    """One line for a path with a backslash where it separates no folders (not Windows), as
+    `C:\\Users\\me\\t.npz` typed on Linux: a character of a name there, so one file of that
+    name is written (in the current folder, here); "" for any other path."""
+    if "\\" not in text or "\\" in (os.sep, os.altsep):
+        return ""
+    path = Path(text)
+    return f"{text}: a backslash is not a folder separator on this system: this names one file, {path.name}, in {path.absolute().parent}"
+
+
 def output_file(text: str) -> str:
     """An argparse type for a file a command writes at its end (a screenshot, a trace, a plot):
     a place it cannot be written is said before the work, not in a traceback after. Folders

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import json
 import os
+import time
 import zipfile
 import zlib
 from collections.abc import Callable
@@ -113,14 +114,19 @@ PART_RANDOM = 8  # the random characters tempfile.mkstemp puts in a name
 _PART_CHARS = frozenset("abcdefghijklmnopqrstuvwxyz0123456789_")  # tempfile's alphabet
 
 
-def _is_part_of(name: str, target_name: str) -> bool:
-    """Whether `name` is one of write_replacing's temporary files for `target_name`
-    (`.<target_name>.<8 random characters>.part`): the exact shape, so that the parts of
+def _part_target(name: str) -> str | None:
+    """The file name a write_replacing temporary file is for (`.<target_name>.<8 random
+    characters>.part`), None for any other name: the exact shape, so that the parts of
     `take.csv.old` are not taken for those of `take.csv`."""
-    prefix = f".{target_name}."
-    middle = name[len(prefix):-len(PART_SUFFIX)]
-    return (name.startswith(prefix) and name.endswith(PART_SUFFIX)
-            and len(name) == len(prefix) + PART_RANDOM + len(PART_SUFFIX) and set(middle) <= _PART_CHARS)
+    if not (name.startswith(".") and name.endswith(PART_SUFFIX)):
+        return None
+    target, dot, middle = name[1:-len(PART_SUFFIX)].rpartition(".")
+    return target if dot and target and len(middle) == PART_RANDOM and set(middle) <= _PART_CHARS else None
+
+
+def _is_part_of(name: str, target_name: str) -> bool:
+    """Whether `name` is one of write_replacing's temporary files for `target_name`."""
+    return _part_target(name) == target_name
 
 
 def _lock(fd: int, blocking: bool) -> bool:
@@ -133,14 +139,34 @@ def _lock(fd: int, blocking: bool) -> bool:
     return True
 
 
+STALE_PART_S = 3600  # a part of another file's name untouched this long, and unlocked, is a dead writer's
+
+
+def _is_stale_part(entry: os.DirEntry, name: str) -> bool:
+    """Whether `entry` may be a dead writer's part file, to be removed if no writer holds its lock:
+    any part of `name` (ours by its name), and a part of another name untouched for STALE_PART_S
+    (a just-made temporary file of the same shape may be another program's, which takes no lock)."""
+    target = _part_target(entry.name)
+    if target is None or target == name:
+        return target == name
+    try:
+        return entry.stat(follow_symlinks=False).st_mtime < time.time() - STALE_PART_S
+    except OSError:
+        return False
+
+
 def _remove_stale_parts(target: str) -> None:
-    """Remove the part files of `target` left by writers that were killed (SIGKILL, a power cut):
-    each such kill left one for good. A writer still alive holds a lock on its own, so two
-    processes writing one file at once never take each other's. Best effort: a folder that
-    cannot be listed, or a part that cannot be removed, is left as it was."""
+    """Remove the part files in `target`'s folder left by writers that were killed (SIGKILL, a
+    power cut): each such kill left one for good, and one of a file never written again (a trace
+    named for its run) stayed whatever was written beside it. A part holds nothing to recover: a
+    kill mid-write cuts a whole file's bytes short (an .npz's zip, a trace's JSON without its
+    end: no reader takes them), of an output its command makes again; `quickjab record`'s takes,
+    the data only a player has, are written in place, never as a part. A writer still alive holds
+    a lock on its own, so two processes writing one file at once never take each other's. Best
+    effort: a folder that cannot be listed, or a part that cannot be removed, is left as it was."""
     folder, name = os.path.dirname(target), os.path.basename(target)
     try:
-        entries = [e for e in os.scandir(folder) if _is_part_of(e.name, name)]
+        entries = [e for e in os.scandir(folder) if _is_stale_part(e, name)]
     except OSError:
         return
     for entry in entries:

@@ -284,6 +284,8 @@ def read_chrome_trace(path: str | os.PathLike) -> dict:
         if why:
             raise TraceError(f"{path}: event {i} {why}")
     if not any(ev["ph"] == "X" and ev["name"] == "frame" for ev in data["traceEvents"]):
+        if isinstance(data.get("otherData"), dict) and data["otherData"].get("frames_total") == 0:  # ours: a run cut short
+            raise TraceError(f"{path}: no frames: the run ended before its first frame")
         raise TraceError(f"{path}: no 'frame' events (not written by a QuickJab loop?)")
     if data.get("otherData") is None:
         data["otherData"] = {}

@@ -341,7 +341,6 @@ def _run_session(args: argparse.Namespace, caption: str, open_sources: Callable[
     import pygame
 
     from engine.clock import VirtualClock
-    from engine.trace import write_chrome_trace
 
     sources: list = []
     try:
@@ -355,28 +354,52 @@ def _run_session(args: argparse.Namespace, caption: str, open_sources: Callable[
         flags = pygame.RESIZABLE | (pygame.FULLSCREEN if args.fullscreen and not args.headless else 0)
         open_window(size, flags, args.headless, "play")
         pygame.display.set_caption(caption)
-        session = make_session(sources, clock, size, pygame.display.get_surface)
-        for line in [*session.templates_lines(), kernels_line()]:
-            if line:
-                print(f"quickjab play: {line}", file=sys.stderr)
-        session.hud_state.show_budget = args.budget
-        session.on_toggle_fullscreen = toggle_fullscreen
-        # one frame drawn before the loop's clock starts: the first draw builds the ring's static
-        # layers and the HUD's fonts (26 ms here against 2.6 for a frame, ~120 ms on a core shared
-        # five ways), which in the loop's first frame dropped steps on a slow board
-        session.render(0.0)
+        session = None
+        try:  # Ctrl-C while the match loads (seconds on a slow board) writes the files as in the loop
+            session = make_session(sources, clock, size, pygame.display.get_surface)
+            _ready(session, args)
+        except KeyboardInterrupt:
+            write_run_files(args, session)
+            raise
         try:
             with slow_hint_at_the_end(args, session.loop.budget):
                 session.loop.run(frames=frames)
         finally:
-            if args.screenshot:
-                save_screenshot(args.screenshot)
-                print(f"quickjab play: wrote {args.screenshot}", file=sys.stderr)
-            if args.trace:
-                write_chrome_trace(session.loop.budget, args.trace)
-                print(f"quickjab play: wrote {args.trace}", file=sys.stderr)
+            write_run_files(args, session)
     finally:
         for source in sources:
             source.close()
         pygame.quit()
     return 0
+
+
+def _ready(session, args: argparse.Namespace) -> None:
+    """A built session made ready for its loop: the templates and kernels lines said, the F3
+    overlay and F11 set, and one frame drawn before the loop's clock starts: the first draw builds
+    the ring's static layers and the HUD's fonts (26 ms here against 2.6 for a frame, ~120 ms on a
+    core shared five ways), which in the loop's first frame dropped steps on a slow board."""
+    for line in [*session.templates_lines(), kernels_line()]:
+        if line:
+            print(f"quickjab play: {line}", file=sys.stderr)
+    session.hud_state.show_budget = args.budget
+    session.on_toggle_fullscreen = toggle_fullscreen
+    session.render(0.0)
+
+
+def write_run_files(args: argparse.Namespace, session) -> None:
+    """The `--screenshot` (what the window shows) and the `--trace` of a match whose window
+    opened, at its end: by its frame count, the window closed, Ctrl-C or SIGTERM, also one before
+    the loop's first frame (`session` None: not built yet). A trace of no frames is still written,
+    as one cut in the loop's first frame is, so that an earlier run's file is not taken for this
+    one's, and its line says it holds no frames."""
+    from engine.budget import FrameBudget
+    from engine.trace import write_chrome_trace
+
+    if args.screenshot:
+        save_screenshot(args.screenshot)
+        print(f"quickjab play: wrote {args.screenshot}", file=sys.stderr)
+    if args.trace:
+        budget = session.loop.budget if session is not None else FrameBudget()
+        write_chrome_trace(budget, args.trace)
+        empty = "" if budget.frames else " (no frames: ended before the first)"
+        print(f"quickjab play: wrote {args.trace}{empty}", file=sys.stderr)

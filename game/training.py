@@ -595,6 +595,9 @@ def _output(args: argparse.Namespace) -> Path:
     if args.output:
         if getattr(args, "profile", None) is not None:
             print("quickjab train: --profile ignored with -o: -o names the templates file", file=sys.stderr)
+        note = arguments.backslash_note(args.output)
+        if note:
+            print(f"quickjab train: -o {note}", file=sys.stderr)
         return Path(args.output)
     return profile_templates_path(getattr(args, "profile", None))  # None: the default player's
 

@@ -32,7 +32,6 @@ import numpy as np
 
 from engine import arguments
 from engine.clock import STEP_MS
-from engine.errors import InputError
 
 BUDGET_MS = STEP_MS
 SIM_TARGET_P99_MS = 1.5  # everything but rendering, per step (issue 9)
@@ -43,13 +42,13 @@ LOW_POWER_BOARD_TARGETS_MS = {"sim": 1.2, "render": 6.0}
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--steps", type=int, default=3600, help="steps of the scripted match (default 3600: one minute)")
+    p.add_argument("--steps", type=arguments.positive_int, default=3600, help="steps of the scripted match (default 3600: one minute)")
     p.add_argument("--low-power", action="store_true", help="measure the low-power mode instead of the full one")
     p.add_argument("--all-modes", action="store_true", help="measure both the full and the low-power mode")
-    p.add_argument("--repeats", type=int, default=3,
+    p.add_argument("--repeats", type=arguments.positive_int, default=3,
                    help="runs of the same deterministic match; the per-step minimum is the least-disturbed time (default 3)")
     p.add_argument("--no-naive", action="store_true", help="skip the naive peer")
-    p.add_argument("--realtime-seconds", type=float, default=10.0,
+    p.add_argument("--realtime-seconds", type=arguments.float_range(0.0), default=10.0,
                    help="seconds of the real-clock 60 Hz run for real dropped steps (0 skips; default 10)")
     p.add_argument("--seed", type=int, default=0, help="match seed (default 0)")
     p.add_argument("--size", default="1280x720", help="render surface WxH (default 1280x720)")
@@ -272,12 +271,6 @@ def realtime(args: argparse.Namespace, size: tuple[int, int], low_power: bool) -
 def run(args: argparse.Namespace) -> int:
     from game.launch import parse_size
 
-    if args.steps < 1:
-        raise InputError(f"bench frame: --steps must be >= 1, got {args.steps}")
-    if args.repeats < 1:
-        raise InputError(f"bench frame: --repeats must be >= 1, got {args.repeats}")
-    if args.realtime_seconds < 0:
-        raise InputError(f"bench frame: --realtime-seconds must be >= 0, got {args.realtime_seconds}")
     size = parse_size(args.size)
     modes = ["full", "low_power"] if args.all_modes else ["low_power" if args.low_power else "full"]
     if not args.no_naive:

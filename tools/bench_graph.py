@@ -21,10 +21,10 @@ from engine import arguments
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--graph", default=None, type=arguments.path_argument,
                    help="time loading/looking up this file instead of building one")
-    p.add_argument("--states", type=int, default=60000, help="states of the graph to build")
+    p.add_argument("--states", type=arguments.int_range(10), default=60000, help="states of the graph to build")
     p.add_argument("--seed", type=arguments.seed, default=0, help="seed of the build and the look-ups (default 0)")
-    p.add_argument("--lookups", type=int, default=20000, help="situations to look up")
-    p.add_argument("--loads", type=int, default=5, help="load repetitions (median reported)")
+    p.add_argument("--lookups", type=arguments.positive_int, default=20000, help="situations to look up")
+    p.add_argument("--loads", type=arguments.positive_int, default=5, help="load repetitions (median reported)")
     p.add_argument("--json", action="store_true", help="print JSON instead of a table")
 
 
@@ -48,11 +48,7 @@ def situations(g, n: int, rng: np.random.Generator) -> list:
 
 
 def run(args: argparse.Namespace) -> int:
-    from engine.errors import InputError
     from game.interaction import InteractionGraph
-    for name in ("states", "lookups", "loads"):
-        if getattr(args, name) < (10 if name == "states" else 1):
-            raise InputError(f"--{name} {getattr(args, name)}: too small")
     fig: dict = {}
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(args.graph) if args.graph else Path(tmp) / "graph.npz"

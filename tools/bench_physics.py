@@ -21,8 +21,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from engine import arguments
 from engine.clock import STEP_DT
-from engine.errors import InputError
 
 if TYPE_CHECKING:
     from engine.physics import World
@@ -31,9 +31,9 @@ DT = STEP_DT
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--steps", type=int, default=500, help="steps per timed run (default 500)")
-    p.add_argument("--repeats", type=int, default=5, help="timed runs per configuration, taken in turn")
-    p.add_argument("--iterations", type=int, default=4, help="relaxation iterations per step")
+    p.add_argument("--steps", type=arguments.positive_int, default=500, help="steps per timed run (default 500)")
+    p.add_argument("--repeats", type=arguments.positive_int, default=5, help="timed runs per configuration, taken in turn")
+    p.add_argument("--iterations", type=arguments.positive_int, default=4, help="relaxation iterations per step")
     p.add_argument("--json", action="store_true", help="print JSON instead of a table")
 
 
@@ -186,9 +186,6 @@ def _relaxation(steps: int) -> dict:
 
 
 def run(args: argparse.Namespace) -> int:
-    for name in ("steps", "repeats", "iterations"):
-        if getattr(args, name) < 1:
-            raise InputError(f"bench physics: --{name} must be >= 1, got {getattr(args, name)}")
     it = args.iterations
     configs = {
         "apart": _world(1.2, it), "clinch": _world(0.45, it),

@@ -19,6 +19,7 @@ import sys
 import time
 from pathlib import Path
 
+from engine import arguments
 from engine.errors import InputError
 
 REPO = Path(__file__).resolve().parents[1]
@@ -48,7 +49,7 @@ def kernel_report() -> tuple[str, dict]:
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--runs", type=int, default=5, help="runs of each (default 5)")
+    p.add_argument("--runs", type=arguments.positive_int, default=5, help="runs of each (default 5)")
     p.add_argument("--json", action="store_true", help="print the figures as JSON")
 
 
@@ -67,8 +68,6 @@ def run_once(code: str) -> tuple[float, float]:
 
 
 def run(args: argparse.Namespace) -> int:
-    if args.runs < 1:
-        raise InputError("--runs must be at least 1")
     run_once(PLAY_CODE)  # warm-up: one-time builds and caches, not start-up
     kernels, per_kernel = kernel_report()
     play, peer = [], []

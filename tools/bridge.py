@@ -11,8 +11,10 @@ import sys
 import time
 from dataclasses import asdict
 
-from engine.arguments import output_file, path_argument
+from engine.arguments import int_range, output_file, path_argument, seed
 from engine.errors import InputError
+
+MAX_COUNT = 100_000_000  # the most frames, corrupted frames or events `bridge faults` takes
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -57,10 +59,10 @@ def register(sub: argparse._SubParsersAction) -> None:
         description="False accepts over random bytes and corrupted frames; frames lost per dropped frame, "
         "garbage burst, bit flip and dropped byte (ground truth and the decoder's own count).")
     f.add_argument("--random-mb", type=float, default=1.0, help="MiB of random bytes (default 1)")
-    f.add_argument("--corrupted", type=int, default=100_000, help="corrupted frames (default 100000)")
-    f.add_argument("--frames", type=int, default=20_000, help="frames per loss experiment")
-    f.add_argument("--events", type=int, default=1000, help="faults per loss experiment")
-    f.add_argument("--seed", type=int, default=0, help="seed of the random bytes and faults (default 0)")
+    f.add_argument("--corrupted", type=int_range(0, MAX_COUNT), default=100_000, help="corrupted frames (default 100000)")
+    f.add_argument("--frames", type=int_range(0, MAX_COUNT), default=20_000, help="frames per loss experiment")
+    f.add_argument("--events", type=int_range(0, MAX_COUNT), default=1000, help="faults per loss experiment")
+    f.add_argument("--seed", type=seed, default=0, help="seed of the random bytes and faults (default 0)")
     f.add_argument("--json", action="store_true", help="print JSON")
     f.set_defaults(func=run_faults)
 
@@ -187,10 +189,6 @@ def run_faults(args: argparse.Namespace) -> int:
     from firmware_bridge import faults
 
     _check("--random-mb", args.random_mb, 0, 1024)
-    for name in ("corrupted", "frames", "events"):
-        _check("--" + name, getattr(args, name), 0, 100_000_000)
-    if args.seed < 0:
-        raise InputError(f"--seed {args.seed}: must be 0 or more")
     if args.events * 3 > args.frames:
         raise InputError(f"--events {args.events}: at most --frames/3 ({args.frames // 3})")
     t0 = time.perf_counter()

@@ -155,3 +155,33 @@ def test_processes_writing_one_file_at_once_never_take_each_others_part_file(tmp
     assert [p.returncode for p in procs] == [0, 0], errors
     assert [p.name for p in tmp_path.iterdir()] == ["templates.npz"]
     assert target.read_bytes() in (b"a" * 4096, b"b" * 4096)
+
+
+def test_a_write_also_clears_old_part_files_of_other_names_whose_writer_is_gone(tmp_path):
+    """A killed writer's part of a file never written again (a trace named for its run, a
+    synthesized take) stayed for good. A write into the folder removes the parts of other names
+    that no writer holds (the flock is free) and that nothing has touched for an hour; one a
+    writer holds, or one just made (another program's temporary file in the same shape, which
+    takes no lock), stays."""
+    import fcntl
+    import os
+    import time
+
+    from engine.npz_files import STALE_PART_S, write_replacing
+
+    def part(name: str, age_s: float):
+        p = tmp_path / name
+        p.write_bytes(b"half a file")
+        then = time.time() - age_s
+        os.utime(p, (then, then))
+        return p
+
+    gone = part(".take.csv.abcdefgh.part", STALE_PART_S + 60)
+    held = part(".templates.npz.ijklmnop.part", STALE_PART_S + 60)
+    fresh = part(".graph.npz.qrstuvwx.part", 5)
+    not_a_part = part(".notes.txt.part", STALE_PART_S + 60)  # no random middle: not write_replacing's
+    with open(held, "rb") as f:
+        fcntl.flock(f.fileno(), fcntl.LOCK_EX)  # a live writer's
+        write_replacing(tmp_path / "trace.json", lambda fh: fh.write(b"{}"))
+    assert not gone.exists()
+    assert held.exists() and fresh.exists() and not_a_part.exists()

@@ -436,3 +436,43 @@ def test_play_ended_by_sigterm_or_sighup_writes_its_trace_as_ctrl_c_does(tmp_pat
     assert proc.returncode == 130, err
     assert "Traceback" not in err and f"quickjab play: wrote {trace}" in err
     assert any(ev.get("name") == "frame" for ev in read_chrome_trace(trace)["traceEvents"])
+
+
+@pytest.mark.parametrize("where", ["__init__", "render"])
+def test_play_ended_while_the_match_loads_writes_its_trace_as_in_the_loop(tmp_path, monkeypatch, capsys, where) -> None:
+    """Ctrl-C (or SIGTERM, SIGHUP: the same KeyboardInterrupt) after the window opened and before
+    the loop ran (the session built, its first frame drawn: seconds on a slow board) wrote no
+    trace and no screenshot, where one in the loop writes both. Now the files are written with
+    what there is, a trace of no frames said so, and the exit is 130 as in the loop."""
+    from game.session import Session
+
+    def interrupted(self, *a, **k):
+        raise KeyboardInterrupt
+
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "xdg"))
+    monkeypatch.setattr(Session, where, interrupted)
+    trace, shot = tmp_path / "t.json", tmp_path / "s.png"
+    assert main(["play", "--demo", "--headless", "--no-sound", "--trace", str(trace), "--screenshot", str(shot)]) == 130
+    err = capsys.readouterr().err
+    assert f"quickjab play: wrote {shot}" in err
+    assert f"quickjab play: wrote {trace} (no frames: ended before the first)" in err
+    data = json.loads(trace.read_text())
+    assert data["otherData"]["frames_total"] == 0 and all(ev["ph"] == "M" for ev in data["traceEvents"])
+    assert pygame.image.load(str(shot)).get_size() == (1280, 720)
+
+
+def test_train_says_a_backslash_in_minus_o_is_no_folder_here(tmp_path, monkeypatch, capsys) -> None:
+    """`train -o 'C:\\Users\\me\\t.npz'` on Linux or macOS saved one file of that literal name in
+    the current folder, unsaid: a backslash is a character of a name there. Said in one line
+    (a name it is, so it is not refused)."""
+    import os
+
+    if os.sep == "\\" or os.altsep == "\\":
+        pytest.skip("a folder separator on this system")
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "xdg"))
+    monkeypatch.chdir(tmp_path)
+    name = "C:\\Users\\me\\t.npz"
+    main(["train", "--headless", "--demo", "--actions", "straight_r", "--frames", "2", "-o", name])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert (f"quickjab train: -o {name}: a backslash is not a folder separator on this system: "
+            f"this names one file, {name}, in {tmp_path}") in err, err

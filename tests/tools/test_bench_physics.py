@@ -6,7 +6,6 @@ import json
 
 import pytest
 
-from engine.errors import InputError
 from tools.cli import main
 
 
@@ -29,8 +28,6 @@ def test_bench_physics_table(capsys):
 
 
 def test_bench_physics_rejects_zero_steps():
-    with pytest.raises(InputError):
-        import argparse
-
-        from tools import bench_physics
-        bench_physics.run(argparse.Namespace(steps=0, repeats=1, iterations=4, json=False))
+    with pytest.raises(SystemExit) as exit_:  # argparse's range, as every bench count (test_bench_ranges.py)
+        main(["bench", "physics", "--steps", "0"])
+    assert exit_.value.code == 2

@@ -269,3 +269,15 @@ def test_the_share_column_says_what_it_is_a_share_of(traced, capsys):
     assert main(["profile", str(path)]) == 0
     header = next(line for line in capsys.readouterr().out.splitlines() if line.startswith("stage"))
     assert "p99/16.7ms" in header and "p99/budget" not in header
+
+
+def test_a_trace_of_no_frames_says_the_run_ended_before_its_first(tmp_path, capsys):
+    """`play --trace` interrupted before its first frame writes a trace of none (otherData's
+    frames_total 0): profile called it "not written by a QuickJab loop?", which it was."""
+    from engine.budget import FrameBudget
+
+    path = tmp_path / "t.json"
+    write_chrome_trace(FrameBudget(), path)
+    assert main(["profile", str(path)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [f"quickjab profile: {path}: no frames: the run ended before its first frame"]

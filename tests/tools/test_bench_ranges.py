@@ -1,0 +1,35 @@
+"""The counts of `bench frame`, `bench graph`, `bench physics` and `bench startup`, and of
+`bridge faults`, are checked by argparse as every other bench command's are: one line naming
+the option and its range, exit 2, before anything is imported or run (they were checked inside
+the run, in words of their own)."""
+
+from __future__ import annotations
+
+import pytest
+
+from tools.cli import main
+
+
+@pytest.mark.parametrize("argv, said", [
+    (["bench", "frame", "--steps", "0"], "argument --steps: 0 is out of range: must be >= 1"),
+    (["bench", "frame", "--repeats", "-1"], "argument --repeats: -1 is out of range: must be >= 1"),
+    (["bench", "frame", "--realtime-seconds", "-0.5"], "argument --realtime-seconds: -0.5 is out of range: must be >= 0"),
+    (["bench", "frame", "--realtime-seconds", "nan"], "argument --realtime-seconds: expected a finite number, not 'nan'"),
+    (["bench", "graph", "--states", "9"], "argument --states: 9 is out of range: must be >= 10"),
+    (["bench", "graph", "--lookups", "0"], "argument --lookups: 0 is out of range: must be >= 1"),
+    (["bench", "graph", "--loads", "0"], "argument --loads: 0 is out of range: must be >= 1"),
+    (["bench", "physics", "--steps", "0"], "argument --steps: 0 is out of range: must be >= 1"),
+    (["bench", "physics", "--repeats", "0"], "argument --repeats: 0 is out of range: must be >= 1"),
+    (["bench", "physics", "--iterations", "0"], "argument --iterations: 0 is out of range: must be >= 1"),
+    (["bench", "startup", "--runs", "0"], "argument --runs: 0 is out of range: must be >= 1"),
+    (["bridge", "faults", "--corrupted", "-1"], "argument --corrupted: -1 is out of range: must be between 0 and 100000000"),
+    (["bridge", "faults", "--frames", "-1"], "argument --frames: -1 is out of range: must be between 0 and 100000000"),
+    (["bridge", "faults", "--events", "100000001"], "argument --events: 100000001 is out of range: must be between 0 and 100000000"),
+    (["bridge", "faults", "--seed", "-1"], "argument --seed: -1 is out of range: must be between 0 and"),
+])
+def test_counts_out_of_range_are_argparse_errors(capsys, argv, said):
+    with pytest.raises(SystemExit) as exit_:
+        main(argv)
+    err = capsys.readouterr().err.strip().splitlines()
+    assert exit_.value.code == 2 and len(err) == 1, err
+    assert err[0].startswith(f"quickjab {' '.join(argv[:2])}: {said}"), err
