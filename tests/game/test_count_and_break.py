@@ -1,0 +1,63 @@
+"""While nobody can box (the referee counts, the break between rounds) nothing done then acts
+after it: a motion the player makes is over for the boxer there and then (as under the pause),
+and a fist's touch spends no hand. A TKO winner who was down too is on their feet at the end."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import pytest
+
+sys.path.insert(0, str(Path(__file__).parent))
+from fair_play import two_players  # noqa: E402
+
+from game.match import COUNT, FIGHT  # noqa: E402
+
+
+@pytest.fixture(autouse=True)
+def own_data_dir(tmp_path, monkeypatch):
+    """Never read (or write) the real user's trained templates."""
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "xdg"))
+
+
+def _stop_boxing(s, why: str) -> None:
+    """Boxer 2 floored (the referee counts), or the round's bell (the break)."""
+    if why == "count":
+        s.match.hit(1, 200.0)
+        assert s.match.phase == COUNT
+    else:
+        s.match.clock_steps = 1
+        s.loop.run(steps=1)
+        assert s.match.phase == "break"
+
+
+def _box_again(s) -> None:
+    """The count or the break over on the next step."""
+    m = s.match
+    if m.phase == COUNT:
+        m.count, m.count_steps = m.rise_count(1) - 1, m.hz - 1
+    else:
+        m.clock_steps = 1
+
+
+@pytest.mark.parametrize("why", ["count", "break"])
+def test_a_motion_made_while_nobody_can_box_does_nothing_after_it(why) -> None:
+    """A left hook made during the count (or the break) was ignored, but its second half (the
+    hand coming back) or a switch of it started a punch once the boxing went on."""
+    s = two_players()
+    s.loop.run(steps=60)  # the recognizers learn the resting gravity
+    _stop_boxing(s, why)
+    s.loop.run(steps=2)
+    s.seats[0].source.press("hook_l")
+    starts, actions = 0, set()
+    for _ in range(240):
+        s.loop.run(steps=1)
+        new = sum(1 for seat, ev in s.events_log if seat == 0 and ev["event"] == "start")
+        if s.match.phase != FIGHT and new > starts == 0:
+            _box_again(s)  # on again just after the recognizer named the motion
+        starts = new
+        actions.add(s.boxers[0].controller.action)
+    assert s.match.phase == FIGHT
+    assert starts >= 1  # the recognizer saw the motion ...
+    assert actions == {"guard"}  # ... and the boxer did nothing with it
