@@ -102,7 +102,10 @@ class Ring:
         self.renderer.step_effects()
 
     def _hits(self, step: int, dt: float) -> None:
-        self._land(step, hits_from_contacts(self.contacts, list(self.boxers)))
+        # no blow counts during the count or the break: a fist's touch then spends no hand (it
+        # spent it on a blow the referee did not count)
+        if self.match.fighting:
+            self._land(step, hits_from_contacts(self.contacts, list(self.boxers)))
 
     def _land(self, step: int, hits: list[Hit]) -> None:
         """Every blow of the step lands before the referee decides who goes down (the first

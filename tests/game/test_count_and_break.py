@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 sys.path.insert(0, str(Path(__file__).parent))
-from fair_play import two_players  # noqa: E402
+from fair_play import fist_on_head, throw, touch_next_steps, two_players  # noqa: E402
 
 from game.match import COUNT, FIGHT  # noqa: E402
 
@@ -61,3 +61,19 @@ def test_a_motion_made_while_nobody_can_box_does_nothing_after_it(why) -> None:
     assert s.match.phase == FIGHT
     assert starts >= 1  # the recognizer saw the motion ...
     assert actions == {"guard"}  # ... and the boxer did nothing with it
+
+
+@pytest.mark.parametrize("why", ["count", "break"])
+def test_a_touch_while_nobody_can_box_spends_no_hand(why) -> None:
+    """A fist on the head during the count (or the break) counted no blow but spent its hand:
+    the punch was used up on a blow the referee did not count."""
+    s = two_players()
+    s.loop.run(steps=20)
+    _stop_boxing(s, why)
+    s.loop.run(steps=2)
+    health, hits = list(s.match.health), list(s.match.hits)
+    throw(s, 0)
+    touch_next_steps(s, [fist_on_head(s, 0)])
+    s.loop.run(steps=1)
+    assert not s.boxers[0].hand_spent("r")
+    assert s.match.health == health and s.match.hits == hits and len(s.blows_log) == 0
