@@ -77,3 +77,21 @@ def test_a_touch_while_nobody_can_box_spends_no_hand(why) -> None:
     s.loop.run(steps=1)
     assert not s.boxers[0].hand_spent("r")
     assert s.match.health == health and s.match.hits == hits and len(s.blows_log) == 0
+
+
+def test_a_tko_winner_floored_in_the_same_step_is_on_their_feet() -> None:
+    """Player 1's third knockdown of the round (a TKO) in the step player 2 went down too: the
+    winner lay on the canvas under "TKO - YOU WIN" (the KO winner has risen by the 10)."""
+    s = two_players()
+    s.loop.run(steps=20)
+    s.match.round_knockdowns, s.match.knockdowns = [2, 0], [2, 0]
+    s.match.health = [3.0, 3.0]
+    throw(s, 0)
+    throw(s, 1)
+    touch_next_steps(s, [fist_on_head(s, 0), fist_on_head(s, 1)])
+    s.loop.run(steps=1)
+    m = s.match
+    assert m.over and m.result == "TKO" and m.winner == 1 and m.knockdowns == [3, 1]
+    s.loop.run(steps=60)
+    assert m.downed == [0] and m.health[1] == 40.0  # up, as one who rises from the count
+    assert [b.controller.action for b in s.boxers] == ["knockdown", "guard"]
