@@ -71,3 +71,18 @@ def test_a_motion_made_under_the_pause_does_nothing_after_it() -> None:
         actions.add(s.boxers[0].controller.action)
     assert starts >= 1  # the recognizer saw the motion ...
     assert actions == {"guard"}  # ... and the boxer did nothing with it
+
+
+def test_a_hit_flash_stands_still_with_the_picture_under_the_pause() -> None:
+    """The pause is a still picture of the ring: a flash mid-way stays as it was (frozen with the
+    bodies it lit, not fading over them), and fades on after the resume."""
+    s = two_players()
+    s.loop.run(steps=20)
+    s.renderer.add_flash(s.boxers[1].joint_positions()[4])
+    s.loop.run(steps=5)
+    s.toggle_pause()
+    s.loop.run(steps=60)
+    assert [f.age for f in s.renderer.flashes] == [5]
+    s.toggle_pause()
+    s.loop.run(steps=1)
+    assert [f.age for f in s.renderer.flashes] == [6]
