@@ -95,6 +95,10 @@ class KeyboardSource(Source):
         self._auto_wait = 0
         self.pressed: list[str] = []  # actions pressed, for tests and the HUD
         self.keymap = KEYMAPS[keys]  # the whole keyboard, or one half of it (two players)
+        # the match is paused (the session sets it): a move pressed but not begun yet waits for
+        # the resume, the hands resting (a key pressed just before Esc was all made under the
+        # pause, which finished it for the boxer)
+        self.held = False
 
     def press(self, action: str) -> None:
         """Start performing `action` from the next sample on (cutting one under way)."""
@@ -129,7 +133,8 @@ class KeyboardSource(Source):
         while self._next_t <= now + 1e-9:
             if self.auto and not self.busy:
                 self._auto_step()
-            out.append(Sample(self._next_t, self.stream.next_frame()))
+            held = self.held and self.stream.waiting
+            out.append(Sample(self._next_t, self.stream.rest_frame() if held else self.stream.next_frame()))
             self._next_t += 1.0 / HZ
         self.count("samples", len(out))
         return out

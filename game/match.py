@@ -11,7 +11,8 @@ scripted match is reproducible and its state hashes. Rules, kept simple and dete
   `settle_knockdowns`), so the order of the contacts decides nothing. Both boxers floored in one
   step both go down and are counted together, each rising at its own count; when neither can
   go on (each counted out or stopped by its third knockdown of the round) the match is a draw,
-  "double KO"; when only one cannot, the other wins by KO or TKO.
+  "double KO"; when only one cannot, the other wins by KO or TKO (a TKO winner floored in the
+  same step gets up at once, with 40 health, as one who rises from the count).
 - Between rounds a 3 s break; each boxer recovers 20 health.
 - After round 3 the scorecards decide: each round 10-9 to whoever dealt more damage (10-10
   when even), minus one point per knockdown suffered in the round. Equal totals: a draw.
@@ -218,6 +219,10 @@ class Match:
             if len(out) == 2:
                 self._finish(None, DOUBLE_KO)
             else:
+                # the winner, floored in this step too, gets up (a KO winner has risen by the 10)
+                for boxer in boxers:
+                    if boxer not in stopped:
+                        self._rise(boxer)
                 self._finish(1 - stopped[0], "TKO")
 
     def _maybe_rise(self) -> None:
@@ -225,9 +230,7 @@ class Match:
         for boxer in list(self.downed):
             rise = self.rise_count(boxer)
             if rise < COUNT_OUT and self.count >= rise:
-                self.health[boxer] = RISE_HEALTH
-                self.downed.remove(boxer)
-                self.events.append(MatchEvent("rise", boxer))
+                self._rise(boxer)
         if self.downed and self.count >= COUNT_OUT:
             if len(self.downed) == 2:
                 self._finish(None, DOUBLE_KO)
@@ -235,6 +238,11 @@ class Match:
                 self._finish(1 - self.downed[0], "KO")
         elif not self.downed:
             self.phase = FIGHT
+
+    def _rise(self, boxer: int) -> None:
+        self.health[boxer] = RISE_HEALTH
+        self.downed.remove(boxer)
+        self.events.append(MatchEvent("rise", boxer))
 
     def _score_round(self) -> None:
         d = self.round_damage

@@ -88,6 +88,8 @@ class PlayerController:
                 self.swing = swing
             self._from_event = True
         elif kind == "reject":
+            # a started motion's reject is its call-off: the recognizer has ended it already, so
+            # the aborted clip owes it no `character_finished()` (nothing left to end or discard)
             young = self.phase < REJECT_ABORT_FRACTION
             if self._from_event and not self.idle and young:
                 self.play("guard")

@@ -3,7 +3,7 @@ game/two_player.py: two people): two boxers in the physics world at their marks,
 hits and match stages (game/stages.py), what a recognizer's event does to a boxer (`_act_on`),
 the referee's blows, the knockdown hold, the corners between rounds, the view and the state
 hash. A pause freezes the ring: no physics step, no contacts (`_physics`), no clip steps (the
-sessions' boxer stages), and a motion begun under it does nothing (`_act_on`). The session
+sessions' boxer stages); a motion begun under it, the count or the break does nothing (`_act_on`). The session
 around it brings the input, the recognition and the opponent: it sets `config`, `match`,
 `hud_state`, `sounds`, `view`, `events_log`, `blows_log` and `loop`, and says what a blow does
 (`damage_of`), its rumble, a decided round (`_rounds_over`), the source line (`_show_sources`)
@@ -66,10 +66,11 @@ class Ring:
         """The boxer who was hit: the session makes its player feel it (_show_blow)."""
 
     def _act_on(self, i: int, recognizer, ev: dict) -> None:
-        """Boxer i acts on its recognizer's event while blows count. A motion that starts under
-        the pause is over for the boxer there and then (`character_finished`: the rest of it is
-        discarded): its second half, the hand coming back, started a punch after the resume,
-        the boxer never having played the first to discard it."""
+        """Boxer i acts on its recognizer's event while blows count. A motion that starts while
+        they do not (the pause, the count, the break between rounds) is over for the boxer there
+        and then (`character_finished`: the rest of it is discarded): its second half, the hand
+        coming back, or a switch of it started a punch once the boxing went on, the boxer never
+        having played the first to discard it."""
         # a whole-motion switch is the recognizer's final word on a motion already over:
         # a label for the record, too late for the character to act on
         if self.match.fighting and not ev.get("whole_motion"):
@@ -77,7 +78,7 @@ class Ring:
             clip = self.lib.get(ev.get("action") or "")
             if ev.get("event") == "start" and clip is not None and clip.kind == "attack":
                 self.sounds.play("punch", 0.5)
-        elif self.match.paused and ev.get("event") == "start":
+        elif ev.get("event") == "start":
             recognizer.character_finished()
 
     def _hold_knockdown(self, i: int) -> None:
@@ -101,7 +102,10 @@ class Ring:
         self.renderer.step_effects()
 
     def _hits(self, step: int, dt: float) -> None:
-        self._land(step, hits_from_contacts(self.contacts, list(self.boxers)))
+        # no blow counts during the count or the break: a fist's touch then spends no hand (it
+        # spent it on a blow the referee did not count)
+        if self.match.fighting:
+            self._land(step, hits_from_contacts(self.contacts, list(self.boxers)))
 
     def _land(self, step: int, hits: list[Hit]) -> None:
         """Every blow of the step lands before the referee decides who goes down (the first

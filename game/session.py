@@ -97,6 +97,13 @@ def rewind_ended(sources: list[Source]) -> None:
                 source.rewind()
 
 
+def hold_keys(source: Source, paused: bool) -> None:
+    """A key pressed in the step Esc paused the match: its move, not begun yet, waits for the
+    resume (`KeyboardSource.held`) instead of being made under the pause, which finishes it."""
+    if KEYS in source.capabilities:
+        source.held = paused
+
+
 def pause_on_home(source, held: int, session) -> int:
     """Toggle the pause when the source's Home button goes down (a press, not a hold: `held` is
     the buttons held at the last poll), through `session.toggle_pause()` (which keeps a match
@@ -324,6 +331,7 @@ class Session(Ring):
                 self.handle_event(event)
         if self.config.demo:
             self.pilot.step(self.source, self.match.fighting, self.player, self.opponent)
+        hold_keys(self.source, self.match.paused)
         samples = self.source.poll()
         self._buttons = pause_on_home(self.source, self._buttons, self)
         self.resampler.push(samples)

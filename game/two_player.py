@@ -47,6 +47,7 @@ from game.session import (
     SessionConfig,
     _event_key,
     enter_starts_match,
+    hold_keys,
     load_templates,
     pause_on_home,
     rewind_ended,
@@ -178,6 +179,7 @@ class TwoPlayerSession(Session):
         for seat in self.seats:
             if self.config.demo:
                 self._pilot_seat(seat)
+            hold_keys(seat.source, self.match.paused)
             samples = seat.source.poll()
             seat.buttons = pause_on_home(seat.source, seat.buttons, self)
             seat.resampler.push(samples)

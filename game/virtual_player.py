@@ -293,6 +293,15 @@ class VirtualPlayerStream:
         self._queue, self._pos, self.performing = signal, 0, name
         return len(signal)
 
+    @property
+    def waiting(self) -> bool:
+        """A move performed whose first reading has not been given yet."""
+        return self.performing is not None and self._pos == 0
+
+    def rest_frame(self) -> np.ndarray:
+        """A reading of the hands at rest, a waiting move left to wait (a paused match holds it)."""
+        return synthesize_rest(1, self.lib["guard"], self.profile, self.rng)[0]
+
     def next_frame(self) -> np.ndarray:
         if self._pos >= len(self._queue):
             self._queue = synthesize_rest(self._rest_chunk, self.lib["guard"], self.profile, self.rng)

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from game.match import BREAK, COUNT, DOUBLE_KO, FIGHT, Match
+from game.match import BREAK, COUNT, DOUBLE_KO, FIGHT, RISE_HEALTH, Match
 
 
 def run(m: Match, steps: int) -> None:
@@ -153,6 +153,7 @@ def test_a_tko_with_the_other_boxer_down_too() -> None:
     m.health = [1.0, 1.0]
     trade(m, (9.0, 9.0))  # boxer 0's third of the round; boxer 1 could rise at 3
     assert m.over and m.result == "TKO" and m.winner == 1
+    assert m.downed == [0] and m.health == [0.0, RISE_HEALTH]  # the winner is up at once
     m = Match()
     m.round_knockdowns, m.knockdowns = [2, 0], [2, 3]
     m.health = [1.0, 1.0]

@@ -57,7 +57,10 @@ def test_a_motion_made_under_the_pause_does_nothing_after_it() -> None:
     """A left hook made under the pause (the virtual player's Wiimote readings: keys do nothing
     then) was ignored, but its second half, the hand coming back, started a hook after the
     resume: the character never played the first, so nothing discarded the return."""
+    from engine.sensors.source import PLAYABLE
+
     s = two_players()
+    s.seats[0].source.capabilities = frozenset({PLAYABLE})  # a controller's readings: no keys (hold_keys)
     s.loop.run(steps=60)  # the recognizers learn the resting gravity
     s.toggle_pause()
     s.seats[0].source.press("hook_l")
@@ -71,3 +74,38 @@ def test_a_motion_made_under_the_pause_does_nothing_after_it() -> None:
         actions.add(s.boxers[0].controller.action)
     assert starts >= 1  # the recognizer saw the motion ...
     assert actions == {"guard"}  # ... and the boxer did nothing with it
+
+
+def test_a_hit_flash_stands_still_with_the_picture_under_the_pause() -> None:
+    """The pause is a still picture of the ring: a flash mid-way stays as it was (frozen with the
+    bodies it lit, not fading over them), and fades on after the resume."""
+    s = two_players()
+    s.loop.run(steps=20)
+    s.renderer.add_flash(s.boxers[1].joint_positions()[4])
+    s.loop.run(steps=5)
+    s.toggle_pause()
+    s.loop.run(steps=60)
+    assert [f.age for f in s.renderer.flashes] == [5]
+    s.toggle_pause()
+    s.loop.run(steps=1)
+    assert [f.age for f in s.renderer.flashes] == [6]
+
+
+@pytest.mark.parametrize("players", [1, 2])
+def test_a_key_pressed_just_before_esc_plays_after_the_resume(players, graph_path) -> None:  # noqa: F811
+    """A key and Esc in one step's events: the key was pressed, but its move, performed from
+    the next reading on, was all made under the pause, which finished it for the boxer: lost."""
+    import pygame
+
+    s = one_player(graph_path) if players == 1 else two_players()
+    s.loop.run(steps=60)  # the recognizer learns the resting gravity
+    for key in (pygame.K_q, pygame.K_ESCAPE):
+        pygame.event.post(pygame.event.Event(pygame.KEYDOWN, key=key, mod=0, unicode="", scancode=0))
+    s.loop.run(steps=120)
+    assert s.match.paused and s.boxers[0].controller.action == "guard"
+    s.toggle_pause()
+    actions = set()
+    for _ in range(60):
+        s.loop.run(steps=1)
+        actions.add(s.boxers[0].controller.action)
+    assert "straight_l" in actions  # the move waited for the resume

@@ -264,6 +264,18 @@ def test_a_wrong_early_start_is_switched_or_called_off():
     assert kinds[0] == ("start", "swing")
     assert kinds[-1] == ("reject", "swing") and events[-1]["called_off"] is True
     assert "end" not in [k for k, _ in kinds]
+    # the call-off ends the motion (the recognizer is idle): a character that aborts its clip
+    # then (the game's young clip, PlayerController) owes it no `character_finished()`, which
+    # would find nothing to end or discard
+    rec = DualBufferRecognizer(tm, noise_g=0.3)
+    for f in np.vstack([rest(30), wind, wind[::-1], rest(30)]):
+        if any(e.get("called_off") for e in rec.push(f)):
+            break
+    else:
+        raise AssertionError("not called off")
+    assert rec.state == "idle"
+    rec.character_finished()
+    assert rec.state == "idle" and rec.push(G) == []
     # the whole swing: started and ended as a swing, never called off
     events = run(DualBufferRecognizer(tm, noise_g=0.3), np.vstack([rest(30), swing, rest(30)]))
     assert [(e["event"], e["action"]) for e in events if e["event"] in ("start", "end")] == [("start", "swing"), ("end", "swing")]
