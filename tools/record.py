@@ -91,9 +91,19 @@ def link_counts(stats: dict[str, int]) -> str:
     unannounced = f" ({jumps} seen only as a sequence jump)" if jumps else ""
     return (f"received {stats.get('frames_ok', 0)} frames, lost {stats.get('lost', 0)}, "
             f"CRC-rejected {stats.get('crc_errors', 0)}, other rejects {rejected}, "
-            f"replays dropped {stats.get('replays', 0)}, reboots {stats.get('reboots', 0) + jumps}{unannounced}, "
+            f"replays dropped {stats.get('replays', 0)}{_ahead(stats)}, reboots {stats.get('reboots', 0) + jumps}{unannounced}, "
             f"sensor changes {stats.get('sensor_changes', 0)}, sensor conflicts {stats.get('sensor_conflicts', 0)}, "
             f"implausible {stats.get('implausible', 0)}")
+
+
+def _ahead(stats: dict[str, int]) -> str:
+    """How many of the replays came later in time than the last frame delivered, and how often a
+    HELLO of the board's boot resynced the sequence check (PROTOCOL.md: the host stopped reading
+    for 32768 frames or more): said only when any did."""
+    ahead, resyncs = stats.get("replays_ahead", 0), stats.get("resyncs", 0)
+    if not ahead and not resyncs:
+        return ""
+    return f" ({ahead} later in time than the frames before them; resynced at the board's HELLO {resyncs} time(s))"
 
 
 def record(url: str, output: str, seconds: float | None, label: str = "", poll_s: float = 0.005,

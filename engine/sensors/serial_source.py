@@ -17,7 +17,8 @@ another one, and the previous HELLO's scales would misread it.
 
 Hostile or broken input is counted and dropped, never raised: the decoder rejects HELLOs whose
 fields make no sense (protocol.hello_problem) and frames replayed from earlier (same boot and
-seq). A board that reboots with another sensor count changes `sensors` (counted as
+seq; a HELLO of the boot later in time resyncs the check after the host stopped reading for
+32768 frames or more, and `missing` says a long run of replays). A board that reboots with another sensor count changes `sensors` (counted as
 `sensor_changes`); from then on its samples have the new shape, which is how the frames stage
 (engine.frames.FrameResampler) and the recorder (tools/record.py) learn of it. Only a reboot
 does: a HELLO that announces other sensors than its boot's earlier HELLO is counted as
@@ -64,6 +65,7 @@ LOST = (OSError, serial.SerialException, termios.error)
 MAX_READS_PER_POLL = 32  # bounds one poll's work even if the device outruns us
 BACKLOG = 1024  # a read this big may have left more behind: read again in the same poll
 STALL_S = 2.0  # no byte for this long while connected counts one stall
+REPLAY_RUN_SAY = 50  # frames dropped as replays in a row that `missing` says, at the least
 MAX_WINDOW_S = 60.0  # `window=`: the clock keeps up to one minimum per poll over it (12,000 at 200 polls/s)
 
 
@@ -173,6 +175,17 @@ def missing_sensor_a(hello: protocol.Hello | None) -> str:
     return ""
 
 
+def missing_now(hello: protocol.Hello | None, decoder: protocol.Decoder) -> str:
+    """`Source.missing` of a connected serial source: a second's worth of frames or more in a
+    row dropped as replays (the board owes a HELLO every second, and one at once when asked, and
+    a HELLO of its boot later in time resyncs the decoder: a board that sends none, or bytes
+    that are all old ones played back), else a B-only board's still right hand."""
+    if decoder.replay_run >= max(hello.rate_hz if hello is not None else 0, REPLAY_RUN_SAY):
+        return ("every frame dropped as a replay: its seq was delivered before in this boot (bytes played "
+                "back, or the host stopped reading for a while and no HELLO of the board has come since)")
+    return missing_sensor_a(hello)
+
+
 class SerialSource(Source):
     """Samples of shape (sensors, 3) in g from a protocol v1 device."""
 
@@ -275,7 +288,7 @@ class SerialSource(Source):
         self.port = None
 
     def missing(self) -> str:
-        return missing_sensor_a(self.hello) if self.state is SourceState.CONNECTED else ""
+        return missing_now(self.hello, self.decoder) if self.state is SourceState.CONNECTED else ""
 
     def close(self) -> None:
         self._drop_port()
