@@ -18,9 +18,11 @@ another one, and the previous HELLO's scales would misread it.
 Hostile or broken input is counted and dropped, never raised: the decoder rejects HELLOs whose
 fields make no sense (protocol.hello_problem) and frames replayed from earlier (same boot and
 seq; a HELLO of the boot later in time resyncs the check after the host stopped reading for
-32768 frames or more, and `missing` says a long run of replays). A board that reboots with another sensor count changes `sensors` (counted as
-`sensor_changes`); from then on its samples have the new shape, which is how the frames stage
-(engine.frames.FrameResampler) and the recorder (tools/record.py) learn of it. Only a reboot
+32768 frames or more, and `missing` says a long run of replays). A board that reboots with
+other sensors counts a `sensor_changes` (B alone after A and B too, whose shape stays 2 rows),
+and one with another sensor count changes `sensors`: from then on its samples have the new
+shape, which is how the frames stage (engine.frames.FrameResampler) and the recorder
+(tools/record.py) learn of it. A new boot holds no sensor reading of the last one. Only a reboot
 does: a HELLO that announces other sensors than its boot's earlier HELLO is counted as
 `sensor_conflicts` and dropped (the boot's first sensors stay; a boot that announced none yet,
 before finding its IMUs, may announce them). A SAMPLE with an acceleration over MAX_ACCEL_G
@@ -340,13 +342,10 @@ class SerialSource(Source):
             self.count("sensor_conflicts")
             return False
         changed = not same_boot or hello.ts_bits != self.hello.ts_bits
-        if hello.sensors:
-            # a change from the sensors announced before; `sensors` is only a guess (2) until the
-            # first HELLO that names some (a boot's HELLOs before its IMUs are found name none)
-            if self.sensors_known and sample_width(hello.flags) != self.sensors:
-                self.count("sensor_changes")
-            self.sensors = sample_width(hello.flags)  # B alone is still the left hand's row
-            self.sensors_known = True
+        if self._accel.take_hello(hello, same_boot):  # other sensors than the ones announced before
+            self.count("sensor_changes")  # (B alone after A and B too: the same width, 2 rows)
+        if hello.sensors:  # `sensors` is only a guess (2) until the first HELLO that names some
+            self.sensors, self.sensors_known = sample_width(hello.flags), True  # B alone: still 2 rows
         self.hello = hello
         self._hello_on_port = True
         self.rate_hz = float(hello.rate_hz)
