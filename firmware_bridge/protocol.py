@@ -255,6 +255,24 @@ def hello_problem(payload, flags):
     return None
 
 
+def hello_rejection(body):
+    # type: (bytes) -> str
+    """Why a HELLO body that passed its CRC was rejected as malformed (PROTOCOL.md)."""
+    payload = body[HEADER_SIZE:len(body) - CRC_SIZE]
+    if len(payload) != HELLO_SIZE:
+        return "a payload of %d bytes, not %d" % (len(payload), HELLO_SIZE)
+    if body[7] & ~FLAGS_KNOWN:
+        return "flags 0x%02x: bits 4-7 must be 0" % body[7]
+    return hello_problem(payload, body[7]) or "?"
+
+
+def narrow_clock(ts_bits, rate_hz):
+    # type: (int, int) -> bool
+    """t_us wraps within two sample periods: a host cannot tell its wraps apart, and its sample
+    times come out wrong (PROTOCOL.md, HELLO: a valid HELLO, counted as `narrow_clock`)."""
+    return (1 << (ts_bits - 1)) * rate_hz <= 1000000
+
+
 def parse_body(body):
     # type: (bytes) -> tuple
     """(Frame, None) for a valid body, or (None, counter_name) saying why it was rejected."""
@@ -312,6 +330,7 @@ class Decoder:
         self.last_seq = None
         self.boot_id = None
         self.hello = None  # the last Hello seen
+        self.bad_hello = None  # why the last HELLO counted as malformed was (hello_rejection)
         self.old_boots = []  # boot ids before the current one, newest last
         self._headless_boot = False  # a seq_jump started a boot whose HELLO has not come yet
         self._old_seen = None  # meanwhile, the seq values the boot before it delivered
@@ -375,7 +394,7 @@ class Decoder:
             return
         frame, why = parse_body(body)
         if frame is None:
-            setattr(self, why, getattr(self, why) + 1)
+            self._reject(body, why)
             return
         hello = None
         if frame.msg_type == HELLO:
@@ -427,6 +446,11 @@ class Decoder:
         self._seen[frame.seq] = 1
         self.frames_ok += 1
         out.append(frame)
+
+    def _reject(self, body, why):
+        setattr(self, why, getattr(self, why) + 1)
+        if why == "malformed" and body[0] & 0x0F == HELLO:
+            self.bad_hello = hello_rejection(body)
 
     def _replay(self, ahead):
         self.replays += 1

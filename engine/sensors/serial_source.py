@@ -351,7 +351,7 @@ class SerialSource(Source):
         self.rate_hz = float(hello.rate_hz)
         if changed:
             self.devclock.reset(hello.ts_bits)
-            if (1 << (hello.ts_bits - 1)) * hello.rate_hz <= 1_000_000:
+            if protocol.narrow_clock(hello.ts_bits, hello.rate_hz):
                 # t_us wraps within two sample periods: its wraps cannot be told apart, so the
                 # sample times are wrong (PROTOCOL.md, HELLO); the HELLO is valid and taken
                 self.count("narrow_clock")
