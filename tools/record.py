@@ -116,9 +116,9 @@ def _ahead(stats: dict[str, int]) -> str:
     HELLO of the board's boot resynced the sequence check (PROTOCOL.md: the host stopped reading
     for 32768 frames or more): said only when any did."""
     ahead, resyncs = stats.get("replays_ahead", 0), stats.get("resyncs", 0)
-    if not ahead and not resyncs:
-        return ""
-    return f" ({ahead} later in time than the frames before them; resynced at the board's HELLO {resyncs} time(s))"
+    said = ([f"{ahead} later in time than the frames before them"] if ahead else []) \
+        + ([f"resynced at the board's HELLO {resyncs} time(s)"] if resyncs else [])
+    return f" ({'; '.join(said)})" if said else ""
 
 
 def record(url: str, output: str, seconds: float | None, label: str = "", poll_s: float = 0.005,

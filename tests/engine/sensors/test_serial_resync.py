@@ -58,7 +58,10 @@ def test_a_host_stall_past_half_the_counter_recovers_at_the_boards_hello():
         assert got == 200 and src.state is SourceState.CONNECTED and src.missing() == ""
         stats = src.stats
         assert stats["resyncs"] == 1 and stats["replays"] == stats["replays_ahead"] == 300
-        assert "replays dropped 300 (300 later in time" in link_counts(stats)
+        assert "replays dropped 300 (300 later in time than the frames before them; resynced at the board's HELLO 1 time" \
+            in link_counts(stats)
+        assert "replays dropped 0 (resynced at the board's HELLO 1 time(s))" in link_counts({**stats, "replays_ahead": 0,
+                                                                                           "replays": 0})
     finally:
         src.close()
         os.close(master)
