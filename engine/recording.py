@@ -22,7 +22,7 @@ import numpy as np
 from engine.clock import STEP_HZ
 from engine.errors import InputError, not_a_regular_file
 from engine.npz_files import write_replacing
-from engine.sample import Sample
+from engine.sample import MAX_ACCEL_G, Sample  # MAX_ACCEL_G: the limit on |acceleration| in g
 
 HAND_COLUMNS = (("rx", "ry", "rz"), ("lx", "ly", "lz"))
 FLUSH_EVERY_S = 0.25  # fsync at least this often: a crashed machine loses at most 0.25 s
@@ -30,10 +30,6 @@ FLUSH_EVERY_S = 0.25  # fsync at least this often: a crashed machine loses at mo
 MAX_RECORDING_BYTES = 256 * 2**20  # an hour at 430 Hz with two hands is about 100 MB
 MAX_DURATION_S = 4 * 3600.0  # 4 h at 60 Hz is 864,000 frames (41 MB for two hands)
 MAX_GAP_S = 600.0  # no sample for 10 minutes: not one recording any more
-# |acceleration| in g: no sensor a player wears reads more (wearable IMUs saturate at 16 g, high-g
-# ones at 200-400 g); a larger value is a file not in g or a corrupt one, and squares near 1e300
-# overflow in the recognizer (thresholds of inf, NaN activity)
-MAX_ACCEL_G = 1000.0
 MAX_LINE_CHARS = 1 << 20  # metadata and header lines
 MAX_META_KEYS = 1000  # distinct metadata keys: each is Python objects ~10x its text (a recording has a few)
 CHUNK_ROWS = 8192  # rows converted to numbers at once

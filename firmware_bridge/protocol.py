@@ -255,6 +255,24 @@ def hello_problem(payload, flags):
     return None
 
 
+def hello_rejection(body):
+    # type: (bytes) -> str
+    """Why a HELLO body that passed its CRC was rejected as malformed (PROTOCOL.md)."""
+    payload = body[HEADER_SIZE:len(body) - CRC_SIZE]
+    if len(payload) != HELLO_SIZE:
+        return "a payload of %d bytes, not %d" % (len(payload), HELLO_SIZE)
+    if body[7] & ~FLAGS_KNOWN:
+        return "flags 0x%02x: bits 4-7 must be 0" % body[7]
+    return hello_problem(payload, body[7]) or "?"
+
+
+def narrow_clock(ts_bits, rate_hz):
+    # type: (int, int) -> bool
+    """t_us wraps within two sample periods: a host cannot tell its wraps apart, and its sample
+    times come out wrong (PROTOCOL.md, HELLO: a valid HELLO, counted as `narrow_clock`)."""
+    return (1 << (ts_bits - 1)) * rate_hz <= 1000000
+
+
 def parse_body(body):
     # type: (bytes) -> tuple
     """(Frame, None) for a valid body, or (None, counter_name) saying why it was rejected."""
@@ -283,7 +301,7 @@ def parse_body(body):
 
 
 COUNTERS = ("frames_ok", "crc_errors", "cobs_errors", "oversize", "runts", "unknown_type",
-            "malformed", "lost", "reboots", "seq_jumps", "replays", "bytes_in")
+            "malformed", "lost", "reboots", "seq_jumps", "replays", "replays_ahead", "resyncs", "bytes_in")
 
 SEQ_WINDOW = 0x8000  # a seq up to this far behind the last one is a repeat; further is a jump
 OLD_BOOTS = 8  # boot ids remembered: a HELLO of an earlier boot is a replay, not a reboot
@@ -297,7 +315,11 @@ class Decoder:
     unknown_type, malformed (CRC ok but a layout v1 does not allow), lost (frames missing by
     sequence number), reboots (HELLO with a new boot_id), seq_jumps (a backwards sequence jump
     not explained by a HELLO: a reboot whose HELLO was lost), replays (a frame whose seq this
-    boot already delivered, or a HELLO of an earlier boot: dropped), bytes_in.
+    boot already delivered, or a HELLO of an earlier boot: dropped), replays_ahead (of those, the
+    ones whose t_us is later than the last delivered frame's: what a host that stopped reading
+    for 32768 frames or more sees until the board's next HELLO), resyncs (a HELLO of this boot
+    behind in seq but ahead in t_us: the board's own word on where it is, so the sequence check
+    goes on from it), bytes_in. `replay_run`: replays since the last delivered frame.
     """
 
     def __init__(self):
@@ -308,11 +330,14 @@ class Decoder:
         self.last_seq = None
         self.boot_id = None
         self.hello = None  # the last Hello seen
+        self.bad_hello = None  # why the last HELLO counted as malformed was (hello_rejection)
         self.old_boots = []  # boot ids before the current one, newest last
         self._headless_boot = False  # a seq_jump started a boot whose HELLO has not come yet
         self._old_seen = None  # meanwhile, the seq values the boot before it delivered
         # seen[s] is 1 once this boot delivered seq s (PROTOCOL.md: "this boot already delivered")
         self._seen = bytearray(SEQ_MASK + 1)
+        self.last_t = None  # t_us of the last delivered frame
+        self.replay_run = 0  # frames dropped as replays since the last delivered one
 
     def resync(self):
         """Forget the unfinished frame and the sequence position (after a reconnect), keeping
@@ -369,13 +394,13 @@ class Decoder:
             return
         frame, why = parse_body(body)
         if frame is None:
-            setattr(self, why, getattr(self, why) + 1)
+            self._reject(body, why)
             return
         hello = None
         if frame.msg_type == HELLO:
             hello = Hello(frame)
             if hello.boot_id != self.boot_id and hello.boot_id in self.old_boots:
-                self.replays += 1  # an earlier boot's HELLO played back: not a reboot
+                self._replay(False)  # an earlier boot's HELLO played back: not a reboot
                 return
             if self.boot_id is not None and hello.boot_id != self.boot_id:
                 self.old_boots = (self.old_boots + [self.boot_id])[-OLD_BOOTS:]
@@ -387,13 +412,22 @@ class Decoder:
         if hello is None and self._old_seen is not None and self._old_seen[frame.seq]:
             # until the new boot's HELLO, a seq the boot before it delivered cannot be told from
             # that boot's bytes played back (PROTOCOL.md, Receiver rules): dropped as a replay
-            self.replays += 1
+            self._replay(False)
             return
         if self.last_seq is not None:
             gap = (frame.seq - self.last_seq - 1) & SEQ_MASK
-            if gap >= SEQ_WINDOW:
+            if gap >= SEQ_WINDOW and hello is not None and hello.boot_id == self.boot_id \
+                    and self._ahead(frame.t_us):
+                # this boot's HELLO, later than anything delivered: the board says where it is.
+                # The host stopped reading for 32768 frames or more (a suspended laptop, Ctrl-Z)
+                # while the board counted on: its seq reads as behind. At least `gap` were lost.
+                self.resyncs += 1
+                self.lost += gap
+            elif gap >= SEQ_WINDOW:
                 if self._seen[frame.seq]:
-                    self.replays += 1  # delivered before in this boot: old bytes played back
+                    # delivered before in this boot: old bytes played back (or, when later in
+                    # time, the stall above until the board's next HELLO: counted apart)
+                    self._replay(self._ahead(frame.t_us))
                     return
                 self.seq_jumps += 1  # never seen: a reboot whose HELLO was lost
                 frame.jump = True
@@ -407,9 +441,34 @@ class Decoder:
             self.boot_id = hello.boot_id
             self.hello = hello
         self.last_seq = frame.seq
+        self.last_t = frame.t_us
+        self.replay_run = 0
         self._seen[frame.seq] = 1
         self.frames_ok += 1
         out.append(frame)
+
+    def _reject(self, body, why):
+        setattr(self, why, getattr(self, why) + 1)
+        if why == "malformed" and body[0] & 0x0F == HELLO:
+            self.bad_hello = hello_rejection(body)
+
+    def _replay(self, ahead):
+        self.replays += 1
+        self.replay_run += 1
+        if ahead:
+            self.replays_ahead += 1
+
+    def _ahead(self, t_us):
+        # type: (int) -> bool
+        """Whether `t_us` is later than the last delivered frame's, on the device clock of
+        2^ts_bits (the latest HELLO's): by less than half its period, as the host unwraps it.
+        Bytes played back carry a time at or before what was delivered, unless they are older
+        than half the clock's period (9 minutes at 30 bits): those cannot be told by time."""
+        if self.last_t is None:
+            return False
+        bits = self.hello.ts_bits if self.hello is not None else 32
+        delta = (t_us - self.last_t) & ((1 << bits) - 1)
+        return 0 < delta < (1 << (bits - 1))
 
     def _restart_seq(self):
         self.last_seq = None

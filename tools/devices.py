@@ -1,7 +1,8 @@
 """`quickjab devices`: list the Wiimotes (model, path) and serial ports this machine can see,
 with the source URL to open each. `quickjab devices PATH...` also probes those ports (a pty from
 `quickjab bridge emulate` or socat, which the list never shows) for a board answering with the
-serial protocol's HELLO; exit status 1 when one does not."""
+serial protocol's HELLO; exit status 1 when one does not, or answers with a HELLO the game cannot
+use (malformed, or spoiling its samples: tools/serial_probe.py)."""
 
 from __future__ import annotations
 
@@ -79,7 +80,7 @@ def run(args: argparse.Namespace) -> int:
     wiimotes, wproblem = find_wiimotes()
     ports, sproblem = find_serial_ports()
     probed = probe_paths(args.paths, args.probe_seconds)
-    status = 1 if any(not r["answered"] for r in probed) else 0
+    status = 1 if any(not r["answered"] or r["problem"] for r in probed) else 0  # a board the game cannot use too
     if args.json:
         listing = {"wiimotes": wiimotes, "serial_ports": ports, "problems": [x for x in (wproblem, sproblem) if x]}
         if args.paths:  # a key of its own, only when asked: the listing's keys stay as they were

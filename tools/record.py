@@ -91,9 +91,34 @@ def link_counts(stats: dict[str, int]) -> str:
     unannounced = f" ({jumps} seen only as a sequence jump)" if jumps else ""
     return (f"received {stats.get('frames_ok', 0)} frames, lost {stats.get('lost', 0)}, "
             f"CRC-rejected {stats.get('crc_errors', 0)}, other rejects {rejected}, "
-            f"replays dropped {stats.get('replays', 0)}, reboots {stats.get('reboots', 0) + jumps}{unannounced}, "
+            f"replays dropped {stats.get('replays', 0)}{_ahead(stats)}, reboots {stats.get('reboots', 0) + jumps}{unannounced}, "
             f"sensor changes {stats.get('sensor_changes', 0)}, sensor conflicts {stats.get('sensor_conflicts', 0)}, "
             f"implausible {stats.get('implausible', 0)}")
+
+
+def no_samples_reason(stats: dict[str, int]) -> str:
+    """Why a source that connected gave no sample, as far as its counters tell (a serial board's:
+    a silent port, SAMPLEs with no valid HELLO to scale them, frames the protocol rejects)."""
+    counts = ", ".join(f"{k} {v}" for k, v in stats.items() if v) or "no counts"
+    if "bytes_in" in stats and not stats["bytes_in"]:
+        why = "the port sent nothing (a board not streaming, or another program reading the port)"
+    elif stats.get("samples_before_hello"):
+        why = "SAMPLEs came but no valid HELLO to scale them, though asked for with `?`"
+    elif "frames_ok" in stats:
+        why = "no SAMPLE the source could take (a HELLO whose fields make no sense counts as malformed)"
+    else:
+        why = "the source delivered no sample"
+    return f"{why} ({counts})"
+
+
+def _ahead(stats: dict[str, int]) -> str:
+    """How many of the replays came later in time than the last frame delivered, and how often a
+    HELLO of the board's boot resynced the sequence check (PROTOCOL.md: the host stopped reading
+    for 32768 frames or more): said only when any did."""
+    ahead, resyncs = stats.get("replays_ahead", 0), stats.get("resyncs", 0)
+    said = ([f"{ahead} later in time than the frames before them"] if ahead else []) \
+        + ([f"resynced at the board's HELLO {resyncs} time(s)"] if resyncs else [])
+    return f" ({'; '.join(said)})" if said else ""
 
 
 def record(url: str, output: str, seconds: float | None, label: str = "", poll_s: float = 0.005,
@@ -103,7 +128,9 @@ def record(url: str, output: str, seconds: float | None, label: str = "", poll_s
     the serial bridge's HELLO, else measured over the first RATE_PROBE_S of samples), so
     `rate_hz` in the file is the rate the samples came at, and a source that cannot be opened
     leaves nothing behind. A source that has neither connected nor delivered a sample after
-    `connect_timeout` seconds (a missing port, `serial://auto` with no board) is an InputError.
+    `connect_timeout` seconds (a missing port, `serial://auto` with no board) is an InputError;
+    so is one that connected but gave no sample at all (a silent board, SAMPLEs without a valid
+    HELLO): no file is written, an earlier one at `output` stays, and the error names the counters.
 
     A source whose sensor count changes mid-run (a board rebooting with one IMU fewer or more)
     continues in a new file, out.2.csv and so on, whose header has the new columns: a row never
@@ -125,6 +152,8 @@ def record(url: str, output: str, seconds: float | None, label: str = "", poll_s
     if not parts.connected:
         raise InputError(f"{url}: the source never connected (state {source.state.value}); nothing recorded; "
                          + no_device_hint(url))
+    if not parts.files:  # no sample at all: no file (one made now would guess its rate_hz)
+        raise InputError(f"{url}: no samples; nothing recorded ({output} not written): {no_samples_reason(source.stats)}")
     rows = parts.finish()
     names = ", ".join(str(f) for f in parts.files)
     print(f"wrote {rows} samples to {names}", file=sys.stderr)
@@ -227,10 +256,7 @@ class _RecordingParts:
             self.writer.close()
 
     def finish(self) -> int:
-        """The run's row count; a run without samples still leaves a file with its header."""
-        if self.writer is None and not self.files:
-            self.writer = self.open_writer(self.source.sensors)
-            self.writer.close()
+        """The run's row count (a run without samples has written no file: `record` says why)."""
         if self.writer is not None:
             self.rows += self.writer.rows
             self.nudged += self.writer.nudged

@@ -1,5 +1,5 @@
 """SAMPLE payloads of protocol v1 to accelerations in g, one (sensors, 3) row per frame,
-holding each sensor's last value for a frame that lacks it, and the check that a frame's
+holding each sensor's last value of the boot for a frame that lacks it, and the check that a frame's
 accelerations are ones a sensor can read at all."""
 
 from __future__ import annotations
@@ -32,6 +32,19 @@ class SampleAccel:
     def __init__(self, count: Callable[[str], None]) -> None:
         self.count = count
         self.last_row: np.ndarray | None = None  # the last SAMPLE's accel, (sensors, 3)
+        self.announced: int | None = None  # the sensor flags the last HELLO naming any announced
+
+    def take_hello(self, hello: protocol.Hello, same_boot: bool) -> bool:
+        """Take a valid HELLO; True when it names other sensors than the HELLOs before it (none
+        before the first that names any: a boot's HELLOs before its IMUs are found name none).
+        A new boot holds nothing of the last one's readings: a sensor it lacks reads 0 g, as
+        before any reading (a B-alone board's right hand after a reboot from A and B)."""
+        if not same_boot:
+            self.last_row = None
+        if not hello.flags & protocol.FLAGS_SENSORS:
+            return False
+        was, self.announced = self.announced, hello.flags & protocol.FLAGS_SENSORS
+        return was is not None and was != self.announced
 
     def rows(self, frames: list[protocol.Frame], hello: protocol.Hello,
              sensors: int) -> list[np.ndarray] | np.ndarray:

@@ -17,9 +17,12 @@ another one, and the previous HELLO's scales would misread it.
 
 Hostile or broken input is counted and dropped, never raised: the decoder rejects HELLOs whose
 fields make no sense (protocol.hello_problem) and frames replayed from earlier (same boot and
-seq). A board that reboots with another sensor count changes `sensors` (counted as
-`sensor_changes`); from then on its samples have the new shape, which is how the frames stage
-(engine.frames.FrameResampler) and the recorder (tools/record.py) learn of it. Only a reboot
+seq; a HELLO of the boot later in time resyncs the check after the host stopped reading for
+32768 frames or more, and `missing` says a long run of replays). A board that reboots with
+other sensors counts a `sensor_changes` (B alone after A and B too, whose shape stays 2 rows),
+and one with another sensor count changes `sensors`: from then on its samples have the new
+shape, which is how the frames stage (engine.frames.FrameResampler) and the recorder
+(tools/record.py) learn of it. A new boot holds no sensor reading of the last one. Only a reboot
 does: a HELLO that announces other sensors than its boot's earlier HELLO is counted as
 `sensor_conflicts` and dropped (the boot's first sensors stay; a boot that announced none yet,
 before finding its IMUs, may announce them). A SAMPLE with an acceleration over MAX_ACCEL_G
@@ -64,6 +67,7 @@ LOST = (OSError, serial.SerialException, termios.error)
 MAX_READS_PER_POLL = 32  # bounds one poll's work even if the device outruns us
 BACKLOG = 1024  # a read this big may have left more behind: read again in the same poll
 STALL_S = 2.0  # no byte for this long while connected counts one stall
+REPLAY_RUN_SAY = 50  # frames dropped as replays in a row that `missing` says, at the least
 MAX_WINDOW_S = 60.0  # `window=`: the clock keeps up to one minimum per poll over it (12,000 at 200 polls/s)
 
 
@@ -173,6 +177,17 @@ def missing_sensor_a(hello: protocol.Hello | None) -> str:
     return ""
 
 
+def missing_now(hello: protocol.Hello | None, decoder: protocol.Decoder) -> str:
+    """`Source.missing` of a connected serial source: a second's worth of frames or more in a
+    row dropped as replays (the board owes a HELLO every second, and one at once when asked, and
+    a HELLO of its boot later in time resyncs the decoder: a board that sends none, or bytes
+    that are all old ones played back), else a B-only board's still right hand."""
+    if decoder.replay_run >= max(hello.rate_hz if hello is not None else 0, REPLAY_RUN_SAY):
+        return ("every frame dropped as a replay: its seq was delivered before in this boot (bytes played "
+                "back, or the host stopped reading for a while and no HELLO of the board has come since)")
+    return missing_sensor_a(hello)
+
+
 class SerialSource(Source):
     """Samples of shape (sensors, 3) in g from a protocol v1 device."""
 
@@ -275,7 +290,7 @@ class SerialSource(Source):
         self.port = None
 
     def missing(self) -> str:
-        return missing_sensor_a(self.hello) if self.state is SourceState.CONNECTED else ""
+        return missing_now(self.hello, self.decoder) if self.state is SourceState.CONNECTED else ""
 
     def close(self) -> None:
         self._drop_port()
@@ -327,19 +342,16 @@ class SerialSource(Source):
             self.count("sensor_conflicts")
             return False
         changed = not same_boot or hello.ts_bits != self.hello.ts_bits
-        if hello.sensors:
-            # a change from the sensors announced before; `sensors` is only a guess (2) until the
-            # first HELLO that names some (a boot's HELLOs before its IMUs are found name none)
-            if self.sensors_known and sample_width(hello.flags) != self.sensors:
-                self.count("sensor_changes")
-            self.sensors = sample_width(hello.flags)  # B alone is still the left hand's row
-            self.sensors_known = True
+        if self._accel.take_hello(hello, same_boot):  # other sensors than the ones announced before
+            self.count("sensor_changes")  # (B alone after A and B too: the same width, 2 rows)
+        if hello.sensors:  # `sensors` is only a guess (2) until the first HELLO that names some
+            self.sensors, self.sensors_known = sample_width(hello.flags), True  # B alone: still 2 rows
         self.hello = hello
         self._hello_on_port = True
         self.rate_hz = float(hello.rate_hz)
         if changed:
             self.devclock.reset(hello.ts_bits)
-            if (1 << (hello.ts_bits - 1)) * hello.rate_hz <= 1_000_000:
+            if protocol.narrow_clock(hello.ts_bits, hello.rate_hz):
                 # t_us wraps within two sample periods: its wraps cannot be told apart, so the
                 # sample times are wrong (PROTOCOL.md, HELLO); the HELLO is valid and taken
                 self.count("narrow_clock")

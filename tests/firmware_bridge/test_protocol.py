@@ -177,3 +177,59 @@ def test_resync_forgets_partial_frame():
     assert dec.feed(fr[-5:]) == []
     rng = random.Random(0)
     assert len(dec.feed(rng.choice(FRAMES))) == 1
+
+
+# -- a host that stopped reading for 32768 frames or more (PROTOCOL.md, Receiver rules) ------
+
+def _wrapped_boot(n: int = 70_000) -> tuple[protocol.Decoder, int]:
+    """A decoder that took a boot's HELLO and `n` samples at 200 Hz (every 16-bit seq delivered
+    once n >= 65536), and the boot's next seq."""
+    dec = protocol.Decoder()
+    dec.feed(protocol.encode_hello(0, 0, 7, 200, 4096, 65500, 30, 1, 3))
+    dec.feed(b"".join(protocol.encode_sample(s, 5000 * s, (0, 0, 4096), None) for s in range(1, n + 1)))
+    assert dec.frames_ok == n + 1
+    return dec, n + 1
+
+
+def test_a_stall_past_half_the_counter_resyncs_at_the_boots_next_hello():
+    # Ctrl-Z, a suspended laptop: the board counts on (dropping with OVERRUN) for 40000 frames.
+    # Every seq was delivered once: its next frames read as behind and already seen, and every
+    # frame, this boot's HELLOs too, was dropped as a replay for good.
+    dec, seq = _wrapped_boot()
+    seq += 40_000
+    after = b"".join(protocol.encode_sample(seq + i, 5000 * (seq + i), (0, 0, 4096), None) for i in range(10))
+    assert dec.feed(after) == []  # no HELLO yet: cannot be told from bytes played back
+    assert (dec.replays, dec.replays_ahead, dec.replay_run) == (10, 10, 10)  # said apart: later in time
+    seq += 10
+    hello = protocol.encode_hello(seq, 5000 * seq, 7, 200, 4096, 65500, 30, 1, 3)
+    more = b"".join(protocol.encode_sample(seq + i, 5000 * (seq + i), (0, 0, 4096), None) for i in range(1, 101))
+    assert len(dec.feed(hello + more)) == 101
+    assert dec.resyncs == 1 and dec.seq_jumps == 0 and dec.reboots == 0 and dec.replay_run == 0
+    assert dec.lost == 40_010  # at least: seq counts modulo 65536
+    # the replay check goes on: bytes from before the stall played back are still dropped
+    old = (seq + 100 - 1000) & protocol.SEQ_MASK  # 1000 behind: delivered on the first pass
+    assert dec.feed(protocol.encode_sample(old, 5000 * old, (0, 0, 4096), None)) == []
+    assert dec.replays == 11 and dec.replays_ahead == 10 and dec.resyncs == 1
+
+
+def test_a_same_boot_hello_played_back_does_not_resync():
+    # its time is at or before what was delivered: old bytes, dropped as before
+    dec, seq = _wrapped_boot()
+    old = protocol.encode_hello(seq - 1000, 5000 * (seq - 1000), 7, 200, 4096, 65500, 30, 1, 3)
+    assert dec.feed(old) == []
+    assert (dec.replays, dec.replays_ahead, dec.resyncs) == (1, 0, 0)
+    nxt = protocol.encode_sample(seq, 5000 * seq, (0, 0, 4096), None)
+    assert len(dec.feed(nxt)) == 1 and dec.lost == 0
+
+
+def test_a_stall_before_the_counter_wrapped_is_a_resync_not_a_reboot():
+    # 40000 frames in: a stall of 40000 makes seq 80001 & 0xFFFF = 14465, behind and never seen.
+    # Taken before as a reboot whose HELLO was lost (a seq_jump) though the HELLO says the same
+    # boot; a later real reboot's HELLO then went uncounted.
+    dec, seq = _wrapped_boot(40_000)
+    seq += 40_000
+    hello = protocol.encode_hello(seq & protocol.SEQ_MASK, 5000 * seq, 7, 200, 4096, 65500, 30, 1, 3)
+    assert len(dec.feed(hello)) == 1
+    assert (dec.resyncs, dec.seq_jumps, dec.lost) == (1, 0, 40_000)
+    assert len(dec.feed(protocol.encode_hello(0, 0, 8, 200, 4096, 65500, 30, 1, 3))) == 1
+    assert dec.reboots == 1

@@ -165,3 +165,37 @@ def test_a_pty_whose_other_end_closes_is_said_lost(capsys):
     rc, out = devices(capsys, "--probe-seconds", "30", path)  # the loss ends it, not the 30 s
     closer.join()
     assert rc == 1 and "the port was lost while probing" in out, out
+
+
+def _probe_board(pty_pair, capsys, data: bytes) -> tuple[int, dict]:
+    """`quickjab devices --json` on a pty whose board end writes `data` every 0.05 s."""
+    master, path = pty_pair
+    stop = threading.Event()
+    writer = feed(master, data, 0.05, stop)
+    try:
+        rc, out = devices(capsys, "--json", "--probe-seconds", "0.5", path)
+    finally:
+        stop.set()
+        writer.join()  # before the fixture closes the master: never a write to a reused descriptor
+    return rc, json.loads(out)["probed"][0]
+
+
+def _board(accel: int = 4096, ts_bits: int = 30) -> bytes:
+    hello = protocol.encode_hello(0, 1000, 77, 200, accel, 65500, ts_bits, protocol.IMU_MPU6050, 3)
+    return hello + b"".join(protocol.encode_sample(i, 1000 + 5000 * i, (0, 0, 4096), (0, 0, 4096)) for i in range(1, 6))
+
+
+@pytest.mark.parametrize(("accel", "ts_bits", "said"), [(0, 30, "accel_lsb_per_g is 0"), (4096, 7, "ts_bits 7 outside 8..32")])
+def test_a_board_whose_hello_is_malformed_is_told_what_is_wrong(pty_pair, capsys, accel, ts_bits, said):
+    # was: "protocol v1 frames but no HELLO: a board that does not answer `?`"; it answers, wrongly
+    rc, r = _probe_board(pty_pair, capsys, _board(accel, ts_bits))
+    assert rc == 1 and not r["answered"] and r["counts"]["malformed"] > 0
+    assert said in r["result"] and "malformed" in r["result"] and "does not answer" not in r["result"], r["result"]
+
+
+@pytest.mark.parametrize(("accel", "ts_bits", "said"), [(1, 30, "implausible"), (4096, 12, "narrow_clock")])
+def test_a_hello_the_source_takes_but_cannot_use_is_said(pty_pair, capsys, accel, ts_bits, said):
+    # accel_lsb_per_g 1: its 4096 counts read as 4096 g, every SAMPLE dropped; ts_bits 12 at 200 Hz:
+    # t_us wraps within two sample periods, every sample time wrong. Both said to be fine.
+    rc, r = _probe_board(pty_pair, capsys, _board(accel, ts_bits))
+    assert rc == 1 and r["answered"] and said in r["problem"] and said in r["result"], r

@@ -220,3 +220,46 @@ def test_the_no_board_hint_offers_the_probe_for_a_named_port_only():
 
     assert "quickjab devices /dev/ttyACM0`" in no_device_hint("serial:///dev/ttyACM0?axes=x,y,z")
     assert "devices auto" not in no_device_hint("serial://auto?vid=2e8a") and "lists USB serial ports" in no_device_hint("serial://auto")
+
+
+def _record_from_a_pty_board(tmp_path: Path, board_bytes: bytes) -> tuple[int, Path]:
+    """`quickjab record` for 0.6 s from a raw pty whose board end writes `board_bytes` (a
+    hundred frames a tenth of a second apart, from a thread) over an existing out.csv."""
+    import threading
+    import tty
+
+    master, slave = os.openpty()
+    tty.setraw(slave)
+    out = tmp_path / "out.csv"
+    out.write_text("an earlier take\n")
+
+    def board() -> None:
+        for i in range(0, len(board_bytes), 2700):
+            time.sleep(0.02)
+            os.write(master, board_bytes[i : i + 2700])
+
+    th = threading.Thread(target=board)
+    th.start()
+    try:
+        rc = main(["record", "--source", f"serial://{os.ttyname(slave)}", "-o", str(out), "--seconds", "0.6"])
+    finally:
+        th.join()
+        os.close(master)
+        os.close(slave)
+    return rc, out
+
+
+def test_record_with_nothing_usable_from_the_board_writes_no_file_and_says_why(tmp_path, capsys):
+    # A silent port, SAMPLEs without any HELLO, only malformed HELLOs: exit 0 and a header-only file
+    # over the earlier one, `rate_hz: 60` guessed, and no word of what the board did send.
+    from firmware_bridge import protocol
+
+    sample = [protocol.encode_sample(i, 5000 * i, (0, 0, 4096), (0, 0, 4096)) for i in range(1, 101)]
+    bad_hello = protocol.encode_frame(protocol.HELLO, 0, 0, 3, protocol.struct.pack(protocol.HELLO_FMT, 0, 65500, 200, 9, 30, 1))
+    for board, said in ((b"", "the port sent nothing"),
+                        (b"".join(sample), "samples_before_hello 100"),
+                        (bad_hello * 3 + b"".join(sample), "malformed 3")):
+        rc, out = _record_from_a_pty_board(tmp_path, board)
+        err = capsys.readouterr().err.strip().splitlines()
+        assert rc == 2 and out.read_text() == "an earlier take\n" and not (tmp_path / "out-old.csv").exists()
+        assert "no samples" in err[-1] and said in err[-1] and "nothing recorded" in err[-1], err[-1]

@@ -648,3 +648,17 @@ def test_mapped_times_are_never_later_than_the_poll():
                               for i in range(5)))
     got = src.poll()
     assert len(got) == 5 and max(s.t for s in got) <= 1000.05
+
+
+def test_a_reboot_from_both_sensors_to_b_alone_holds_no_old_reading_and_counts_a_change():
+    # sensor B alone keeps two rows (the right hand's row holding still), so the width did not
+    # change: the right hand kept the old boot's last reading for good, and no change was counted
+    right = protocol.encode_sample(41, 5000 * 41, (8000, 0, 4096), (0, 0, 4096))  # 1.95 g on the right
+    b_only = b"".join(protocol.encode_sample(1 + i, 5000 * (1 + i), None, (2048, 0, 4096)) for i in range(20))
+    data = hello(boot=1) + samples(40) + right + hello(boot=2, flags=protocol.FLAG_SENSOR_B) + b_only
+    src, got = _write_and_poll(data, lambda s: s.stats.get("frames_ok", 0) >= 63)
+    assert len(got) == 61 and src.stats["reboots"] == 1
+    np.testing.assert_allclose(got[40].accel[0], [8000 / 4096, 0, 1])
+    for s in got[41:]:  # the new boot's: no right-hand sensor, which reads 0 g (PROTOCOL.md, README)
+        np.testing.assert_allclose(s.accel, [[0, 0, 0], [0.5, 0, 1]])
+    assert src.sensors == 2 and src.stats["sensor_changes"] == 1
