@@ -71,9 +71,7 @@ class Ring:
         and then (`character_finished`: the rest of it is discarded): its second half, the hand
         coming back, or a switch of it started a punch once the boxing went on, the boxer never
         having played the first to discard it."""
-        # a whole-motion switch is the recognizer's final word on a motion already over:
-        # a label for the record, too late for the character to act on
-        if self.match.fighting and not ev.get("whole_motion"):
+        if self.match.fighting:
             self.boxers[i].controller.on_event(ev)
             clip = self.lib.get(ev.get("action") or "")
             if ev.get("event") == "start" and clip is not None and clip.kind == "attack":

@@ -25,7 +25,7 @@ ADDED = "## Added since"
 EVENT_KINDS = {"start", "switch", "end", "reject"}
 EVENT_KEYS = {  # every key docs/formats.md names for an event line
     "frame", "t", "event", "action", "score", "from_frame", "called_off",
-    "speed", "direction", "peak_g", "onset_frame", "late", "whole_motion", "reason",
+    "speed", "direction", "peak_g", "onset_frame", "late", "reason",
 }
 
 

@@ -692,7 +692,10 @@ def _check_punch_files(
 # from single-kind files. Built here from the single-kind files: every labelled punch of the test
 # set's files, with the rest around it, spliced into one stream in a seeded shuffled order.
 SPLICE_FRAMES = 20  # a linear ramp between two spliced rests: a guard change of 1/3 s
-LEAD_REST = 120  # frames of rest before the first punch (the auto gate learns from them)
+# frames before the first punch, as recorded: meant as a rest for the auto gate to learn from, but
+# on the phone-punches files the hand moves over the templates' gate within the first 9-24 of them
+# (a start there, a false one), so the mixed rows keep the gate learnt from the templates' rest
+LEAD_REST = 120
 TURN_IN = 10  # "one guard, turned in": the fist turns from the guard into the punch's own in 1/6 s
 
 

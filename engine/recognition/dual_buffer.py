@@ -44,10 +44,9 @@ Per 60 Hz frame (`push`):
   down, so punches thrown back to back without a rest start one action each even when no
   character calls `character_finished()`. `complete_fraction=0` keeps the paper's rules.
 - Beyond the paper: a decided motion that outlasts the supplementary buffer keeps its DTW
-  growing (bounded); at its end the whole motion is scored against whole templates, and a
-  clearly better action becomes the final decision: a `switch` flagged `whole_motion` just
-  before `end` (the game has usually finished the clip by then; what it sees within
-  `supplementary` frames follows the paper). `extend=False` turns this off.
+  growing (bounded), for the rules that weigh the whole motion (the `complete` end, the end of
+  a motion that outlasted its action, adaptation); the decision itself is the buffer's, as in
+  the paper. `extend=False` turns this off.
 - Beyond the paper: adaptation to the player. A motion whose whole fits its final action's
   templates better by ADAPT_MARGIN than any other action's (and under the threshold) joins that
   action's templates; the `adapt` (3) most recent per action are kept beside the trained ones,
@@ -237,7 +236,6 @@ class DualBufferRecognizer(TemplateSet, DecisionRules, MotionEnd, Adaptation):
         self._peak_act_seen = 0.0
         self._peak_lin = 0.0  # the motion's peak of the gate's `_lin` (see TURN_RATIO)
         self._done = 0
-        self._extended = False  # the DTW ran past the supplementary buffer (a long motion)
         self._was_closed = False
         self._stopped, self._stop_n = False, 0  # the hand stopped (closed-end scores kept), at query frame n
 
@@ -370,8 +368,6 @@ class DualBufferRecognizer(TemplateSet, DecisionRules, MotionEnd, Adaptation):
                 usable = self._first_usable(self._moving_hand(scores)) if self.action is None else self._moving_hand(self._usable(scores))
                 self._decide(usable, events)
                 complete = self._complete(usable)
-            else:
-                self._extended = True
         if self.quiet >= self.null_frames and not complete and self._paused():
             return  # a wind-up's pause: the blow may follow
         # A motion rejected at the end of its window ends there, and a decided one that outlasted its

@@ -13,7 +13,7 @@ if TYPE_CHECKING:
     from engine.recognition.speed import SpeedEstimate
 
 # The flags an event may carry, each only when true (one at most per event).
-FLAGS = ("reason", "late", "called_off", "whole_motion")
+FLAGS = ("reason", "late", "called_off")
 
 
 @dataclass(frozen=True, slots=True)
@@ -34,7 +34,6 @@ class RecognizerEvent:
     reason: str | None = None  # end: "complete" or "character_finished"
     late: bool = False  # start: decided after the main buffer (the supplementary buffer)
     called_off: bool = False  # reject: a started motion that never reached its action's strength
-    whole_motion: bool = False  # switch: the late re-decision over the whole motion, before `end`
 
     def to_dict(self) -> dict[str, Any]:
         """The JSON-lines form: event, action, frame, then each field that is set, in contract order."""

@@ -1,6 +1,6 @@
 """How a motion ends, for `DualBufferRecognizer` (a mixin, as DecisionRules is): at the null
 signal, by the `complete` rule, or rejected at the end of its window. Its last events (a call-off
-`reject`, the late whole-motion switch, the `end`), the gate learning from a motion that was only
+`reject`, the `end`), the gate learning from a motion that was only
 noise, and the state after it: idle, or the discard of the handover (rules.HANDOVER_OVER)."""
 
 from __future__ import annotations
@@ -16,8 +16,6 @@ class MotionEnd:
         if self.action is not None and self._called_off():
             events.append(self._event("reject", self.action_names[self.action], None, called_off=True))
         elif self.action is not None:
-            if self._extended:
-                self._late_switch(self._moving_hand(self._usable(self._stop_scores if self._stopped else self.dtw.scores)), events)
             # the character's clip still plays: its end's discard begins now (HANDOVER_OVER)
             handover = complete and self._hands_over()
             if self.adapt and self.count <= max(self.window, self._extend_to):

@@ -139,12 +139,11 @@ GATE_FLOOR = 1.3
 ADOPTED_LEAD = 0.4
 
 # A decided motion that outlasts the supplementary buffer keeps its DTW growing up to
-# EXTEND_FACTOR x max(window, longest template) frames; at its end a different action whose whole
-# template fits the whole motion better by LATE_SWITCH_MARGIN becomes the final decision (a
-# noticeable change, so a wider margin than a switch inside the buffer): long gestures that the
-# 60-frame buffer cannot see to their end.
+# EXTEND_FACTOR x max(window, longest template) frames, for the rules that weigh the whole motion
+# (the `complete` end's whole fit, `_outlasted`, `_ran_course`, adaptation). It no longer changes
+# the decision at the end (the twenty-eighth round: the late whole-motion switch named another
+# kind on the motions no character cuts short; docs/recognition.md).
 EXTEND_FACTOR = 2.0
-LATE_SWITCH_MARGIN = 0.1
 
 IDLE, ACTIVE, DISCARD = "idle", "active", "discard"
 
@@ -362,27 +361,8 @@ class DecisionRules:
                 self._event("switch", self.action_names[best_action], best_score, from_frame=self.frame - self.start_frame)
             )
 
-    def _late_switch(self, scores: np.ndarray, events: list) -> None:
-        """A motion longer than the supplementary buffer: its DTW kept growing past it, so at
-        the end the whole motion (up to where the hand stopped) is scored against whole
-        templates. A different action that is now better by LATE_SWITCH_MARGIN (with the same
-        threshold rules as a switch) becomes the final decision: a `switch` flagged
-        `whole_motion` (from_frame = n_p, frames since the start, as for any switch) before `end`."""
-        best = int(scores.argmin())  # the method: no fromnumeric wrapper
-        best_action = int(self._tmpl_action[best])
-        if best_action == self.action:
-            return
-        best_score = float(scores[best])
-        if self._beats_current(scores, best_score, best_score <= self.thresholds[best], LATE_SWITCH_MARGIN):
-            self.action = best_action
-            events.append(
-                self._event(
-                    "switch", self.action_names[best_action], best_score, from_frame=self.frame - self.start_frame, whole_motion=True
-                )
-            )
-
     def _beats_current(self, scores: np.ndarray, best_score: float, ok: bool, margin: float) -> bool:
-        """A switch's test (in the buffer and at the end): the best template, `ok` if under its
+        """A switch's test: the best template, `ok` if under its
         threshold, beats the current action's best template by `margin`; a best template over
         its threshold only counts once the current action no longer fits under its own."""
         k = self._current_best(scores)

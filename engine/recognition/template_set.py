@@ -85,8 +85,8 @@ class TemplateSet:
         self.dtw = IncrementalDTW(cut, method=self._dtw_method, min_progress=self.min_progress)
         self._stop_scores = np.empty(len(cut))  # the scores when the hand stopped (`_stopped`)
         # A decided motion that outlasts the supplementary buffer keeps its DTW growing (one
-        # row a frame, as before) up to this many frames, for a final decision over the whole
-        # motion at its end (`_late_switch`); bounded so a hand that never rests costs nothing.
+        # row a frame, as before) up to this many frames, for the rules that weigh the whole
+        # motion (rules.EXTEND_FACTOR); bounded so a hand that never rests costs nothing.
         self._extend_to = int(EXTEND_FACTOR * max(self.window, int(self.template_lengths.max()))) if extend else 0
         self._base = (cut, self._tmpl_action.copy(), self.thresholds.copy(), self._peak_act.copy())
         self._base_starts = self._action_starts.copy()

@@ -291,12 +291,14 @@ def test_switch_to_a_template_over_its_threshold_only_when_the_current_misfits(c
 
 
 @pytest.mark.parametrize("extend", [True, False])
-def test_a_motion_longer_than_the_supplementary_buffer_is_decided_over_its_whole(extend):
+def test_a_motion_longer_than_the_supplementary_buffer_keeps_the_buffers_decision(extend):
     # "a" and "b" share their first 70 frames (longer than the 60-frame supplementary buffer)
     # and differ afterwards: inside the buffer the decision ends on "a" (the noise tips it).
-    # The DTW keeps growing past the buffer, and at the end a late switch (flagged
-    # `whole_motion`) makes the final decision the action the whole motion matches, "b".
-    # Without the extension the decision stays "a".
+    # The DTW keeps growing past the buffer (for the rules that weigh the whole motion), but the
+    # decision stays the buffers', as in the paper: no switch after the supplementary buffer, and
+    # the `end` names "a". (Until the twenty-eighth round a late switch over the whole motion
+    # named "b" here; on real punches with no character to cut the motion short it named another
+    # kind far more often than it mended one: docs/recognition.md.)
     rng = np.random.default_rng(5)
     shared = np.vstack([bump(0, 6.0, 35), bump(1, 6.0, 35)])
     a = np.vstack([shared, bump(2, 6.0, 30)])
@@ -307,16 +309,8 @@ def test_a_motion_longer_than_the_supplementary_buffer_is_decided_over_its_whole
     decided = [e for e in evs if e["event"] in ("start", "switch")]
     start, ends = decided[0], [e for e in evs if e["event"] == "end"]
     assert start["event"] == "start" and len(ends) == 1 and [e["event"] for e in evs].count("start") == 1
-    in_buffer = [e for e in decided if not e.get("whole_motion")]
-    assert in_buffer[-1]["action"] == "a"
-    # what the game sees inside the buffer keeps the paper's rule: within `supplementary` frames
-    assert all(e["frame"] - start["onset_frame"] < 60 for e in in_buffer)
-    late = [e for e in decided if e.get("whole_motion")]
-    if extend:
-        assert [e["action"] for e in late] == ["b"] and ends[0]["action"] == "b"
-        assert late[0]["frame"] == ends[0]["frame"] and late[0]["from_frame"] == late[0]["frame"] - start["frame"]
-    else:
-        assert late == [] and ends[0]["action"] == "a"
+    assert decided[-1]["action"] == "a" and ends[0]["action"] == "a"
+    assert all(e["frame"] - start["onset_frame"] < 60 for e in decided)
 
 
 def test_a_rejected_motion_ends_with_its_window_while_the_hand_keeps_moving(templates):

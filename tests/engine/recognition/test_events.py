@@ -35,10 +35,10 @@ def test_the_contract_examples_round_trip_byte_for_byte():
 
 def test_an_event_reads_like_its_dict():
     ev = RecognizerEvent("switch", "hook_r", 58, t=0.967, from_frame=17, score=0.3, speed=1.4,
-                         direction=(0.7, 0.7, 0.0), peak_g=2.6, onset_frame=33, whole_motion=True)
+                         direction=(0.7, 0.7, 0.0), peak_g=2.6, onset_frame=33)
     assert ev["action"] == ev.action == "hook_r"
     assert ev.get("from_frame", 0) == 17 and ev.get("reason") is None
-    assert "whole_motion" in ev and "called_off" not in ev
+    assert "onset_frame" in ev and "called_off" not in ev
     assert dict(ev) == ev.to_dict()
     assert ev.to_dict()["direction"] == [0.7, 0.7, 0.0]
     with pytest.raises(KeyError):
