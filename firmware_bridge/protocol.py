@@ -336,6 +336,7 @@ class Decoder:
         self._old_seen = None  # meanwhile, the seq values the boot before it delivered
         # seen[s] is 1 once this boot delivered seq s (PROTOCOL.md: "this boot already delivered")
         self._seen = bytearray(SEQ_MASK + 1)
+        self._resynced = False  # a HELLO resynced this boot's sequence check (`_restart_seq`)
         self.last_t = None  # t_us of the last delivered frame
         self.replay_run = 0  # frames dropped as replays since the last delivered one
 
@@ -417,12 +418,13 @@ class Decoder:
         if self.last_seq is not None:
             gap = (frame.seq - self.last_seq - 1) & SEQ_MASK
             if gap >= SEQ_WINDOW and hello is not None and hello.boot_id == self.boot_id \
-                    and self._ahead(frame.t_us):
+                    and self._clock_tells() and self._ahead(frame.t_us):
                 # this boot's HELLO, later than anything delivered: the board says where it is.
                 # The host stopped reading for 32768 frames or more (a suspended laptop, Ctrl-Z)
                 # while the board counted on: its seq reads as behind. At least `gap` were lost.
                 self.resyncs += 1
                 self.lost += gap
+                self._resynced = True
             elif gap >= SEQ_WINDOW:
                 if self._seen[frame.seq]:
                     # delivered before in this boot: old bytes played back (or, when later in
@@ -435,6 +437,11 @@ class Decoder:
                     self._old_seen = self._seen
                 self._restart_seq()
                 self._headless_boot = True  # its HELLO, when it comes, is no second reboot
+            elif self._resynced and self._seen[frame.seq] and not self._ahead(frame.t_us):
+                # after a resync the bytes from before the stall read as ahead in seq: their
+                # time, not later than the last delivered, tells them (PROTOCOL.md)
+                self._replay(False)
+                return
             else:
                 self.lost += gap
         if hello is not None:
@@ -470,6 +477,15 @@ class Decoder:
         delta = (t_us - self.last_t) & ((1 << bits) - 1)
         return 0 < delta < (1 << (bits - 1))
 
+    def _clock_tells(self):
+        # type: () -> bool
+        """Whether t_us can order frames a whole seq cycle apart: half the device clock's
+        period (how far the host unwraps it) is longer than 65536 sample periods of the announced
+        rate (327 s at 200 Hz: 30 bits and more; 16 bits cannot)."""
+        h = self.hello
+        return h is not None and (1 << (h.ts_bits - 1)) * h.rate_hz > (SEQ_MASK + 1) * 1000000
+
     def _restart_seq(self):
         self.last_seq = None
+        self._resynced = False  # seq values delivered before a resync read as ahead of it
         self._seen = bytearray(SEQ_MASK + 1)

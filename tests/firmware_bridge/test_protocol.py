@@ -233,3 +233,28 @@ def test_a_stall_before_the_counter_wrapped_is_a_resync_not_a_reboot():
     assert (dec.resyncs, dec.seq_jumps, dec.lost) == (1, 0, 40_000)
     assert len(dec.feed(protocol.encode_hello(0, 0, 8, 200, 4096, 65500, 30, 1, 3))) == 1
     assert dec.reboots == 1
+
+
+def test_bytes_from_before_the_stall_played_back_after_a_resync_are_replays():
+    # After the resync the last pass's seq values read as ahead of the new position: their time,
+    # not later than the last delivered frame's, tells them from new frames.
+    dec, seq = _wrapped_boot()
+    old = b"".join(protocol.encode_sample(s, 5000 * s, (0, 0, 4096), None) for s in range(seq - 100, seq))
+    seq += 40_000
+    hello = protocol.encode_hello(seq, 5000 * seq, 7, 200, 4096, 65500, 30, 1, 3)
+    assert len(dec.feed(hello)) == 1 and dec.resyncs == 1
+    assert dec.feed(old) == [] and dec.replays == 100
+    live = b"".join(protocol.encode_sample(seq + i, 5000 * (seq + i), (0, 0, 4096), None) for i in range(1, 51))
+    assert len(dec.feed(live)) == 50 and dec.lost == 40_000  # the live frames go on where they were
+
+
+def test_a_clock_too_short_to_order_a_seq_cycle_never_resyncs():
+    # 16-bit t_us at 200 Hz wraps every 65 ms: a HELLO played back from seconds ago reads as
+    # "later" about half the time, so t_us cannot tell a stall from old bytes: no resync.
+    dec = protocol.Decoder()
+    dec.feed(protocol.encode_hello(0, 0, 7, 200, 4096, 65500, 16, 1, 3))
+    dec.feed(b"".join(protocol.encode_sample(s, (5000 * s) & 0xFFFF, (0, 0, 4096), None) for s in range(1, 70_001)))
+    for back in range(100, 3000, 37):
+        s = 70_000 - back
+        assert dec.feed(protocol.encode_hello(s, (5000 * s) & 0xFFFF, 7, 200, 4096, 65500, 16, 1, 3)) == []
+    assert dec.resyncs == 0
