@@ -75,8 +75,10 @@ class RecognizerEvent:
 
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> RecognizerEvent:
-        """The event a JSON line describes (the inverse of to_dict)."""
+        """The event a JSON line describes (the inverse of to_dict). `whole_motion`, which files
+        written before the twenty-eighth round may hold on a `switch`, is no event field now."""
         fields = dict(d)
+        fields.pop("whole_motion", None)
         if fields.get("direction") is not None:
             fields["direction"] = tuple(fields["direction"])
         return cls(**fields)

@@ -33,6 +33,14 @@ def test_the_contract_examples_round_trip_byte_for_byte():
     assert kinds == {"start", "switch", "end", "reject"}
 
 
+def test_an_older_files_whole_motion_switch_reads_back():
+    # files written before the late whole-motion switch was removed (docs/formats.md) hold the flag
+    line = ('{"event": "switch", "action": "hook_r", "frame": 58, "t": 0.967, "from_frame": 17, "score": 0.3, '
+            '"speed": 1.4, "direction": [0.7, 0.7, 0.0], "peak_g": 2.6, "onset_frame": 33, "whole_motion": true}')
+    ev = RecognizerEvent.from_dict(json.loads(line))
+    assert ev.event == "switch" and ev.action == "hook_r" and ev.from_frame == 17 and "whole_motion" not in ev
+
+
 def test_an_event_reads_like_its_dict():
     ev = RecognizerEvent("switch", "hook_r", 58, t=0.967, from_frame=17, score=0.3, speed=1.4,
                          direction=(0.7, 0.7, 0.0), peak_g=2.6, onset_frame=33)
