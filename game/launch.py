@@ -18,6 +18,7 @@ from engine.errors import InputError, refuse_overwriting
 
 if TYPE_CHECKING:
     from engine.budget import FrameBudget
+    from game.session import Session
 
 T = TypeVar("T")
 DEFAULT_SOURCE = "wiimote://"
@@ -373,7 +374,7 @@ def _run_session(args: argparse.Namespace, caption: str, open_sources: Callable[
     return 0
 
 
-def _ready(session, args: argparse.Namespace) -> None:
+def _ready(session: Session, args: argparse.Namespace) -> None:
     """A built session made ready for its loop: the templates and kernels lines said, the F3
     overlay and F11 set, and one frame drawn before the loop's clock starts: the first draw builds
     the ring's static layers and the HUD's fonts (26 ms here against 2.6 for a frame, ~120 ms on a
@@ -386,7 +387,7 @@ def _ready(session, args: argparse.Namespace) -> None:
     session.render(0.0)
 
 
-def write_run_files(args: argparse.Namespace, session) -> None:
+def write_run_files(args: argparse.Namespace, session: Session | None) -> None:
     """The `--screenshot` (what the window shows) and the `--trace` of a match whose window
     opened, at its end: by its frame count, the window closed, Ctrl-C or SIGTERM, also one before
     the loop's first frame (`session` None: not built yet). A trace of no frames is still written,

@@ -223,8 +223,10 @@ def test_the_no_board_hint_offers_the_probe_for_a_named_port_only():
 
 
 def _record_from_a_pty_board(tmp_path: Path, board_bytes: bytes) -> tuple[int, Path]:
-    """`quickjab record` for 0.6 s from a raw pty whose board end writes `board_bytes` (a
-    hundred frames a tenth of a second apart, from a thread) over an existing out.csv."""
+    """`quickjab record` for 1 s from a raw pty whose board end writes `board_bytes` (from a
+    thread, once the source has opened the port: its `?` asking for a HELLO; bytes written before
+    are flushed by the open) over an existing out.csv."""
+    import select
     import threading
     import tty
 
@@ -234,14 +236,17 @@ def _record_from_a_pty_board(tmp_path: Path, board_bytes: bytes) -> tuple[int, P
     out.write_text("an earlier take\n")
 
     def board() -> None:
+        if not board_bytes:
+            return
+        if select.select([master], [], [], 10.0)[0]:  # the host's `?` when it opened the port
+            os.read(master, 64)
         for i in range(0, len(board_bytes), 2700):
-            time.sleep(0.02)
             os.write(master, board_bytes[i : i + 2700])
 
     th = threading.Thread(target=board)
     th.start()
     try:
-        rc = main(["record", "--source", f"serial://{os.ttyname(slave)}", "-o", str(out), "--seconds", "0.6"])
+        rc = main(["record", "--source", f"serial://{os.ttyname(slave)}", "-o", str(out), "--seconds", "1"])
     finally:
         th.join()
         os.close(master)
