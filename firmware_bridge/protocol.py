@@ -415,35 +415,8 @@ class Decoder:
             # that boot's bytes played back (PROTOCOL.md, Receiver rules): dropped as a replay
             self._replay(False)
             return
-        if self.last_seq is not None:
-            gap = (frame.seq - self.last_seq - 1) & SEQ_MASK
-            if gap >= SEQ_WINDOW and hello is not None and hello.boot_id == self.boot_id \
-                    and self._clock_tells() and self._ahead(frame.t_us):
-                # this boot's HELLO, later than anything delivered: the board says where it is.
-                # The host stopped reading for 32768 frames or more (a suspended laptop, Ctrl-Z)
-                # while the board counted on: its seq reads as behind. At least `gap` were lost.
-                self.resyncs += 1
-                self.lost += gap
-                self._resynced = True
-            elif gap >= SEQ_WINDOW:
-                if self._seen[frame.seq]:
-                    # delivered before in this boot: old bytes played back (or, when later in
-                    # time, the stall above until the board's next HELLO: counted apart)
-                    self._replay(self._ahead(frame.t_us))
-                    return
-                self.seq_jumps += 1  # never seen: a reboot whose HELLO was lost
-                frame.jump = True
-                if hello is None:  # (a HELLO says which boot it is: nothing to hold against it)
-                    self._old_seen = self._seen
-                self._restart_seq()
-                self._headless_boot = True  # its HELLO, when it comes, is no second reboot
-            elif self._resynced and self._seen[frame.seq] and not self._ahead(frame.t_us):
-                # after a resync the bytes from before the stall read as ahead in seq: their
-                # time, not later than the last delivered, tells them (PROTOCOL.md)
-                self._replay(False)
-                return
-            else:
-                self.lost += gap
+        if self.last_seq is not None and not self._in_sequence(frame, hello):
+            return
         if hello is not None:
             self.boot_id = hello.boot_id
             self.hello = hello
@@ -453,6 +426,40 @@ class Decoder:
         self._seen[frame.seq] = 1
         self.frames_ok += 1
         out.append(frame)
+
+    def _in_sequence(self, frame, hello):
+        # type: (Frame, Hello | None) -> bool
+        """The sequence check of a frame after the first of its boot: False when it is dropped
+        as a replay; else counts what its gap says (lost, a resync, a seq_jump)."""
+        gap = (frame.seq - self.last_seq - 1) & SEQ_MASK
+        if gap >= SEQ_WINDOW and hello is not None and hello.boot_id == self.boot_id \
+                and self._clock_tells() and self._ahead(frame.t_us):
+            # this boot's HELLO, later than anything delivered: the board says where it is.
+            # The host stopped reading for 32768 frames or more (a suspended laptop, Ctrl-Z)
+            # while the board counted on: its seq reads as behind. At least `gap` were lost.
+            self.resyncs += 1
+            self.lost += gap
+            self._resynced = True
+        elif gap >= SEQ_WINDOW:
+            if self._seen[frame.seq]:
+                # delivered before in this boot: old bytes played back (or, when later in
+                # time, the stall above until the board's next HELLO: counted apart)
+                self._replay(self._ahead(frame.t_us))
+                return False
+            self.seq_jumps += 1  # never seen: a reboot whose HELLO was lost
+            frame.jump = True
+            if hello is None:  # (a HELLO says which boot it is: nothing to hold against it)
+                self._old_seen = self._seen
+            self._restart_seq()
+            self._headless_boot = True  # its HELLO, when it comes, is no second reboot
+        elif self._resynced and self._seen[frame.seq] and not self._ahead(frame.t_us):
+            # after a resync the bytes from before the stall read as ahead in seq: their
+            # time, not later than the last delivered, tells them (PROTOCOL.md)
+            self._replay(False)
+            return False
+        else:
+            self.lost += gap
+        return True
 
     def _reject(self, body, why):
         setattr(self, why, getattr(self, why) + 1)
