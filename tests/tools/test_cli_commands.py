@@ -313,3 +313,27 @@ def test_a_reader_that_goes_away_ends_the_command_quietly(tmp_path):
     proc.stdout.close()
     _, err = proc.communicate(timeout=120)
     assert err.decode() == "" and proc.returncode == 141
+
+
+@pytest.mark.parametrize("argv", [
+    ["play", "--headless", "--frames", "2", "--size=--"],
+    ["play", "--headless", "--frames", "2", "--templates=--"],
+    ["play", "--headless", "--frames", "2", "--source=--"],
+    ["play", "--headless", "--frames", "2", "--trace=--"],
+    ["play", "--headless", "--frames", "2", "--recognizer=--"],
+    ["synth", "--session", "2", "-o=--"],
+    ["synth", "--session", "2", "-o--"],
+    ["bvh", "export", "-o", "out.bvh", "--play=--"],
+    ["graph", "info", "--graph=--"],
+    ["profile", "trace.json", "--plot=--"],
+])
+def test_an_option_given_the_value_double_dash_is_refused(capsys, argv):
+    """The tester: argparse turns the value `--` into [] without calling `type=`: `play
+    --size=--` ended in AttributeError 'list' object has no attribute 'lower', `play --trace=--`
+    and `graph info --graph=--` ignored the option. Refused by the parser, as one line, exit 2."""
+    with pytest.raises(SystemExit) as exit_:
+        main(argv)
+    assert exit_.value.code == 2
+    err = capsys.readouterr().err
+    option = argv[-1].split("=")[0] if "=" in argv[-1] else argv[-1][:2]
+    assert err.count("\n") == 1 and f"argument {option}" in err and "expected a value, got '--'" in err, err
