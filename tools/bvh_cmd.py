@@ -19,7 +19,7 @@ from pathlib import Path
 from engine import arguments
 from engine.errors import InputError, refuse_overwriting
 from engine.npz_files import write_replacing
-from game.actions import KINDS, load_library
+from game.actions import KINDS, NAME_MAX_CHARS, load_library, name_problem
 from game.bvh import (
     cut_action,
     map_joints,
@@ -46,7 +46,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     cut.add_argument("file", metavar="FILE.bvh", type=arguments.path_argument, help="the BVH file")
     cut.add_argument("--start", type=arguments.non_negative_int, required=True, help="first frame (60 Hz, after resampling)")
     cut.add_argument("--end", type=arguments.non_negative_int, required=True, help="last frame (inclusive)")
-    cut.add_argument("--name", required=True, help="action name")
+    cut.add_argument("--name", required=True, type=_action_name,
+                     help=f"action name: 1 to {NAME_MAX_CHARS} letters, digits, '_' and '-' (as the action loader takes)")
     cut.add_argument("--kind", default="attack", choices=KINDS, help="what the action is in the game (default attack)")
     cut.add_argument("--no-guard-blend", action="store_true", help="do not blend the ends into the guard")
     cut.add_argument("-o", "--output", required=True, type=arguments.path_argument, help="action JSON to write")
@@ -60,6 +61,17 @@ def register(sub: argparse._SubParsersAction) -> None:
     exp.add_argument("--gap", type=arguments.float_range(0.0, 100.0, lo_open=True), default=0.85, help="distance between the boxers in a bout (m)")
     exp.add_argument("-o", "--output", required=True, type=arguments.path_argument, help="BVH file to write")
     exp.set_defaults(func=run_export)
+
+
+def _action_name(text: str) -> str:
+    """An argparse type for `bvh cut --name`: a name the action loader takes (name_problem);
+    `--name ""` wrote a file the loader then refused."""
+    if why := name_problem(text):
+        raise argparse.ArgumentTypeError(f"the action name {why}")
+    return text
+
+
+_action_name.__name__ = "action name"
 
 
 def run_info(args: argparse.Namespace) -> int:

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 
@@ -171,3 +173,26 @@ def test_a_simulated_bout_exports_one_bvh_per_boxer(tmp_path):
     # both in one world frame: boxer 0 at -z, boxer 1 at +z, facing each other
     assert pa[0, 0, 2] < 0 < pb[0, 0, 2]
     assert np.abs(bone_lengths(pa) / BONE_LENGTHS - 1).max() < 0.05  # simulated bodies keep their bones
+
+
+@pytest.mark.parametrize("name", ["", "../../x", "a b", "x" * 5000, "a,b"])
+def test_bvh_cut_refuses_a_name_the_action_loader_refuses(tmp_path, capsys, name):
+    """The tester: `bvh cut --name ""` exited 0 with an action file the loader refused ("name must
+    be a non-empty string"), and "../../x", "a b" or 5000 characters were taken. Refused by the
+    parser with the loader's own rule (game.actions.name_problem), before the BVH is read."""
+    out = tmp_path / "e.json"
+    with pytest.raises(SystemExit) as exit_:
+        main(["bvh", "cut", str(tmp_path / "m.bvh"), "--start", "0", "--end", "20", "--name", name, "-o", str(out)])
+    assert exit_.value.code == 2 and not out.exists()
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "argument --name: the action name" in err, err
+
+
+@pytest.mark.parametrize("name", ["../../x", "a b", "x" * 65])
+def test_the_action_loader_refuses_the_names_bvh_cut_refuses(tmp_path, name):
+    from game.actions import ActionError, load_action
+
+    path = tmp_path / "odd.json"
+    path.write_text(json.dumps(dict(json.loads(open(LIB["hook_r"].source).read()), name=name)))
+    with pytest.raises(ActionError, match="name"):
+        load_action(path)
