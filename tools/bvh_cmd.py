@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 from pathlib import Path
 
 from engine import arguments
@@ -86,14 +87,20 @@ def run_info(args: argparse.Namespace) -> int:
 
 
 def run_cut(args: argparse.Namespace) -> int:
+    from tools.record import aside_unless_same
+
     refuse_overwriting({"-o": args.output}, [args.file])
     bvh = read_bvh(args.file, mappable=True)
     motion = retarget(bvh)
     guard = None if args.no_guard_blend else load_library()["guard"].posture(0)
     action = cut_action(motion, args.start, args.end, args.name, args.kind, guard)
     Path(args.output).parent.mkdir(parents=True, exist_ok=True)
+    data = (json.dumps(action.to_json(), indent=1) + "\n").encode("utf-8")
+    # a file there may be an action someone made: moved aside as `record -o` does, and said
+    aside = aside_unless_same(args.output, data)
+    if aside is not None:
+        print(f"{args.output} was not empty: moved to {aside}", file=sys.stderr)
     try:
-        data = (json.dumps(action.to_json(), indent=1) + "\n").encode("utf-8")
         write_replacing(args.output, lambda f: f.write(data))  # whole, or the file it replaces as it was
     except OSError as exc:  # a full disk: ENOSPC names no file
         raise InputError(f"{args.output}: cannot write ({exc.strerror or exc})") from None

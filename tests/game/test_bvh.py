@@ -196,3 +196,22 @@ def test_the_action_loader_refuses_the_names_bvh_cut_refuses(tmp_path, name):
     path.write_text(json.dumps(dict(json.loads(open(LIB["hook_r"].source).read()), name=name)))
     with pytest.raises(ActionError, match="name"):
         load_action(path)
+
+
+def test_bvh_cut_moves_an_existing_file_aside(tmp_path, capsys):
+    """The tester: `bvh cut ... -o cut.json` replaced whatever was there (an action someone made).
+    Moved aside as `record -o` does, said in one line."""
+    bvh = tmp_path / "m.bvh"
+    assert main(["bvh", "export", "--play", "straight_r", "-o", str(bvh)]) == 0
+    out = tmp_path / "cut.json"
+    out.write_text('{"my": "action"}\n')
+    capsys.readouterr()
+    argv = ["bvh", "cut", str(bvh), "--start", "0", "--end", "20", "--name", "x", "-o", str(out)]
+    assert main(argv) == 0
+    assert capsys.readouterr().err == f"{out} was not empty: moved to {tmp_path / 'cut-old.json'}\n"
+    assert (tmp_path / "cut-old.json").read_text() == '{"my": "action"}\n'
+    from game.actions import load_action
+
+    assert load_action(out).name == "x"
+    assert main(argv) == 0 and capsys.readouterr().err == ""  # the same action again: nothing to keep
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["cut-old.json", "cut.json", "m.bvh"]
