@@ -337,3 +337,20 @@ def test_an_option_given_the_value_double_dash_is_refused(capsys, argv):
     err = capsys.readouterr().err
     option = argv[-1].split("=")[0] if "=" in argv[-1] else argv[-1][:2]
     assert err.count("\n") == 1 and f"argument {option}" in err and "expected a value, got '--'" in err, err
+
+
+def test_actions_author_leaves_an_edited_action_of_its_folder(tmp_path, capsys):
+    """The tester: `actions author -o MYDIR` wrote over a hook_r.json someone had edited there.
+    Files that hold what would be written are written again; one that differs is left and named
+    in one line (moved aside in the folder, it would be a second hook_r the library refuses)."""
+    assert main(["actions", "author", "-o", str(tmp_path)]) == 0
+    capsys.readouterr()
+    edited = tmp_path / "hook_r.json"
+    edited.write_text(edited.read_text().replace('"kind": "attack"', '"kind": "defense"'))
+    mine = edited.read_text()
+    (tmp_path / "guard.json").unlink()
+    assert main(["actions", "author", "-o", str(tmp_path)]) == 0
+    out, err = capsys.readouterr()
+    assert edited.read_text() == mine and (tmp_path / "guard.json").exists()
+    assert err.count("\n") == 1 and "hook_r.json" in err and "left 1 file" in err, err
+    assert out.startswith("wrote 26 action files")
