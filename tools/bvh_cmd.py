@@ -18,11 +18,13 @@ import sys
 from pathlib import Path
 
 from engine import arguments
-from engine.errors import InputError, refuse_overwriting
+from engine.errors import InputError, refuse_other_kind, refuse_overwriting
 from engine.npz_files import write_replacing
 from game.actions import KINDS, NAME_MAX_CHARS, load_library, name_problem
 from game.bvh import (
+    boxer_paths,
     cut_action,
+    is_bvh_head,
     map_joints,
     played_positions,
     read_bvh,
@@ -120,8 +122,11 @@ def _names(text: str, lib: dict) -> list[str]:
 def run_export(args: argparse.Namespace) -> int:
     lib = load_library()
     names = _names(args.play, lib)
-    if args.opponent is not None:
-        rec, hits = simulate_bout(lib, names, _names(args.opponent, lib), args.gap)
+    opponent = None if args.opponent is None else _names(args.opponent, lib)
+    for path in boxer_paths(args.output, 1 if opponent is None else 2):  # an earlier BVH is replaced
+        refuse_other_kind(path, "-o", "a BVH", is_bvh_head)
+    if opponent is not None:
+        rec, hits = simulate_bout(lib, names, opponent, args.gap)
         paths = rec.write(args.output, rest=lib["guard"].posture(0))
         print(f"simulated {len(rec.frames)} steps, {len(hits)} hit(s); wrote {', '.join(map(str, paths))}")
         return 0

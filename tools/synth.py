@@ -188,6 +188,10 @@ def run(args: argparse.Namespace) -> int:
 
 def _run(args: argparse.Namespace) -> int:
     if args.templates:
+        from engine.errors import refuse_other_kind
+        from engine.npz_files import is_npz_head
+
+        refuse_other_kind(args.output, "-o", "an .npz", is_npz_head)  # earlier templates are replaced
         seed = DEFAULT_TEMPLATE_SEED if args.seed is None else args.seed
         path = build_default_templates(args.output, seed, profile=args.player)
         print(f"wrote templates for {len(ACTION_NAMES)} actions to {path} (seed {seed})")

@@ -354,3 +354,37 @@ def test_actions_author_leaves_an_edited_action_of_its_folder(tmp_path, capsys):
     assert edited.read_text() == mine and (tmp_path / "guard.json").exists()
     assert err.count("\n") == 1 and "hook_r.json" in err and "left 1 file" in err, err
     assert out.startswith("wrote 26 action files")
+
+
+@pytest.mark.parametrize("argv, written", [
+    (["synth", "--templates", "-o", "{out}"], "cut.json"),
+    (["graph", "build", "--quiet", "-o", "{out}"], "cut.json"),
+    (["bvh", "export", "--play", "hook_r", "-o", "{out}"], "cut.json"),
+    (["bvh", "export", "--play", "hook_r", "--opponent", "block", "-o", "{out}"], "cut_boxer1.json"),
+])
+def test_a_derived_output_is_not_written_over_a_file_of_another_kind(tmp_path, capsys, argv, written):
+    """The tester: `synth --templates -o cut.json` wrote an .npz over an action JSON, `bvh export`
+    and `graph build` replaced any file. An earlier output of the kind is replaced (their job);
+    a file plainly of another kind (by its first bytes) is refused in one line, before the work."""
+    theirs = tmp_path / written
+    theirs.write_text('{"name": "x"}\n')
+    assert main([a.format(out=tmp_path / "cut.json") for a in argv]) == 2 and theirs.read_text() == '{"name": "x"}\n'
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "is not a" in err and str(theirs) in err, err
+    assert sorted(p.name for p in tmp_path.iterdir()) == [written]
+
+
+def test_a_derived_output_replaces_an_earlier_one_of_its_kind(tmp_path):
+    import zipfile
+
+    from engine.npz_files import is_npz_head
+    from game.bvh import is_bvh_head
+
+    out = tmp_path / "out.bvh"
+    assert main(["bvh", "export", "--play", "hook_r", "-o", str(out)]) == 0
+    assert main(["bvh", "export", "--play", "block", "-o", str(out)]) == 0  # its own kind: replaced
+    np.savez(tmp_path / "a.npz", x=np.zeros(2))
+    zipfile.ZipFile(tmp_path / "empty.zip", "w").close()
+    assert is_npz_head((tmp_path / "a.npz").read_bytes()[:64]) and is_npz_head((tmp_path / "empty.zip").read_bytes())
+    assert is_bvh_head(out.read_bytes()[:64]) and is_bvh_head(b"\xef\xbb\xbf  hierarchy\n")
+    assert not is_npz_head(b'{"name": "x"}') and not is_bvh_head(b'{"name": "x"}')
