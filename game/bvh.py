@@ -677,6 +677,7 @@ class BVHRecorder:
     def __init__(self, fps: float = FPS):
         self.fps = fps
         self.frames: list[np.ndarray] = []
+        self.unplayed: tuple[int, ...] = ()  # a bout cut at MAX_BOUT_S: the actions of each boxer never begun
 
     def add(self, positions_per_boxer: list[np.ndarray]) -> None:
         self.frames.append(np.array([np.asarray(p, dtype=np.float64) for p in positions_per_boxer]))
@@ -701,6 +702,9 @@ def is_bvh_head(head: bytes) -> bool:
     """Whether a file's first bytes are a BVH's (its first word HIERARCHY): what a BVH output
     may replace (engine.errors.refuse_other_kind)."""
     return head.removeprefix(b"\xef\xbb\xbf").lstrip().upper().startswith(b"HIERARCHY")
+
+
+MAX_BOUT_S = 120  # simulate_bout stops a script longer than this (its BVHRecorder's unplayed says what was left)
 
 
 def simulate_bout(lib: dict[str, Action], player: list[str], opponent: list[str], gap: float = 0.85,
@@ -732,7 +736,8 @@ def simulate_bout(lib: dict[str, Action], player: list[str], opponent: list[str]
         hits_all += hits
         rec.add([b.joint_positions() for b in boxers])
         idle += 1
-        if len(rec.frames) > STEP_HZ * 120:  # a runaway script: stop after two minutes
+        if len(rec.frames) > STEP_HZ * MAX_BOUT_S:  # a runaway script: stop after two minutes
+            rec.unplayed = tuple(len(q) for q in queues)  # said by the caller (bvh export)
             break
     for _ in range(rest_frames):
         for b in boxers:

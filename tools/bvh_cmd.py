@@ -22,6 +22,7 @@ from engine.errors import InputError, refuse_other_kind, refuse_overwriting
 from engine.npz_files import write_replacing
 from game.actions import KINDS, NAME_MAX_CHARS, load_library, name_problem
 from game.bvh import (
+    MAX_BOUT_S,
     boxer_paths,
     cut_action,
     is_bvh_head,
@@ -128,6 +129,11 @@ def run_export(args: argparse.Namespace) -> int:
     if opponent is not None:
         rec, hits = simulate_bout(lib, names, opponent, args.gap)
         paths = rec.write(args.output, rest=lib["guard"].posture(0))
+        if rec.unplayed:
+            asked = (len(names), len(opponent))
+            begun = " and ".join(f"{a - u} of {a}" for a, u in zip(asked, rec.unplayed, strict=True))
+            print(f"quickjab bvh export: the bout is cut at the {MAX_BOUT_S:g} s cap: asked for {asked[0]} and "
+                  f"{asked[1]} actions, {begun} began; wrote {len(rec.frames) / rec.fps:.1f} s", file=sys.stderr)
         print(f"simulated {len(rec.frames)} steps, {len(hits)} hit(s); wrote {', '.join(map(str, paths))}")
         return 0
     positions = played_positions(lib, names)

@@ -215,3 +215,24 @@ def test_bvh_cut_moves_an_existing_file_aside(tmp_path, capsys):
     assert load_action(out).name == "x"
     assert main(argv) == 0 and capsys.readouterr().err == ""  # the same action again: nothing to keep
     assert sorted(p.name for p in tmp_path.iterdir()) == ["cut-old.json", "cut.json", "m.bvh"]
+
+
+def test_a_bout_cut_at_the_cap_is_said(tmp_path, capsys, monkeypatch):
+    """The tester: `bvh export --play hook_r x3000 --opponent hook_r x3000` silently stopped at the
+    2-minute cap. Said in one line: what was asked, what was written (the cap made 1 s here)."""
+    import game.bvh
+    import tools.bvh_cmd
+
+    monkeypatch.setattr(game.bvh, "MAX_BOUT_S", 1)
+    monkeypatch.setattr(tools.bvh_cmd, "MAX_BOUT_S", 1)
+    script = ",".join(["hook_r"] * 30)
+    assert main(["bvh", "export", "--play", script, "--opponent", script, "-o", str(tmp_path / "bout.bvh")]) == 0
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "cut at the 1 s cap: asked for 30 and 30 actions" in err, err
+    frames = read_bvh(tmp_path / "bout_boxer0.bvh").frames
+    assert f"wrote {frames / 60:.1f} s" in err
+
+
+def test_a_bout_under_the_cap_says_nothing_of_it(tmp_path, capsys):
+    assert main(["bvh", "export", "--play", "hook_r", "--opponent", "block", "-o", str(tmp_path / "b.bvh")]) == 0
+    assert capsys.readouterr().err == ""
