@@ -166,6 +166,14 @@ class OneLineErrorParser(argparse.ArgumentParser):
     def error(self, message: str) -> NoReturn:
         self.exit(2, f"{self.prog}: {message} (see {self.prog} --help)\n")
 
+    def _get_values(self, action, arg_strings):  # argparse's, called for every option given
+        """As argparse's, but an option given the value `--` (`--size=--`, `-o--`) is refused:
+        argparse takes `--` out of the values and hands on [] without calling `type=`, so
+        `play --size=--` ended in a traceback and `play --trace=--` was silently ignored."""
+        if action.option_strings and "--" in arg_strings:
+            raise argparse.ArgumentError(action, "expected a value, got '--'")
+        return super()._get_values(action, arg_strings)
+
     def parse_args(self, args=None, namespace=None):  # argparse's signature
         """As argparse's, but an unknown option is named by the (sub)command that was given it:
         `quickjab play: unrecognized arguments: --low-pwer (see quickjab play --help)`, whose

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import os
 import stat
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 
 
 class InputError(Exception):
@@ -43,3 +43,24 @@ def refuse_overwriting(outputs: dict[str, str | os.PathLike | None], inputs: Ite
         for other, out2 in given[k + 1:]:
             if same_file(out, out2):
                 raise InputError(f"{flag} {out} and {other} {out2} are one file: give each its own")
+
+
+HEAD_BYTES = 64  # enough for any kind's first line or magic number
+
+
+def refuse_other_kind(path: str | os.PathLike, flag: str, kind: str, is_kind: Callable[[bytes], bool]) -> None:
+    """InputError when `path` holds a file that is plainly not a `kind` (`is_kind` of its first
+    HEAD_BYTES bytes is false): a derived output a command makes again (templates, a graph, a
+    BVH) replaces an earlier one of its kind, but not whatever else is there (`synth --templates
+    -o cut.json` wrote an .npz over an action). Said before the work. Nothing there, an empty file
+    and what is not a regular file (/dev/null) pass."""
+    try:
+        st = os.stat(path)
+        if not stat.S_ISREG(st.st_mode) or st.st_size == 0:
+            return
+        with open(path, "rb") as f:
+            head = f.read(HEAD_BYTES)
+    except OSError:  # not there, or not readable: the write says what is wrong, if anything
+        return
+    if not is_kind(head):
+        raise InputError(f"{flag} {path}: is there and is not {kind}; not replaced (give another file, or move it)")

@@ -97,6 +97,12 @@ def read_npz(path: str | os.PathLike, max_bytes: int, keep: Callable[[str], bool
         raise NpzFileError(f"{exc.__class__.__name__}: {exc}") from None
 
 
+def is_npz_head(head: bytes) -> bool:
+    """Whether a file's first bytes are a zip archive's (an .npz is one; an empty archive starts
+    with its end record): what an .npz output may replace (engine.errors.refuse_other_kind)."""
+    return head.startswith((b"PK\x03\x04", b"PK\x05\x06"))
+
+
 def read_json(array: np.ndarray) -> object:
     """The JSON text an .npz stores as a string array (a file's settings or meta record),
     parsed. NpzFileError (a ValueError) for text that is not JSON, holds an integer of over 4300

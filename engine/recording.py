@@ -301,15 +301,21 @@ def _file_head(sensors: int, meta: dict[str, str]) -> str:
     return _metadata_lines({"rate_hz": str(STEP_HZ), "units": "g", **meta}) + ",".join(_header_columns(sensors) + ["label"]) + "\n"
 
 
-def write_recording(path: str | os.PathLike, rec: Recording) -> None:
-    """Write a whole recording (docs/formats.md layout, label column always present), beside
-    `path` and renamed over it once whole: a full disk or a kill halfway through left a
-    truncated file (or a cut last row) where the player's recording had been."""
+def recording_bytes(rec: Recording) -> bytes:
+    """The whole file write_recording writes for `rec` (docs/formats.md layout, label column
+    always present)."""
     buf = io.StringIO()
     buf.write(_file_head(rec.sensors, rec.meta))
     for t, a, lab in zip(rec.t, rec.accel, rec.labels, strict=True):
         buf.write(_format_row(float(t), a, lab))
-    data = buf.getvalue().encode("utf-8", UNENCODABLE)
+    return buf.getvalue().encode("utf-8", UNENCODABLE)
+
+
+def write_recording(path: str | os.PathLike, rec: Recording | bytes) -> None:
+    """Write a whole recording (or its recording_bytes), beside `path` and renamed over it once
+    whole: a full disk or a kill halfway through left a truncated file (or a cut last row) where
+    the player's recording had been."""
+    data = rec if isinstance(rec, bytes) else recording_bytes(rec)
     try:
         write_replacing(path, lambda f: f.write(data))
     except OSError as exc:  # a full disk: ENOSPC names no file, a read-only folder the temporary one

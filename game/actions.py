@@ -53,8 +53,26 @@ REACTION_NAMES: tuple[str, ...] = tuple(
 HEAVY_HIT_SPEED = 5.0  # m/s closing speed from which a blow staggers rather than stings
 
 
+NAME_MAX_CHARS = 64
+_NAME_CHARS = frozenset("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_-")
+
+
 class ActionError(InputError):
     """An action file that cannot be loaded; the message names the file."""
+
+
+def name_problem(name: object) -> str | None:
+    """Why `name` cannot name an action (None: it can): 1 to NAME_MAX_CHARS letters, digits,
+    `_` and `-`, as every shipped name. A name is a label in recordings and templates, one of a
+    comma-separated `--actions` list and the file name `actions author` writes, so no spaces,
+    commas or slashes. The loader and `bvh cut --name` both ask it."""
+    if not isinstance(name, str) or not name:
+        return f"must be a non-empty string, not {name!r}"
+    if len(name) > NAME_MAX_CHARS:
+        return f"has {len(name)} characters, at most {NAME_MAX_CHARS}"
+    if bad := sorted(set(name) - _NAME_CHARS):
+        return f"{name!r} may hold only letters, digits, '_' and '-', not {''.join(bad)!r}"
+    return None
 
 
 @dataclass(frozen=True)
@@ -207,8 +225,8 @@ def action_from_json(data: dict, source: str = "") -> Action:
         raise ActionError(f"{source or '?'}: not an action (expected a JSON object, not {type(data).__name__})")
     where = source or data.get("name", "?")
     try:
-        if not isinstance(data["name"], str) or not data["name"]:
-            raise ActionError(f"{where}: name must be a non-empty string, not {data['name']!r}")
+        if why := name_problem(data["name"]):
+            raise ActionError(f"{where}: name {why}")
         joints = data.get("joints", list(JOINTS))
         if list(joints) != list(JOINTS):
             raise ActionError(f"{where}: joints must be {', '.join(JOINTS)}")

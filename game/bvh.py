@@ -677,6 +677,7 @@ class BVHRecorder:
     def __init__(self, fps: float = FPS):
         self.fps = fps
         self.frames: list[np.ndarray] = []
+        self.unplayed: tuple[int, ...] = ()  # a bout cut at MAX_BOUT_S: the actions of each boxer never begun
 
     def add(self, positions_per_boxer: list[np.ndarray]) -> None:
         self.frames.append(np.array([np.asarray(p, dtype=np.float64) for p in positions_per_boxer]))
@@ -685,13 +686,25 @@ class BVHRecorder:
         if not self.frames:
             raise InputError(f"{path}: nothing recorded")
         data = np.array(self.frames)  # (n, boxers, 17, 3)
-        path = Path(path)
-        if data.shape[1] == 1:
-            return [write_bvh(path, data[:, 0], self.fps, rest)]
-        return [
-            write_bvh(path.with_name(f"{path.stem}_boxer{i}{path.suffix or '.bvh'}"), data[:, i], self.fps, rest)
-            for i in range(data.shape[1])
-        ]
+        return [write_bvh(p, data[:, i], self.fps, rest) for i, p in enumerate(boxer_paths(path, data.shape[1]))]
+
+
+def boxer_paths(path: str | os.PathLike, boxers: int) -> list[Path]:
+    """The files BVHRecorder.write writes for `boxers` boxers: `path` itself for one, else
+    <stem>_boxer0.bvh, <stem>_boxer1.bvh, ... beside it."""
+    path = Path(path)
+    if boxers == 1:
+        return [path]
+    return [path.with_name(f"{path.stem}_boxer{i}{path.suffix or '.bvh'}") for i in range(boxers)]
+
+
+def is_bvh_head(head: bytes) -> bool:
+    """Whether a file's first bytes are a BVH's (its first word HIERARCHY): what a BVH output
+    may replace (engine.errors.refuse_other_kind)."""
+    return head.removeprefix(b"\xef\xbb\xbf").lstrip().upper().startswith(b"HIERARCHY")
+
+
+MAX_BOUT_S = 120  # simulate_bout stops a script longer than this (its BVHRecorder's unplayed says what was left)
 
 
 def simulate_bout(lib: dict[str, Action], player: list[str], opponent: list[str], gap: float = 0.85,
@@ -723,7 +736,8 @@ def simulate_bout(lib: dict[str, Action], player: list[str], opponent: list[str]
         hits_all += hits
         rec.add([b.joint_positions() for b in boxers])
         idle += 1
-        if len(rec.frames) > STEP_HZ * 120:  # a runaway script: stop after two minutes
+        if len(rec.frames) > STEP_HZ * MAX_BOUT_S:  # a runaway script: stop after two minutes
+            rec.unplayed = tuple(len(q) for q in queues)  # said by the caller (bvh export)
             break
     for _ in range(rest_frames):
         for b in boxers:

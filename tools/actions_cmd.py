@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import sys
 
 from engine import arguments
 from game.actions import load_library
@@ -34,7 +35,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     sheet.set_defaults(func=run_sheet)
     author = cmds.add_parser("author", help="regenerate the action JSON files",
                              description="Regenerate the action JSON files from tools/author_actions.py.")
-    author.add_argument("-o", "--output", default=None, type=arguments.path_argument, help="folder (default: game/assets/actions)")
+    author.add_argument("-o", "--output", default=None, type=arguments.path_argument,
+                        help="folder (default: game/assets/actions, rewritten); there, files that differ from what would be written are left and named")
     author.set_defaults(func=run_author)
 
 
@@ -70,8 +72,19 @@ def run_sheet(args: argparse.Namespace) -> int:
 
 
 def run_author(args: argparse.Namespace) -> int:
+    """The shipped library (no -o) is rewritten: it is this script's output, kept in git. In a
+    folder of -o, a file that differs from what would be written is someone's edit: left as it is
+    and named, not replaced (moving it aside in the folder would give the library two files of
+    one action, which load_library refuses)."""
+    from pathlib import Path
+
     from tools.author_actions import write_library
 
-    written = write_library(args.output)
-    print(f"wrote {len(written)} action files to {written[0].parent}")
+    kept: list[Path] | None = None if args.output is None else []
+    written = write_library(args.output, kept)
+    folder = Path(args.output) if args.output is not None else (written[0].parent if written else None)
+    if kept:
+        print(f"quickjab actions author: left {len(kept)} file(s) in {folder} that differ from what would be written: "
+              f"{', '.join(p.name for p in kept)} (remove them to write them again)", file=sys.stderr)
+    print(f"wrote {len(written)} action files to {folder}")
     return 0

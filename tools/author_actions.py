@@ -333,15 +333,30 @@ def build_library() -> list[Action]:
     ]  # fmt: skip
 
 
-def write_library(directory: str | Path | None = None) -> list[Path]:
+def write_library(directory: str | Path | None = None, kept: list[Path] | None = None) -> list[Path]:
+    """Write every action's JSON to `directory` (default: the shipped game/assets/actions);
+    the files written. With `kept`, a file there that holds anything else than what would be
+    written (an action someone edited) is left as it is and added to `kept`, not replaced."""
     directory = Path(directory) if directory is not None else default_actions_dir()
     directory.mkdir(parents=True, exist_ok=True)
     written = []
     for a in build_library():
         path = directory / f"{a.name}.json"
-        path.write_text(json.dumps(a.to_json(), indent=1) + "\n", encoding="utf-8")
+        text = json.dumps(a.to_json(), indent=1) + "\n"
+        if kept is not None and _differs(path, text):
+            kept.append(path)
+            continue
+        path.write_text(text, encoding="utf-8")
         written.append(path)
     return written
+
+
+def _differs(path: Path, text: str) -> bool:
+    """Whether a file at `path` holds anything other than `text` (not there, or empty: no)."""
+    try:
+        return path.stat().st_size > 0 and path.read_bytes() != text.encode("utf-8")
+    except FileNotFoundError:
+        return False
 
 
 if __name__ == "__main__":

@@ -23,6 +23,7 @@ import numpy as np
 
 from engine import arguments
 from engine.clock import STEP_DT
+from engine.errors import InputError
 
 if TYPE_CHECKING:
     from engine.physics import World
@@ -30,10 +31,31 @@ if TYPE_CHECKING:
 DT = STEP_DT
 
 
+# A run costs about steps x repeats x (iterations + 8) x 45 us of CPU here (a step's work outside the
+# relaxation is some 8 iterations'): --iterations 100000000 ran for hours. The bounds keep the
+# largest run near 45 s on a desktop core, a few minutes on a Raspberry Pi-class board.
+MAX_STEPS = 100_000
+MAX_REPEATS = 100
+MAX_ITERATIONS = 100  # the game steps with 4 (2 in low power); the scramble study goes to 40
+STEP_IN_ITERATIONS = 8
+MAX_WORK = 1_000_000
+
+
+def check_work(steps: int, repeats: int, iterations: int) -> None:
+    """InputError, before the run, for a run over MAX_WORK (each bound alone allows one)."""
+    work = steps * repeats * (iterations + STEP_IN_ITERATIONS)
+    if work > MAX_WORK:
+        raise InputError(f"--steps {steps} x --repeats {repeats} x (--iterations {iterations} + {STEP_IN_ITERATIONS}) "
+                         f"is {work:,}, over {MAX_WORK:,} (about 45 s of CPU on a desktop core): give fewer")
+
+
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--steps", type=arguments.positive_int, default=500, help="steps per timed run (default 500)")
-    p.add_argument("--repeats", type=arguments.positive_int, default=5, help="timed runs per configuration, taken in turn")
-    p.add_argument("--iterations", type=arguments.positive_int, default=4, help="relaxation iterations per step")
+    p.add_argument("--steps", type=arguments.int_range(1, MAX_STEPS), default=500, help=f"steps per timed run (default 500; at most {MAX_STEPS})")
+    p.add_argument("--repeats", type=arguments.int_range(1, MAX_REPEATS), default=5,
+                   help=f"timed runs per configuration, taken in turn (default 5; at most {MAX_REPEATS})")
+    p.add_argument("--iterations", type=arguments.int_range(1, MAX_ITERATIONS), default=4,
+                   help=f"relaxation iterations per step (default 4; at most {MAX_ITERATIONS}); "
+                   f"steps x repeats x (iterations + {STEP_IN_ITERATIONS}) at most {MAX_WORK:,}")
     p.add_argument("--json", action="store_true", help="print JSON instead of a table")
 
 
@@ -186,6 +208,7 @@ def _relaxation(steps: int) -> dict:
 
 
 def run(args: argparse.Namespace) -> int:
+    check_work(args.steps, args.repeats, args.iterations)
     it = args.iterations
     configs = {
         "apart": _world(1.2, it), "clinch": _world(0.45, it),

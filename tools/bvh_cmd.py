@@ -14,14 +14,18 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 from pathlib import Path
 
 from engine import arguments
-from engine.errors import InputError, refuse_overwriting
+from engine.errors import InputError, refuse_other_kind, refuse_overwriting
 from engine.npz_files import write_replacing
-from game.actions import KINDS, load_library
+from game.actions import KINDS, NAME_MAX_CHARS, load_library, name_problem
 from game.bvh import (
+    MAX_BOUT_S,
+    boxer_paths,
     cut_action,
+    is_bvh_head,
     map_joints,
     played_positions,
     read_bvh,
@@ -46,7 +50,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     cut.add_argument("file", metavar="FILE.bvh", type=arguments.path_argument, help="the BVH file")
     cut.add_argument("--start", type=arguments.non_negative_int, required=True, help="first frame (60 Hz, after resampling)")
     cut.add_argument("--end", type=arguments.non_negative_int, required=True, help="last frame (inclusive)")
-    cut.add_argument("--name", required=True, help="action name")
+    cut.add_argument("--name", required=True, type=_action_name,
+                     help=f"action name: 1 to {NAME_MAX_CHARS} letters, digits, '_' and '-' (as the action loader takes)")
     cut.add_argument("--kind", default="attack", choices=KINDS, help="what the action is in the game (default attack)")
     cut.add_argument("--no-guard-blend", action="store_true", help="do not blend the ends into the guard")
     cut.add_argument("-o", "--output", required=True, type=arguments.path_argument, help="action JSON to write")
@@ -62,6 +67,17 @@ def register(sub: argparse._SubParsersAction) -> None:
     exp.set_defaults(func=run_export)
 
 
+def _action_name(text: str) -> str:
+    """An argparse type for `bvh cut --name`: a name the action loader takes (name_problem);
+    `--name ""` wrote a file the loader then refused."""
+    if why := name_problem(text):
+        raise argparse.ArgumentTypeError(f"the action name {why}")
+    return text
+
+
+_action_name.__name__ = "action name"
+
+
 def run_info(args: argparse.Namespace) -> int:
     bvh = read_bvh(args.file, mappable=True)
     print(f"{args.file}: {len(bvh.joints)} joints, {bvh.frames} frames at {1 / bvh.frame_time:.1f} Hz")
@@ -74,14 +90,20 @@ def run_info(args: argparse.Namespace) -> int:
 
 
 def run_cut(args: argparse.Namespace) -> int:
+    from tools.record import aside_unless_same
+
     refuse_overwriting({"-o": args.output}, [args.file])
     bvh = read_bvh(args.file, mappable=True)
     motion = retarget(bvh)
     guard = None if args.no_guard_blend else load_library()["guard"].posture(0)
     action = cut_action(motion, args.start, args.end, args.name, args.kind, guard)
     Path(args.output).parent.mkdir(parents=True, exist_ok=True)
+    data = (json.dumps(action.to_json(), indent=1) + "\n").encode("utf-8")
+    # a file there may be an action someone made: moved aside as `record -o` does, and said
+    aside = aside_unless_same(args.output, data)
+    if aside is not None:
+        print(f"{args.output} was not empty: moved to {aside}", file=sys.stderr)
     try:
-        data = (json.dumps(action.to_json(), indent=1) + "\n").encode("utf-8")
         write_replacing(args.output, lambda f: f.write(data))  # whole, or the file it replaces as it was
     except OSError as exc:  # a full disk: ENOSPC names no file
         raise InputError(f"{args.output}: cannot write ({exc.strerror or exc})") from None
@@ -101,9 +123,17 @@ def _names(text: str, lib: dict) -> list[str]:
 def run_export(args: argparse.Namespace) -> int:
     lib = load_library()
     names = _names(args.play, lib)
-    if args.opponent is not None:
-        rec, hits = simulate_bout(lib, names, _names(args.opponent, lib), args.gap)
+    opponent = None if args.opponent is None else _names(args.opponent, lib)
+    for path in boxer_paths(args.output, 1 if opponent is None else 2):  # an earlier BVH is replaced
+        refuse_other_kind(path, "-o", "a BVH", is_bvh_head)
+    if opponent is not None:
+        rec, hits = simulate_bout(lib, names, opponent, args.gap)
         paths = rec.write(args.output, rest=lib["guard"].posture(0))
+        if rec.unplayed:
+            asked = (len(names), len(opponent))
+            begun = " and ".join(f"{a - u} of {a}" for a, u in zip(asked, rec.unplayed, strict=True))
+            print(f"quickjab bvh export: the bout is cut at the {MAX_BOUT_S:g} s cap: asked for {asked[0]} and "
+                  f"{asked[1]} actions, {begun} began; wrote {len(rec.frames) / rec.fps:.1f} s", file=sys.stderr)
         print(f"simulated {len(rec.frames)} steps, {len(hits)} hit(s); wrote {', '.join(map(str, paths))}")
         return 0
     positions = played_positions(lib, names)

@@ -74,7 +74,10 @@ def _graph_path(path: str | None) -> Path:
 
 
 def cmd_build(args: argparse.Namespace) -> int:
+    from engine.errors import refuse_other_kind
+    from engine.npz_files import is_npz_head
     from game.interaction.build import BuildParams, build_graph
+    refuse_other_kind(args.output, "-o", "an .npz", is_npz_head)  # an earlier graph is replaced
     if args.states < 10:
         raise InputError(f"--states {args.states}: need at least 10")
     kw = {"seed": args.seed, "states": args.states}

@@ -81,6 +81,21 @@ def keep_aside(output: str | Path) -> Path | None:
         return aside
 
 
+def aside_unless_same(output: str | Path, data: bytes) -> Path | None:
+    """Before `data` is written whole over `output` (a synthesized trial or session, a cut
+    action: files a person may have made there): keep_aside, unless the file there holds these
+    very bytes (a second run with one seed: nothing would be lost, and a trial folder would gain
+    a copy of each trial as one more trial). The place it was moved to, else None. A move that
+    fails is an InputError naming the file, as `record -o`'s."""
+    target = Path(output)
+    try:
+        if target.is_file() and target.stat().st_size == len(data) and target.read_bytes() == data:
+            return None
+        return keep_aside(target)
+    except OSError as exc:
+        raise InputError(f"{target}: cannot move the file there aside ({exc.strerror or exc}); give another -o") from None
+
+
 def link_counts(stats: dict[str, int]) -> str:
     """The end-of-run line about the link: what came in and what was lost or rejected on the way
     (the counters a source has; a serial source has them all)."""

@@ -12,13 +12,14 @@ Both are written in the recording CSV of docs/formats.md; `--seed` makes them re
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
 import numpy as np
 
 from engine import arguments
 from engine.errors import InputError
-from engine.recording import MAX_DURATION_S, Recording, write_recording
+from engine.recording import MAX_DURATION_S, Recording, recording_bytes, write_recording
 from game.actions import ACTION_NAMES, Action, load_library
 from game.virtual_player import FPS, PROFILES, synthesize_action, synthesize_rest
 
@@ -48,7 +49,22 @@ def _to_recording(signal: np.ndarray, labels: list[str], meta: dict[str, str]) -
     return Recording(np.arange(n) / FPS, signal.reshape(n, 2, 3), labels, meta)
 
 
-def write_trials(directory: str | Path, trials: dict[str, list[np.ndarray]], profile: str, seed) -> list[Path]:
+def write_keeping(path: Path, rec: Recording) -> Path | None:
+    """Write `rec` to `path`; a non-empty file there that holds anything else is moved aside
+    first, as `record -o` does (tools.record.aside_unless_same): a trial or a recording may be a
+    player's. Where it went, else None."""
+    from tools.record import aside_unless_same
+
+    data = recording_bytes(rec)
+    aside = aside_unless_same(path, data)
+    write_recording(path, data)
+    return aside
+
+
+def write_trials(directory: str | Path, trials: dict[str, list[np.ndarray]], profile: str, seed,
+                 moved: list[tuple[Path, Path]] | None = None) -> list[Path]:
+    """DIR/<action>/<n>.csv for every trial; the files moved aside to make room are added to
+    `moved` as (file, where it went)."""
     directory = Path(directory)
     written = []
     for name, signals in trials.items():
@@ -57,9 +73,23 @@ def write_trials(directory: str | Path, trials: dict[str, list[np.ndarray]], pro
         for i, sig in enumerate(signals, start=1):
             path = folder / f"{i}.csv"
             meta = {"source": f"{SOURCE}, profile {profile}", "action": name, "seed": str(seed)}
-            write_recording(path, _to_recording(sig, [name] * len(sig), meta))
+            aside = write_keeping(path, _to_recording(sig, [name] * len(sig), meta))
+            if aside is not None and moved is not None:
+                moved.append((path, aside))
             written.append(path)
     return written
+
+
+def say_moved(moved: list[tuple[Path, Path]], directory: str) -> None:
+    """One line for the trial files moved aside (the first three named): they are in the action
+    folders still, where `templates build` reads every *.csv as a trial."""
+    if not moved:
+        return
+    named = ", ".join(f"{path} -> {aside.name}" for path, aside in moved[:3])
+    more = f" and {len(moved) - 3} more" if len(moved) > 3 else ""
+    print(f"synth: {len(moved)} trial file(s) under {directory} were not empty, moved aside: {named}{more} "
+          "(templates build reads them as trials too: move them out of the action folders if they are not)",
+          file=sys.stderr)
 
 
 def synth_session(
@@ -158,6 +188,10 @@ def run(args: argparse.Namespace) -> int:
 
 def _run(args: argparse.Namespace) -> int:
     if args.templates:
+        from engine.errors import refuse_other_kind
+        from engine.npz_files import is_npz_head
+
+        refuse_other_kind(args.output, "-o", "an .npz", is_npz_head)  # earlier templates are replaced
         seed = DEFAULT_TEMPLATE_SEED if args.seed is None else args.seed
         path = build_default_templates(args.output, seed, profile=args.player)
         print(f"wrote templates for {len(ACTION_NAMES)} actions to {path} (seed {seed})")
@@ -171,7 +205,9 @@ def _run(args: argparse.Namespace) -> int:
         if args.trials < 1:
             raise InputError("--trials must be at least 1")
         trials = synth_trials(lib, args.player, args.trials, rng, actions, max(args.rest, 0))
-        written = write_trials(args.output, trials, args.player, args.seed)
+        moved: list[tuple[Path, Path]] = []
+        written = write_trials(args.output, trials, args.player, args.seed, moved)
+        say_moved(moved, args.output)
         print(f"wrote {len(written)} trial files under {args.output}")
         return 0
     if not args.session or args.session <= 0:
@@ -182,7 +218,9 @@ def _run(args: argparse.Namespace) -> int:
     signal, labels = synth_session(lib, args.session, args.player, rng, actions=actions)
     meta = {"source": f"{SOURCE}, profile {args.player}", "seed": str(args.seed)}
     out.parent.mkdir(parents=True, exist_ok=True)
-    write_recording(out, _to_recording(signal, labels, meta))
+    aside = write_keeping(out, _to_recording(signal, labels, meta))
+    if aside is not None:
+        print(f"{out} was not empty: moved to {aside}", file=sys.stderr)
     count = sum(1 for i, lab in enumerate(labels) if lab and (i == 0 or labels[i - 1] != lab))
     print(f"wrote {len(signal)} frames ({len(signal) / FPS:.1f} s, {count} actions) to {out}")
     return 0

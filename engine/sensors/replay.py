@@ -16,6 +16,7 @@ from engine.sensors.source import (
     Source,
     SourceError,
     SourceState,
+    file_path,
     parse_source_url,
     register_scheme,
     url_number,
@@ -100,7 +101,7 @@ def open_replay(url: str, clock: Clock) -> ReplaySource:
     url_params_known(url, params, ("speed", "loop"))
     speed = url_number(url, params, "speed", 1.0, MIN_SPEED, MAX_SPEED)
     loop = params.get("loop", "0").lower() in ("1", "true", "yes")
-    return ReplaySource(read_recording(path), url=url, clock=clock, speed=speed, loop=loop)
+    return ReplaySource(read_recording(file_path(path)), url=url, clock=clock, speed=speed, loop=loop)
 
 
 register_scheme("replay", open_replay)

@@ -213,14 +213,31 @@ def url_params_known(url: str, params: dict[str, str], known: tuple[str, ...]) -
         raise SourceError(f"{url}: unknown parameter(s) {', '.join(unknown)} (known: {', '.join(known) or 'none'})")
 
 
+_FILE_ESCAPES = {"%23": "#", "%3f": "?", "%25": "%"}
+
+
+def file_path(path: str) -> str:
+    """A replay:// URL's path as a file name: %23 is '#', %3F '?' and %25 '%' (any case), the
+    characters a URL keeps for itself, so `replay://a%23b%3Fc=1.csv` reads `a#b?c=1.csv`. Only
+    these: a name with another '%' (`50%.csv`, `a%41.csv`) is read as it is written."""
+    if "%" not in path:
+        return path
+    out, i = [], 0
+    while i < len(path):
+        decoded = _FILE_ESCAPES.get(path[i:i + 3].lower()) if path[i] == "%" else None
+        out.append(decoded or path[i])
+        i += 3 if decoded else 1
+    return "".join(out)
+
+
 def url_file(url: str) -> str | None:
     """The file a source URL reads (replay://rec.csv: rec.csv), None when it names none or is no
     URL: what a command writing files must not write over."""
     try:
-        _, path, _ = parse_source_url(url)
+        scheme, path, _ = parse_source_url(url)
     except SourceError:
         return None
-    return path or None
+    return (file_path(path) if scheme == "replay" else path) or None
 
 
 def url_flag(params: dict[str, str], key: str, default: str = "0") -> bool:

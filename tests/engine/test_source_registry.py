@@ -217,3 +217,21 @@ def test_replay_announces_the_rate_its_file_states_when_its_times_agree(tmp_path
     lying = tmp_path / "lying.csv"
     write_recording(lying, Recording(t, accel, [""] * 120, {"rate_hz": "100"}))  # its times say 60
     assert open_source(f"replay://{lying}", clock=VirtualClock().seconds).rate_hz == pytest.approx(60.0, rel=1e-3)
+
+
+def test_a_replay_path_names_a_file_with_hash_or_question_mark_percent_escaped(tmp_path):
+    """The tester: `replay:///path/a#b?c=1.csv` cannot name its file (the URL takes '#' and '?').
+    %23, %3F and %25 stand for '#', '?' and '%'; any other '%' is the file name's own."""
+    from engine.sensors.source import url_file
+
+    path, _ = write_rec(tmp_path)
+    for name in ("a#b?c=1.csv", "50%.csv", "a%41.csv", "x%y.csv"):
+        (tmp_path / name).write_bytes(path.read_bytes())
+    for url, name in ((f"replay://{tmp_path}/a%23b%3fc=1.csv?speed=2", "a#b?c=1.csv"),
+                      (f"replay://{tmp_path}/50%25.csv", "50%.csv"), (f"replay://{tmp_path}/50%.csv", "50%.csv"),
+                      (f"replay://{tmp_path}/a%41.csv", "a%41.csv"), (f"replay://{tmp_path}/x%y.csv", "x%y.csv")):
+        assert url_file(url) == str(tmp_path / name), url
+        src = open_source(url)
+        assert src.sensors == 2
+        src.close()
+    assert url_file("serial:///dev/a%23b") == "/dev/a%23b"  # only replay:// paths are files to decode

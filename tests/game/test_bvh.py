@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 
@@ -171,3 +173,66 @@ def test_a_simulated_bout_exports_one_bvh_per_boxer(tmp_path):
     # both in one world frame: boxer 0 at -z, boxer 1 at +z, facing each other
     assert pa[0, 0, 2] < 0 < pb[0, 0, 2]
     assert np.abs(bone_lengths(pa) / BONE_LENGTHS - 1).max() < 0.05  # simulated bodies keep their bones
+
+
+@pytest.mark.parametrize("name", ["", "../../x", "a b", "x" * 5000, "a,b"])
+def test_bvh_cut_refuses_a_name_the_action_loader_refuses(tmp_path, capsys, name):
+    """The tester: `bvh cut --name ""` exited 0 with an action file the loader refused ("name must
+    be a non-empty string"), and "../../x", "a b" or 5000 characters were taken. Refused by the
+    parser with the loader's own rule (game.actions.name_problem), before the BVH is read."""
+    out = tmp_path / "e.json"
+    with pytest.raises(SystemExit) as exit_:
+        main(["bvh", "cut", str(tmp_path / "m.bvh"), "--start", "0", "--end", "20", "--name", name, "-o", str(out)])
+    assert exit_.value.code == 2 and not out.exists()
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "argument --name: the action name" in err, err
+
+
+@pytest.mark.parametrize("name", ["../../x", "a b", "x" * 65])
+def test_the_action_loader_refuses_the_names_bvh_cut_refuses(tmp_path, name):
+    from game.actions import ActionError, load_action
+
+    path = tmp_path / "odd.json"
+    path.write_text(json.dumps(dict(json.loads(open(LIB["hook_r"].source).read()), name=name)))
+    with pytest.raises(ActionError, match="name"):
+        load_action(path)
+
+
+def test_bvh_cut_moves_an_existing_file_aside(tmp_path, capsys):
+    """The tester: `bvh cut ... -o cut.json` replaced whatever was there (an action someone made).
+    Moved aside as `record -o` does, said in one line."""
+    bvh = tmp_path / "m.bvh"
+    assert main(["bvh", "export", "--play", "straight_r", "-o", str(bvh)]) == 0
+    out = tmp_path / "cut.json"
+    out.write_text('{"my": "action"}\n')
+    capsys.readouterr()
+    argv = ["bvh", "cut", str(bvh), "--start", "0", "--end", "20", "--name", "x", "-o", str(out)]
+    assert main(argv) == 0
+    assert capsys.readouterr().err == f"{out} was not empty: moved to {tmp_path / 'cut-old.json'}\n"
+    assert (tmp_path / "cut-old.json").read_text() == '{"my": "action"}\n'
+    from game.actions import load_action
+
+    assert load_action(out).name == "x"
+    assert main(argv) == 0 and capsys.readouterr().err == ""  # the same action again: nothing to keep
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["cut-old.json", "cut.json", "m.bvh"]
+
+
+def test_a_bout_cut_at_the_cap_is_said(tmp_path, capsys, monkeypatch):
+    """The tester: `bvh export --play hook_r x3000 --opponent hook_r x3000` silently stopped at the
+    2-minute cap. Said in one line: what was asked, what was written (the cap made 1 s here)."""
+    import game.bvh
+    import tools.bvh_cmd
+
+    monkeypatch.setattr(game.bvh, "MAX_BOUT_S", 1)
+    monkeypatch.setattr(tools.bvh_cmd, "MAX_BOUT_S", 1)
+    script = ",".join(["hook_r"] * 30)
+    assert main(["bvh", "export", "--play", script, "--opponent", script, "-o", str(tmp_path / "bout.bvh")]) == 0
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "cut at the 1 s cap: asked for 30 and 30 actions" in err, err
+    frames = read_bvh(tmp_path / "bout_boxer0.bvh").frames
+    assert f"wrote {frames / 60:.1f} s" in err
+
+
+def test_a_bout_under_the_cap_says_nothing_of_it(tmp_path, capsys):
+    assert main(["bvh", "export", "--play", "hook_r", "--opponent", "block", "-o", str(tmp_path / "b.bvh")]) == 0
+    assert capsys.readouterr().err == ""

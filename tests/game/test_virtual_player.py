@@ -147,3 +147,31 @@ def test_the_sensor_frame_is_left_handed_x_to_the_wearers_left():
 
     rot = sensor_frames(np.array([[[0.0, 0.0, 1.0], [0.0, 0.0, 1.0]]]), np.zeros(2))
     np.testing.assert_allclose(rot[0, 0], [[-1, 0, 0], [0, 0, 1], [0, 1, 0]], atol=1e-12)
+
+
+def test_synth_moves_a_trial_of_its_folder_aside_and_says_so(tmp_path, capsys):
+    """The tester: `synth --trials 2 --actions hook_r -o DIR` replaced a player's DIR/hook_r/1.csv
+    without a word. Moved aside as `record -o` does (1-old.csv) and said in one line; a file that
+    holds just what would be written (a second run of the same seed) stays, and is not copied."""
+    mine = tmp_path / "hook_r" / "1.csv"
+    mine.parent.mkdir()
+    mine.write_text("my own trial\n")
+    argv = ["synth", "--trials", "2", "--actions", "hook_r", "--seed", "1", "-o", str(tmp_path)]
+    assert main(argv) == 0
+    err = capsys.readouterr().err
+    assert (tmp_path / "hook_r" / "1-old.csv").read_text() == "my own trial\n"
+    assert err.count("\n") == 1 and str(mine) in err and "1-old.csv" in err, err
+    assert read_recording(mine).labels[0] == "hook_r"
+    assert main(argv) == 0 and capsys.readouterr().err == ""  # the same bytes again: nothing moved
+    assert sorted(p.name for p in (tmp_path / "hook_r").iterdir()) == ["1-old.csv", "1.csv", "2.csv"]
+
+
+def test_synth_session_moves_an_existing_recording_aside(tmp_path, capsys):
+    out = tmp_path / "rec.csv"
+    out.write_text("a take of mine\n")
+    (tmp_path / "rec-old.csv").write_text("an older one\n")
+    assert main(["synth", "--session", "2", "-o", str(out)]) == 0
+    assert capsys.readouterr().err == f"{out} was not empty: moved to {tmp_path / 'rec-old-2.csv'}\n"
+    assert (tmp_path / "rec-old-2.csv").read_text() == "a take of mine\n"
+    assert (tmp_path / "rec-old.csv").read_text() == "an older one\n"
+    assert len(read_recording(out)) == 120

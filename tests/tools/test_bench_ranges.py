@@ -18,9 +18,12 @@ from tools.cli import main
     (["bench", "graph", "--states", "9"], "argument --states: 9 is out of range: must be >= 10"),
     (["bench", "graph", "--lookups", "0"], "argument --lookups: 0 is out of range: must be >= 1"),
     (["bench", "graph", "--loads", "0"], "argument --loads: 0 is out of range: must be >= 1"),
-    (["bench", "physics", "--steps", "0"], "argument --steps: 0 is out of range: must be >= 1"),
-    (["bench", "physics", "--repeats", "0"], "argument --repeats: 0 is out of range: must be >= 1"),
-    (["bench", "physics", "--iterations", "0"], "argument --iterations: 0 is out of range: must be >= 1"),
+    (["bench", "physics", "--steps", "0"], "argument --steps: 0 is out of range: must be between 1 and 100000"),
+    (["bench", "physics", "--repeats", "0"], "argument --repeats: 0 is out of range: must be between 1 and 100"),
+    (["bench", "physics", "--iterations", "0"], "argument --iterations: 0 is out of range: must be between 1 and 100"),
+    (["bench", "physics", "--iterations", "100000000"], "argument --iterations: 100000000 is out of range: must be between 1 and 100"),
+    (["bench", "physics", "--steps", "100001"], "argument --steps: 100001 is out of range: must be between 1 and 100000"),
+    (["bench", "physics", "--repeats", "101"], "argument --repeats: 101 is out of range: must be between 1 and 100"),
     (["bench", "startup", "--runs", "0"], "argument --runs: 0 is out of range: must be >= 1"),
     (["bridge", "faults", "--corrupted", "-1"], "argument --corrupted: -1 is out of range: must be between 0 and 100000000"),
     (["bridge", "faults", "--frames", "-1"], "argument --frames: -1 is out of range: must be between 0 and 100000000"),
@@ -33,3 +36,11 @@ def test_counts_out_of_range_are_argparse_errors(capsys, argv, said):
     err = capsys.readouterr().err.strip().splitlines()
     assert exit_.value.code == 2 and len(err) == 1, err
     assert err[0].startswith(f"quickjab {' '.join(argv[:2])}: {said}"), err
+
+
+def test_a_bench_physics_run_over_its_budget_is_refused_before_it_runs(capsys):
+    """Each bound alone allows a run of hours (100 iterations x 100000 steps x 100 repeats): the
+    run's size is bounded too, one line and exit 2 before anything is built."""
+    assert main(["bench", "physics", "--iterations", "100", "--steps", "100000", "--repeats", "1"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "over 1,000,000" in err, err

@@ -313,3 +313,78 @@ def test_a_reader_that_goes_away_ends_the_command_quietly(tmp_path):
     proc.stdout.close()
     _, err = proc.communicate(timeout=120)
     assert err.decode() == "" and proc.returncode == 141
+
+
+@pytest.mark.parametrize("argv", [
+    ["play", "--headless", "--frames", "2", "--size=--"],
+    ["play", "--headless", "--frames", "2", "--templates=--"],
+    ["play", "--headless", "--frames", "2", "--source=--"],
+    ["play", "--headless", "--frames", "2", "--trace=--"],
+    ["play", "--headless", "--frames", "2", "--recognizer=--"],
+    ["synth", "--session", "2", "-o=--"],
+    ["synth", "--session", "2", "-o--"],
+    ["bvh", "export", "-o", "out.bvh", "--play=--"],
+    ["graph", "info", "--graph=--"],
+    ["profile", "trace.json", "--plot=--"],
+])
+def test_an_option_given_the_value_double_dash_is_refused(capsys, argv):
+    """The tester: argparse turns the value `--` into [] without calling `type=`: `play
+    --size=--` ended in AttributeError 'list' object has no attribute 'lower', `play --trace=--`
+    and `graph info --graph=--` ignored the option. Refused by the parser, as one line, exit 2."""
+    with pytest.raises(SystemExit) as exit_:
+        main(argv)
+    assert exit_.value.code == 2
+    err = capsys.readouterr().err
+    option = argv[-1].split("=")[0] if "=" in argv[-1] else argv[-1][:2]
+    assert err.count("\n") == 1 and f"argument {option}" in err and "expected a value, got '--'" in err, err
+
+
+def test_actions_author_leaves_an_edited_action_of_its_folder(tmp_path, capsys):
+    """The tester: `actions author -o MYDIR` wrote over a hook_r.json someone had edited there.
+    Files that hold what would be written are written again; one that differs is left and named
+    in one line (moved aside in the folder, it would be a second hook_r the library refuses)."""
+    assert main(["actions", "author", "-o", str(tmp_path)]) == 0
+    capsys.readouterr()
+    edited = tmp_path / "hook_r.json"
+    edited.write_text(edited.read_text().replace('"kind": "attack"', '"kind": "defense"'))
+    mine = edited.read_text()
+    (tmp_path / "guard.json").unlink()
+    assert main(["actions", "author", "-o", str(tmp_path)]) == 0
+    out, err = capsys.readouterr()
+    assert edited.read_text() == mine and (tmp_path / "guard.json").exists()
+    assert err.count("\n") == 1 and "hook_r.json" in err and "left 1 file" in err, err
+    assert out.startswith("wrote 26 action files")
+
+
+@pytest.mark.parametrize("argv, written", [
+    (["synth", "--templates", "-o", "{out}"], "cut.json"),
+    (["graph", "build", "--quiet", "-o", "{out}"], "cut.json"),
+    (["bvh", "export", "--play", "hook_r", "-o", "{out}"], "cut.json"),
+    (["bvh", "export", "--play", "hook_r", "--opponent", "block", "-o", "{out}"], "cut_boxer1.json"),
+])
+def test_a_derived_output_is_not_written_over_a_file_of_another_kind(tmp_path, capsys, argv, written):
+    """The tester: `synth --templates -o cut.json` wrote an .npz over an action JSON, `bvh export`
+    and `graph build` replaced any file. An earlier output of the kind is replaced (their job);
+    a file plainly of another kind (by its first bytes) is refused in one line, before the work."""
+    theirs = tmp_path / written
+    theirs.write_text('{"name": "x"}\n')
+    assert main([a.format(out=tmp_path / "cut.json") for a in argv]) == 2 and theirs.read_text() == '{"name": "x"}\n'
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "is not a" in err and str(theirs) in err, err
+    assert sorted(p.name for p in tmp_path.iterdir()) == [written]
+
+
+def test_a_derived_output_replaces_an_earlier_one_of_its_kind(tmp_path):
+    import zipfile
+
+    from engine.npz_files import is_npz_head
+    from game.bvh import is_bvh_head
+
+    out = tmp_path / "out.bvh"
+    assert main(["bvh", "export", "--play", "hook_r", "-o", str(out)]) == 0
+    assert main(["bvh", "export", "--play", "block", "-o", str(out)]) == 0  # its own kind: replaced
+    np.savez(tmp_path / "a.npz", x=np.zeros(2))
+    zipfile.ZipFile(tmp_path / "empty.zip", "w").close()
+    assert is_npz_head((tmp_path / "a.npz").read_bytes()[:64]) and is_npz_head((tmp_path / "empty.zip").read_bytes())
+    assert is_bvh_head(out.read_bytes()[:64]) and is_bvh_head(b"\xef\xbb\xbf  hierarchy\n")
+    assert not is_npz_head(b'{"name": "x"}') and not is_bvh_head(b'{"name": "x"}')
