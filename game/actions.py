@@ -54,7 +54,6 @@ HEAVY_HIT_SPEED = 5.0  # m/s closing speed from which a blow staggers rather tha
 
 
 NAME_MAX_CHARS = 64
-_NAME_CHARS = frozenset("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_-")
 
 
 class ActionError(InputError):
@@ -62,15 +61,15 @@ class ActionError(InputError):
 
 
 def name_problem(name: object) -> str | None:
-    """Why `name` cannot name an action (None: it can): 1 to NAME_MAX_CHARS letters, digits,
-    `_` and `-`, as every shipped name. A name is a label in recordings and templates, one of a
+    """Why `name` cannot name an action (None: it can): 1 to NAME_MAX_CHARS letters, digits
+    (any script's: a player names actions in their own language), `_` and `-`, as every shipped name. A name is a label in recordings and templates, one of a
     comma-separated `--actions` list and the file name `actions author` writes, so no spaces,
     commas or slashes. The loader and `bvh cut --name` both ask it."""
     if not isinstance(name, str) or not name:
         return f"must be a non-empty string, not {name!r}"
     if len(name) > NAME_MAX_CHARS:
         return f"has {len(name)} characters, at most {NAME_MAX_CHARS}"
-    if bad := sorted(set(name) - _NAME_CHARS):
+    if bad := sorted({ch for ch in name if not (ch.isalnum() or ch in "_-")}):
         return f"{name!r} may hold only letters, digits, '_' and '-', not {''.join(bad)!r}"
     return None
 

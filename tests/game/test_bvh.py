@@ -236,3 +236,12 @@ def test_a_bout_cut_at_the_cap_is_said(tmp_path, capsys, monkeypatch):
 def test_a_bout_under_the_cap_says_nothing_of_it(tmp_path, capsys):
     assert main(["bvh", "export", "--play", "hook_r", "--opponent", "block", "-o", str(tmp_path / "b.bvh")]) == 0
     assert capsys.readouterr().err == ""
+
+
+def test_an_action_named_in_another_script_loads(tmp_path):
+    # letters and digits of any script, `_` and `-`: a player names actions in their language
+    from game.actions import load_action, name_problem
+
+    path = tmp_path / "hook.json"
+    path.write_text(json.dumps(dict(json.loads(open(LIB["hook_r"].source).read()), name="хук_2")), encoding="utf-8")
+    assert load_action(path).name == "хук_2" and name_problem("хук 2") is not None
