@@ -124,6 +124,9 @@ def cmd_info(args: argparse.Namespace) -> int:
 
 
 def cmd_virtual_duel(args: argparse.Namespace) -> int:
+    from concurrent.futures.process import BrokenProcessPool
+
+    from engine.interrupt import stop_signals_as_ctrl_c
     from game.difficulty import CHOICES
     from tools.virtual_duel import PROFILES, virtual_duel
 
@@ -136,7 +139,12 @@ def cmd_virtual_duel(args: argparse.Namespace) -> int:
     profiles = list(PROFILES) if args.opponent == "virtual" else [args.opponent]
     graph = str(_graph_path(args.graph)) if args.graph else None
     t0 = time.perf_counter()
-    summaries = virtual_duel(difficulties, profiles, args.matches, seed=args.seed, jobs=args.jobs, graph=graph)
+    # `kill` and a closed terminal end the matches as Ctrl-C does: the workers ended, exit 130
+    with stop_signals_as_ctrl_c():
+        try:
+            summaries = virtual_duel(difficulties, profiles, args.matches, seed=args.seed, jobs=args.jobs, graph=graph)
+        except BrokenProcessPool:
+            raise InputError("duel: a match's worker process ended before its match did (killed?)") from None
     results = [s.as_dict() for s in summaries]
     if args.json:
         print(json.dumps(results, indent=2))
