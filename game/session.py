@@ -154,11 +154,12 @@ def load_templates(path: str | Path | None = None, left_handed: bool = False):
     built from the virtual player. Left-handed players (Wiimote in the left hand) get the
     mirror image of a right-handed set; their own trained set is used as it is."""
     from engine.recognition import Templates
+    from engine.xdg import is_there
     from game.userdata import SHIPPED_TEMPLATES, user_templates_path
 
     if path is not None:
         templates = Templates.load(path)
-    elif user_templates_path().exists():
+    elif is_there(user_templates_path()):  # a data dir that cannot be looked at has none
         templates = Templates.load(user_templates_path())
     elif SHIPPED_TEMPLATES.exists():
         templates = Templates.load(SHIPPED_TEMPLATES)
@@ -172,6 +173,7 @@ def load_templates(path: str | Path | None = None, left_handed: bool = False):
 def templates_in_use(path: str | Path | None = None) -> str:
     """What `load_templates(path)` loads, said for the HUD and the console: the player has to
     know when a trained set (perhaps of a few moves) is in play, and how to go back."""
+    from engine.xdg import is_there
     from game.userdata import user_templates_path
 
     if path is not None:
@@ -179,7 +181,7 @@ def templates_in_use(path: str | Path | None = None) -> str:
         if profile is None:
             return f"templates {Path(path).name}"
         return f"your templates ({profile}: {_moves_trained(Path(path))}; `quickjab train --reset --profile {profile}` for the defaults)"
-    if user_templates_path().exists():
+    if is_there(user_templates_path()):
         return f"your templates ({_moves_trained(user_templates_path())}; `quickjab train --reset` for the defaults)"
     return "default templates"
 
