@@ -126,12 +126,15 @@ def _in_processes(work: list[tuple], jobs: int) -> list[MatchResult]:
 
     pool = ProcessPoolExecutor(max_workers=jobs, initializer=as_worker, initargs=(os.getpid(),))
     try:
-        return list(pool.map(_play, work))
+        # not pool.map, and nothing cancelled: a future map's cleanup cancelled was then failed by
+        # the executor's thread as the workers ended (Python 3.11: an InvalidStateError traceback)
+        futures = [pool.submit(_play, w) for w in work]
+        return [f.result() for f in futures]
     except BaseException:
         _end_workers(pool)
         raise
     finally:
-        pool.shutdown(wait=True, cancel_futures=True)
+        pool.shutdown(wait=True)
 
 
 def _end_workers(pool: ProcessPoolExecutor) -> None:
