@@ -60,3 +60,44 @@ def stop_signals_as_ctrl_c() -> Iterator[None]:
     finally:
         for sig, handler in previous.items():
             signal.signal(sig, handler)
+
+
+def as_worker(parent: int) -> None:
+    """The initializer of a worker process that a command under stop_signals_as_ctrl_c() starts
+    (a ProcessPoolExecutor's): a forked worker inherited the parent's handlers, so SIGTERM raised
+    KeyboardInterrupt in the middle of its task, and pygame.init() in a worker with SIGTERM at
+    its default made SIGTERM a quit event nothing read; either way `kill` did not end it. Here
+    SIGTERM and SIGHUP end the worker (their default, SDL kept off them), Ctrl-C to the process
+    group is left to the parent, which ends its workers, and the worker ends when `parent` does
+    (a parent killed outright left its workers waiting for work forever)."""
+    import os
+
+    os.environ["SDL_NO_SIGNAL_HANDLERS"] = "1"
+    for sig in STOP_SIGNALS:
+        signal.signal(sig, signal.SIG_DFL)
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    _end_with_parent(parent)
+
+
+def _end_with_parent(parent: int) -> None:
+    """SIGTERM to this process when `parent` ends: Linux's parent-death signal, else a thread
+    that looks for a new parent twice a second."""
+    import os
+
+    if sys.platform.startswith("linux"):
+        import ctypes
+
+        with contextlib.suppress(OSError, AttributeError):
+            if ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGTERM, 0, 0, 0) == 0:  # PR_SET_PDEATHSIG
+                if os.getppid() != parent:  # it ended before the signal was asked for
+                    os._exit(128 + signal.SIGTERM)
+                return
+    import threading
+    import time
+
+    def watch() -> None:
+        while os.getppid() == parent:
+            time.sleep(0.5)
+        os._exit(128 + signal.SIGTERM)
+
+    threading.Thread(target=watch, name="end-with-parent", daemon=True).start()

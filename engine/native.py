@@ -138,6 +138,15 @@ def compiler() -> str | None:
     return os.environ.get("CC") or shutil.which("cc") or shutil.which("gcc") or shutil.which("clang")
 
 
+def _exists(path: Path) -> bool:
+    """engine.xdg.is_there: a path that cannot be probed (too long a name) is not there, so an
+    unusable cache is passed over as an unwritable one is (the kernels are an optimisation;
+    `recognize` and `play` ended with the errno)."""
+    from engine.xdg import is_there
+
+    return is_there(path)
+
+
 def _writable(d: Path) -> bool:
     try:
         d.mkdir(parents=True, exist_ok=True, mode=0o700)
@@ -149,7 +158,7 @@ def _writable(d: Path) -> bool:
 def _dirs() -> list[Path]:
     """Where libraries are looked for: the cache, then the temporary fallback if it is ours."""
     fb = fallback_dir()
-    return [cache_dir()] + ([fb] if fb.exists() and _safe_fallback(fb) else [])
+    return [cache_dir()] + ([fb] if _exists(fb) and _safe_fallback(fb) else [])
 
 
 def _build_dir() -> Path | None:
@@ -278,7 +287,7 @@ def load_library(stem: str, source: str, symbols: tuple[str, ...] = ()) -> ctype
     for d in _dirs():
         for flags in variants:
             path = library_path(stem, source, flags, d)
-            if path.exists():
+            if _exists(path):
                 lib = _open(path, symbols)
                 if lib is not None:
                     _status[stem] = f"native: {path}"
@@ -294,7 +303,7 @@ def load_library(stem: str, source: str, symbols: tuple[str, ...] = ()) -> ctype
     reason = ""
     for flags in variants:
         path, marker = library_path(stem, source, flags, d), failure_marker(stem, source, flags, cc, d)
-        if marker.exists():
+        if _exists(marker):
             try:
                 reason = marker.read_text().strip() or "the build failed"
             except OSError:
@@ -308,7 +317,7 @@ def load_library(stem: str, source: str, symbols: tuple[str, ...] = ()) -> ctype
                 _prune(d, stem, path, markers)
                 _status[stem] = f"native: built {path}"
                 return lib
-            if not path.exists():  # pruned by another kernel version's build meanwhile: not a failure
+            if not _exists(path):  # pruned by another kernel version's build meanwhile: not a failure
                 return _numpy(stem, f"{path} was removed while loading it; the next start builds it again")
             _remove(path)
             failed = f"{cc} built a library that does not load or lacks {', '.join(symbols)}", True

@@ -29,3 +29,14 @@ def base_dir(variable: str, *default: str) -> Path:
     """$`variable` if it is an absolute path, else home()/`default` (e.g. ".local", "share")."""
     value = os.environ.get(variable, "")
     return Path(value) if os.path.isabs(value) else home().joinpath(*default)
+
+
+def is_there(path: Path) -> bool:
+    """Whether `path` is there. One that cannot be looked at is not: Path.exists() answers False
+    under a file but raises for a name too long for the file system (ENAMETOOLONG: a long
+    $XDG_DATA_HOME, $QUICKJAB_CACHE_DIR), so a user file or a cache there was one line with the
+    errno, not naming the variable, where an unusable directory is passed over."""
+    try:
+        return path.exists()
+    except OSError:
+        return False

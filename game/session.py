@@ -154,11 +154,12 @@ def load_templates(path: str | Path | None = None, left_handed: bool = False):
     built from the virtual player. Left-handed players (Wiimote in the left hand) get the
     mirror image of a right-handed set; their own trained set is used as it is."""
     from engine.recognition import Templates
+    from engine.xdg import is_there
     from game.userdata import SHIPPED_TEMPLATES, user_templates_path
 
     if path is not None:
         templates = Templates.load(path)
-    elif user_templates_path().exists():
+    elif is_there(user_templates_path()):  # a data dir that cannot be looked at has none
         templates = Templates.load(user_templates_path())
     elif SHIPPED_TEMPLATES.exists():
         templates = Templates.load(SHIPPED_TEMPLATES)
@@ -172,6 +173,7 @@ def load_templates(path: str | Path | None = None, left_handed: bool = False):
 def templates_in_use(path: str | Path | None = None) -> str:
     """What `load_templates(path)` loads, said for the HUD and the console: the player has to
     know when a trained set (perhaps of a few moves) is in play, and how to go back."""
+    from engine.xdg import is_there
     from game.userdata import user_templates_path
 
     if path is not None:
@@ -179,7 +181,7 @@ def templates_in_use(path: str | Path | None = None) -> str:
         if profile is None:
             return f"templates {Path(path).name}"
         return f"your templates ({profile}: {_moves_trained(Path(path))}; `quickjab train --reset --profile {profile}` for the defaults)"
-    if user_templates_path().exists():
+    if is_there(user_templates_path()):
         return f"your templates ({_moves_trained(user_templates_path())}; `quickjab train --reset` for the defaults)"
     return "default templates"
 
@@ -207,33 +209,48 @@ def _moves_trained(path: Path) -> str:
     return f"{len(trained)} of {len(ACTION_NAMES)} moves" if trained and len(trained) < len(ACTION_NAMES) else "all moves"
 
 
-def load_graph(path: str | Path | None = None):
+def load_graph(path: str | Path | None = None, lib: dict | None = None):
     """The Interaction Graph: `path`, else the shipped table, else one cached in the user's
     data directory, else a small one built now (~3 s) and cached there. A match needs the
-    policy and the look-up, not the edges: they stay compressed in the file."""
+    policy and the look-up, not the edges: they stay compressed in the file. A graph built from
+    another action library than `lib` (default the game's) is a GraphFileError naming the file
+    before the match (its first look-up of an action the library lacks raised KeyError); a
+    cached one is built again."""
     import sys
 
-    from game.interaction import DEFAULT_GRAPH, InteractionGraph
+    from game.actions import load_library
+    from game.interaction import DEFAULT_GRAPH
     from game.userdata import data_dir
 
+    lib = load_library() if lib is None else lib
     if path is not None:
-        return InteractionGraph.load(path, edges=False)
+        return _graph_for(path, lib)
     if DEFAULT_GRAPH.exists():
-        return InteractionGraph.load(DEFAULT_GRAPH, edges=False)
+        return _graph_for(DEFAULT_GRAPH, lib)
     cached = data_dir() / "graph-small.npz"
     why = f"no shipped Interaction Graph; building a small one in {cached} (once)"
     if cached.is_file():
         try:
-            return InteractionGraph.load(cached, edges=False)
-        except InputError as exc:  # a cache: a broken one (cut short, a disk error) is built again
+            return _graph_for(cached, lib)
+        except InputError as exc:  # a cache: a broken or stale one (cut short, a disk error) is built again
             why = f"{exc}; building it again"
-    from game.actions import load_library
     from game.interaction.build import BuildParams, build_graph
 
     print(f"quickjab: {why}", file=sys.stderr)  # one line: the first build, or a broken cache's
     cached.parent.mkdir(parents=True, exist_ok=True)
-    build_graph(load_library(), BuildParams(states=3000, bouts=256)).save(cached)
-    return InteractionGraph.load(cached, edges=False)
+    build_graph(lib, BuildParams(states=3000, bouts=256)).save(cached)
+    return _graph_for(cached, lib)
+
+
+def _graph_for(path: str | Path, lib: dict):
+    """The graph at `path` (policy and look-up), refused when built from another library than `lib`."""
+    from game.interaction import GraphFileError, InteractionGraph
+
+    graph = InteractionGraph.load(path, edges=False)
+    why = graph.library_mismatch(lib)
+    if why is not None:
+        raise GraphFileError(f"{path}: {why}")
+    return graph
 
 
 LOG_KEPT = 1024  # recent recognizer events / blows kept in memory (an hour makes ~7,000-12,000 events)
@@ -256,7 +273,7 @@ class Session(Ring):
         self.clock = clock or RealClock()
         self.source = source
         self._build_ring(cfg)
-        self.graph = load_graph(cfg.graph)
+        self.graph = load_graph(cfg.graph, self.lib)
         self.difficulty = DifficultySetting(cfg.difficulty)
         self._rest_next = self.difficulty.current.rest_steps  # its rest after the move it plays
         self.opponent_ai = OpponentController(self.graph, self.lib, controller=self.opponent.controller,

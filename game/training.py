@@ -614,6 +614,11 @@ def _check_files(args: argparse.Namespace, output: Path) -> None:
     replayed = url_file(args.source) if args.source else None
     refuse_overwriting({"--screenshot": args.screenshot}, [output, replayed])
     refuse_overwriting({"-o": output, "--screenshot": args.screenshot}, [replayed])
+    try:
+        output.exists()
+    except OSError as exc:  # a name too long for the file system (ENAMETOOLONG): said with whose name it is
+        whose = "" if args.output else " (the data directory: $XDG_DATA_HOME/quickjab, else ~/.local/share/quickjab)"
+        raise InputError(f"{output}: cannot save the templates there: {exc.strerror}{whose}") from None
     if output.is_dir():
         raise InputError(f"{output}: a directory; the templates are saved to a file (-o FILE.npz)")
     if output.exists():

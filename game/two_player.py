@@ -412,6 +412,7 @@ def seat_templates(profile: str | None, templates: str | None, option: str = "--
     """A seat's templates: --templates, else the profile's trained set, else the default chain
     (the default profile's file, the shipped set...), with a note when a named profile has none.
     A bad name is an error naming `option`; `who` ("player 2: ") starts the note."""
+    from engine.xdg import is_there
     from game.userdata import DEFAULT_PROFILE, profile_templates_path
 
     if templates is not None:
@@ -419,7 +420,7 @@ def seat_templates(profile: str | None, templates: str | None, option: str = "--
     path = profile_templates_path(profile, option)
     if profile in (None, DEFAULT_PROFILE):
         return None, None
-    if path.exists():
+    if is_there(path):
         return path, None
     return None, (f"{who}profile {profile!r} has no trained templates yet (quickjab train --profile {profile}); "
                   "using the default profile's templates")

@@ -114,19 +114,50 @@ def cmd_info(args: argparse.Namespace) -> int:
     if args.json:
         print(json.dumps(info, indent=2, sort_keys=True))
         return 0
-    b = info["build"]
     print(f"{path}: {info['states']} states, {info['edges']} edges, "
           f"{info.get('file_bytes', 0) / 1e6:.2f} MB")
-    print(f"  build: library {b.get('library')}, seed {b.get('seed')}, {b.get('samples')} samples in {b.get('cells_sampled')} "
-          f"cells, opponent_max {b.get('opponent_max')}, {b.get('seconds', {}).get('total')} s")
-    print(f"  value iteration: {b.get('vi_iterations')} iterations, residual {b.get('vi_residual'):.2g}")
+    for line in _build_lines(info["build"]):
+        print(f"  {line}")
     print(f"  grid: {json.dumps(info['grid'])}")
     print(f"  rules: {json.dumps(info['rules'])}")
     print(f"  rewards: {json.dumps(info['rewards'])}")
     return 0
 
 
+NOT_RECORDED = "not recorded"
+
+
+def _recorded(build: dict, key: str, form: str = "{}") -> str:
+    """`form` of the build's `key`, or "not recorded": the loader takes `build` as optional and
+    reads none of its fields, so a field may be missing or of any type (its plain text then), on
+    one line."""
+    from game.command import one_line
+
+    value = build.get(key)
+    if value is None:
+        return NOT_RECORDED
+    try:
+        return one_line(form.format(value))
+    except (TypeError, ValueError):
+        return one_line(str(value))
+
+
+def _build_lines(build: dict) -> list[str]:
+    """graph info's lines on how the graph was built. A missing or odd field was a traceback
+    (formatting None, .get on a string)."""
+    seconds = build.get("seconds")
+    total = {"total": seconds.get("total") if isinstance(seconds, dict) else seconds}
+    return [f"build: library {_recorded(build, 'library')}, seed {_recorded(build, 'seed')}, "
+            f"{_recorded(build, 'samples')} samples in {_recorded(build, 'cells_sampled')} cells, "
+            f"opponent_max {_recorded(build, 'opponent_max')}, time {_recorded(total, 'total', '{} s')}",
+            f"value iteration: {_recorded(build, 'vi_iterations')} iterations, "
+            f"residual {_recorded(build, 'vi_residual', '{:.2g}')}"]
+
+
 def cmd_virtual_duel(args: argparse.Namespace) -> int:
+    from concurrent.futures.process import BrokenProcessPool
+
+    from engine.interrupt import stop_signals_as_ctrl_c
     from game.difficulty import CHOICES
     from tools.virtual_duel import PROFILES, virtual_duel
 
@@ -139,7 +170,12 @@ def cmd_virtual_duel(args: argparse.Namespace) -> int:
     profiles = list(PROFILES) if args.opponent == "virtual" else [args.opponent]
     graph = str(_graph_path(args.graph)) if args.graph else None
     t0 = time.perf_counter()
-    summaries = virtual_duel(difficulties, profiles, args.matches, seed=args.seed, jobs=args.jobs, graph=graph)
+    # `kill` and a closed terminal end the matches as Ctrl-C does: the workers ended, exit 130
+    with stop_signals_as_ctrl_c():
+        try:
+            summaries = virtual_duel(difficulties, profiles, args.matches, seed=args.seed, jobs=args.jobs, graph=graph)
+        except BrokenProcessPool:
+            raise InputError("duel: a match's worker process ended before its match did (killed?)") from None
     results = [s.as_dict() for s in summaries]
     if args.json:
         print(json.dumps(results, indent=2))

@@ -11,6 +11,7 @@ knockdowns) or by ending the match in it (KO, TKO); rounds scored even count as 
 
 from __future__ import annotations
 
+import os
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
 
@@ -109,12 +110,39 @@ def virtual_duel(difficulties: list[str], profiles: list[str], matches: int, see
                  graph: str | None = None, templates: str | None = None) -> list[DuelSummary]:
     """`matches` matches per (difficulty, profile), seeds seed, seed+1, ...; `jobs` processes."""
     work = duel_jobs(difficulties, profiles, matches, seed, graph, templates)
-    if jobs > 1 and len(work) > 1:
-        with ProcessPoolExecutor(max_workers=jobs) as pool:
-            results = list(pool.map(_play, work))
-    else:
-        results = [_play(w) for w in work]
+    results = _in_processes(work, jobs) if jobs > 1 and len(work) > 1 else [_play(w) for w in work]
     summaries = {(d, p): DuelSummary(d, p) for d in difficulties for p in profiles}
     for r in results:
         summaries[(r.difficulty, r.profile)].add(r)
     return list(summaries.values())
+
+
+def _in_processes(work: list[tuple], jobs: int) -> list[MatchResult]:
+    """The matches played in `jobs` worker processes (engine.interrupt.as_worker: `kill` ends
+    one, and each ends with this process). Interrupted (Ctrl-C, or SIGTERM / SIGHUP under
+    stop_signals_as_ctrl_c), the workers are ended rather than waited for: the executor's
+    shutdown waited for the matches under way, and a parent gone left them waiting for work."""
+    from engine.interrupt import as_worker
+
+    pool = ProcessPoolExecutor(max_workers=jobs, initializer=as_worker, initargs=(os.getpid(),))
+    try:
+        # not pool.map, and nothing cancelled: a future map's cleanup cancelled was then failed by
+        # the executor's thread as the workers ended (Python 3.11: an InvalidStateError traceback)
+        futures = [pool.submit(_play, w) for w in work]
+        return [f.result() for f in futures]
+    except BaseException:
+        _end_workers(pool)
+        raise
+    finally:
+        pool.shutdown(wait=True)
+
+
+def _end_workers(pool: ProcessPoolExecutor) -> None:
+    """SIGTERM to the pool's workers (terminate_workers() from Python 3.14; its processes before)."""
+    end = getattr(pool, "terminate_workers", None)
+    if end is not None:
+        end()
+        return
+    for process in list((getattr(pool, "_processes", None) or {}).values()):
+        if process.exitcode is None:
+            process.terminate()

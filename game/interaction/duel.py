@@ -61,11 +61,10 @@ def duel(graph: InteractionGraph, lib: dict, opponent: str = "random", bouts: in
     if opponent not in OPPONENTS or us not in OPPONENTS:
         raise ValueError(f"policies are {', '.join(OPPONENTS)}")
     rules, rewards = graph.table.rules, graph.table.rewards
+    why = graph.library_mismatch(lib)
+    if why is not None:
+        raise ValueError(why)
     table = compile_table(lib, rules)
-    built_from = graph.table.build.get("library")
-    if table.names != graph.names or (built_from and built_from != table.fingerprint()):
-        raise ValueError("the graph was built from a different action library; rebuild it "
-                         "(quickjab graph build -o game/assets/graph.npz)")
     rng = np.random.default_rng(seed)
     b = Bouts(table, bouts)
     b.place(rng.uniform(1.6, 2.0, bouts), rng.normal(0, 0.05, bouts), rng.normal(0, 0.05, bouts))

@@ -38,6 +38,19 @@ class InteractionGraph:
         """`edges=False`: the policy and the look-up only (a match's needs; GraphTable.load)."""
         return cls(GraphTable.load(path, edges=edges), path)
 
+    def library_mismatch(self, lib: dict) -> str | None:
+        """Why the graph cannot play with the action library `lib`, or None: built from another
+        library (its action names, or what the bout model read of the library, the fingerprint
+        its build recorded, differ). Checked wherever a graph meets the library: `graph duel`,
+        and a match, whose first look-up of an action the library lacks raised KeyError."""
+        from .build import compile_table
+
+        table = compile_table(lib, self.table.rules)
+        built_from = self.table.build.get("library")
+        if table.names != self.names or (built_from and built_from != table.fingerprint()):
+            return "built from a different action library; rebuild it (quickjab graph build -o game/assets/graph.npz)"
+        return None
+
     @property
     def n_states(self) -> int:
         return self.table.n_states

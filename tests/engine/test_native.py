@@ -127,6 +127,16 @@ def test_an_unwritable_cache_falls_back_to_a_private_temp_dir_then_numpy(cache, 
 
 
 @needs_cc
+def test_a_cache_path_too_long_to_probe_falls_back_as_an_unwritable_one_does(cache, tmp_path, monkeypatch):
+    """A name too long for the file system: Path.exists() raised ENAMETOOLONG, and `recognize`
+    and `play` ended with the errno, where an unwritable cache is passed over."""
+    monkeypatch.setenv(native.CACHE_ENV, str(tmp_path / ("x" * 300)))
+    assert twice(native.load_library("k", SRC, ("twice",))) == 5.0
+    assert native.library_path("k", SRC, directory=native.fallback_dir()).exists()
+    assert twice(native.load_library("k", SRC, ("twice",))) == 5.0  # found there at the next start
+
+
+@needs_cc
 def test_a_temp_dir_others_can_write_is_never_used(cache, tmp_path, monkeypatch):
     (tmp_path / "file").write_text("")
     monkeypatch.setenv(native.CACHE_ENV, str(tmp_path / "file" / "cache"))

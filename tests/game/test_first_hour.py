@@ -14,7 +14,7 @@ import pytest
 from tools.cli import main
 
 sys.path.insert(0, str(Path(__file__).parent))
-from game_graph import graph_path  # noqa: E402,F401 - the fixture
+from game_graph import graph_path, other_library_graph  # noqa: E402,F401 - the fixture
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -334,3 +334,21 @@ def test_a_broken_cached_graph_is_built_again(tmp_path, monkeypatch, capsys):
     assert load_graph() is not None
     assert "building it again" in capsys.readouterr().err
     assert load_graph() is not None and "building" not in capsys.readouterr().err
+
+
+def test_a_cached_graph_from_another_action_library_is_built_again(tmp_path, monkeypatch, capsys):
+    """The cache is checked against the library as a given graph is (a stale one crashed the
+    match at its first look-up of an action the library lacks): it is built again."""
+    import game.interaction
+    from game.session import load_graph
+    from game.userdata import data_dir
+
+    if not game.interaction.DEFAULT_GRAPH.exists():
+        pytest.skip("no shipped graph to alter")
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "xdg"))
+    cached = data_dir() / "graph-small.npz"
+    cached.parent.mkdir(parents=True)
+    other_library_graph(str(game.interaction.DEFAULT_GRAPH), cached)
+    monkeypatch.setattr(game.interaction, "DEFAULT_GRAPH", tmp_path / "no-graph.npz")
+    assert "zzz" not in load_graph().names
+    assert "different action library" in capsys.readouterr().err

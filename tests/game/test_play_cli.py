@@ -16,7 +16,7 @@ from game.hud import SWITCH_COLOR
 from tools.cli import main
 
 sys.path.insert(0, str(Path(__file__).parent))
-from game_graph import graph_path  # noqa: E402,F401 - the fixture
+from game_graph import graph_path, other_library_graph  # noqa: E402,F401 - the fixture
 
 
 def no_wiimote(url, clock):
@@ -51,6 +51,24 @@ def test_bad_input_is_one_line_and_exit_2(tmp_path, capsys) -> None:
     assert len(err) == 1 and "nosuch" in err[0]
     assert main(["play", "--headless", "--graph", str(tmp_path / "missing.npz"), "--frames", "1", "--source", "keyboard://"]) == 2
     assert "missing.npz" in capsys.readouterr().err
+
+
+def test_a_graph_from_another_action_library_is_one_line_before_the_match(tmp_path, capsys, graph_path) -> None:  # noqa: F811
+    """`graph duel` refused it; `play` took it and its first look-up of the action the library
+    lacks was a KeyError traceback in the middle of the match."""
+    from game.interaction import GraphFileError
+    from game.session import load_graph
+
+    other = other_library_graph(graph_path, tmp_path / "other.npz")
+    assert main(["play", "--headless", "--frames", "300", "--graph", other, "--source", "keyboard://", "--no-sound"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and other in err[0] and "different action library" in err[0], err
+    with pytest.raises(GraphFileError, match="different action library"):
+        load_graph(other)
+    # graph duel says the same of it, from the same check
+    assert main(["graph", "duel", "--graph", other, "--bouts", "1", "--seconds", "1"]) == 2
+    said = capsys.readouterr().err.strip().splitlines()
+    assert [line.split(": ", 1)[1] for line in said] == [line.split(": ", 1)[1] for line in err], said
 
 
 def test_a_screenshot_or_trace_under_a_file_is_refused_before_the_match(tmp_path, capsys) -> None:

@@ -47,3 +47,19 @@ def test_an_empty_or_relative_home_is_not_used(monkeypatch, tmp_path, value):
     monkeypatch.chdir(tmp_path)
     assert data_dir() == type(data_dir())(pwd.getpwuid(os.getuid()).pw_dir) / ".local" / "share" / "quickjab"
     assert data_dir().is_absolute()
+
+
+def test_a_data_dir_too_long_to_look_at_is_passed_over_by_play_and_named_by_train(tmp_path, monkeypatch, capsys):
+    """A name too long for the file system: Path.exists() raised ENAMETOOLONG, and `play` ended
+    with the errno (not naming the variable) where a data dir under a file is passed over: it
+    has no trained templates, and plays the default ones. `train`, which must save there, says
+    so in one line naming the variable."""
+    from tools.cli import main
+
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / ("x" * 300)))
+    for profile in ([], ["--profile", "bob"]):
+        assert main(["play", "--headless", "--frames", "2", "--source", "keyboard://", "--no-sound", *profile]) == 0
+        assert "default templates" in capsys.readouterr().err
+    assert main(["train", "--demo", "--headless", "--actions", "straight_r"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "cannot save the templates there" in err[0] and "$XDG_DATA_HOME" in err[0], err

@@ -90,6 +90,23 @@ def test_bench_frame_rejects_bad_arguments(tmp_path) -> None:
     assert r.returncode == 2 and "--steps" in r.stderr and r.stderr.count("\n") == 1
 
 
+def test_a_graph_from_another_action_library_is_one_line(tmp_path) -> None:
+    """It crashed the scripted match with a KeyError traceback (an action the library lacks)."""
+    sys.path.insert(0, str(REPO / "tests" / "game"))
+    from game_graph import other_library_graph
+
+    from game.interaction import DEFAULT_GRAPH
+
+    if not DEFAULT_GRAPH.exists():
+        import pytest
+
+        pytest.skip("no shipped graph to alter")
+    other = other_library_graph(str(DEFAULT_GRAPH), tmp_path / "other.npz")
+    r = run_cli(["--steps", "120", "--repeats", "1", "--realtime-seconds", "0", "--no-naive", "--graph", other], tmp_path)
+    assert r.returncode == 2 and r.stderr.count("\n") == 1, r.stderr
+    assert other in r.stderr and "different action library" in r.stderr
+
+
 def test_the_simulations_row_shows_its_per_step_target(tmp_path) -> None:
     """The SIM/step row (every stage but the render, per step) printed a budget of 0.00."""
     from tools.bench_frame import SIM_TARGET_P99_MS

@@ -457,3 +457,30 @@ def test_duel_counts_are_consistent(small_graph, lib):
     assert r.hits_landed >= 0 and r.damage_dealt >= 0
     again = duel(small_graph, lib, "greedy", bouts=6, seconds=5.0, seed=0)
     assert again.as_dict() == r.as_dict()
+
+
+@pytest.mark.parametrize("build, says", [
+    (None, ["library not recorded", "time not recorded", "residual not recorded"]),  # no build at all
+    ({}, ["seed not recorded", "not recorded samples", "residual not recorded"]),  # TypeError formatting None
+    ({"seconds": "x"}, ["time x s"]),  # AttributeError: .get on a string
+    ({"seconds": {"total": [1]}, "vi_residual": "small", "seed": "a\nb"}, ["time [1] s", "residual small", "seed a\\nb"]),
+])
+def test_cli_info_prints_what_build_metadata_it_has(small_table, tmp_path, capsys, build, says):
+    """The loader takes `build` as optional and reads none of its fields: `graph info` tracebacked
+    on a missing or odd one; now it prints what there is and "not recorded" for the rest."""
+    from tools.cli import main
+
+    arrays = _saved_arrays(small_table, tmp_path / "good.npz")
+    meta = json.loads(str(arrays["meta"]))
+    meta.pop("build")
+    if build is not None:
+        meta["build"] = build
+    path = tmp_path / "g.npz"
+    np.savez(path, **dict(arrays, meta=np.array(json.dumps(meta))))
+    assert main(["graph", "info", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert len(out.splitlines()) == 6, out
+    for text in says:
+        assert text in out, out
+    assert main(["graph", "info", str(path), "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["build"] == (build or {})
