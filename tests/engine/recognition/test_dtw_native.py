@@ -4,6 +4,7 @@ recognizer events as the numpy scan on a synthesized session, built once and reu
 
 from __future__ import annotations
 
+import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -19,6 +20,14 @@ from engine.recognition.dual_buffer import CLOSED_END
 needs_native = pytest.mark.skipif(not dtw.native_available(), reason="no C compiler, or QUICKJAB_NO_NATIVE set")
 finite = st.floats(-4.0, 4.0, allow_nan=False, width=64)
 ASSETS = Path(__file__).resolve().parents[3] / "game" / "assets"
+
+
+@pytest.fixture(autouse=True)
+def _own_temporary_fallback(tmp_path_factory, monkeypatch):
+    """Each test a temporary fallback cache of its own: a kernel an earlier run built in the
+    machine's (a cache that could not be written then) was loaded from there, without a
+    compiler and instead of the test's own cache."""
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path_factory.mktemp("tmp")))
 
 
 @st.composite
