@@ -3,7 +3,9 @@ tests that need them skip cleanly when that folder is absent."""
 
 from __future__ import annotations
 
+import atexit
 import os
+import shutil
 import tempfile
 import tracemalloc
 from collections.abc import Callable
@@ -15,7 +17,10 @@ import pytest
 os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
 os.environ.setdefault("SDL_AUDIODRIVER", "dummy")
 # No test reads the real user's config file (game/user_config.py); subprocesses inherit this.
-os.environ["XDG_CONFIG_HOME"] = tempfile.mkdtemp(prefix="quickjab-test-config-")
+# Removed when the run ends (each run left one behind in the temporary folder for good).
+_CONFIG_HOME = tempfile.mkdtemp(prefix="quickjab-test-config-")
+os.environ["XDG_CONFIG_HOME"] = _CONFIG_HOME
+atexit.register(shutil.rmtree, _CONFIG_HOME, True)
 
 REPO = Path(__file__).resolve().parent.parent
 SHARED_DATA = Path(os.environ.get("QUICKJAB_SHARED_DATA", REPO.parent / "shared" / "data"))
