@@ -100,7 +100,7 @@ def run_cut(args: argparse.Namespace) -> int:
     Path(args.output).parent.mkdir(parents=True, exist_ok=True)
     data = (json.dumps(action.to_json(), indent=1) + "\n").encode("utf-8")
     # a file there may be an action someone made: moved aside as `record -o` does, and said
-    aside = aside_unless_same(args.output, data)
+    aside = aside_unless_same(args.output, data, unread=True)  # not one more action of its folder
     if aside is not None:
         print(f"{args.output} was not empty: moved to {aside}", file=sys.stderr)
     try:

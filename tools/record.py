@@ -48,9 +48,11 @@ def part_path(output: str | Path, part: int) -> Path:
     return out if part == 1 else out.with_name(f"{out.stem}.{part}{out.suffix}")
 
 
-def keep_aside(output: str | Path) -> Path | None:
+def keep_aside(output: str | Path, unread: bool = False) -> Path | None:
     """A file with anything in it at `output` (through a link, the file it points to) moved to
-    `<name>-old<suffix>` beside it, else `<name>-old-2<suffix>`, `-old-3`...: the recording is
+    `<name>-old<suffix>` beside it, else `<name>-old-2<suffix>`, `-old-3`... (`unread`:
+    `<name><suffix>.old`, `.old-2`...: a name the folder's readers, which take every `*.csv` or
+    `*.json` in it, pass over, for a file in a folder of trials or of actions): the recording is
     written in place (what keeps a kill to the last rows), and opening the file emptied it, so a
     mistyped -o lost a take. None when nothing is there, the file is empty (mkstemp's: nothing
     to lose) or it is not a regular file (/dev/null, a pipe: written to as before)."""
@@ -65,7 +67,8 @@ def keep_aside(output: str | Path) -> Path | None:
         return None
     n = 1
     while True:
-        aside = target.with_name(f"{target.stem}-old{f'-{n}' if n > 1 else ''}{target.suffix}")
+        old = f"old{f'-{n}' if n > 1 else ''}"
+        aside = target.with_name(f"{target.name}.{old}" if unread else f"{target.stem}-{old}{target.suffix}")
         try:
             os.link(target, aside)  # never over another file, as a rename would be
         except FileExistsError:
@@ -81,7 +84,7 @@ def keep_aside(output: str | Path) -> Path | None:
         return aside
 
 
-def aside_unless_same(output: str | Path, data: bytes) -> Path | None:
+def aside_unless_same(output: str | Path, data: bytes, unread: bool = False) -> Path | None:
     """Before `data` is written whole over `output` (a synthesized trial or session, a cut
     action: files a person may have made there): keep_aside, unless the file there holds these
     very bytes (a second run with one seed: nothing would be lost, and a trial folder would gain
@@ -91,7 +94,7 @@ def aside_unless_same(output: str | Path, data: bytes) -> Path | None:
     try:
         if target.is_file() and target.stat().st_size == len(data) and target.read_bytes() == data:
             return None
-        return keep_aside(target)
+        return keep_aside(target, unread)
     except OSError as exc:
         raise InputError(f"{target}: cannot move the file there aside ({exc.strerror or exc}); give another -o") from None
 

@@ -49,14 +49,14 @@ def _to_recording(signal: np.ndarray, labels: list[str], meta: dict[str, str]) -
     return Recording(np.arange(n) / FPS, signal.reshape(n, 2, 3), labels, meta)
 
 
-def write_keeping(path: Path, rec: Recording) -> Path | None:
+def write_keeping(path: Path, rec: Recording, unread: bool = False) -> Path | None:
     """Write `rec` to `path`; a non-empty file there that holds anything else is moved aside
-    first, as `record -o` does (tools.record.aside_unless_same): a trial or a recording may be a
-    player's. Where it went, else None."""
+    first, as `record -o` does (tools.record.aside_unless_same; `unread`: to a name a trial
+    folder's readers pass over): a trial or a recording may be a player's. Where it went, else None."""
     from tools.record import aside_unless_same
 
     data = recording_bytes(rec)
-    aside = aside_unless_same(path, data)
+    aside = aside_unless_same(path, data, unread)
     write_recording(path, data)
     return aside
 
@@ -73,7 +73,7 @@ def write_trials(directory: str | Path, trials: dict[str, list[np.ndarray]], pro
         for i, sig in enumerate(signals, start=1):
             path = folder / f"{i}.csv"
             meta = {"source": f"{SOURCE}, profile {profile}", "action": name, "seed": str(seed)}
-            aside = write_keeping(path, _to_recording(sig, [name] * len(sig), meta))
+            aside = write_keeping(path, _to_recording(sig, [name] * len(sig), meta), unread=True)
             if aside is not None and moved is not None:
                 moved.append((path, aside))
             written.append(path)
@@ -81,15 +81,14 @@ def write_trials(directory: str | Path, trials: dict[str, list[np.ndarray]], pro
 
 
 def say_moved(moved: list[tuple[Path, Path]], directory: str) -> None:
-    """One line for the trial files moved aside (the first three named): they are in the action
-    folders still, where `templates build` reads every *.csv as a trial."""
+    """One line for the trial files moved aside (the first three named), to names `templates
+    build`, which reads every *.csv of an action folder as a trial, passes over."""
     if not moved:
         return
     named = ", ".join(f"{path} -> {aside.name}" for path, aside in moved[:3])
     more = f" and {len(moved) - 3} more" if len(moved) > 3 else ""
     print(f"synth: {len(moved)} trial file(s) under {directory} were not empty, moved aside: {named}{more} "
-          "(templates build reads them as trials too: move them out of the action folders if they are not)",
-          file=sys.stderr)
+          "(no longer read as trials)", file=sys.stderr)
 
 
 def synth_session(

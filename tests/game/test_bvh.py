@@ -200,7 +200,8 @@ def test_the_action_loader_refuses_the_names_bvh_cut_refuses(tmp_path, name):
 
 def test_bvh_cut_moves_an_existing_file_aside(tmp_path, capsys):
     """The tester: `bvh cut ... -o cut.json` replaced whatever was there (an action someone made).
-    Moved aside as `record -o` does, said in one line."""
+    Moved aside, to cut.json.old (not one more action of a folder the loader reads: two files
+    of one action there stop the whole library), said in one line."""
     bvh = tmp_path / "m.bvh"
     assert main(["bvh", "export", "--play", "straight_r", "-o", str(bvh)]) == 0
     out = tmp_path / "cut.json"
@@ -208,13 +209,28 @@ def test_bvh_cut_moves_an_existing_file_aside(tmp_path, capsys):
     capsys.readouterr()
     argv = ["bvh", "cut", str(bvh), "--start", "0", "--end", "20", "--name", "x", "-o", str(out)]
     assert main(argv) == 0
-    assert capsys.readouterr().err == f"{out} was not empty: moved to {tmp_path / 'cut-old.json'}\n"
-    assert (tmp_path / "cut-old.json").read_text() == '{"my": "action"}\n'
+    assert capsys.readouterr().err == f"{out} was not empty: moved to {tmp_path / 'cut.json.old'}\n"
+    assert (tmp_path / "cut.json.old").read_text() == '{"my": "action"}\n'
     from game.actions import load_action
 
     assert load_action(out).name == "x"
     assert main(argv) == 0 and capsys.readouterr().err == ""  # the same action again: nothing to keep
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["cut-old.json", "cut.json", "m.bvh"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["cut.json", "cut.json.old", "m.bvh"]
+
+
+def test_a_cut_over_an_action_of_a_library_folder_keeps_the_library_loading(tmp_path):
+    """Re-cutting an action into a copy of the library (its file moved aside) left two files of
+    one action there, and the library refused to load ("one file per action")."""
+    import shutil
+    from pathlib import Path
+
+    lib = tmp_path / "actions"
+    shutil.copytree(Path(LIB["hook_r"].source).parent, lib)
+    bvh = tmp_path / "m.bvh"
+    assert main(["bvh", "export", "--play", "straight_r", "-o", str(bvh)]) == 0
+    argv = ["bvh", "cut", str(bvh), "--start", "0", "--end", "20", "--name", "straight_l", "-o", str(lib / "straight_l.json")]
+    assert main(argv) == 0 and (lib / "straight_l.json.old").is_file()
+    assert load_library(lib)["straight_l"].frames == 21
 
 
 def test_a_bout_cut_at_the_cap_is_said(tmp_path, capsys, monkeypatch):

@@ -151,19 +151,21 @@ def test_the_sensor_frame_is_left_handed_x_to_the_wearers_left():
 
 def test_synth_moves_a_trial_of_its_folder_aside_and_says_so(tmp_path, capsys):
     """The tester: `synth --trials 2 --actions hook_r -o DIR` replaced a player's DIR/hook_r/1.csv
-    without a word. Moved aside as `record -o` does (1-old.csv) and said in one line; a file that
-    holds just what would be written (a second run of the same seed) stays, and is not copied."""
+    without a word. Moved aside (to 1.csv.old: `templates build` reads every *.csv of the folder
+    as a trial) and said in one line; a file that holds just what would be written (a second run
+    of the same seed) stays, and is not copied."""
     mine = tmp_path / "hook_r" / "1.csv"
     mine.parent.mkdir()
     mine.write_text("my own trial\n")
     argv = ["synth", "--trials", "2", "--actions", "hook_r", "--seed", "1", "-o", str(tmp_path)]
     assert main(argv) == 0
     err = capsys.readouterr().err
-    assert (tmp_path / "hook_r" / "1-old.csv").read_text() == "my own trial\n"
-    assert err.count("\n") == 1 and str(mine) in err and "1-old.csv" in err, err
+    assert (tmp_path / "hook_r" / "1.csv.old").read_text() == "my own trial\n"
+    assert err.count("\n") == 1 and str(mine) in err and "1.csv.old" in err, err
     assert read_recording(mine).labels[0] == "hook_r"
     assert main(argv) == 0 and capsys.readouterr().err == ""  # the same bytes again: nothing moved
-    assert sorted(p.name for p in (tmp_path / "hook_r").iterdir()) == ["1-old.csv", "1.csv", "2.csv"]
+    assert sorted(p.name for p in (tmp_path / "hook_r").iterdir()) == ["1.csv", "1.csv.old", "2.csv"]
+    assert sorted(p.name for p in (tmp_path / "hook_r").glob("*.csv")) == ["1.csv", "2.csv"]  # the trials read
 
 
 def test_synth_session_moves_an_existing_recording_aside(tmp_path, capsys):
