@@ -62,16 +62,20 @@ def stop_signals_as_ctrl_c() -> Iterator[None]:
             signal.signal(sig, handler)
 
 
-def as_worker(parent: int) -> None:
+def as_worker() -> None:
     """The initializer of a worker process that a command under stop_signals_as_ctrl_c() starts
     (a ProcessPoolExecutor's): a forked worker inherited the parent's handlers, so SIGTERM raised
     KeyboardInterrupt in the middle of its task, and pygame.init() in a worker with SIGTERM at
     its default made SIGTERM a quit event nothing read; either way `kill` did not end it. Here
     SIGTERM and SIGHUP end the worker (their default, SDL kept off them), Ctrl-C to the process
-    group is left to the parent, which ends its workers, and the worker ends when `parent` does
-    (a parent killed outright left its workers waiting for work forever)."""
+    group is left to the parent, which ends its workers, and the worker ends when its parent does
+    (a parent killed outright left its workers waiting for work forever). The parent is the
+    process that started the worker, whatever the start method: the command's own under "fork"
+    and "spawn", the fork server under "forkserver" (Python 3.14's default on Linux), which ends
+    with the command."""
     import os
 
+    parent = os.getppid()
     os.environ["SDL_NO_SIGNAL_HANDLERS"] = "1"
     for sig in STOP_SIGNALS:
         signal.signal(sig, signal.SIG_DFL)

@@ -11,7 +11,6 @@ knockdowns) or by ending the match in it (KO, TKO); rounds scored even count as 
 
 from __future__ import annotations
 
-import os
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
 
@@ -124,7 +123,7 @@ def _in_processes(work: list[tuple], jobs: int) -> list[MatchResult]:
     shutdown waited for the matches under way, and a parent gone left them waiting for work."""
     from engine.interrupt import as_worker
 
-    pool = ProcessPoolExecutor(max_workers=jobs, initializer=as_worker, initargs=(os.getpid(),))
+    pool = ProcessPoolExecutor(max_workers=jobs, initializer=as_worker)
     try:
         # not pool.map, and nothing cancelled: a future map's cleanup cancelled was then failed by
         # the executor's thread as the workers ended (Python 3.11: an InvalidStateError traceback)

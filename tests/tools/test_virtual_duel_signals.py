@@ -115,3 +115,22 @@ def test_kill_ends_a_worker_and_the_command_says_so_in_one_line(duel):
     err = p.stderr.read()
     assert err.count("\n") == 1 and "worker process ended" in err, err
     poll(lambda: not any(alive(w) for w in workers), "a worker outlived the command")
+
+
+def _pid() -> int:
+    return os.getpid()
+
+
+@pytest.mark.parametrize("method", ["fork", "spawn", "forkserver"])
+def test_a_worker_set_up_by_as_worker_works_under_every_start_method(method):
+    # as_worker took the command's pid for the worker's parent: under "forkserver" (Python 3.14's
+    # default on Linux) the parent is the fork server, and every worker ended on its first task
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor
+
+    from engine.interrupt import as_worker
+
+    if method not in multiprocessing.get_all_start_methods():
+        pytest.skip(f"no {method} here")
+    with ProcessPoolExecutor(max_workers=1, mp_context=multiprocessing.get_context(method), initializer=as_worker) as pool:
+        assert pool.submit(_pid).result(timeout=120) != os.getpid()
