@@ -16,6 +16,7 @@ from __future__ import annotations
 import json
 import os
 import stat
+import unicodedata
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
@@ -62,14 +63,16 @@ class ActionError(InputError):
 
 def name_problem(name: object) -> str | None:
     """Why `name` cannot name an action (None: it can): 1 to NAME_MAX_CHARS letters, digits
-    (any script's: a player names actions in their own language), `_` and `-`, as every shipped name. A name is a label in recordings and templates, one of a
+    and the marks that go with them (any script's: a player names actions in their own language;
+    Hindi and Thai vowels are combining marks, as is the accent of a decomposed é), `_` and `-`,
+    as every shipped name. A name is a label in recordings and templates, one of a
     comma-separated `--actions` list and the file name `actions author` writes, so no spaces,
     commas or slashes. The loader and `bvh cut --name` both ask it."""
     if not isinstance(name, str) or not name:
         return f"must be a non-empty string, not {name!r}"
     if len(name) > NAME_MAX_CHARS:
         return f"has {len(name)} characters, at most {NAME_MAX_CHARS}"
-    if bad := sorted({ch for ch in name if not (ch.isalnum() or ch in "_-")}):
+    if bad := sorted({ch for ch in name if not (ch.isalnum() or unicodedata.category(ch)[0] == "M" or ch in "_-")}):
         return f"{name!r} may hold only letters, digits, '_' and '-', not {''.join(bad)!r}"
     return None
 

@@ -261,3 +261,5 @@ def test_an_action_named_in_another_script_loads(tmp_path):
     path = tmp_path / "hook.json"
     path.write_text(json.dumps(dict(json.loads(open(LIB["hook_r"].source).read()), name="хук_2")), encoding="utf-8")
     assert load_action(path).name == "хук_2" and name_problem("хук 2") is not None
+    for word in ("मुक्का", "ต่อย", "ضَرْبَة", "cafe\u0301"):  # vowels and accents that are combining marks
+        assert name_problem(word) is None, word
