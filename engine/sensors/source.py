@@ -214,10 +214,11 @@ def url_params_known(url: str, params: dict[str, str], known: tuple[str, ...]) -
 
 
 _FILE_ESCAPES = {"%23": "#", "%3f": "?", "%25": "%"}
+RECORDING_SCHEMES = ("replay", "wiimote-emu")  # sources whose URL path names a recording file
 
 
 def file_path(path: str) -> str:
-    """A replay:// URL's path as a file name: %23 is '#', %3F '?' and %25 '%' (any case), the
+    """The path of a URL that names a recording file (RECORDING_SCHEMES) as a file name: %23 is '#', %3F '?' and %25 '%' (any case), the
     characters a URL keeps for itself, so `replay://a%23b%3Fc=1.csv` reads `a#b?c=1.csv`. Only
     these: a name with another '%' (`50%.csv`, `a%41.csv`) is read as it is written."""
     if "%" not in path:
@@ -237,7 +238,7 @@ def url_file(url: str) -> str | None:
         scheme, path, _ = parse_source_url(url)
     except SourceError:
         return None
-    return (file_path(path) if scheme == "replay" else path) or None
+    return (file_path(path) if scheme in RECORDING_SCHEMES else path) or None
 
 
 def url_flag(params: dict[str, str], key: str, default: str = "0") -> bool:

@@ -234,4 +234,7 @@ def test_a_replay_path_names_a_file_with_hash_or_question_mark_percent_escaped(t
         src = open_source(url)
         assert src.sensors == 2
         src.close()
-    assert url_file("serial:///dev/a%23b") == "/dev/a%23b"  # only replay:// paths are files to decode
+    assert url_file("serial:///dev/a%23b") == "/dev/a%23b"  # only the paths of recording files are decoded
+    emu = f"wiimote-emu://{tmp_path}/a%23b%3fc=1.csv?seconds=1"  # a recording file too: decoded alike
+    assert url_file(emu) == str(tmp_path / "a#b?c=1.csv")
+    open_source(emu).close()

@@ -56,6 +56,7 @@ from engine.sensors.source import (
     Sample,
     SourceError,
     SourceState,
+    file_path,
     parse_source_url,
     url_flag,
     url_number,
@@ -525,7 +526,7 @@ def emulator_from_url(url: str, clock: Callable[[], float]) -> tuple[EmulatedBus
     _, path, params = parse_source_url(url)
     if not path:
         raise SourceError(f"{url}: no recording (expected wiimote-emu://path/to/recording.csv)")
-    rec = read_recording(path)
+    rec = read_recording(file_path(path))
     events = [(t, name) for key, name in (
         ("unplug_at", "unplug"), ("replug_at", "replug"), ("nunchuk_out_at", "nunchuk_out"),
         ("nunchuk_in_at", "nunchuk_in"), ("foreign_mode_at", "foreign_mode"),
