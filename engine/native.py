@@ -29,6 +29,8 @@ import platform
 import sys
 from pathlib import Path
 
+from engine.xdg import is_there
+
 NO_NATIVE_ENV = "QUICKJAB_NO_NATIVE"
 NO_JIT_ENV = "QUICKJAB_NO_JIT"
 CACHE_ENV = "QUICKJAB_CACHE_DIR"
@@ -138,15 +140,6 @@ def compiler() -> str | None:
     return os.environ.get("CC") or shutil.which("cc") or shutil.which("gcc") or shutil.which("clang")
 
 
-def _exists(path: Path) -> bool:
-    """engine.xdg.is_there: a path that cannot be probed (too long a name) is not there, so an
-    unusable cache is passed over as an unwritable one is (the kernels are an optimisation;
-    `recognize` and `play` ended with the errno)."""
-    from engine.xdg import is_there
-
-    return is_there(path)
-
-
 def _writable(d: Path) -> bool:
     try:
         d.mkdir(parents=True, exist_ok=True, mode=0o700)
@@ -158,7 +151,7 @@ def _writable(d: Path) -> bool:
 def _dirs() -> list[Path]:
     """Where libraries are looked for: the cache, then the temporary fallback if it is ours."""
     fb = fallback_dir()
-    return [cache_dir()] + ([fb] if _exists(fb) and _safe_fallback(fb) else [])
+    return [cache_dir()] + ([fb] if is_there(fb) and _safe_fallback(fb) else [])
 
 
 def _build_dir() -> Path | None:
@@ -287,7 +280,7 @@ def load_library(stem: str, source: str, symbols: tuple[str, ...] = ()) -> ctype
     for d in _dirs():
         for flags in variants:
             path = library_path(stem, source, flags, d)
-            if _exists(path):
+            if is_there(path):
                 lib = _open(path, symbols)
                 if lib is not None:
                     _status[stem] = f"native: {path}"
@@ -303,7 +296,7 @@ def load_library(stem: str, source: str, symbols: tuple[str, ...] = ()) -> ctype
     reason = ""
     for flags in variants:
         path, marker = library_path(stem, source, flags, d), failure_marker(stem, source, flags, cc, d)
-        if _exists(marker):
+        if is_there(marker):
             try:
                 reason = marker.read_text().strip() or "the build failed"
             except OSError:
@@ -317,7 +310,7 @@ def load_library(stem: str, source: str, symbols: tuple[str, ...] = ()) -> ctype
                 _prune(d, stem, path, markers)
                 _status[stem] = f"native: built {path}"
                 return lib
-            if not _exists(path):  # pruned by another kernel version's build meanwhile: not a failure
+            if not is_there(path):  # pruned by another kernel version's build meanwhile: not a failure
                 return _numpy(stem, f"{path} was removed while loading it; the next start builds it again")
             _remove(path)
             failed = f"{cc} built a library that does not load or lacks {', '.join(symbols)}", True

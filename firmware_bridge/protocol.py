@@ -266,11 +266,18 @@ def hello_rejection(body):
     return hello_problem(payload, body[7]) or "?"
 
 
+def clock_reach(ts_bits, rate_hz):
+    # type: (int, int) -> float
+    """How many sample periods half the device clock's period spans: how far apart in time two
+    frames can be and still be ordered by t_us, which the host unwraps within half a period."""
+    return (1 << (ts_bits - 1)) * rate_hz / 1000000
+
+
 def narrow_clock(ts_bits, rate_hz):
     # type: (int, int) -> bool
     """t_us wraps within two sample periods: a host cannot tell its wraps apart, and its sample
     times come out wrong (PROTOCOL.md, HELLO: a valid HELLO, counted as `narrow_clock`)."""
-    return (1 << (ts_bits - 1)) * rate_hz <= 1000000
+    return clock_reach(ts_bits, rate_hz) <= 1
 
 
 def parse_body(body):
@@ -490,7 +497,7 @@ class Decoder:
         period (how far the host unwraps it) is longer than 65536 sample periods of the announced
         rate (327 s at 200 Hz: 30 bits and more; 16 bits cannot)."""
         h = self.hello
-        return h is not None and (1 << (h.ts_bits - 1)) * h.rate_hz > (SEQ_MASK + 1) * 1000000
+        return h is not None and clock_reach(h.ts_bits, h.rate_hz) > SEQ_MASK + 1
 
     def _restart_seq(self):
         self.last_seq = None
