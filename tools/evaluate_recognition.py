@@ -306,23 +306,34 @@ def _clip_end(e: dict, clip_frames: int | Clips) -> int | None:
     return e["frame"] - from_frame + frames if frames > 0 else None
 
 
+class SimulatedCharacter:
+    """A character that finishes each action `clips` after its start (a switch continues at n_p,
+    so the end does not move), or as the game's boxer does with `Clips`, and then calls the
+    recognizer's `character_finished()`; with clips=0 it never does."""
+
+    def __init__(self, clips: int | Clips) -> None:
+        self.clips = clips
+        self.clip_end: int | None = None
+
+    def after_push(self, rec: DualBufferRecognizer, i: int, events: Sequence[dict]) -> None:
+        """The character's turn after push number `i` (from 0) decided `events`."""
+        for e in events:
+            if e["event"] in ("start", "switch"):
+                self.clip_end = _clip_end(e, self.clips)
+        if self.clip_end is not None and i >= self.clip_end:
+            rec.character_finished()
+            self.clip_end = None
+
+
 def replay_stream(rec: DualBufferRecognizer, frames: np.ndarray, clip_frames: int | Clips = CLIP_FRAMES) -> list[dict]:
-    """Events of a whole stream, with a simulated character that finishes each action
-    `clip_frames` after its start (a switch continues at n_p, so the end does not move), or as
-    the game does with `Clips`, and then calls `character_finished()`; with clip_frames=0 it
-    never does."""
+    """Events of a whole stream, with a SimulatedCharacter playing `clip_frames`."""
     rec.reset()
     events: list[dict] = []
-    clip_end = None
+    character = SimulatedCharacter(clip_frames)
     for i, f in enumerate(frames):
         evs = rec.push(f)
-        for e in evs:
-            if e["event"] in ("start", "switch"):
-                clip_end = _clip_end(e, clip_frames)
         events.extend(evs)
-        if clip_end is not None and i >= clip_end:
-            rec.character_finished()
-            clip_end = None
+        character.after_push(rec, i, evs)
     return events
 
 

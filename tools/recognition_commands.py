@@ -159,6 +159,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="recognition templates: `templates build` or `train -o` wrote them, or game/assets/templates.npz")
     r.add_argument("-o", "--output", default=None, type=arguments.path_argument, help="write the JSON lines here instead of stdout")
     r.add_argument("--main", type=_main_arg, default=None, help="main buffer in frames or 'auto' (default 6)")
+    r.add_argument("--clip-frames", type=arguments.int_range(0, MAX_BUFFER), default=0,
+                   help="replay with a character that calls character_finished() as the game's boxer does: an action "
+                        "the game has plays its own clip, any other name this many frames (0, the default: no character, "
+                        f"the recognizer alone; `evaluate`'s streams use {CLIP_FRAMES})")
     _recognizer_args(r)
     r.set_defaults(func=cmd_recognize)
     _register_evaluate(sub)
@@ -270,15 +274,23 @@ def cmd_recognize(args: argparse.Namespace) -> int:
     config = layered(templates.recognizer, recognizer_settings(), _cli_settings(args),
                      where=["templates", "config file", "command line"])
     rec = DualBufferRecognizer.from_config(templates, config)
+    character = None
+    if args.clip_frames:  # a boxer playing each decided action's clip, as in `play` and `evaluate`
+        from tools.evaluate_recognition import SimulatedCharacter, game_clips
+
+        character = SimulatedCharacter(game_clips(args.clip_frames))
     try:
         if args.output:  # a folder not made yet is made, as for every output
             Path(args.output).parent.mkdir(parents=True, exist_ok=True)
         out = open(args.output, "w", encoding="utf-8") if args.output else sys.stdout
         try:
             t0 = float(rec_file.t[0])  # events carry the recording's own seconds (docs/formats.md)
-            for t, f in zip(times, frames, strict=True):
-                for e in rec.push(f, t=t0 + float(t)):
+            for i, (t, f) in enumerate(zip(times, frames, strict=True)):
+                events = rec.push(f, t=t0 + float(t))
+                for e in events:
                     out.write(json.dumps(e.to_dict()) + "\n")
+                if character is not None:
+                    character.after_push(rec, i, events)
         finally:
             if args.output:
                 out.close()

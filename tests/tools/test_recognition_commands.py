@@ -667,3 +667,28 @@ def test_the_simulated_character_plays_the_games_actions_as_the_boxer_does():
         replay_stream(rec, np.zeros((80, 3)), 24)  # --fixed-clips: 24 from the motion's start
         assert rec.finished == fixed
     assert game_clips(0) == 0
+
+
+def test_recognize_with_clip_frames_replays_as_the_games_boxer_and_evaluate_do(tmp_path, trials_dir, capsys):
+    # `evaluate`'s stream figures have a character that calls character_finished() at each clip's
+    # end; `recognize` had none, so what it printed was not what those figures or the game decide
+    from engine.frames import recording_frames
+    from engine.recognition import DualBufferRecognizer
+    from engine.recording import read_recording
+    from tools.evaluate_recognition import game_clips, replay_stream
+
+    templates = tmp_path / "t.npz"
+    assert main(["templates", "build", str(trials_dir), "-o", str(templates)]) == 0
+    frames = np.vstack([rest(20), bump(0, n=40), rest(30), bump(2, n=40), rest(30)])
+    recording = tmp_path / "r.csv"
+    write(recording, frames)
+    capsys.readouterr()
+    runs = {}
+    for clips in ("0", "10"):
+        assert main(["recognize", "--templates", str(templates), str(recording), "--clip-frames", clips]) == 0
+        runs[clips] = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
+    reasons = {c: [e.get("reason") for e in evs if e["event"] == "end"] for c, evs in runs.items()}
+    assert reasons["10"].count("character_finished") == 2 and "character_finished" not in reasons["0"]
+    _, read, _ = recording_frames(read_recording(recording))  # as written: 4 decimals
+    expected = [e.to_dict() for e in replay_stream(DualBufferRecognizer(Templates.load(templates)), read, game_clips(10))]
+    assert [{k: v for k, v in e.items() if k != "t"} for e in runs["10"]] == expected
