@@ -133,11 +133,14 @@ def _rec_kwargs(args: argparse.Namespace, saved: dict | None = None) -> dict:
 def register(sub: argparse._SubParsersAction) -> None:
     t = sub.add_parser("templates", help="build recognition templates from trials", description=__doc__)
     tsub = t.add_subparsers(dest="templates_command", metavar="ACTION", required=True)
-    b = tsub.add_parser("build", help="build templates.npz from TRIALS_DIR/<action>/*.csv",
+    b = tsub.add_parser("build", help="build templates.npz from TRIALS_DIR/<action>/*.csv or labelled recordings",
                         description="Build recognition templates from trial recordings, one folder of CSVs per "
-                        "action (TRIALS_DIR/<action>/*.csv, as `quickjab synth --trials` writes them); "
-                        "`play --templates`, `recognize` and `evaluate --templates` read the file.")
-    b.add_argument("trials_dir", metavar="TRIALS_DIR", type=arguments.path_argument, help="a folder with one folder of trial CSVs per action (TRIALS_DIR/<action>/*.csv)")
+                        "action (TRIALS_DIR/<action>/*.csv, as `quickjab synth --trials` writes them), or from "
+                        "labelled recordings (REC.csv ...: every labelled run a trial, cut as `evaluate` cuts its "
+                        "training punches); `play --templates`, `recognize` and `evaluate --templates` read the file.")
+    b.add_argument("trials_dir", metavar="TRIALS_DIR|REC.csv", nargs="+", type=arguments.path_argument,
+                   help="a folder with one folder of trial CSVs per action (TRIALS_DIR/<action>/*.csv), or one or more "
+                        "labelled recordings (a `label` per row: each labelled run is a trial of that action)")
     b.add_argument("-o", "--output", default="templates.npz", type=arguments.path_argument, help="output .npz (default templates.npz)")
     b.add_argument("--method", choices=METHODS, default=None, help="trials (default), average (Eq. 1) or dba")
     b.add_argument("--feature", choices=FEATURES, default=None, help="what DTW compares (default log)")
@@ -148,6 +151,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "odd or like another action's (as `train` does); default all")
     b.add_argument("--recognizer", action="append", default=[], metavar="NAME=VALUE",
                    help="a recognizer setting to save with the templates, e.g. noise_g=0.5 (repeatable)")
+    b.add_argument("--lead", type=arguments.int_range(0, MAX_BUFFER), default=10,
+                   help="labelled recordings: frames kept before each labelled run (default 10, as evaluate's --lead)")
+    b.add_argument("--trials", type=arguments.int_range(1, 1000), default=None,
+                   help="labelled recordings: each action's first TRIALS runs only (default all)")
     b.set_defaults(func=cmd_build)
 
     r = sub.add_parser("recognize", help="replay a recording through the recognizer; events as JSON lines",
@@ -243,13 +250,31 @@ def _data_set_args(e: argparse.ArgumentParser) -> None:
 
 
 def cmd_build(args: argparse.Namespace) -> int:
-    from tools.trial_files import load_trials_dir, templates_from_trials, trial_paths
+    from tools.trial_files import (
+        labelled_trials,
+        load_trials_dir,
+        templates_from_trials,
+        trial_paths,
+    )
 
-    refuse_overwriting({"-o": args.output}, [f for fs in trial_paths(args.trials_dir, args.glob).values() for f in fs])
+    inputs = args.trials_dir
+    for p in inputs:
+        if not Path(p).exists():
+            raise InputError(f"{p}: no such folder of trials (<root>/<action>/*.csv) or labelled recording")
+    folders = [p for p in inputs if Path(p).is_dir()]
+    if folders and len(inputs) > 1:
+        raise InputError(f"{folders[0]}: a folder of trials is given alone (or give labelled recordings, one or more)")
     settings = parse_assignments(args.recognizer)
-    trials = load_trials_dir(args.trials_dir, args.glob, prog="templates")
+    if folders:
+        where = folders[0]
+        refuse_overwriting({"-o": args.output}, [f for fs in trial_paths(where, args.glob).values() for f in fs])
+        trials = load_trials_dir(where, args.glob, prog="templates")
+    else:
+        where = ", ".join(inputs)
+        refuse_overwriting({"-o": args.output}, inputs)
+        trials = labelled_trials(inputs, args.lead, args.trials)
     kwargs = {k: v for k, v in (("method", args.method), ("feature", args.feature), ("keep", args.keep)) if v}
-    templates = templates_from_trials(trials, args.trials_dir, **kwargs)
+    templates = templates_from_trials(trials, where, **kwargs)
     if args.mirror:
         templates = templates.mirrored()
     templates.recognizer = settings

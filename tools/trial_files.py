@@ -88,3 +88,26 @@ def templates_from_trials(trials: Mapping[str, Sequence[np.ndarray]], where: str
 def trials_dim(trials: Mapping[str, Sequence[np.ndarray]]) -> int:
     """The values per frame of `load_trials_dir`'s trials (one D for all: it checks that)."""
     return next(t.shape[1] for ts in trials.values() for t in ts)
+
+
+def labelled_trials(paths: Sequence[str | Path], lead: int = 10, first: int | None = None,
+                    prog: str = "templates") -> dict[str, list[np.ndarray]]:
+    """{action: [frames, ...]} cut from labelled recordings (a `label` per row, docs/formats.md):
+    every labelled run with `lead` frames before it, on the 60 Hz grid of the whole recording, as
+    `quickjab evaluate` cuts its training punches (evaluate_recognition.stream_trials); `first`:
+    only each action's first so many, in file order. InputError when no row is labelled."""
+    from tools.evaluate_recognition import intervals, stream_trials
+
+    out: dict[str, list[np.ndarray]] = {}
+    for path in paths:
+        frames, labels = read_labelled_frames(path, prog)
+        for action, cut in stream_trials(frames, intervals(labels), lead).items():
+            out.setdefault(action, []).extend(cut)
+    if not out:
+        raise InputError(f"{', '.join(map(str, paths))}: no labelled rows to cut trials from (a `label` column, docs/formats.md)")
+    if first is not None:
+        out = {action: cuts[:first] for action, cuts in out.items()}
+    dims = {t.shape[1] for ts in out.values() for t in ts}
+    if len(dims) != 1:
+        raise InputError(f"{', '.join(map(str, paths))}: recordings mix one- and two-hand sensors (D = {sorted(dims)})")
+    return out

@@ -692,3 +692,32 @@ def test_recognize_with_clip_frames_replays_as_the_games_boxer_and_evaluate_do(t
     _, read, _ = recording_frames(read_recording(recording))  # as written: 4 decimals
     expected = [e.to_dict() for e in replay_stream(DualBufferRecognizer(Templates.load(templates)), read, game_clips(10))]
     assert [{k: v for k, v in e.items() if k != "t"} for e in runs["10"]] == expected
+
+
+def test_templates_build_from_labelled_recordings_cuts_as_evaluate_does(tmp_path, capsys):
+    # an outside harness with labelled recordings (a phone-punches file: every punch labelled) had
+    # to cut its own trials, with its own lead and grid: `evaluate`'s templates were out of reach
+    from tools.evaluate_recognition import first_trials_templates
+    from tools.trial_files import read_labelled_frames
+
+    rng = np.random.default_rng(2)
+    parts, labels = [rest(30)], [""] * 30
+    for k in range(3):
+        for action, axis in (("jab", 0), ("upper", 2)):
+            b = bump(axis, n=20 + 4 * k) + rng.normal(0, 0.02, (20 + 4 * k, 3))
+            parts += [b, rest(25)]
+            labels += [action] * len(b) + [""] * 25
+    frames = np.vstack(parts)
+    recording = tmp_path / "punches.csv"
+    write(recording, frames, labels)
+    out = tmp_path / "t.npz"
+    assert main(["templates", "build", str(recording), "--trials", "2", "-o", str(out)]) == 0
+    built = Templates.load(out)
+    read = read_labelled_frames(recording)
+    expected = first_trials_templates({"jab": read, "upper": read}, trials=2, lead=10)
+    assert built.actions == expected.actions and len(built.signals) == 4
+    for a, b in zip(built.signals, expected.signals, strict=True):
+        assert np.array_equal(a, b)
+    assert np.array_equal(built.onsets, expected.onsets) and np.array_equal(built.thresholds, expected.thresholds)
+    assert main(["templates", "build", str(tmp_path / "nope.csv")]) == 2
+    assert "no such folder of trials" in capsys.readouterr().err
