@@ -44,7 +44,7 @@ EMPTY = {
     "graph duel --graph": (["graph", "duel", "--graph", ""], "--graph"),
     "bridge emulate --replay": (["bridge", "emulate", "--seconds", "0.1", "--replay", ""], "--replay"),
     "bridge emulate --link": (["bridge", "emulate", "--seconds", "0.1", "--link", ""], "--link"),
-    "templates build": (["templates", "build", ""], "TRIALS_DIR"),
+    "templates build": (["templates", "build", ""], "TRIALS_DIR|REC.csv"),
     "templates build -o": (["templates", "build", "trials", "-o", ""], "-o/--output"),
     "recognize": (["recognize", "", "--templates", "t.npz"], "REC.csv"),
     "recognize --templates": (["recognize", "r.csv", "--templates", ""], "--templates"),
