@@ -1,7 +1,6 @@
-"""The counts of `bench frame`, `bench graph`, `bench physics` and `bench startup`, and of
-`bridge faults`, are checked by argparse as every other bench command's are: one line naming
-the option and its range, exit 2, before anything is imported or run (they were checked inside
-the run, in words of their own)."""
+"""The counts of the bench commands (`bench loop`, `frame`, `graph`, `physics`, `startup`) and of
+`bridge faults` are checked by argparse: one line naming the option and its range, exit 2,
+before anything is imported or run (they were checked inside the run, in words of their own)."""
 
 from __future__ import annotations
 
@@ -11,6 +10,9 @@ from tools.cli import main
 
 
 @pytest.mark.parametrize("argv, said", [
+    # bench loop's: --steps 0 was a division by zero, --frames 0 an IndexError (tracebacks)
+    (["bench", "loop", "--steps", "0"], "argument --steps: 0 is out of range: must be between 1 and 10000000"),
+    (["bench", "loop", "--frames", "0"], "argument --frames: 0 is out of range: must be between 1 and 216000"),
     (["bench", "frame", "--steps", "0"], "argument --steps: 0 is out of range: must be >= 1"),
     (["bench", "frame", "--repeats", "-1"], "argument --repeats: -1 is out of range: must be >= 1"),
     (["bench", "frame", "--realtime-seconds", "-0.5"], "argument --realtime-seconds: -0.5 is out of range: must be >= 0"),
