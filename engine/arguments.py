@@ -127,6 +127,41 @@ def output_file(text: str) -> str:
     return text
 
 
+def output_of_kind(kind: str, is_kind: Callable[[bytes], bool]) -> Callable[[str], str]:
+    """output_file for a file a command makes again and again (a screenshot, a trace): an
+    earlier file of its kind is replaced, but a file plainly of another kind at the path (a
+    recording, an action) is refused before the work (engine.errors.refuse_other_kind)."""
+    from engine.errors import InputError, refuse_other_kind
+
+    def parse(text: str) -> str:
+        output_file(text)
+        try:
+            refuse_other_kind(text, "", kind, is_kind)
+        except InputError as exc:
+            raise argparse.ArgumentTypeError(str(exc)) from None
+        return text
+
+    parse.__name__ = "file"
+    return parse
+
+
+def image_file(text: str) -> str:
+    """A screenshot or contact sheet to write: output_of_kind, an image."""
+    from engine.file_kinds import is_image_head
+
+    return output_of_kind("an image", is_image_head)(text)
+
+
+def trace_file(text: str) -> str:
+    """A Chrome trace to write: output_of_kind, a trace."""
+    from engine.file_kinds import is_trace_head
+
+    return output_of_kind("a Chrome trace", is_trace_head)(text)
+
+
+image_file.__name__ = trace_file.__name__ = "file"
+
+
 def existing_folder(path: str | os.PathLike) -> Path:
     """The nearest of `path`'s parents that exists (it may be a file: then nothing can be made
     under it): the folder in which a missing output folder would be made."""
@@ -140,9 +175,11 @@ output_file.__name__ = "file"
 
 
 def plot_file(text: str) -> str:
-    """output_file, in a format matplotlib writes (it goes by the suffix; none is PNG). Imports
-    matplotlib, so only commands given a plot pay for it."""
-    output_file(text)
+    """output_of_kind (an image or a document), in a format matplotlib writes (it goes by the
+    suffix; none is PNG). Imports matplotlib, so only commands given a plot pay for it."""
+    from engine.file_kinds import is_plot_head
+
+    output_of_kind("an image or a plot", is_plot_head)(text)
     try:
         from matplotlib.backend_bases import FigureCanvasBase
     except ImportError:  # the command says "--plot needs matplotlib" itself

@@ -44,8 +44,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--headless", action="store_true", help="no window: SDL dummy driver and a virtual clock (reproducible; a live serial:// or wiimote:// device runs on the real clock)")
     p.add_argument("--frames", type=arguments.positive_int, default=None,
                    help=f"stop after N rendered frames (default: until the window closes; {HEADLESS_FRAMES} with --headless)")
-    p.add_argument("--screenshot", type=arguments.output_file, metavar="PNG", help="save the last frame to this PNG")
-    p.add_argument("--trace", type=arguments.output_file, metavar="JSON", help="write the loop's Chrome trace here on exit")
+    p.add_argument("--screenshot", type=arguments.image_file, metavar="PNG", help="save the last frame to this PNG")
+    p.add_argument("--trace", type=arguments.trace_file, metavar="JSON", help="write the loop's Chrome trace here on exit")
     p.add_argument("--virtual-clock", action="store_true", help="a virtual clock in a real window: the same frames as --headless with a simulated source (tests; a live device too)")
     p.add_argument("--seed", type=arguments.seed, default=0, help="seed for the virtual player and anything random (default 0)")
     p.add_argument("--size", default="1280x720", help="window size WxH (default 1280x720; under 640x360 the text is hard to read)")

@@ -474,7 +474,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--profile", default=None, metavar="NAME", help="save as this player's templates (`play --profile NAME`; default: your default set)")
     p.add_argument("--headless", action="store_true", help="no window: SDL dummy driver, virtual clock (a live serial:// or wiimote:// device: the real clock)")
     p.add_argument("--frames", type=arguments.positive_int, default=None, help="stop after N rendered frames")
-    p.add_argument("--screenshot", type=arguments.output_file, metavar="PNG", help="save the last frame to this PNG")
+    p.add_argument("--screenshot", type=arguments.image_file, metavar="PNG", help="save the last frame to this PNG")
     p.add_argument("--seed", type=arguments.seed, default=0, help="seed of the virtual player's moves (default 0)")
     p.add_argument("--size", default="1280x720", help="window size WxH (default 1280x720; under 640x360 the text is hard to read)")
     p.add_argument("--recognizer", action="append", default=[], metavar="NAME=VALUE",

@@ -27,7 +27,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                             description="Draw a contact sheet PNG of every action's key frames (pygame).")
     # in the current folder, as templates build's templates.npz: docs/img/actions.png made a
     # docs/img/ wherever it ran; the repository's figure is `-o docs/img/actions.png` (docs/motion.md)
-    sheet.add_argument("-o", "--output", default="actions.png", type=arguments.path_argument,
+    sheet.add_argument("-o", "--output", default="actions.png", type=arguments.image_file,
                        help="PNG to write (default actions.png in the current folder)")
     sheet.add_argument("--dir", default=None, type=arguments.path_argument, help="action folder (default: the shipped library)")
     sheet.add_argument("--add", action="append", default=[], metavar="JSON_OR_DIR", type=arguments.path_argument,

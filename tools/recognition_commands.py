@@ -10,8 +10,10 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from engine import arguments
-from engine.errors import InputError, refuse_overwriting
+from engine.errors import InputError, refuse_other_kind, refuse_overwriting
+from engine.file_kinds import is_events_head
 from engine.frames import recording_frames
+from engine.npz_files import is_npz_head
 from engine.recognition import DualBufferRecognizer, Templates
 from engine.recognition.config import layered, parse_assignments
 from engine.recognition.templates import FEATURES, METHODS
@@ -265,14 +267,11 @@ def cmd_build(args: argparse.Namespace) -> int:
     if folders and len(inputs) > 1:
         raise InputError(f"{folders[0]}: a folder of trials is given alone (or give labelled recordings, one or more)")
     settings = parse_assignments(args.recognizer)
-    if folders:
-        where = folders[0]
-        refuse_overwriting({"-o": args.output}, [f for fs in trial_paths(where, args.glob).values() for f in fs])
-        trials = load_trials_dir(where, args.glob, prog="templates")
-    else:
-        where = ", ".join(inputs)
-        refuse_overwriting({"-o": args.output}, inputs)
-        trials = labelled_trials(inputs, args.lead, args.trials)
+    where = folders[0] if folders else ", ".join(inputs)
+    read = [f for fs in trial_paths(where, args.glob).values() for f in fs] if folders else inputs
+    refuse_overwriting({"-o": args.output}, read)
+    refuse_other_kind(args.output, "-o", "an .npz", is_npz_head)  # earlier templates are replaced
+    trials = load_trials_dir(where, args.glob, prog="templates") if folders else labelled_trials(inputs, args.lead, args.trials)
     kwargs = {k: v for k, v in (("method", args.method), ("feature", args.feature), ("keep", args.keep)) if v}
     templates = templates_from_trials(trials, where, **kwargs)
     if args.mirror:
@@ -287,6 +286,8 @@ def cmd_build(args: argparse.Namespace) -> int:
 
 def cmd_recognize(args: argparse.Namespace) -> int:
     refuse_overwriting({"-o": args.output}, [args.recording, args.templates])
+    if args.output:  # earlier events are replaced
+        refuse_other_kind(args.output, "-o", "the recognizer's events (JSON lines)", is_events_head)
     templates = Templates.load(args.templates)
     rec_file = read_recording(args.recording)
     say_notes(rec_file.notes, "recognize")

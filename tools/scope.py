@@ -348,8 +348,8 @@ def headless_env() -> None:
 def add_view_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--headless", action="store_true", help="no window: SDL dummy driver and a virtual clock (reproducible; a live serial:// or wiimote:// device runs on the real clock)")
     p.add_argument("--frames", type=arguments.positive_int, default=None, help="stop after N frames (default: until the window closes)")
-    p.add_argument("--screenshot", type=arguments.output_file, metavar="PNG", help="save the last frame to this PNG")
-    p.add_argument("--trace", type=arguments.output_file, metavar="JSON", help="write the loop's Chrome trace here on exit (read it with `quickjab profile`)")
+    p.add_argument("--screenshot", type=arguments.image_file, metavar="PNG", help="save the last frame to this PNG")
+    p.add_argument("--trace", type=arguments.trace_file, metavar="JSON", help="write the loop's Chrome trace here on exit (read it with `quickjab profile`)")
     p.add_argument("--seconds", type=arguments.float_range(0.0, 3600.0, lo_open=True), default=5.0, help="seconds shown across the window (default 5)")
     p.add_argument("--size", default="960x600", help="window size WxH (default 960x600)")
     p.add_argument("--range", type=arguments.float_range(0.1, 1000.0), default=None, metavar="G",

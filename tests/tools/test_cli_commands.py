@@ -202,6 +202,14 @@ def test_unwritable_output_is_one_line(tmp_path, shared_data):
 GOOD_REC = "t,rx,ry,rz,lx,ly,lz,label\n" + "".join(f"{i / 60:.6f},0.01,0.02,1.0,0.0,0.01,0.99,\n" for i in range(60))
 
 
+def _exit_code(argv: list[str]) -> int:
+    """main's exit code, whether it returns it or argparse exits with it (an option's type)."""
+    try:
+        return main(argv)
+    except SystemExit as exc:
+        return exc.code
+
+
 def _same_file_cases(d: Path) -> dict[str, tuple[list[str], Path]]:
     """name -> (argv whose output is one of its inputs, that input)."""
     rec, trial = d / "rec.csv", d / "trials" / "jab" / "1.csv"
@@ -234,14 +242,17 @@ def test_an_output_that_is_an_input_is_refused_before_it_is_written(tmp_path, ca
     """`recognize rec.csv -o rec.csv` emptied the recording, `templates build trials -o
     trials/jab/1.csv` wrote the templates over a trial, `bvh cut a.bvh -o a.bvh` replaced the
     capture with JSON, `record --source replay://a.csv -o a.csv` cut it to its first seconds:
-    each exited 0. Now: one line naming both, exit 2, the input as it was."""
+    each exited 0. Now: one line naming both, exit 2, the input as it was. (A screenshot, trace
+    or plot over an input of another kind is refused by its kind first, before the command runs.)"""
     monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "xdg"))
     argv, victim = _same_file_cases(tmp_path)[name]
     (tmp_path / "link.csv").symlink_to(tmp_path / "rec.csv")
     before = victim.read_bytes()
-    assert main(argv) == 2
+    assert _exit_code(argv) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert err[-1].startswith("quickjab") and "is the input" in err[-1] and str(victim) in err[-1], err
+    said = "is the input" if name in ("recognize-recording", "recognize-templates", "build-trial", "bvh-cut",
+                                      "record-replay", "record-replay-link") else "is there and is not"
+    assert err[-1].startswith("quickjab") and said in err[-1] and str(victim) in err[-1], err
     assert victim.read_bytes() == before
 
 
@@ -358,6 +369,13 @@ def test_actions_author_leaves_an_edited_action_of_its_folder(tmp_path, capsys):
 
 @pytest.mark.parametrize("argv, written", [
     (["synth", "--templates", "-o", "{out}"], "cut.json"),
+    (["templates", "build", "{trials}", "-o", "{out}"], "cut.json"),
+    (["recognize", "{rec}", "--templates", str(REPO / "game" / "assets" / "templates.npz"), "-o", "{out}"], "cut.json"),
+    (["play", "--headless", "--frames", "2", "--screenshot", "{out}"], "cut.json"),
+    (["play", "--headless", "--frames", "2", "--trace", "{out}"], "cut.json"),
+    (["scope", "--headless", "--frames", "2", "--trace", "{out}"], "cut.json"),
+    (["actions", "sheet", "-o", "{out}"], "cut.json"),
+    (["profile", "{trace}", "--plot", "{out}"], "cut.json"),
     (["graph", "build", "--quiet", "-o", "{out}"], "cut.json"),
     (["bvh", "export", "--play", "hook_r", "-o", "{out}"], "cut.json"),
     (["bvh", "export", "--play", "hook_r", "--opponent", "block", "-o", "{out}"], "cut_boxer1.json"),
@@ -365,13 +383,19 @@ def test_actions_author_leaves_an_edited_action_of_its_folder(tmp_path, capsys):
 def test_a_derived_output_is_not_written_over_a_file_of_another_kind(tmp_path, capsys, argv, written):
     """The tester: `synth --templates -o cut.json` wrote an .npz over an action JSON, `bvh export`
     and `graph build` replaced any file. An earlier output of the kind is replaced (their job);
-    a file plainly of another kind (by its first bytes) is refused in one line, before the work."""
+    a file plainly of another kind (by its first bytes) is refused in one line, before the work.
+    So are `templates build`, `recognize -o`, screenshots, traces, the contact sheet and plots,
+    which replaced any file (a recording given by mistake was lost)."""
+    inputs = tmp_path / "in"
+    _same_file_cases(inputs.mkdir() or inputs)  # a recording, trials and a trace to read
     theirs = tmp_path / written
     theirs.write_text('{"name": "x"}\n')
-    assert main([a.format(out=tmp_path / "cut.json") for a in argv]) == 2 and theirs.read_text() == '{"name": "x"}\n'
+    argv = [a.format(out=tmp_path / "cut.json", trials=inputs / "trials", rec=inputs / "rec.csv", trace=inputs / "trace")
+            for a in argv]
+    assert _exit_code(argv) == 2 and theirs.read_text() == '{"name": "x"}\n'
     err = capsys.readouterr().err
-    assert err.count("\n") == 1 and "is not a" in err and str(theirs) in err, err
-    assert sorted(p.name for p in tmp_path.iterdir()) == [written]
+    assert err.count("\n") == 1 and "is not " in err and str(theirs) in err, err
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted([written, "in"])
 
 
 def test_a_derived_output_replaces_an_earlier_one_of_its_kind(tmp_path):
@@ -388,3 +412,38 @@ def test_a_derived_output_replaces_an_earlier_one_of_its_kind(tmp_path):
     assert is_npz_head((tmp_path / "a.npz").read_bytes()[:64]) and is_npz_head((tmp_path / "empty.zip").read_bytes())
     assert is_bvh_head(out.read_bytes()[:64]) and is_bvh_head(b"\xef\xbb\xbf  hierarchy\n")
     assert not is_npz_head(b'{"name": "x"}') and not is_bvh_head(b'{"name": "x"}')
+    from engine.file_kinds import is_events_head, is_image_head, is_plot_head, is_trace_head
+
+    rec, action, bvh = GOOD_REC.encode()[:64], b'{"name": "jab_l", "kind": "attack"}', b"HIERARCHY\nROOT Hips\n"
+    for other in (rec, action, bvh, b"PK\x03\x04" + bytes(60)):  # a recording, an action, a BVH, an .npz
+        assert not any(is_kind(other) for is_kind in (is_image_head, is_plot_head, is_trace_head, is_events_head))
+    assert is_trace_head(b'\xef\xbb\xbf {\n "traceEvents": [') and is_trace_head(b"[]") and not is_trace_head(b'{"event"')
+    assert is_events_head(b'{"event": "start"') and not is_events_head(b'{"traceEvents": []}')
+
+
+@pytest.mark.parametrize("argv, out", [
+    (["play", "--headless", "--frames", "2", "--screenshot", "{out}"], "shot.png"),
+    (["play", "--headless", "--frames", "2", "--screenshot", "{out}"], "shot.jpg"),
+    (["play", "--headless", "--frames", "2", "--screenshot", "{out}"], "shot.bmp"),
+    (["play", "--headless", "--frames", "2", "--screenshot", "{out}"], "shot"),  # pygame: TGA
+    (["play", "--headless", "--frames", "2", "--trace", "{out}"], "trace.json"),
+    (["recognize", "{rec}", "--templates", str(REPO / "game" / "assets" / "templates.npz"), "-o", "{out}"], "ev.jsonl"),
+    (["profile", "{trace}", "--plot", "{out}"], "plot.svg"),
+    (["profile", "{trace}", "--plot", "{out}"], "plot.pdf"),
+    (["profile", "{trace}", "--plot", "{out}"], "plot.eps"),
+])
+def test_a_screenshot_trace_events_or_plot_replaces_an_earlier_one(tmp_path, capsys, argv, out):
+    """What each command writes is of the kind its check lets it replace: run twice, the second
+    run replaces the first one's file (a check too strict would refuse the command's own output)."""
+    inputs = tmp_path / "in"
+    _same_file_cases(inputs.mkdir() or inputs)
+    if "--plot" in argv:
+        pytest.importorskip("matplotlib")
+        assert main(["play", "--headless", "--frames", "5", "--trace", str(inputs / "trace")]) == 0  # a loop's trace
+    swing = [2.5 * np.sin(np.pi * i / 20) if 60 <= i < 80 else 0.01 for i in range(140)]  # events to write
+    (inputs / "rec.csv").write_text("t,rx,ry,rz,lx,ly,lz,label\n" + "".join(
+        f"{i / 60:.6f},{x:.4f},0.02,1.0,0.0,0.01,0.99,\n" for i, x in enumerate(swing)))
+    argv = [a.format(out=tmp_path / out, rec=inputs / "rec.csv", trace=inputs / "trace") for a in argv]
+    for _ in range(2):
+        assert main(argv) == 0, capsys.readouterr().err
+        assert (tmp_path / out).stat().st_size > 0
