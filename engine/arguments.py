@@ -141,7 +141,6 @@ def output_of_kind(kind: str, is_kind: Callable[[bytes], bool]) -> Callable[[str
             raise argparse.ArgumentTypeError(str(exc)) from None
         return text
 
-    parse.__name__ = "file"
     return parse
 
 
