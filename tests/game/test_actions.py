@@ -214,9 +214,11 @@ def test_a_contact_sheet_over_a_folder_is_one_line(tmp_path, capsys):
     for target in (tmp_path, tmp_path / "sheet.png"):
         if target != tmp_path:
             target.mkdir()
-        assert main(["actions", "sheet", "-o", str(target)]) == 2
+        with pytest.raises(SystemExit) as exit_:  # refused by -o's type, before the drawing
+            main(["actions", "sheet", "-o", str(target)])
         err = capsys.readouterr().err.strip().splitlines()
-        assert len(err) == 1 and err[0].startswith(f"quickjab actions: {target}"), err
+        assert exit_.value.code == 2 and len(err) == 1, err
+        assert err[0].startswith(f"quickjab actions sheet: argument -o/--output: {target} is a directory"), err
 
 
 def test_contact_sheet_command_draws_every_action(tmp_path):
