@@ -16,6 +16,7 @@ import json
 import math
 import os
 import stat
+from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
@@ -74,17 +75,33 @@ def _enclose(open_events: list[dict], event: dict) -> None:
 
 def chrome_trace(budget: FrameBudget) -> dict:
     """The frames and spans `budget` holds as a Chrome trace (a dict ready for json.dumps)."""
-    frames = budget.frame_rows()
-    spans = budget.span_rows()
-    events: list[dict] = [
+    events = [event for batch in _event_batches(budget) for event in batch]
+    return {"traceEvents": events, "displayTimeUnit": "ms", "otherData": _other_data(budget)}
+
+
+def _trace_text(budget: FrameBudget) -> Iterator[str]:
+    """json.dumps(chrome_trace(budget)), the same text, a frame's events at a time: the whole
+    list of an hour's events as dicts took 64 MB more at the end of a `play --trace` (a lot on a
+    small board), one frame's a few kB."""
+    yield '{"traceEvents": ['
+    sep = ""
+    for batch in _event_batches(budget):
+        if batch:
+            yield sep + json.dumps(batch)[1:-1]  # the list's items, as the whole list writes them
+            sep = ", "
+    yield '], "displayTimeUnit": "ms", "otherData": ' + json.dumps(_other_data(budget)) + "}"
+
+
+def _event_batches(budget: FrameBudget) -> Iterator[list[dict]]:
+    """The trace's events in order: the M events naming the process and thread, then each
+    recorded frame's events (_frame_events)."""
+    yield [
         {"ph": "M", "name": "process_name", "pid": PID, "tid": TID, "args": {"name": "quickjab"}},
         {"ph": "M", "name": "thread_name", "pid": PID, "tid": TID, "args": {"name": "main loop"}},
     ]
-    other = _other_data(budget)
-    if len(frames) == 0:
-        return {"traceEvents": events, "displayTimeUnit": "ms", "otherData": other}
-    events += _frame_events(budget, frames, spans)
-    return {"traceEvents": events, "displayTimeUnit": "ms", "otherData": other}
+    frames = budget.frame_rows()
+    if len(frames):
+        yield from _frame_events(budget, frames, budget.span_rows())
 
 
 def _other_data(budget: FrameBudget) -> dict:
@@ -100,10 +117,10 @@ def _other_data(budget: FrameBudget) -> dict:
     }
 
 
-def _frame_events(budget: FrameBudget, frames: np.ndarray, spans: np.ndarray) -> list[dict]:
-    """Per recorded frame (rows `frames`, at least one): its X event, its spans' X events (rows
-    `spans`) and its two C events, times from the first frame's start."""
-    events: list[dict] = []
+def _frame_events(budget: FrameBudget, frames: np.ndarray, spans: np.ndarray) -> Iterator[list[dict]]:
+    """Per recorded frame (rows `frames`, at least one), once its spans have lengthened it: its
+    X event, its spans' X events (rows `spans`) and its two C events, times from the first
+    frame's start."""
     origin = int(budget.f_start[frames[0]])
     first_frame = budget.frames - len(frames)
     names = [s.name for s in budget.stages]
@@ -129,7 +146,7 @@ def _frame_events(budget: FrameBudget, frames: np.ndarray, spans: np.ndarray) ->
                 "overrun": work > budget.frame_period_ms * 1e6,
             },
         }
-        events.append(frame_event)
+        events = [frame_event]
         rows = spans[bounds[j]: bounds[j + 1]]
         # in time order, the outer of two that start together first: a span is recorded when it
         # ends, so the ring holds it before the stage around it (ts went back on the thread)
@@ -154,7 +171,7 @@ def _frame_events(budget: FrameBudget, frames: np.ndarray, spans: np.ndarray) ->
             "ph": "C", "name": "dropped_steps", "pid": PID, "tid": TID, "ts": _us(end - origin),
             "args": {"dropped": dropped_total},
         })
-    return events
+        yield events
 
 
 def _span_event(budget: FrameBudget, r: int, name: str, limit_ns: float, origin: int) -> dict:
@@ -174,9 +191,8 @@ def _span_event(budget: FrameBudget, r: int, name: str, limit_ns: float, origin:
 
 def write_chrome_trace(budget: FrameBudget, path: str | os.PathLike) -> None:
     try:
-        data = json.dumps(chrome_trace(budget)).encode("utf-8")
         Path(path).parent.mkdir(parents=True, exist_ok=True)  # `--trace new/t.json`: made, as every output's folder
-        write_replacing(path, lambda f: f.write(data))  # whole, or the previous trace as it was
+        write_replacing(path, lambda f: f.writelines(text.encode("utf-8") for text in _trace_text(budget)))  # whole, or the previous trace as it was
     except OSError as exc:  # a full disk's ENOSPC names no file
         raise TraceError(f"{path}: cannot write the trace ({exc.strerror or exc})") from None
 

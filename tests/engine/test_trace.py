@@ -119,6 +119,19 @@ def test_trace_file_is_valid_chrome_trace_json(tmp_path):
         assert total == pytest.approx(f["dur"], abs=0.01)
 
 
+@pytest.mark.parametrize("frames, capacity", [(40, None), (60, 16), (0, None)])
+def test_the_written_trace_is_the_trace_as_one_json_text(tmp_path, frames, capacity):
+    """The file is written a frame's events at a time (an hour's events as dicts took 64 MB at
+    the end of a match); its text is json.dumps of the whole trace, byte for byte: a ring that
+    wrapped, and no frames at all, too."""
+    loop = traced_loop(frames=frames, capacity=capacity or 3600)
+    path = tmp_path / "trace.json"
+    write_chrome_trace(loop.budget, path)
+    doc = chrome_trace(loop.budget)
+    assert len(doc["traceEvents"]) > (2 if frames else 1)
+    assert path.read_text() == json.dumps(doc)
+
+
 def test_trace_of_a_real_clock_run_is_valid(tmp_path):
     loop = traced_loop(clock=RealClock(), frames=6)
     check_chrome_trace(chrome_trace(loop.budget))
