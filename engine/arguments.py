@@ -124,7 +124,23 @@ def output_file(text: str) -> str:
         raise argparse.ArgumentTypeError(f"{text}: {folder} is not a directory")
     if not os.access(folder, os.W_OK):
         raise argparse.ArgumentTypeError(f"{text}: cannot write in {folder}")
+    if folder == Path(text).parent and not os.path.lexists(text):
+        _try_creating(text)
     return text
+
+
+def _try_creating(text: str) -> None:
+    """Create the file `text` (which is not there) and remove it at once: os.access passes for
+    root where nothing can be made (/proc, /sys, a read-only mount), so a match was played whole
+    before its trace was refused. O_EXCL: a file that appeared meanwhile is never touched."""
+    try:
+        fd = os.open(text, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
+    except FileExistsError:
+        return
+    except OSError as exc:
+        raise argparse.ArgumentTypeError(f"{text}: cannot write there ({exc.strerror})") from None
+    os.close(fd)
+    os.unlink(text)
 
 
 def output_of_kind(kind: str, is_kind: Callable[[bytes], bool]) -> Callable[[str], str]:
