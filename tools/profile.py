@@ -87,7 +87,7 @@ def profile_summary(trace: dict) -> dict:
 
 def _frames_total(other: dict, held: int) -> int:
     """The run's frames, otherData.frames_total: more than the `held` frames in the trace when
-    the loop's ring kept only the last ones. A value that is not a count is ignored, not refused."""
+    the loop's ring kept only the last ones (read_chrome_trace refuses one that is not a count)."""
     total = other.get("frames_total")
     if isinstance(total, int) and not isinstance(total, bool) and 0 <= total <= 10**12:
         return max(total, held)
