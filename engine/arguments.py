@@ -191,19 +191,23 @@ output_file.__name__ = "file"
 
 def plot_file(text: str) -> str:
     """output_of_kind (an image or a document), in a format matplotlib writes (it goes by the
-    suffix; none is PNG). Imports matplotlib, so only commands given a plot pay for it."""
+    suffix). Returns the path matplotlib writes: with no suffix it adds `.png` (`--plot p/noext`
+    wrote p/noext.png while the command named p/noext, and the checks were of p/noext). Imports
+    matplotlib, so only commands given a plot pay for it."""
     from engine.file_kinds import is_plot_head
 
-    output_of_kind("an image or a plot", is_plot_head)(text)
+    path_argument(text)
+    suffix = os.path.splitext(text)[1][1:].lower()  # as matplotlib's savefig reads it
+    written = text if suffix else text.rstrip(".") + ".png"  # savefig's default format
+    output_of_kind("an image or a plot", is_plot_head)(written)
     try:
         from matplotlib.backend_bases import FigureCanvasBase
     except ImportError:  # the command says "--plot needs matplotlib" itself
-        return text
+        return written
     formats = FigureCanvasBase.get_supported_filetypes()
-    suffix = Path(text).suffix[1:].lower()
     if suffix and suffix not in formats:
         raise argparse.ArgumentTypeError(f"{text}: matplotlib writes no .{suffix} (" + ", ".join(sorted(formats)) + ")")
-    return text
+    return written
 
 
 plot_file.__name__ = "plot file"

@@ -76,6 +76,19 @@ def test_plot_draws_a_png(traced, tmp_path, capsys):
     assert np.unique(img.reshape(-1, img.shape[2]), axis=0).shape[0] > 20  # more than a blank canvas
 
 
+@pytest.mark.parametrize("name, written", [("noext", "noext.png"), ("dot.", "dot.png"), ("p.svg", "p.svg")])
+def test_a_plot_says_the_file_it_wrote(traced, tmp_path, capsys, name, written):
+    """`--plot p/noext` wrote noext.png without a word (matplotlib adds its default format's
+    suffix), and no plot said where it went, as other commands' outputs do."""
+    _, path = traced
+    out = tmp_path / "p" / name
+    assert main(["profile", str(path), "--plot", str(out), "--json"]) == 0
+    stdout, err = capsys.readouterr()
+    json.loads(stdout)  # the JSON alone on stdout
+    assert err.splitlines() == [f"quickjab profile: wrote {tmp_path / 'p' / written}"]
+    assert sorted(p.name for p in (tmp_path / "p").iterdir()) == [written]
+
+
 def test_a_plot_matplotlib_cannot_write_is_refused_before_the_summary(traced, tmp_path, capsys):
     _, path = traced
     with pytest.raises(SystemExit) as exit_:  # was a ValueError traceback after the summary
