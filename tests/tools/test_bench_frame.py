@@ -178,7 +178,7 @@ def test_bench_frame_ended_by_sigterm_exits_130_and_reports_nothing(tmp_path) ->
 
     env = {"XDG_DATA_HOME": str(tmp_path), "PATH": "/usr/bin:/bin", "SDL_VIDEODRIVER": "dummy",
            "SDL_AUDIODRIVER": "dummy", "PYTHONPATH": str(REPO)}
-    p = subprocess.Popen([sys.executable, "-m", "tools.cli", "bench", "frame", "--steps", "1000000", "--repeats", "1",
+    p = subprocess.Popen([sys.executable, "-m", "tools.cli", "bench", "frame", "--steps", "216000", "--repeats", "1",
                           "--no-naive", "--realtime-seconds", "0", "--size", "320x180"], cwd=REPO, env=env,
                          stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
