@@ -124,7 +124,23 @@ def output_file(text: str) -> str:
         raise argparse.ArgumentTypeError(f"{text}: {folder} is not a directory")
     if not os.access(folder, os.W_OK):
         raise argparse.ArgumentTypeError(f"{text}: cannot write in {folder}")
+    if folder == Path(text).parent and not os.path.lexists(text):
+        _try_creating(text)
     return text
+
+
+def _try_creating(text: str) -> None:
+    """Create the file `text` (which is not there) and remove it at once: os.access passes for
+    root where nothing can be made (/proc, /sys, a read-only mount), so a match was played whole
+    before its trace was refused. O_EXCL: a file that appeared meanwhile is never touched."""
+    try:
+        fd = os.open(text, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
+    except FileExistsError:
+        return
+    except OSError as exc:
+        raise argparse.ArgumentTypeError(f"{text}: cannot write there ({exc.strerror})") from None
+    os.close(fd)
+    os.unlink(text)
 
 
 def output_of_kind(kind: str, is_kind: Callable[[bytes], bool]) -> Callable[[str], str]:
@@ -175,19 +191,23 @@ output_file.__name__ = "file"
 
 def plot_file(text: str) -> str:
     """output_of_kind (an image or a document), in a format matplotlib writes (it goes by the
-    suffix; none is PNG). Imports matplotlib, so only commands given a plot pay for it."""
+    suffix). Returns the path matplotlib writes: with no suffix it adds `.png` (`--plot p/noext`
+    wrote p/noext.png while the command named p/noext, and the checks were of p/noext). Imports
+    matplotlib, so only commands given a plot pay for it."""
     from engine.file_kinds import is_plot_head
 
-    output_of_kind("an image or a plot", is_plot_head)(text)
+    path_argument(text)
+    suffix = os.path.splitext(text)[1][1:].lower()  # as matplotlib's savefig reads it
+    written = text if suffix else text.rstrip(".") + ".png"  # savefig's default format
+    output_of_kind("an image or a plot", is_plot_head)(written)
     try:
         from matplotlib.backend_bases import FigureCanvasBase
     except ImportError:  # the command says "--plot needs matplotlib" itself
-        return text
+        return written
     formats = FigureCanvasBase.get_supported_filetypes()
-    suffix = Path(text).suffix[1:].lower()
     if suffix and suffix not in formats:
         raise argparse.ArgumentTypeError(f"{text}: matplotlib writes no .{suffix} (" + ", ".join(sorted(formats)) + ")")
-    return text
+    return written
 
 
 plot_file.__name__ = "plot file"

@@ -10,9 +10,13 @@ ends on Ctrl-C (its files written, its summary said, its usual exit status).
 from __future__ import annotations
 
 import contextlib
+import functools
 import signal
 import sys
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
+from typing import TypeVar
+
+F = TypeVar("F", bound=Callable)
 
 STOP_SIGNALS = tuple(filter(None, (signal.SIGTERM, getattr(signal, "SIGHUP", None))))  # Windows has no SIGHUP
 
@@ -60,6 +64,19 @@ def stop_signals_as_ctrl_c() -> Iterator[None]:
     finally:
         for sig, handler in previous.items():
             signal.signal(sig, handler)
+
+
+def ends_as_ctrl_c(run: F) -> F:
+    """`run` (a command's) inside stop_signals_as_ctrl_c(): for a command that starts pygame, where
+    SDL otherwise made SIGTERM a quit event the loop took for a closed window or the end of a
+    match (`bench frame` went on to its next run and reported the cut run as a pass, exit 0)."""
+
+    @functools.wraps(run)
+    def guarded(*args, **kwargs):
+        with stop_signals_as_ctrl_c():
+            return run(*args, **kwargs)
+
+    return guarded  # type: ignore[return-value]
 
 
 def as_worker() -> None:

@@ -6,7 +6,8 @@ Time is an integer accumulator in units of ns x hz, so one step is exactly 1e9 u
 never carried: no spiral of death), render with the interpolation alpha, then wait for the
 absolute deadline of the next frame. Deadlines are absolute (anchor + k periods, so waiting
 never accumulates drift) and reset to a fresh anchor after a stall (so a hitch is not
-followed by a burst of zero-wait frames).
+followed by a burst of zero-wait frames); a wait never ends before the next step is due (so a
+frame after a late wake-up does not render again with no step run).
 
 Stages receive the step index and dt; none reads a clock. Every stage and the render are
 timed with perf_counter_ns into a FrameBudget. See docs/engine.md.
@@ -186,18 +187,36 @@ class FixedStepLoop:
         self.frame_index += 1
         return run
 
+    def _next_step_due_ns(self) -> int:
+        # the instant the accumulator holds a whole step again: a frame woken before it would
+        # find no step to run and render the same state again
+        return self._last_ns + -(-(NS_PER_S - self._acc) // self.hz)
+
     def _wait_next_deadline(self) -> None:
         self._deadline_k += 1
         deadline = self._anchor_ns + self._frame_period_ns(self._deadline_k)
         now = self.clock.now_ns()
+        due = self._next_step_due_ns()
         if now > deadline + self._frame_period_ns(1):
-            # stalled: more than a whole frame late; start a fresh schedule from now
-            self._anchor_ns, self._deadline_k = now, 0
+            # stalled: start a fresh schedule. If steps are owed already (the stall was inside
+            # this frame) the next frame is an immediate catch-up frame; if this frame was the
+            # catch-up (its wait before it returned late) the schedule starts at the next step's
+            # due time, so no frame renders with nothing run
+            self._anchor_ns, self._deadline_k = max(now, due), 0
             self.stalls += 1
-            self.last_lateness_ns = now - deadline
-            return
-        self.clock.wait_until(deadline)
-        self.last_lateness_ns = self.clock.now_ns() - deadline
+            if due <= now:
+                self.last_lateness_ns = now - deadline
+                return
+            target = due
+        else:
+            # a frame that ran late already caught up the steps of the deadline just missed:
+            # skip to the first deadline of the schedule at which a step is due again
+            while deadline < due:  # at most a step and a period on: a few turns
+                self._deadline_k += 1
+                deadline = self._anchor_ns + self._frame_period_ns(self._deadline_k)
+            target = deadline
+        self.clock.wait_until(target)
+        self.last_lateness_ns = self.clock.now_ns() - target
 
     def run(
         self,

@@ -198,7 +198,14 @@ def write_chrome_trace(budget: FrameBudget, path: str | os.PathLike) -> None:
 
 
 MAX_TRACE_BYTES = 256 * 2**20  # over an hour of play; parsed JSON takes ~10x its text
-_MAX_COUNT = 10**9  # steps or dropped steps in one frame: anything above is not a count
+_MAX_COUNT = 10**9  # dropped steps in one frame: anything above is not a count
+# A frame runs at most the loop's max_steps (5 by default); this leaves room for any loop set up
+# otherwise and refuses what no loop runs (1e9 made "1000000299 steps")
+_MAX_FRAME_STEPS = 1000
+# a loop's step budget and frame period: 0.1 ms (10 kHz) to 10 s (0.1 Hz); 1e300 or 1e-300 printed
+# 300-digit numbers and garbled the table's header. A stage budget is at most the same 10 s.
+_PERIOD_MS = (0.1, 10_000.0)
+_MAX_RUN_COUNT = 10**12  # otherData's totals of a run (frames, dropped steps, frames over period)
 _FRAME_ARGS_NUMBERS = ("wait_us", "unaccounted_us")
 _FRAME_ARGS_COUNTS = ("steps", "dropped")
 
@@ -239,6 +246,8 @@ def _bad_event(ev: object) -> str | None:
         for k in _FRAME_ARGS_COUNTS:
             if k in args and not (_number(args[k]) and 0 <= args[k] <= _MAX_COUNT):
                 return f"(frame) has args.{k} that is not a count"
+        if "steps" in args and args["steps"] > _MAX_FRAME_STEPS:
+            return f"(frame) has args.steps {args['steps']:.6g}, more than a loop runs in a frame ({_MAX_FRAME_STEPS})"
     return None
 
 
@@ -256,15 +265,22 @@ def _bad_other(other: object) -> str | None:
     """Why otherData cannot be used (budgets must be positive finite numbers), or None."""
     if not isinstance(other, dict):
         return "otherData is not an object"
+    lo, hi = _PERIOD_MS
     for k in ("frame_budget_ms", "frame_period_ms"):
         if other.get(k) is not None and not (_number(other[k]) and other[k] > 0):
             return f"otherData.{k} is not a positive number of milliseconds"
+        if other.get(k) is not None and not lo <= other[k] <= hi:
+            return f"otherData.{k} {other[k]:.6g} is out of range: a loop's is {lo:g} to {hi:g} ms"
+    for k in ("frames_total", "dropped_steps", "frame_overruns"):
+        n = other.get(k)
+        if n is not None and not (isinstance(n, int) and not isinstance(n, bool) and 0 <= n <= _MAX_RUN_COUNT):
+            return f"otherData.{k} is not a count (0 to {_MAX_RUN_COUNT:.0e})"
     stages = other.get("stages")
     if stages is not None and not isinstance(stages, dict):
         return "otherData.stages is not an object"
     for name, v in (stages or {}).items():
-        if isinstance(v, dict) and v.get("budget_ms") is not None and not (_number(v["budget_ms"]) and v["budget_ms"] >= 0):
-            return f"otherData.stages[{name!r}].budget_ms is not a number of milliseconds"
+        if isinstance(v, dict) and v.get("budget_ms") is not None and not (_number(v["budget_ms"]) and 0 <= v["budget_ms"] <= hi):
+            return f"otherData.stages[{name!r}].budget_ms is not a number of milliseconds from 0 to {hi:g}"
     return None
 
 

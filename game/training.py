@@ -30,6 +30,7 @@ import numpy as np
 from engine import arguments
 from engine.clock import STEP_HZ
 from engine.errors import InputError, refuse_overwriting
+from engine.interrupt import ends_as_ctrl_c
 from engine.sensors.source import PLAYABLE, SourceState, missing_in_short, missing_part
 from game.launch import (
     KEYBOARD_SOURCE,
@@ -786,6 +787,7 @@ class _TrainingStages:
         pygame.display.flip()
 
 
+@ends_as_ctrl_c  # before pygame starts: SDL made SIGTERM a closed window
 def run(args: argparse.Namespace) -> int:
     size = parse_window_size(args.size, args.headless, "train")
     from engine.recognition.config import parse_assignments

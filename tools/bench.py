@@ -6,6 +6,8 @@ from __future__ import annotations
 import argparse
 import importlib
 
+from engine.interrupt import ends_as_ctrl_c
+
 # target name -> module; each is imported when the parser is built (for its arguments),
 # so a target module imports what it measures (the recognizer, the physics, the Wiimote driver,
 # the serial bridge, the game) inside run() and the functions run() calls, never at its top:
@@ -30,7 +32,9 @@ def register(sub: argparse._SubParsersAction) -> None:
         mod = importlib.import_module(module)
         tp = targets.add_parser(name, help=summary(mod.__doc__), description=mod.__doc__)
         mod.add_arguments(tp)
-        tp.set_defaults(func=mod.run)
+        # SIGTERM and SIGHUP end a bench as Ctrl-C does (exit 130, no figures): SDL made SIGTERM a
+        # quit event that `bench frame` took for the end of its match, and reported the cut run
+        tp.set_defaults(func=ends_as_ctrl_c(mod.run))
 
 
 def summary(doc: str | None) -> str:

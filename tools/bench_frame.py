@@ -32,6 +32,7 @@ import numpy as np
 
 from engine import arguments
 from engine.clock import STEP_MS
+from engine.errors import InputError
 
 BUDGET_MS = STEP_MS
 SIM_TARGET_P99_MS = 1.5  # everything but rendering, per step (issue 9)
@@ -39,18 +40,25 @@ RENDER_TARGET_P99_MS = {"full": 8.0, "low_power": 4.0}
 SIM_TARGET_P99_MS_TWO_PLAYERS = 1.2  # two recognizers and two sources (issue 19)
 # issue 14 (low-power boards): the full mode's simulation and render p99s at 1280x720
 LOW_POWER_BOARD_TARGETS_MS = {"sim": 1.2, "render": 6.0}
+# Every count bounded (each timed call is kept, per run: an hour's steps is ~35 MB of timings, and
+# --steps 1e12 was a memory error); the runs together too, each bound alone allowing 100 hours.
+MAX_STEPS = 216_000  # an hour at 60 Hz
+MAX_REPEATS = 100
+MAX_WORK = 3 * MAX_STEPS  # steps x repeats: three hour-long runs
+MAX_REALTIME_S = 3600.0
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--steps", type=arguments.positive_int, default=3600, help="steps of the scripted match (default 3600: one minute)")
+    p.add_argument("--steps", type=arguments.int_range(1, MAX_STEPS), default=3600,
+                   help=f"steps of the scripted match (default 3600: one minute; at most {MAX_STEPS})")
     p.add_argument("--low-power", action="store_true", help="measure the low-power mode instead of the full one")
     p.add_argument("--all-modes", action="store_true", help="measure both the full and the low-power mode")
-    p.add_argument("--repeats", type=arguments.positive_int, default=3,
+    p.add_argument("--repeats", type=arguments.int_range(1, MAX_REPEATS), default=3,
                    help="runs of the same deterministic match; the per-step minimum is the least-disturbed time (default 3)")
     p.add_argument("--no-naive", action="store_true", help="skip the naive peer")
-    p.add_argument("--realtime-seconds", type=arguments.float_range(0.0), default=10.0,
+    p.add_argument("--realtime-seconds", type=arguments.float_range(0.0, MAX_REALTIME_S), default=10.0,
                    help="seconds of the real-clock 60 Hz run for real dropped steps (0 skips; default 10)")
-    p.add_argument("--seed", type=int, default=0, help="match seed (default 0)")
+    p.add_argument("--seed", type=arguments.seed, default=0, help="match seed (default 0)")
     p.add_argument("--size", default="1280x720", help="render surface WxH (default 1280x720)")
     p.add_argument("--templates", metavar="NPZ", type=arguments.path_argument, help="recognition templates (default: shipped, else synthesized)")
     p.add_argument("--graph", metavar="NPZ", type=arguments.path_argument, help="Interaction Graph table (default: the shipped one)")
@@ -271,6 +279,9 @@ def realtime(args: argparse.Namespace, size: tuple[int, int], low_power: bool) -
 def run(args: argparse.Namespace) -> int:
     from game.launch import parse_size
 
+    if args.steps * args.repeats > MAX_WORK:
+        raise InputError(f"--steps {args.steps} x --repeats {args.repeats} is {args.steps * args.repeats:,} steps, "
+                         f"over {MAX_WORK:,} (three hour-long matches): give fewer")
     size = parse_size(args.size)
     modes = ["full", "low_power"] if args.all_modes else ["low_power" if args.low_power else "full"]
     if not args.no_naive:

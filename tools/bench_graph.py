@@ -21,10 +21,11 @@ from engine import arguments
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--graph", default=None, type=arguments.path_argument,
                    help="time loading/looking up this file instead of building one")
-    p.add_argument("--states", type=arguments.int_range(10), default=60000, help="states of the graph to build")
+    p.add_argument("--states", type=arguments.int_range(10, 1_000_000), default=60000,
+                   help="states of the graph to build (at most 1000000, as graph build)")
     p.add_argument("--seed", type=arguments.seed, default=0, help="seed of the build and the look-ups (default 0)")
-    p.add_argument("--lookups", type=arguments.positive_int, default=20000, help="situations to look up")
-    p.add_argument("--loads", type=arguments.positive_int, default=5, help="load repetitions (median reported)")
+    p.add_argument("--lookups", type=arguments.int_range(1, 1_000_000), default=20000, help="situations to look up (at most 1000000)")
+    p.add_argument("--loads", type=arguments.int_range(1, 1000), default=5, help="load repetitions (median reported)")
     p.add_argument("--json", action="store_true", help="print JSON instead of a table")
 
 

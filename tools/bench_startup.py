@@ -49,7 +49,7 @@ def kernel_report() -> tuple[str, dict]:
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--runs", type=arguments.positive_int, default=5, help="runs of each (default 5)")
+    p.add_argument("--runs", type=arguments.int_range(1, 1000), default=5, help="runs of each (default 5; at most 1000)")
     p.add_argument("--json", action="store_true", help="print the figures as JSON")
 
 

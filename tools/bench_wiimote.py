@@ -22,7 +22,9 @@ STEP_NS = 16_666_667
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--seconds", type=arguments.positive_float, default=20.0, help="virtual seconds per session")
+    # at most an hour, as bench serial's: 1e12 s was a numpy memory error (a traceback)
+    p.add_argument("--seconds", type=arguments.float_range(0.0, 3600.0, lo_open=True), default=20.0,
+                   help="virtual seconds per session (default 20; at most 3600)")
     p.add_argument("--json", action="store_true", help="print JSON instead of a table")
 
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import sys
 from collections import Counter
 
 import numpy as np
@@ -87,7 +88,7 @@ def profile_summary(trace: dict) -> dict:
 
 def _frames_total(other: dict, held: int) -> int:
     """The run's frames, otherData.frames_total: more than the `held` frames in the trace when
-    the loop's ring kept only the last ones. A value that is not a count is ignored, not refused."""
+    the loop's ring kept only the last ones (read_chrome_trace refuses one that is not a count)."""
     total = other.get("frames_total")
     if isinstance(total, int) and not isinstance(total, bool) and 0 <= total <= 10**12:
         return max(total, held)
@@ -287,7 +288,8 @@ def run(args: argparse.Namespace) -> int:
     trace = read_chrome_trace(args.trace)
     summary = profile_summary(trace)
     if args.plot:
-        plot_profile(trace, summary, args.plot)
+        plot_profile(trace, summary, args.plot)  # args.plot is the file written (a .png added to none)
+        print(f"quickjab profile: wrote {args.plot}", file=sys.stderr)  # stderr: --json's stdout stays JSON
     public = {k: v for k, v in summary.items() if not k.startswith("_")}
     print(json.dumps(public, indent=2) if args.json else format_table(public))
     return 0

@@ -22,6 +22,7 @@ import numpy as np
 from engine import arguments
 from engine.clock import RealClock, VirtualClock
 from engine.errors import InputError, refuse_overwriting
+from engine.interrupt import ends_as_ctrl_c
 from engine.loop import FixedStepLoop
 from engine.sensors import Sample, Source, SourceError, SourceState, open_source
 from engine.sensors.rate import RateMeter
@@ -305,16 +306,22 @@ def run_scope(
     loop.add_stage("poll", scope.poll, budget_ms=1.0)
     loop.set_render(scope.render, budget_ms=8.0)
     try:
-        loop.run(frames=frames, until=lambda: scope.quit)
-        if screenshot:
-            from game.launch import save_image
-
-            save_image(scope.screen, screenshot)  # a file it cannot write whole: an InputError naming it
-        if trace:
-            write_chrome_trace(loop.budget, trace)
+        try:
+            loop.run(frames=frames, until=lambda: scope.quit)
+        finally:  # also on Ctrl-C, SIGTERM or SIGHUP (KeyboardInterrupt), as play writes its files
+            _write_files(scope, screenshot, trace)
     finally:
         scope.close()
     return scope
+
+
+def _write_files(scope: Scope, screenshot: str | None, trace: str | None) -> None:
+    if screenshot:
+        from game.launch import save_image
+
+        save_image(scope.screen, screenshot)  # a file it cannot write whole: an InputError naming it
+    if trace:
+        write_chrome_trace(scope.loop.budget, trace)
 
 
 def open_with_fallback(url: str, clock: Callable[[], float], default: str = "wiimote://",
@@ -379,6 +386,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=run)
 
 
+@ends_as_ctrl_c  # before pygame starts: SDL made SIGTERM a closed window (exit 0)
 def run(args: argparse.Namespace) -> int:
     from engine.sensors.source import url_file
     from game.launch import open_on_run_clock

@@ -293,3 +293,40 @@ def test_a_stall_past_the_clamp_accounts_for_every_step_too(stall_ms):
     assert loop.dropped_steps > 0
     total = loop.step_index + loop.dropped_steps + loop.alpha
     assert total == pytest.approx(clock.now_ns() / STEP_NS, abs=1e-6)
+
+
+class LateWakeClock(VirtualClock):
+    """A virtual clock whose `at_wait`-th wait returns `late_ns` after its deadline: a sleep that
+    overslept (the OS ran something else) rather than a stage that stalled."""
+
+    def __init__(self, late_ns: int, at_wait: int):
+        super().__init__()
+        self.late_ns, self.at_wait, self.waits = late_ns, at_wait, 0
+
+    def wait_until(self, deadline_ns: int) -> None:
+        super().wait_until(deadline_ns)
+        self.waits += 1
+        if self.waits == self.at_wait:
+            self.now += self.late_ns
+
+
+@pytest.mark.parametrize("late_ms", [20, 70, 120, 200])
+@pytest.mark.parametrize("render_hz, per_frame", [(60, 1), (30, 2)])
+def test_a_late_wake_up_is_caught_up_by_one_frame_and_no_frame_runs_no_step(
+    late_ms, render_hz, per_frame
+):
+    clock = LateWakeClock(late_ms * 1_000_000, at_wait=3)
+    loop = FixedStepLoop(clock=clock, render_hz=render_hz, auto_freeze_gc=False)
+    steps: list[int] = []
+    loop.add_stage("sim", lambda step, dt: steps.append(step), budget_ms=1.0)
+    counts = [loop.run_frame() for _ in range(12)]
+    # the frame after the late wait runs what is due (the catch-up); the next one waits for the
+    # next step instead of rendering the same state again, then frames are normal
+    assert 0 not in counts
+    assert counts[3] > per_frame
+    assert counts[-6:] == [per_frame] * 6
+    assert steps == list(range(len(steps)))
+    # every step of the time passed is run, dropped or carried: none lost by the wait (the clock
+    # sits a frame past the last frame's reading; the first frame ran one step at 0)
+    total = loop.step_index + loop.dropped_steps + loop.alpha
+    assert total == pytest.approx(clock.now_ns() / STEP_NS + 1 - per_frame, abs=1e-6)

@@ -76,6 +76,19 @@ def test_plot_draws_a_png(traced, tmp_path, capsys):
     assert np.unique(img.reshape(-1, img.shape[2]), axis=0).shape[0] > 20  # more than a blank canvas
 
 
+@pytest.mark.parametrize("name, written", [("noext", "noext.png"), ("dot.", "dot.png"), ("p.svg", "p.svg")])
+def test_a_plot_says_the_file_it_wrote(traced, tmp_path, capsys, name, written):
+    """`--plot p/noext` wrote noext.png without a word (matplotlib adds its default format's
+    suffix), and no plot said where it went, as other commands' outputs do."""
+    _, path = traced
+    out = tmp_path / "p" / name
+    assert main(["profile", str(path), "--plot", str(out), "--json"]) == 0
+    stdout, err = capsys.readouterr()
+    json.loads(stdout)  # the JSON alone on stdout
+    assert err.splitlines() == [f"quickjab profile: wrote {tmp_path / 'p' / written}"]
+    assert sorted(p.name for p in (tmp_path / "p").iterdir()) == [written]
+
+
 def test_a_plot_matplotlib_cannot_write_is_refused_before_the_summary(traced, tmp_path, capsys):
     _, path = traced
     with pytest.raises(SystemExit) as exit_:  # was a ValueError traceback after the summary
@@ -209,13 +222,47 @@ def test_a_trace_that_holds_the_last_frames_of_a_longer_run_says_so(tmp_path, ca
     assert capsys.readouterr().out.startswith("3 frames, 3 steps")
 
 
-@pytest.mark.parametrize("total", [float("nan"), 1e400, -5, "many", True, 10**400, 2.5])
-def test_a_frames_total_that_is_not_a_count_is_ignored(tmp_path, total):
+@pytest.mark.parametrize("field, value", [
+    ("frames_total", -3), ("frames_total", 2.5), ("frames_total", "many"), ("frames_total", True),
+    ("frames_total", 10**400), ("frames_total", 1e400), ("dropped_steps", -1), ("frame_overruns", 10**13),
+    ("frame_budget_ms", 1e300), ("frame_budget_ms", 1e-300), ("frame_period_ms", 1e300), ("frame_period_ms", 1e-300),
+])
+def test_a_run_figure_out_of_its_range_is_refused_naming_the_file_and_the_field(tmp_path, capsys, field, value):
+    """A hostile trace's otherData: a frames_total of -3 was ignored without a word, a budget or
+    period of 1e300 or 1e-300 printed 300-digit numbers and garbled the table's header."""
     doc = json.loads(open(traced_path(tmp_path)).read())
-    doc["otherData"]["frames_total"] = total
+    doc["otherData"][field] = value
     path = tmp_path / "odd.json"
     path.write_text(json.dumps(doc))
-    assert profile_summary(read_chrome_trace(path))["frames_total"] == 3
+    assert main(["profile", str(path)]) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and err.count("\n") == 1 and err.startswith(f"quickjab profile: {path}: otherData.{field} "), err
+    assert len(err) < 200, err
+
+
+@pytest.mark.parametrize("where, value", [("steps", 1e9), ("steps", 1001), ("budget_ms", 1e300)])
+def test_a_frames_steps_or_a_stage_budget_out_of_range_is_refused(tmp_path, capsys, where, value):
+    """A frame's args.steps of 1e9 made "1000000299 steps"; a stage's budget of 1e300 a 300-digit
+    column. A frame runs at most a few steps (the loop's max_steps)."""
+    doc = json.loads(open(traced_path(tmp_path)).read())
+    if where == "steps":
+        next(e for e in doc["traceEvents"] if e.get("name") == "frame")["args"]["steps"] = value
+    else:
+        next(iter(doc["otherData"]["stages"].values()))["budget_ms"] = value
+    path = tmp_path / "odd.json"
+    path.write_text(json.dumps(doc))
+    assert main(["profile", str(path)]) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and err.count("\n") == 1 and str(path) in err, err
+    assert ("args.steps" if where == "steps" else "budget_ms") in err and len(err) < 200, err
+
+
+def test_a_plausible_trace_of_a_slow_loop_is_still_read(tmp_path):
+    doc = json.loads(open(traced_path(tmp_path)).read())
+    doc["otherData"].update(frame_budget_ms=1000.0, frame_period_ms=1000.0)  # a 1 Hz loop
+    path = tmp_path / "slow.json"
+    path.write_text(json.dumps(doc))
+    assert profile_summary(read_chrome_trace(path))["frame_period_ms"] == 1000.0
 
 
 def test_a_stage_as_long_as_its_frame_is_read_inside_it_whatever_the_order(tmp_path):
