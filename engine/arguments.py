@@ -8,6 +8,7 @@ multi-gigabyte allocation later. Numbers are always finite: `nan` and `inf` neve
 from __future__ import annotations
 
 import argparse
+import contextlib
 import math
 import os
 from collections.abc import Callable
@@ -124,23 +125,45 @@ def output_file(text: str) -> str:
         raise argparse.ArgumentTypeError(f"{text}: {folder} is not a directory")
     if not os.access(folder, os.W_OK):
         raise argparse.ArgumentTypeError(f"{text}: cannot write in {folder}")
-    if folder == Path(text).parent and not os.path.lexists(text):
-        _try_creating(text)
+    if folder == Path(text).parent:
+        if not os.path.lexists(text):
+            _try_creating(text)
+    else:  # folders to be made: the first of them
+        _try_making(text, next(p for p in Path(text).parents if p.parent == folder))
     return text
 
 
 def _try_creating(text: str) -> None:
     """Create the file `text` (which is not there) and remove it at once: os.access passes for
     root where nothing can be made (/proc, /sys, a read-only mount), so a match was played whole
-    before its trace was refused. O_EXCL: a file that appeared meanwhile is never touched."""
+    before its trace was refused. O_EXCL: a file that appeared meanwhile is never touched, and
+    one put in the probe's place before it is removed (another writer's rename) is not removed."""
     try:
         fd = os.open(text, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
     except FileExistsError:
         return
     except OSError as exc:
         raise argparse.ArgumentTypeError(f"{text}: cannot write there ({exc.strerror})") from None
-    os.close(fd)
-    os.unlink(text)
+    try:
+        probe = os.fstat(fd)
+        with contextlib.suppress(OSError):  # a folder that lets one create but not remove: left, harmless
+            if os.path.samestat(probe, os.lstat(text)):
+                os.unlink(text)
+    finally:
+        os.close(fd)
+
+
+def _try_making(text: str, first_missing: Path) -> None:
+    """As _try_creating, for an output whose folders are not made yet: make the first of them
+    and remove it at once (`--trace /proc/new/t.json` was refused only after the match)."""
+    try:
+        os.mkdir(first_missing)
+    except FileExistsError:
+        return
+    except OSError as exc:
+        raise argparse.ArgumentTypeError(f"{text}: cannot make {first_missing} ({exc.strerror})") from None
+    with contextlib.suppress(OSError):  # emptied again: only a folder that filled meanwhile stays
+        os.rmdir(first_missing)
 
 
 def output_of_kind(kind: str, is_kind: Callable[[bytes], bool]) -> Callable[[str], str]:
@@ -194,12 +217,15 @@ def plot_file(text: str) -> str:
     suffix). Returns the path matplotlib writes: with no suffix it adds `.png` (`--plot p/noext`
     wrote p/noext.png while the command named p/noext, and the checks were of p/noext). Imports
     matplotlib, so only commands given a plot pay for it."""
-    from engine.file_kinds import is_plot_head
+    from engine.file_kinds import HEADLESS_PLOT_FORMATS, is_plot_head
 
     path_argument(text)
     suffix = os.path.splitext(text)[1][1:].lower()  # as matplotlib's savefig reads it
     written = text if suffix else text.rstrip(".") + ".png"  # savefig's default format
-    output_of_kind("an image or a plot", is_plot_head)(written)
+    if suffix in HEADLESS_PLOT_FORMATS:
+        output_file(written)
+    else:
+        output_of_kind("an image or a plot", is_plot_head)(written)
     try:
         from matplotlib.backend_bases import FigureCanvasBase
     except ImportError:  # the command says "--plot needs matplotlib" itself

@@ -10,7 +10,8 @@ import re
 # pygame.image.save writes PNG, JPEG, BMP or (any other suffix) TGA; matplotlib also these
 IMAGE_MAGIC = (b"\x89PNG\r\n\x1a\n", b"\xff\xd8\xff", b"BM", b"GIF8", b"RIFF", b"II*\x00", b"MM\x00*")
 TGA_IMAGE_TYPES = (1, 2, 3, 9, 10, 11)  # colour-mapped, true-colour, grey; raw or run-length
-DOCUMENT_MAGIC = (b"%PDF", b"%!PS", b"\xc5\xd0\xd3\xc6")  # matplotlib's pdf, ps / eps (and binary eps)
+DOCUMENT_MAGIC = (b"%PDF", b"%!PS", b"\xc5\xd0\xd3\xc6", b"\x1f\x8b")  # pdf, ps / eps (and binary eps), svgz
+HEADLESS_PLOT_FORMATS = ("raw", "rgba")  # matplotlib's bare pixel buffers: nothing to know them by
 
 
 def is_image_head(head: bytes) -> bool:
@@ -23,9 +24,11 @@ def is_image_head(head: bytes) -> bool:
 
 
 def is_plot_head(head: bytes) -> bool:
-    """An image's, or a document matplotlib writes (PDF, PostScript, SVG; raw RGBA has no head
-    and is refused: move the file)."""
-    return is_image_head(head) or head.startswith(DOCUMENT_MAGIC) or _text(head).startswith((b"<?xml", b"<svg"))
+    """An image's (AVIF too: an ISO media file, `ftyp` at its 5th byte), or a document matplotlib
+    writes (PDF, PostScript, SVG, gzipped SVG). Its raw RGBA buffers have no head: plot_file does
+    not ask (HEADLESS_PLOT_FORMATS)."""
+    return (is_image_head(head) or head.startswith(DOCUMENT_MAGIC) or head[4:8] == b"ftyp"
+            or _text(head).startswith((b"<?xml", b"<svg")))
 
 
 def _text(head: bytes) -> bytes:

@@ -42,3 +42,42 @@ def test_folders_not_made_yet_are_still_fine_and_not_made(tmp_path):
     out = tmp_path / "a" / "b" / "t.json"
     assert arguments.output_file(str(out)) == str(out)
     assert not (tmp_path / "a").exists()
+
+
+@pytest.mark.skipif(not Path("/proc/self").exists(), reason="needs Linux's /proc")
+def test_folders_that_cannot_be_made_are_refused_before_the_work(monkeypatch):
+    """`--trace /proc/new/t.json` (folders to make in a place nothing can be made) was refused
+    only after the match; the first folder to make is made and removed to see."""
+    monkeypatch.setattr(arguments.os, "access", lambda *a, **k: True)
+    with pytest.raises(argparse.ArgumentTypeError, match=r"^/proc/quickjab-new/t\.json: cannot make /proc/quickjab-new"):
+        arguments.output_file("/proc/quickjab-new/t.json")
+
+
+def test_a_probe_that_cannot_be_removed_is_no_traceback(tmp_path, monkeypatch):
+    """A folder that lets one create but not remove (or a scanner holding the file): the probe
+    stays, the argument passes, no PermissionError escapes argparse's type."""
+    def refuse(path):
+        raise PermissionError(13, "Permission denied", str(path))
+
+    monkeypatch.setattr(arguments.os, "unlink", refuse)
+    monkeypatch.setattr(arguments.os, "rmdir", refuse)
+    assert arguments.output_file(str(tmp_path / "x.json")) == str(tmp_path / "x.json")
+    assert arguments.output_file(str(tmp_path / "d" / "x.json")) == str(tmp_path / "d" / "x.json")
+
+
+def test_a_file_put_in_the_probes_place_is_not_removed(tmp_path, monkeypatch):
+    """Another writer renaming its finished output onto the path between the probe's creation
+    and its removal keeps its file."""
+    out = tmp_path / "x.json"
+    real_fstat = os.fstat
+
+    def fstat_then_replace(fd):
+        st = real_fstat(fd)
+        theirs = tmp_path / "theirs"
+        theirs.write_text("theirs")
+        os.replace(theirs, out)
+        return st
+
+    monkeypatch.setattr(arguments.os, "fstat", fstat_then_replace)
+    arguments.output_file(str(out))
+    assert out.read_text() == "theirs"
