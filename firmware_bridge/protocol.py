@@ -448,9 +448,13 @@ class Decoder:
             self.lost += gap
             self._resynced = True
         elif gap >= SEQ_WINDOW:
-            if self._seen[frame.seq]:
+            this_boots_hello = hello is not None and hello.boot_id == self.boot_id and self._clock_tells()
+            if self._seen[frame.seq] or this_boots_hello:
                 # delivered before in this boot: old bytes played back (or, when later in
-                # time, the stall above until the board's next HELLO: counted apart)
+                # time, the stall above until the board's next HELLO: counted apart). Or this
+                # boot's HELLO, not later than what was delivered (the branch above took a later
+                # one): old bytes too, even when its seq was never delivered (the host opened
+                # the port after it was sent); its fields would undo the boot's later ones
                 self._replay(self._ahead(frame.t_us))
                 return False
             self.seq_jumps += 1  # never seen: a reboot whose HELLO was lost

@@ -290,7 +290,12 @@ class SerialSource(Source):
         self.port = None
 
     def missing(self) -> str:
-        return missing_now(self.hello, self.decoder) if self.state is SourceState.CONNECTED else ""
+        if self.state is not SourceState.CONNECTED:
+            return ""
+        if self._stalled:  # the port is open, but a board owes a HELLO every second
+            return (f"no data for {STALL_S:g} s or more: the board has gone quiet (its power, a crash?); "
+                    "it comes back by itself when the board sends again")
+        return missing_now(self.hello, self.decoder)
 
     def close(self) -> None:
         self._drop_port()

@@ -258,3 +258,18 @@ def test_a_clock_too_short_to_order_a_seq_cycle_never_resyncs():
         s = 70_000 - back
         assert dec.feed(protocol.encode_hello(s, (5000 * s) & 0xFFFF, 7, 200, 4096, 65500, 16, 1, 3)) == []
     assert dec.resyncs == 0
+
+
+def test_a_same_boot_hello_played_back_from_before_the_host_opened_the_port_is_a_replay():
+    # The host opened the port mid-boot (first frame seq 5000); old bytes then bring this boot's
+    # HELLO of seq 4000, ten seconds earlier: never delivered, so it was taken for a reboot whose
+    # HELLO was lost (a seq_jump, `lost` 61000-odd) and its fields applied. PROTOCOL.md: a
+    # same-boot HELLO at or before the last delivered time is a replay.
+    dec = protocol.Decoder()
+    dec.feed(protocol.encode_hello(5000, 5000 * 5000, 7, 200, 4096, 65500, 30, 1, 3))
+    dec.feed(b"".join(protocol.encode_sample(s, 5000 * s, (0, 0, 4096), None) for s in range(5001, 5101)))
+    old = protocol.encode_hello(4000, 5000 * 4000, 7, 200, 4096, 65500, 30, 1, 3)
+    assert dec.feed(old) == []
+    assert (dec.replays, dec.seq_jumps, dec.lost, dec.reboots) == (1, 0, 0, 0)
+    nxt = b"".join(protocol.encode_sample(s, 5000 * s, (0, 0, 4096), None) for s in range(5101, 5111))
+    assert len(dec.feed(nxt)) == 10 and dec.lost == 0 and dec.seq_jumps == 0

@@ -129,6 +129,32 @@ def test_pty_real_serial_and_hangup():
         src.close()
 
 
+def test_a_board_gone_quiet_is_said_while_its_port_stays_open():
+    """A board that stops sending (its power, a crash) kept the port open and the source
+    "connected", with nothing on screen: only a `stalls` count. Now `missing()` says it, and the
+    first byte again clears it."""
+    master, slave = os.openpty()
+    tty.setraw(slave)
+    now = [0.0]
+    src = open_source(f"serial://{os.ttyname(slave)}?retry=0.05", clock=lambda: now[0])
+    try:
+        os.write(master, HELLO2 + samples(20))
+        assert len(poll_until(src, 20)) == 20 and src.missing() == ""
+        now[0] += 1.0
+        src.poll()
+        assert src.missing() == "" and src.stats.get("stalls", 0) == 0  # a second of quiet: not yet
+        now[0] += 1.5
+        src.poll()
+        assert src.state is SourceState.CONNECTED and src.stats["stalls"] == 1
+        assert src.missing().startswith("no data for 2 s or more: the board has gone quiet")
+        os.write(master, samples(5, start_seq=21, t0=100_000))
+        assert len(poll_until(src, 5)) == 5 and src.missing() == ""
+    finally:
+        src.close()
+        os.close(master)
+        os.close(slave)
+
+
 def test_big_burst_is_drained_in_one_poll():
     master, slave = os.openpty()
     tty.setraw(slave)
