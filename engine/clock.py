@@ -14,8 +14,9 @@ STEP_DT = 1.0 / STEP_HZ  # seconds per step
 STEP_MS = 1000.0 / STEP_HZ  # the frame budget at the step rate
 # A wait sleeps until a little before its deadline, then spins: sleep() overshoots. The spin is
 # learnt: twice the latest overshoot, never under SPIN_MIN_NS nor over SPIN_NS, and otherwise
-# shrinking by SPIN_DECAY a wait, so that one late wake-up widens it for half a second. A fixed 2 ms spin burnt 12 % of a core at 60 Hz on an
-# idle loop (power and CPU a small board's X server wants); Linux overshoots by 0.05-0.1 ms.
+# shrinking by SPIN_DECAY a wait, so that one late wake-up widens it for half a second. A fixed
+# 2 ms spin burnt 12 % of a core at 60 Hz on an idle loop (power and CPU a small board's X server
+# wants); Linux overshoots by 0.05-0.1 ms.
 SPIN_NS = 2_000_000
 SPIN_MIN_NS = 300_000
 SPIN_DECAY = 15 / 16  # from 2 ms back to the floor in about 30 waits (half a second)

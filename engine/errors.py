@@ -51,8 +51,8 @@ HEAD_BYTES = 64  # enough for any kind's first line or magic number
 def refuse_other_kind(path: str | os.PathLike, flag: str, kind: str, is_kind: Callable[[bytes], bool]) -> None:
     """InputError when `path` holds a file that is plainly not a `kind` (`is_kind` of its first
     HEAD_BYTES bytes is false): a derived output a command makes again (templates, a graph, a
-    BVH, a screenshot, a trace: engine.file_kinds) replaces an earlier one of its kind, but not whatever else is there (`synth --templates
-    -o cut.json` wrote an .npz over an action). Said before the work. Nothing there, an empty file
+    BVH, a screenshot, a trace: engine.file_kinds) replaces an earlier one of its kind, but not
+    whatever else is there (`synth --templates -o cut.json` wrote an .npz over an action). Said before the work. Nothing there, an empty file
     and what is not a regular file (/dev/null) pass."""
     try:
         st = os.stat(path)

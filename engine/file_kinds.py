@@ -1,13 +1,13 @@
 """The first bytes of each kind of file a command writes again and again (a screenshot, a plot, a
-trace, the recognizer's events): what such an output may replace (engine.errors.refuse_other_kind). An earlier
-file of its kind is replaced; a recording, an action or anything else found at the path is not.
-The .npz and BVH heads live with their writers (engine.npz_files, game.bvh)."""
+trace, the recognizer's events): what such an output may replace (engine.errors.refuse_other_kind).
+An earlier file of its kind is replaced; a recording, an action or anything else found at the
+path is not. The .npz and BVH heads live with their writers (engine.npz_files, game.bvh)."""
 
 from __future__ import annotations
 
 import re
 
-# pygame.image.save writes PNG, JPEG, BMP or (any other suffix) TGA; matplotlib also these
+# pygame.image.save writes PNG, JPEG, BMP or (any other suffix) TGA; matplotlib GIF, WebP, TIFF too
 IMAGE_MAGIC = (b"\x89PNG\r\n\x1a\n", b"\xff\xd8\xff", b"BM", b"GIF8", b"RIFF", b"II*\x00", b"MM\x00*")
 TGA_IMAGE_TYPES = (1, 2, 3, 9, 10, 11)  # colour-mapped, true-colour, grey; raw or run-length
 DOCUMENT_MAGIC = (b"%PDF", b"%!PS", b"\xc5\xd0\xd3\xc6", b"\x1f\x8b")  # pdf, ps / eps (and binary eps), svgz
