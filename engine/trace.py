@@ -192,7 +192,8 @@ def _span_event(budget: FrameBudget, r: int, name: str, limit_ns: float, origin:
 def write_chrome_trace(budget: FrameBudget, path: str | os.PathLike) -> None:
     try:
         Path(path).parent.mkdir(parents=True, exist_ok=True)  # `--trace new/t.json`: made, as every output's folder
-        write_replacing(path, lambda f: f.writelines(text.encode("utf-8") for text in _trace_text(budget)))  # whole, or the previous trace as it was
+        # whole, or the previous trace as it was
+        write_replacing(path, lambda f: f.writelines(text.encode("utf-8") for text in _trace_text(budget)))
     except OSError as exc:  # a full disk's ENOSPC names no file
         raise TraceError(f"{path}: cannot write the trace ({exc.strerror or exc})") from None
 
