@@ -177,11 +177,15 @@ def missing_sensor_a(hello: protocol.Hello | None) -> str:
     return ""
 
 
-def missing_now(hello: protocol.Hello | None, decoder: protocol.Decoder) -> str:
-    """`Source.missing` of a connected serial source: a second's worth of frames or more in a
+def missing_now(hello: protocol.Hello | None, decoder: protocol.Decoder, stalled: bool = False) -> str:
+    """`Source.missing` of a connected serial source: no byte for STALL_S on the open port
+    (`stalled`: a board owes a HELLO every second), a second's worth of frames or more in a
     row dropped as replays (the board owes a HELLO every second, and one at once when asked, and
     a HELLO of its boot later in time resyncs the decoder: a board that sends none, or bytes
     that are all old ones played back), else a B-only board's still right hand."""
+    if stalled:
+        return (f"no data for {STALL_S:g} s or more: the board has gone quiet (its power, a crash?); "
+                "it comes back by itself when the board sends again")
     if decoder.replay_run >= max(hello.rate_hz if hello is not None else 0, REPLAY_RUN_SAY):
         return ("every frame dropped as a replay: its seq was delivered before in this boot (bytes played "
                 "back, or the host stopped reading for a while and no HELLO of the board has come since)")
@@ -290,12 +294,7 @@ class SerialSource(Source):
         self.port = None
 
     def missing(self) -> str:
-        if self.state is not SourceState.CONNECTED:
-            return ""
-        if self._stalled:  # the port is open, but a board owes a HELLO every second
-            return (f"no data for {STALL_S:g} s or more: the board has gone quiet (its power, a crash?); "
-                    "it comes back by itself when the board sends again")
-        return missing_now(self.hello, self.decoder)
+        return missing_now(self.hello, self.decoder, self._stalled) if self.state is SourceState.CONNECTED else ""
 
     def close(self) -> None:
         self._drop_port()
