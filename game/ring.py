@@ -25,6 +25,13 @@ KNOCKDOWN_HOLD = 0.55  # the fraction of the knockdown clip held while the refer
 DEMO_RESTART_STEPS = 8 * STEP_HZ  # the attract mode shows the result, then boxes again
 
 
+# Under the pause the picture changes only when something happens (a key, the source's state,
+# the F3 overlay's figures): it is drawn every PAUSED_REDRAW_FRAMES-th frame (10 a second at
+# 60 Hz) and after any event, not every frame: a paused match took half a core at 1280x720
+# under a software display, as much as the match itself.
+PAUSED_REDRAW_FRAMES = 6
+
+
 class Ring:
     """The shared half of a session (see the module docstring); never built on its own."""
 
@@ -45,6 +52,7 @@ class Ring:
         self.contacts: list = []  # physics -> hits
         self.prev_joints = [b.joint_positions().copy() for b in self.boxers]  # physics -> render
         self.curr_joints = [j.copy() for j in self.prev_joints]
+        self._paused_frames, self._redraw_now = 0, False  # render: the paused picture held
 
     # -- the view's parts, under the names tools and tests read ------------------------------
     @property
@@ -175,7 +183,25 @@ class Ring:
 
     # -- rendering and reproducibility ---------------------------------------------------------
     def render(self, alpha: float) -> None:
+        if self._paused_picture_holds():
+            return
         self.view.draw(alpha, self.prev_joints, self.curr_joints, self.hud_state, self.loop.budget)
+
+    def redraw(self) -> None:
+        """Draw the next frame even under the pause (an event came: a key, the window shown)."""
+        self._redraw_now = True
+
+    def _paused_picture_holds(self) -> bool:
+        """Whether this frame keeps the picture on screen: under the pause only every
+        PAUSED_REDRAW_FRAMES-th frame is drawn, the first at once, and the next after an event."""
+        if not self.match.paused:
+            self._paused_frames = 0
+            return False
+        self._paused_frames += 1
+        if self._redraw_now:
+            self._redraw_now = False
+            return False
+        return (self._paused_frames - 1) % PAUSED_REDRAW_FRAMES != 0
 
     def state_hash(self) -> str:
         """The simulation's state: bodies, controllers, match, recognizer decisions."""

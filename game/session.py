@@ -346,6 +346,7 @@ class Session(Ring):
         if pygame.display.get_init():
             for event in pygame.event.get():
                 self.handle_event(event)
+                self.redraw()
         if self.config.demo:
             self.pilot.step(self.source, self.match.fighting, self.player, self.opponent)
         hold_keys(self.source, self.match.paused)

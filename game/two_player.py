@@ -176,6 +176,7 @@ class TwoPlayerSession(Session):
         if pygame.display.get_init():
             for event in pygame.event.get():
                 self.handle_event(event)
+                self.redraw()
         for seat in self.seats:
             if self.config.demo:
                 self._pilot_seat(seat)

@@ -263,6 +263,7 @@ def test_enter_under_source_ended_plays_the_replay_again_in_a_new_match(tmp_path
     probe = (SIZE[0] // 2, int(SIZE[1] * 0.93))
     dark = sum(surf.get_at(probe)[:3])  # under the overlay
     s.view.hud.layout = []
+    s.redraw()  # the overlay's picture: paused, the frame would hold the last one
     s.loop.run(frames=1)
     said = [text for text, _, panel in s.view.hud.layout if panel == "lost"]
     assert "SOURCE ENDED" in said and any(t.startswith("Enter: play it again") for t in said), said
@@ -505,3 +506,32 @@ def test_a_new_match_mid_round_does_not_count_the_cpus_lead_as_the_players_blows
     s.new_match()
     s.loop.run(steps=2)
     assert s.difficulty.form.landed == 0.0
+
+
+def test_a_paused_match_redraws_its_picture_ten_times_a_second_and_after_a_key() -> None:
+    """A paused match drew every frame (half a core at 1280x720 under a software display, as much
+    as the match); its picture is held now: drawn on the pause's first frame, every
+    PAUSED_REDRAW_FRAMES-th after it, and on the frame after any event; every frame while boxing."""
+    from game.ring import PAUSED_REDRAW_FRAMES
+
+    s = make_session("keyboard://?seed=4", display=True)
+    drawn = []
+    draw = s.view.draw
+    s.view.draw = lambda *a: (drawn.append(s.loop.frame_index), draw(*a))[-1]
+    s.loop.run(frames=10)
+    assert len(drawn) == 10  # boxing: every frame
+    pygame.event.post(key(pygame.K_ESCAPE))
+    drawn.clear()
+    start = s.loop.frame_index
+    s.loop.run(frames=32)
+    assert s.match.paused
+    assert drawn == [start + k for k in range(0, 32, PAUSED_REDRAW_FRAMES)], drawn  # the first at once
+    drawn.clear()
+    # the paused frames 33 and 34 are not due (every 6th: 31, 37): the key's frame is drawn all the same
+    pygame.event.post(key(pygame.K_F3))  # the budget overlay: shown on the next frame, not 0.1 s later
+    s.loop.run(frames=2)
+    assert drawn == [s.loop.frame_index - 2] and s.hud_state.show_budget
+    pygame.event.post(key(pygame.K_ESCAPE))
+    drawn.clear()
+    s.loop.run(frames=5)
+    assert not s.match.paused and len(drawn) == 5

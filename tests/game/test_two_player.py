@@ -152,6 +152,7 @@ def test_enter_plays_a_played_out_replay_again_with_two_players(tmp_path) -> Non
     s.loop.run(frames=90)
     assert s.seats[0].source.state == SourceState.ENDED and s.match.paused
     s.view.hud.layout = []
+    s.redraw()  # the overlay's picture: paused, the frame would hold the last one
     s.loop.run(frames=1)
     said = [text for text, _, panel in s.view.hud.layout if panel == "lost"]
     assert "SOURCE ENDED" in said and any(t.startswith("Enter: play it again") for t in said), said
@@ -205,6 +206,7 @@ def test_enter_under_a_replays_end_waits_for_the_other_seat(tmp_path) -> None:
     s.loop.run(frames=90)
     s.seats[1].source.disconnect()
     s.view.hud.layout = []
+    s.redraw()  # the overlay's picture: paused, the frame would hold the last one
     s.loop.run(frames=1)
     assert [seat.source.state for seat in s.seats] == [SourceState.ENDED, SourceState.DISCONNECTED]
     said = [text for text, _, panel in s.view.hud.layout if panel == "lost"]
@@ -215,6 +217,7 @@ def test_enter_under_a_replays_end_waits_for_the_other_seat(tmp_path) -> None:
     assert s.match is match and s.seats[0].source.state == SourceState.ENDED  # not rewound unseen
     s.seats[1].source.reconnect()
     s.view.hud.layout = []
+    s.redraw()  # the overlay's picture: paused, the frame would hold the last one
     s.loop.run(frames=1)
     said = [text for text, _, panel in s.view.hud.layout if panel == "lost"]
     assert "SOURCE ENDED" in said and any(t.startswith("Enter: play it again") for t in said), said
@@ -261,11 +264,13 @@ def test_the_result_screen_offers_no_menu_under_a_lost_seats_box(tmp_path) -> No
     s.loop.run(frames=10)
     s.match._finish(0, "KO")  # a knockout now: the result screen
     s.view.hud.layout = []
+    s.redraw()  # the overlay's picture: paused, the frame would hold the last one
     s.loop.run(frames=1)
     assert "Enter: a new match" in [text for text, _, _ in s.view.hud.layout]  # the control
     s.loop.run(frames=90)
     assert s.seats[0].source.state == SourceState.ENDED
     s.view.hud.layout = []
+    s.redraw()  # the overlay's picture: paused, the frame would hold the last one
     s.loop.run(frames=1)
     said = [text for text, _, _ in s.view.hud.layout]
     assert "SOURCE ENDED" in said and "Enter: a new match" not in said, said

@@ -207,6 +207,7 @@ class Campaign:
         b = self.before()
         self.apply(move)
         self.s.view.hud.layout = []
+        self.s.redraw()  # every frame drawn: the picture is what is checked (the pause's held picture: test_session)
         self.s.loop.run(frames=3 if move.quit else 1)
         assert self.s.loop.frame_index == b.frame + 1, "a QUIT did not end the run after its frame"
         for src in self.sources:
