@@ -3,7 +3,8 @@ simulated IMU, writing to a pseudo-terminal, so `serial:///dev/pts/N` behaves li
 
 It can inject what real links do: garbage bursts, bit flips, dropped bytes, device stalls,
 reboots, and unplug/replug (the pty vanishes and a new one appears; `link` is a symlink that
-always points at the current one, so a host can keep one path across replugs).
+points at the current one, so a host can keep one path across replugs, and is gone while the
+board is unplugged).
 """
 
 from __future__ import annotations
@@ -142,6 +143,10 @@ class PtyPort:
         return self.name
 
     def unplug(self) -> None:
+        # the link goes first, as udev removes a board's /dev/serial/by-id link: left pointing at
+        # the closed /dev/pts/N, a host opening it could get another program's new pty of that number
+        if self.link and os.path.islink(self.link) and os.readlink(self.link) == self.name:
+            os.unlink(self.link)
         for fd in (self.master, self.slave):
             if fd >= 0:
                 os.close(fd)
@@ -192,8 +197,6 @@ class PtyPort:
 
     def close(self) -> None:
         self.unplug()
-        if self.link and os.path.islink(self.link) and os.readlink(self.link) == self.name:
-            os.unlink(self.link)
 
 
 @dataclass

@@ -439,8 +439,16 @@ class Decoder:
         """The sequence check of a frame after the first of its boot: False when it is dropped
         as a replay; else counts what its gap says (lost, a resync, a seq_jump)."""
         gap = (frame.seq - self.last_seq - 1) & SEQ_MASK
-        if gap >= SEQ_WINDOW and hello is not None and hello.boot_id == self.boot_id \
-                and self._clock_tells() and self._ahead(frame.t_us):
+        this_boots_hello = hello is not None and hello.boot_id == self.boot_id and self._clock_tells()
+        if this_boots_hello and not self._ahead(frame.t_us):
+            # this boot's HELLO, not later than what was delivered: old bytes played back,
+            # whichever way its seq reads (behind: never delivered when the host opened the port
+            # after it; ahead: from the last seq pass), since the board stamps each HELLO afresh.
+            # Taken, its fields would undo the boot's later ones, and an ahead one moved the
+            # sequence check past the live frames
+            self._replay(False)
+            return False
+        if gap >= SEQ_WINDOW and this_boots_hello:
             # this boot's HELLO, later than anything delivered: the board says where it is.
             # The host stopped reading for 32768 frames or more (a suspended laptop, Ctrl-Z)
             # while the board counted on: its seq reads as behind. At least `gap` were lost.
@@ -448,13 +456,9 @@ class Decoder:
             self.lost += gap
             self._resynced = True
         elif gap >= SEQ_WINDOW:
-            this_boots_hello = hello is not None and hello.boot_id == self.boot_id and self._clock_tells()
-            if self._seen[frame.seq] or this_boots_hello:
+            if self._seen[frame.seq]:
                 # delivered before in this boot: old bytes played back (or, when later in
-                # time, the stall above until the board's next HELLO: counted apart). Or this
-                # boot's HELLO, not later than what was delivered (the branch above took a later
-                # one): old bytes too, even when its seq was never delivered (the host opened
-                # the port after it was sent); its fields would undo the boot's later ones
+                # time, the stall above until the board's next HELLO: counted apart)
                 self._replay(self._ahead(frame.t_us))
                 return False
             self.seq_jumps += 1  # never seen: a reboot whose HELLO was lost

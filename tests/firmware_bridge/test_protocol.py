@@ -273,3 +273,17 @@ def test_a_same_boot_hello_played_back_from_before_the_host_opened_the_port_is_a
     assert (dec.replays, dec.seq_jumps, dec.lost, dec.reboots) == (1, 0, 0, 0)
     nxt = b"".join(protocol.encode_sample(s, 5000 * s, (0, 0, 4096), None) for s in range(5101, 5111))
     assert len(dec.feed(nxt)) == 10 and dec.lost == 0 and dec.seq_jumps == 0
+
+
+def test_a_same_boot_hello_that_reads_ahead_in_seq_but_earlier_in_time_is_a_replay():
+    # a HELLO from the last pass of the 16-bit seq, played back: ahead by its seq, earlier by its
+    # time. Taken, its fields were applied, 499 counted lost, and the live frames after it read as
+    # replays until the board's next HELLO resynced (65,000 more "lost")
+    dec = protocol.Decoder()
+    dec.feed(protocol.encode_hello(0, 0, 7, 200, 4096, 65500, 30, 1, 3))
+    dec.feed(b"".join(protocol.encode_sample(s, 5000 * s, (0, 0, 4096), None) for s in range(1, 1001)))
+    old = protocol.encode_hello(1500, 5000 * 500, 7, 100, 2048, 65500, 30, 1, 3)  # other fields, too
+    assert dec.feed(old) == []
+    assert (dec.replays, dec.lost, dec.hello.rate_hz) == (1, 0, 200)
+    live = b"".join(protocol.encode_sample(s, 5000 * s, (0, 0, 4096), None) for s in range(1001, 1011))
+    assert len(dec.feed(live)) == 10 and dec.lost == 0 and dec.replays == 1
