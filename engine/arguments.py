@@ -217,13 +217,13 @@ def plot_file(text: str) -> str:
     suffix). Returns the path matplotlib writes: with no suffix it adds `.png` (`--plot p/noext`
     wrote p/noext.png while the command named p/noext, and the checks were of p/noext). Imports
     matplotlib, so only commands given a plot pay for it."""
-    from engine.file_kinds import HEADLESS_PLOT_FORMATS, is_plot_head
+    from engine.file_kinds import HEADLESS_PLOT_FORMATS, is_pixels_head, is_plot_head
 
     path_argument(text)
     suffix = os.path.splitext(text)[1][1:].lower()  # as matplotlib's savefig reads it
     written = text if suffix else text.rstrip(".") + ".png"  # savefig's default format
     if suffix in HEADLESS_PLOT_FORMATS:
-        output_file(written)
+        output_of_kind("raw pixels", is_pixels_head)(written)
     else:
         output_of_kind("an image or a plot", is_plot_head)(written)
     try:
@@ -233,6 +233,13 @@ def plot_file(text: str) -> str:
     formats = FigureCanvasBase.get_supported_filetypes()
     if suffix and suffix not in formats:
         raise argparse.ArgumentTypeError(f"{text}: matplotlib writes no .{suffix} (" + ", ".join(sorted(formats)) + ")")
+    if suffix == "pgf":  # said now, not after an evaluation of minutes
+        import shutil
+
+        from matplotlib import rcParams
+
+        if shutil.which(rcParams["pgf.texsystem"]) is None:
+            raise argparse.ArgumentTypeError(f"{text}: a .pgf plot needs {rcParams['pgf.texsystem']} (LaTeX), not found")
     return written
 
 

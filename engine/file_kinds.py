@@ -11,7 +11,7 @@ import re
 IMAGE_MAGIC = (b"\x89PNG\r\n\x1a\n", b"\xff\xd8\xff", b"BM", b"GIF8", b"RIFF", b"II*\x00", b"MM\x00*")
 TGA_IMAGE_TYPES = (1, 2, 3, 9, 10, 11)  # colour-mapped, true-colour, grey; raw or run-length
 DOCUMENT_MAGIC = (b"%PDF", b"%!PS", b"\xc5\xd0\xd3\xc6", b"\x1f\x8b")  # pdf, ps / eps (and binary eps), svgz
-HEADLESS_PLOT_FORMATS = ("raw", "rgba")  # matplotlib's bare pixel buffers: nothing to know them by
+HEADLESS_PLOT_FORMATS = ("raw", "rgba")  # matplotlib's bare pixel buffers: is_pixels_head
 
 
 def is_image_head(head: bytes) -> bool:
@@ -29,6 +29,19 @@ def is_plot_head(head: bytes) -> bool:
     not ask (HEADLESS_PLOT_FORMATS)."""
     return (is_image_head(head) or head.startswith(DOCUMENT_MAGIC) or head[4:8] == b"ftyp"
             or _text(head).startswith((b"<?xml", b"<svg")))
+
+
+def is_pixels_head(head: bytes) -> bool:
+    """Whether a file's first bytes may be matplotlib's raw RGBA pixels (no head of their own: a
+    plot's white background is 0xFF bytes): neither text (a recording, a trace, an action, event
+    lines) nor a zip archive (templates, a graph)."""
+    if head.startswith(b"PK"):
+        return False
+    try:
+        head.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        return exc.start < len(head) - 3  # not a character cut off by the head's end
+    return False
 
 
 def _text(head: bytes) -> bytes:

@@ -25,11 +25,11 @@ KNOCKDOWN_HOLD = 0.55  # the fraction of the knockdown clip held while the refer
 DEMO_RESTART_STEPS = 8 * STEP_HZ  # the attract mode shows the result, then boxes again
 
 
-# Under the pause the picture changes only when something happens (a key, the source's state,
-# the F3 overlay's figures): it is drawn every PAUSED_REDRAW_FRAMES-th frame (10 a second at
-# 60 Hz) and after any event, not every frame: a paused match took half a core at 1280x720
-# under a software display, as much as the match itself.
-PAUSED_REDRAW_FRAMES = 6
+# Under the pause the picture changes only when something happens (a key, the source's state):
+# it is drawn PAUSED_REDRAW_HZ times a second and after any event, not every frame: a paused
+# match took half a core at 1280x720 under a software display, as much as the match itself.
+# With the F3 overlay up every frame is drawn (its figures are of the frames it shows).
+PAUSED_REDRAW_HZ = 10
 
 
 class Ring:
@@ -192,16 +192,17 @@ class Ring:
         self._redraw_now = True
 
     def _paused_picture_holds(self) -> bool:
-        """Whether this frame keeps the picture on screen: under the pause only every
-        PAUSED_REDRAW_FRAMES-th frame is drawn, the first at once, and the next after an event."""
-        if not self.match.paused:
+        """Whether this frame keeps the picture on screen: under the pause (F3's overlay down)
+        the first frame is drawn, then PAUSED_REDRAW_HZ a second, and the frame after an event."""
+        if not self.match.paused or self.hud_state.show_budget:
             self._paused_frames = 0
             return False
         self._paused_frames += 1
         if self._redraw_now:
             self._redraw_now = False
             return False
-        return (self._paused_frames - 1) % PAUSED_REDRAW_FRAMES != 0
+        every = max(1, round(self.loop.render_hz / PAUSED_REDRAW_HZ))  # 6 frames at 60 Hz, 3 at 30
+        return (self._paused_frames - 1) % every != 0
 
     def state_hash(self) -> str:
         """The simulation's state: bodies, controllers, match, recognizer decisions."""

@@ -200,7 +200,8 @@ def save_figure(fig, path: str, dpi: float) -> None:
     except OSError as exc:
         raise InputError(f"{path}: cannot write the plot ({exc.strerror or exc})") from None
     except RuntimeError as exc:  # a format whose tool is missing (.pgf without LaTeX)
-        raise InputError(f"{path}: matplotlib cannot write the plot: {str(exc).strip().splitlines()[0]}") from None
+        said = str(exc).strip().splitlines() or [exc.__class__.__name__]
+        raise InputError(f"{path}: matplotlib cannot write the plot: {said[0]}") from None
     finally:
         plt.close(fig)
 

@@ -510,11 +510,14 @@ def test_a_new_match_mid_round_does_not_count_the_cpus_lead_as_the_players_blows
 
 def test_a_paused_match_redraws_its_picture_ten_times_a_second_and_after_a_key() -> None:
     """A paused match drew every frame (half a core at 1280x720 under a software display, as much
-    as the match); its picture is held now: drawn on the pause's first frame, every
-    PAUSED_REDRAW_FRAMES-th after it, and on the frame after any event; every frame while boxing."""
-    from game.ring import PAUSED_REDRAW_FRAMES
+    as the match); its picture is held now: drawn on the pause's first frame, PAUSED_REDRAW_HZ
+    times a second after it, and on the frame after any event; every frame while boxing, and
+    while the F3 overlay is up (its figures are of the frames drawn)."""
+    from game.ring import PAUSED_REDRAW_HZ
 
     s = make_session("keyboard://?seed=4", display=True)
+    every = round(s.loop.render_hz / PAUSED_REDRAW_HZ)
+    assert every == 6
     drawn = []
     draw = s.view.draw
     s.view.draw = lambda *a: (drawn.append(s.loop.frame_index), draw(*a))[-1]
@@ -525,12 +528,18 @@ def test_a_paused_match_redraws_its_picture_ten_times_a_second_and_after_a_key()
     start = s.loop.frame_index
     s.loop.run(frames=32)
     assert s.match.paused
-    assert drawn == [start + k for k in range(0, 32, PAUSED_REDRAW_FRAMES)], drawn  # the first at once
+    assert drawn == [start + k for k in range(0, 32, every)], drawn  # the first at once
     drawn.clear()
-    # the paused frames 33 and 34 are not due (every 6th: 31, 37): the key's frame is drawn all the same
-    pygame.event.post(key(pygame.K_F3))  # the budget overlay: shown on the next frame, not 0.1 s later
+    # the paused frames 33 and 34 are not due (31, 37 are): the key's frame is drawn all the same
+    level = s.difficulty.name
+    pygame.event.post(key(pygame.K_d))  # the pause menu's next difficulty: shown at once
     s.loop.run(frames=2)
-    assert drawn == [s.loop.frame_index - 2] and s.hud_state.show_budget
+    assert drawn == [s.loop.frame_index - 2] and s.difficulty.name != level
+    pygame.event.post(key(pygame.K_F3))
+    drawn.clear()
+    s.loop.run(frames=4)
+    assert s.hud_state.show_budget and len(drawn) == 4  # the overlay's figures: every frame
+    pygame.event.post(key(pygame.K_F3))
     pygame.event.post(key(pygame.K_ESCAPE))
     drawn.clear()
     s.loop.run(frames=5)

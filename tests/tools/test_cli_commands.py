@@ -463,3 +463,27 @@ def test_a_plot_replaces_an_earlier_one_in_every_format_matplotlib_writes(tmp_pa
         for _ in range(2):
             assert main(["profile", str(trace), "--plot", str(out)]) == 0, (fmt, capsys.readouterr().err)
         assert out.stat().st_size > 0
+
+
+def test_raw_pixels_replace_only_raw_pixels_and_pgf_without_latex_is_said_first(tmp_path, capsys):
+    """.raw and .rgba plots have no head of their own: they replaced anything (a recording named
+    rec.raw); a .pgf plot without LaTeX failed after the work."""
+    import shutil
+
+    pytest.importorskip("matplotlib")
+    from engine.file_kinds import is_pixels_head
+
+    assert is_pixels_head(b"\xff" * 64) and is_pixels_head(b"\x00\xff\x10\x80" * 16)
+    assert not any(is_pixels_head(h) for h in (GOOD_REC.encode()[:64], b'{"traceEvents": [', b"PK\x03\x04" + bytes(60),
+                                               "é".encode() * 32, b"t,x\n0,\xc3"))  # a character cut by the head's end
+    trace = tmp_path / "t.json"
+    assert main(["play", "--headless", "--frames", "5", "--trace", str(trace)]) == 0
+    rec = tmp_path / "rec.raw"
+    rec.write_text(GOOD_REC)
+    assert _exit_code(["profile", str(trace), "--plot", str(rec)]) == 2 and rec.read_text() == GOOD_REC
+    assert "is there and is not raw pixels" in capsys.readouterr().err
+    from matplotlib import rcParams
+
+    if shutil.which(rcParams["pgf.texsystem"]) is None:
+        assert _exit_code(["profile", str(trace), "--plot", str(tmp_path / "p.pgf")]) == 2
+        assert "needs" in capsys.readouterr().err and not (tmp_path / "p.pgf").exists()
