@@ -52,8 +52,9 @@ def refuse_other_kind(path: str | os.PathLike, flag: str, kind: str, is_kind: Ca
     """InputError when `path` holds a file that is plainly not a `kind` (`is_kind` of its first
     HEAD_BYTES bytes is false): a derived output a command makes again (templates, a graph, a
     BVH, a screenshot, a trace: engine.file_kinds) replaces an earlier one of its kind, but not
-    whatever else is there (`synth --templates -o cut.json` wrote an .npz over an action). Said before the work. Nothing there, an empty file
-    and what is not a regular file (/dev/null) pass."""
+    whatever else is there (`synth --templates -o cut.json` wrote an .npz over an action). Said
+    before the work. Nothing there, an empty file and what is not a regular file (/dev/null)
+    pass."""
     try:
         st = os.stat(path)
         if not stat.S_ISREG(st.st_mode) or st.st_size == 0:
