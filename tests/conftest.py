@@ -6,7 +6,11 @@ from __future__ import annotations
 import atexit
 import os
 import shutil
+import signal
+import subprocess
+import sys
 import tempfile
+import time
 import tracemalloc
 from collections.abc import Callable
 from pathlib import Path
@@ -47,3 +51,31 @@ def peak_memory() -> Callable[[Callable[[], Any]], tuple[Any, int]]:
             tracemalloc.stop()
 
     return measure
+
+
+@pytest.fixture
+def sigterm_when_running() -> Callable[..., tuple[int, str, str]]:
+    """`sigterm_when_running(argv, env, settle=1.0)`: start `quickjab argv` in `env`, send it
+    SIGTERM once it has loaded SDL and run `settle` seconds more (its loop going), and return its
+    exit code, stdout and stderr. SDL makes SIGTERM a quit event: the commands' tests check it
+    ends them as Ctrl-C does."""
+
+    def run(argv: list[str], env: dict[str, str], settle: float = 1.0) -> tuple[int, str, str]:
+        p = subprocess.Popen([sys.executable, "-m", "tools.cli", *argv], cwd=REPO, env=env,
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        try:
+            deadline = time.monotonic() + 60
+            while p.poll() is None and "libSDL2" not in Path(f"/proc/{p.pid}/maps").read_text() \
+                    and time.monotonic() < deadline:
+                time.sleep(0.1)
+            time.sleep(settle)
+            assert p.poll() is None, f"quickjab {argv[0]} ended by itself"
+            p.send_signal(signal.SIGTERM)
+            out, err = p.communicate(timeout=60)
+        finally:
+            if p.poll() is None:
+                p.kill()
+                p.wait()
+        return p.returncode, out, err
+
+    return run

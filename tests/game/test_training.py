@@ -505,33 +505,15 @@ def test_training_without_the_handedness_of_the_players_set_says_it_is_mirrored(
     assert str(out) in err and "trained left-handed" in err and "--left-handed" in err
 
 
-def test_train_ended_by_sigterm_exits_130_as_ctrl_c_does(tmp_path) -> None:
+def test_train_ended_by_sigterm_exits_130_as_ctrl_c_does(tmp_path, sigterm_when_running) -> None:
     """SDL turned SIGTERM into a quit event: `kill` ended a training as its window closed
     ("stopped after N trials", exit 0). Now it ends as Ctrl-C does: exit 130."""
     import os
-    import signal
-    import subprocess
-    import sys
-    import time
     from pathlib import Path
 
-    repo = Path(__file__).resolve().parents[2]
-    env = {**os.environ, "PYTHONPATH": str(repo), "SDL_VIDEODRIVER": "dummy", "SDL_AUDIODRIVER": "dummy",
-           "XDG_DATA_HOME": str(tmp_path / "data"), "XDG_CONFIG_HOME": str(tmp_path / "config")}
-    p = subprocess.Popen([sys.executable, "-m", "tools.cli", "train", "--headless", "--demo", "--frames", "100000000",
-                          "-o", str(tmp_path / "t.npz")], cwd=repo, env=env, stdout=subprocess.DEVNULL,
-                         stderr=subprocess.PIPE, text=True)
-    try:
-        deadline = time.monotonic() + 60
-        while p.poll() is None and "libSDL2" not in Path(f"/proc/{p.pid}/maps").read_text() and time.monotonic() < deadline:
-            time.sleep(0.1)
-        time.sleep(1.0)  # the window open: the walk runs
-        assert p.poll() is None, "the training ended by itself"
-        p.send_signal(signal.SIGTERM)
-        err = p.communicate(timeout=60)[1]
-    finally:
-        if p.poll() is None:
-            p.kill()
-            p.wait()
-    assert p.returncode == 130, err
+    env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[2]), "SDL_VIDEODRIVER": "dummy",
+           "SDL_AUDIODRIVER": "dummy", "XDG_DATA_HOME": str(tmp_path / "data"), "XDG_CONFIG_HOME": str(tmp_path / "config")}
+    code, _, err = sigterm_when_running(["train", "--headless", "--demo", "--frames", "100000000",
+                                         "-o", str(tmp_path / "t.npz")], env)  # the walk runs
+    assert code == 130, err
     assert "Traceback" not in err, err

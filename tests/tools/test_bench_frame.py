@@ -169,29 +169,13 @@ def test_the_virtual_clock_runs_draw_once_before_timing_and_report_it_apart(monk
     assert measure("naive", args, (320, 180))["first_draw_ms"] is None and made == []  # the peer draws nothing
 
 
-def test_bench_frame_ended_by_sigterm_exits_130_and_reports_nothing(tmp_path) -> None:
+def test_bench_frame_ended_by_sigterm_exits_130_and_reports_nothing(tmp_path, sigterm_when_running) -> None:
     """SDL turned SIGTERM into a quit event, which the match took for its end: the bench went on
     with the cut run (its table over the steps done, the peer's ratios against a whole run) and
     ended "targets: ... yes", exit 0. Now SIGTERM ends it as Ctrl-C does: exit 130, no report."""
-    import signal
-    import time
-
     env = {"XDG_DATA_HOME": str(tmp_path), "PATH": "/usr/bin:/bin", "SDL_VIDEODRIVER": "dummy",
            "SDL_AUDIODRIVER": "dummy", "PYTHONPATH": str(REPO)}
-    p = subprocess.Popen([sys.executable, "-m", "tools.cli", "bench", "frame", "--steps", "216000", "--repeats", "1",
-                          "--no-naive", "--realtime-seconds", "0", "--size", "320x180"], cwd=REPO, env=env,
-                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    try:
-        deadline = time.monotonic() + 60
-        while p.poll() is None and "libSDL2" not in Path(f"/proc/{p.pid}/maps").read_text() and time.monotonic() < deadline:
-            time.sleep(0.1)
-        time.sleep(1.0)  # pygame initialised: the match runs
-        assert p.poll() is None, "the bench ended by itself"
-        p.send_signal(signal.SIGTERM)
-        out, err = p.communicate(timeout=60)
-    finally:
-        if p.poll() is None:
-            p.kill()
-            p.wait()
-    assert p.returncode == 130, err
+    code, out, err = sigterm_when_running(["bench", "frame", "--steps", "216000", "--repeats", "1", "--no-naive",
+                                           "--realtime-seconds", "0", "--size", "320x180"], env)  # the match runs
+    assert code == 130, err
     assert "targets" not in out and "Traceback" not in err, (out, err)

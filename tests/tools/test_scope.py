@@ -258,32 +258,15 @@ def test_scope_says_a_wiimote_streams_without_its_nunchuk(tmp_path, monkeypatch)
     assert whole.status_line.startswith("connected   "), whole.status_line
 
 
-def test_headless_scope_ended_by_sigterm_writes_its_trace_and_exits_130(tmp_path) -> None:
+def test_headless_scope_ended_by_sigterm_writes_its_trace_and_exits_130(tmp_path, sigterm_when_running) -> None:
     """SDL turned SIGTERM into a quit event: the scope ended as a closed window, exit 0, and
     without its trace when one ended by Ctrl-C. Now it ends as `play` does: the trace written,
     exit 130."""
-    import signal
-    import time
-
     from engine.trace import read_chrome_trace
 
     trace = tmp_path / "t.json"
     env = {**os.environ, "PYTHONPATH": str(REPO), "SDL_VIDEODRIVER": "dummy", "SDL_AUDIODRIVER": "dummy"}
-    p = subprocess.Popen([sys.executable, "-m", "tools.cli", "scope", "--headless", "--frames", "100000000",
-                          "--trace", str(trace)], cwd=REPO, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                         text=True)
-    try:
-        deadline = time.monotonic() + 60
-        while p.poll() is None and "libSDL2" not in Path(f"/proc/{p.pid}/maps").read_text() and time.monotonic() < deadline:
-            time.sleep(0.1)
-        time.sleep(1.0)  # the window open: the loop runs
-        assert p.poll() is None, "the scope ended by itself"
-        p.send_signal(signal.SIGTERM)
-        out, err = p.communicate(timeout=60)
-    finally:
-        if p.poll() is None:
-            p.kill()
-            p.wait()
-    assert p.returncode == 130, err
+    code, out, err = sigterm_when_running(["scope", "--headless", "--frames", "100000000", "--trace", str(trace)], env)
+    assert code == 130, err
     assert "Traceback" not in err and "state " not in out, (out, err)
     assert any(ev.get("name") == "frame" for ev in read_chrome_trace(trace)["traceEvents"])

@@ -63,26 +63,13 @@ def test_soak_cli_json_and_bad_input(tmp_path) -> None:
     assert bad.returncode == 2 and bad.stderr.count("\n") == 1 and "not both" in bad.stderr
 
 
-def test_a_soak_ends_on_sigterm(tmp_path) -> None:
+def test_a_soak_ends_on_sigterm(tmp_path, sigterm_when_running) -> None:
     """SDL turns SIGTERM into a quit event, which nothing in a soak reads: `kill` and `timeout`
     could not stop an hour's soak (it ran on, only SIGKILL ended it)."""
     import os
     import signal
-    import time
 
     env = {**os.environ, "PYTHONPATH": str(REPO), "SDL_VIDEODRIVER": "dummy", "SDL_AUDIODRIVER": "dummy",
            "XDG_DATA_HOME": str(tmp_path)}
-    p = subprocess.Popen([sys.executable, "-m", "tools.cli", "soak", "--minutes", "10", "--quiet"], cwd=REPO, env=env,
-                         stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    try:
-        deadline = time.monotonic() + 60
-        while "libSDL2" not in Path(f"/proc/{p.pid}/maps").read_text() and time.monotonic() < deadline:
-            time.sleep(0.1)
-        time.sleep(2.0)  # pygame initialised: the session runs
-        assert p.poll() is None, "the soak ended by itself"
-        p.send_signal(signal.SIGTERM)
-        assert p.wait(timeout=15) == -signal.SIGTERM
-    finally:
-        if p.poll() is None:
-            p.kill()
-            p.wait()
+    code, _, _ = sigterm_when_running(["soak", "--minutes", "10", "--quiet"], env, settle=2.0)  # the session runs
+    assert code == -signal.SIGTERM
