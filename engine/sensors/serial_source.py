@@ -11,7 +11,8 @@ URLs:
 Polling never waits: each poll drains `in_waiting` (the Linux tty buffer holds only 4095 bytes,
 so a slow reader loses data), decodes frames, and maps device time to host time. A lost port
 (OSError, SerialException, termios.error) becomes SourceState.RECONNECTING, and the port is
-reopened every `retry` seconds until it comes back. After every open, SAMPLEs wait for a HELLO
+reopened every `retry` seconds until it comes back. So does an open port that brings no byte
+for STALL_S (a board owes a HELLO every second: it has gone quiet), until its next byte. After every open, SAMPLEs wait for a HELLO
 on that port (counted as `samples_before_hello`): a board back on the port may have rebooted or be
 another one, and the previous HELLO's scales would misread it.
 
@@ -66,7 +67,11 @@ KNOWN_BOARDS = (
 LOST = (OSError, serial.SerialException, termios.error)
 MAX_READS_PER_POLL = 32  # bounds one poll's work even if the device outruns us
 BACKLOG = 1024  # a read this big may have left more behind: read again in the same poll
-STALL_S = 2.0  # no byte for this long while connected counts one stall
+# No byte for STALL_S on an open port, though a board owes a HELLO every second: it has gone quiet
+# (its power, a crash). One stall is counted and the source is away (`reconnecting`) as a Wiimote
+# gone silent is, so the game pauses under the lost overlay; the port stays open, and the first
+# byte again is the board back (its samples flowed on with a frozen player before).
+STALL_S = 2.0
 REPLAY_RUN_SAY = 50  # frames dropped as replays in a row that `missing` says, at the least
 MAX_WINDOW_S = 60.0  # `window=`: the clock keeps up to one minimum per poll over it (12,000 at 200 polls/s)
 
@@ -177,15 +182,11 @@ def missing_sensor_a(hello: protocol.Hello | None) -> str:
     return ""
 
 
-def missing_now(hello: protocol.Hello | None, decoder: protocol.Decoder, stalled: bool = False) -> str:
-    """`Source.missing` of a connected serial source: no byte for STALL_S on the open port
-    (`stalled`: a board owes a HELLO every second), a second's worth of frames or more in a
+def missing_now(hello: protocol.Hello | None, decoder: protocol.Decoder) -> str:
+    """`Source.missing` of a connected serial source: a second's worth of frames or more in a
     row dropped as replays (the board owes a HELLO every second, and one at once when asked, and
     a HELLO of its boot later in time resyncs the decoder: a board that sends none, or bytes
     that are all old ones played back), else a B-only board's still right hand."""
-    if stalled:
-        return (f"no data for {STALL_S:g} s or more: the board has gone quiet (its power, a crash?); "
-                "it comes back by itself when the board sends again")
     if decoder.replay_run >= max(hello.rate_hz if hello is not None else 0, REPLAY_RUN_SAY):
         return ("every frame dropped as a replay: its seq was delivered before in this boot (bytes played "
                 "back, or the host stopped reading for a while and no HELLO of the board has come since)")
@@ -294,7 +295,7 @@ class SerialSource(Source):
         self.port = None
 
     def missing(self) -> str:
-        return missing_now(self.hello, self.decoder, self._stalled) if self.state is SourceState.CONNECTED else ""
+        return missing_now(self.hello, self.decoder) if self.state is SourceState.CONNECTED else ""
 
     def close(self) -> None:
         self._drop_port()
@@ -317,11 +318,14 @@ class SerialSource(Source):
             return []
         now = self.clock()
         if not data:
-            if not self._stalled and now - self._last_byte > STALL_S:
-                self._stalled = True
+            if not self._stalled and now - self._last_byte > STALL_S:  # gone quiet: away (STALL_S)
+                self._stalled, self.state = True, SourceState.RECONNECTING
                 self.count("stalls")
+                self._ask_hello()
             return []
-        self._last_byte, self._stalled = now, False
+        if self._stalled:
+            self.state, self._stalled = SourceState.CONNECTED, False
+        self._last_byte = now
         replays = self.decoder.replays
         frames = self.decoder.feed(data)
         if self.decoder.replays > replays or any(f.jump for f in frames):

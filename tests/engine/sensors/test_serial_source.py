@@ -129,10 +129,11 @@ def test_pty_real_serial_and_hangup():
         src.close()
 
 
-def test_a_board_gone_quiet_is_said_while_its_port_stays_open():
+def test_a_board_gone_quiet_is_away_until_it_sends_again():
     """A board that stops sending (its power, a crash) kept the port open and the source
-    "connected", with nothing on screen: only a `stalls` count. Now `missing()` says it, and the
-    first byte again clears it."""
+    "connected", with nothing on screen (only a `stalls` count), and the match went on with a
+    frozen player. Now it is away (`reconnecting`, as a Wiimote gone silent: the game pauses), and
+    the first byte again brings it back on the same port."""
     master, slave = os.openpty()
     tty.setraw(slave)
     now = [0.0]
@@ -140,15 +141,17 @@ def test_a_board_gone_quiet_is_said_while_its_port_stays_open():
     try:
         os.write(master, HELLO2 + samples(20))
         assert len(poll_until(src, 20)) == 20 and src.missing() == ""
+        _drain(master)  # the HELLO request of the open
         now[0] += 1.0
         src.poll()
         assert src.missing() == "" and src.stats.get("stalls", 0) == 0  # a second of quiet: not yet
         now[0] += 1.5
         src.poll()
-        assert src.state is SourceState.CONNECTED and src.stats["stalls"] == 1
-        assert src.missing().startswith("no data for 2 s or more: the board has gone quiet")
+        assert src.state is SourceState.RECONNECTING and src.stats["stalls"] == 1
+        assert os.read(master, 16) == protocol.HELLO_REQUEST  # asked again
         os.write(master, samples(5, start_seq=21, t0=100_000))
-        assert len(poll_until(src, 5)) == 5 and src.missing() == ""
+        assert len(poll_until(src, 5)) == 5 and src.state is SourceState.CONNECTED and src.missing() == ""
+        assert src.stats.get("disconnects", 0) == 0 and src.stats["stalls"] == 1
     finally:
         src.close()
         os.close(master)
